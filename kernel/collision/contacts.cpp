@@ -1,0 +1,317 @@
+#include "kernel/collision/contacts.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/collision/geometry.hpp"
+#include "kernel/sleeping/sleeping.hpp"
+
+namespace limber {
+namespace {
+
+// A contact whose surfaces are this close after relaxation still touches (m): its normal
+// velocity is set by the restitution pass.
+constexpr double kTouchingSlop = 1e-4;
+
+template <typename Scalar>
+Eigen::Vector3d position_of(const ParticleBuffer<Scalar>& particles, std::uint32_t p, bool previous = false) {
+  return (previous ? particles.previous(p) : particles.position(p)).template cast<double>();
+}
+// Every particle at x* + t·(x − x*): t = 0 the previous positions, t = 1 the current ones.
+template <typename Scalar>
+Eigen::Vector3d position_at(const ParticleBuffer<Scalar>& particles, std::uint32_t p, double t) {
+  return (1 - t) * position_of(particles, p, true) + t * position_of(particles, p);
+}
+template <typename Scalar>
+Eigen::Vector3d velocity_of(const ParticleBuffer<Scalar>& particles, std::uint32_t p, double dt) {
+  return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
+}
+template <typename Scalar>
+void move(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta) {
+  particles.set_position(p, particles.position(p) + delta.cast<Scalar>());
+}
+// A velocity change is a change of the previous position: v = (x − x_previous)/Δt.
+template <typename Scalar>
+void change_velocity(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta_v, double dt) {
+  particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
+}
+
+// The separation a contact may be left at this step: 0 if it began the step outside, else its
+// starting penetration reduced by at most the recovery distance.
+double allowed_separation(double start_separation, double recovery) {
+  return start_separation < 0 ? std::min(0.0, start_separation + recovery) : 0.0;
+}
+
+// Normal speed a contact must leave with: e·(approach speed), or 0 for slow (resting) approaches.
+double bounce_speed(double approach_speed, double restitution, double resting_speed) {
+  return approach_speed < -resting_speed ? -restitution * approach_speed : 0.0;
+}
+
+// --- Plane contacts ---
+
+// A feature against a plane, at the current or the previous positions.
+template <typename Scalar>
+PlaneFeatureConstraint plane_constraint(const VerletState<Scalar>& state, std::uint32_t f, std::uint32_t plane_index,
+                                        bool previous = false) {
+  const ContactFeature& feature = state.features[f];
+  const Plane& plane = state.planes[plane_index];
+  return plane_feature_constraint(plane.normal, plane.offset, position_of(state.particles, feature.particle, previous),
+                                  position_of(state.particles, feature.axis_partner, previous), feature.radius,
+                                  feature.is_disk);
+}
+
+// Generalized inverse mass Σ w |∇C|² of a plane contact (a sphere: the particle's own w).
+template <typename Scalar>
+double plane_inverse_mass(const VerletState<Scalar>& state, const ContactFeature& feature,
+                          const PlaneFeatureConstraint& constraint) {
+  const auto& w = state.particles.inverse_mass;
+  double sum = w[feature.particle] * constraint.gradient_point.squaredNorm();
+  if (feature.axis_partner != feature.particle) sum += w[feature.axis_partner] * constraint.gradient_partner.squaredNorm();
+  return sum;
+}
+
+// Rate of change of C, ∇C·v, m/s.
+template <typename Scalar>
+double plane_normal_speed(const VerletState<Scalar>& state, const ContactFeature& feature,
+                          const PlaneFeatureConstraint& constraint, double dt) {
+  double speed = constraint.gradient_point.dot(velocity_of(state.particles, feature.particle, dt));
+  if (feature.axis_partner != feature.particle) {
+    speed += constraint.gradient_partner.dot(velocity_of(state.particles, feature.axis_partner, dt));
+  }
+  return speed;
+}
+
+// --- Ball–limb contacts ---
+
+template <typename Scalar>
+SphereLimbContact ball_limb_geometry(const VerletState<Scalar>& state, std::uint32_t limb, double t) {
+  const auto& particles = state.particles;
+  return sphere_limb_contact(position_at(particles, static_cast<std::uint32_t>(state.ball_particle), t),
+                             state.ball_radius, position_at(particles, state.limbs.head[limb], t),
+                             position_at(particles, state.limbs.tail[limb], t), state.limbs.shape[limb],
+                             state.limbs.radius[limb]);
+}
+
+// From the limb's contact point to the ball's centre, at time t of the step.
+template <typename Scalar>
+Eigen::Vector3d ball_from_limb_point(const VerletState<Scalar>& state, std::uint32_t limb, double axial, double t = 1) {
+  const auto& particles = state.particles;
+  return position_at(particles, static_cast<std::uint32_t>(state.ball_particle), t) -
+         (1 - axial) * position_at(particles, state.limbs.head[limb], t) -
+         axial * position_at(particles, state.limbs.tail[limb], t);
+}
+
+template <typename Scalar>
+double ball_separation(const VerletState<Scalar>& state, const BallContact& contact) {
+  return contact.normal.dot(ball_from_limb_point(state, contact.limb, contact.axial)) - contact.offset;
+}
+
+// Relative normal velocity of the ball against the contact's limb point, m/s.
+template <typename Scalar>
+double ball_normal_speed(const VerletState<Scalar>& state, const BallContact& contact, double dt) {
+  const auto& particles = state.particles;
+  const Eigen::Vector3d limb_velocity = (1 - contact.axial) * velocity_of(particles, state.limbs.head[contact.limb], dt) +
+                                        contact.axial * velocity_of(particles, state.limbs.tail[contact.limb], dt);
+  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+  return contact.normal.dot(velocity_of(particles, ball, dt) - limb_velocity);
+}
+
+// Generalized inverse mass of a ball–limb contact (the denominator of thesis eq. 2.33 for a
+// point a of the way from the limb's head to its tail).
+template <typename Scalar>
+double ball_limb_inverse_mass(const VerletState<Scalar>& state, std::uint32_t limb, double a) {
+  const auto& w = state.particles.inverse_mass;
+  return w[static_cast<std::uint32_t>(state.ball_particle)] + (1 - a) * (1 - a) * w[state.limbs.head[limb]] +
+         a * a * w[state.limbs.tail[limb]];
+}
+
+// Shares a position (kg·m) or velocity (N·s) impulse along the contact normal between the ball
+// (+) and the limb's particles (−), each in proportion to its inverse mass and lever.
+template <typename Scalar, typename Apply>
+void share_ball_limb_impulse(const VerletState<Scalar>& state, std::uint32_t limb, double a,
+                             const Eigen::Vector3d& impulse, Apply&& apply) {
+  const auto& w = state.particles.inverse_mass;
+  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+  const std::uint32_t head = state.limbs.head[limb], tail = state.limbs.tail[limb];
+  apply(ball, Eigen::Vector3d(w[ball] * impulse));
+  apply(head, Eigen::Vector3d(-(1 - a) * w[head] * impulse));
+  apply(tail, Eigen::Vector3d(-a * w[tail] * impulse));
+}
+
+// Finds the ball's contact with a limb during the step. A fast ball can cross most of a thin
+// limb in one step, and the overlap at the end of the step then points sideways (it would wedge
+// the legs apart instead of striking them); so the contact plane is fixed where the surfaces
+// first met — the time of impact, by bisection on the separation of the interpolated
+// configuration, as continuous collision detection does. A contact already overlapping at the
+// start of the step keeps that configuration's plane.
+template <typename Scalar>
+bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, BallContact& contact) {
+  const SphereLimbContact start = ball_limb_geometry(state, limb, 0.0);
+  double time = 0;
+  if (start.separation >= 0) {
+    double inside = -1;  // the first sampled time with overlap
+    for (double t : {0.25, 0.5, 0.75, 1.0}) {
+      if (ball_limb_geometry(state, limb, t).separation < 0) {
+        inside = t;
+        break;
+      }
+    }
+    if (inside < 0) return false;
+    double outside = inside - 0.25;
+    for (int k = 0; k < 24; ++k) {
+      const double middle = 0.5 * (outside + inside);
+      (ball_limb_geometry(state, limb, middle).separation < 0 ? inside : outside) = middle;
+    }
+    time = outside;
+  }
+  const SphereLimbContact touch = ball_limb_geometry(state, limb, time);
+  contact.limb = limb;
+  contact.normal = touch.normal;
+  contact.axial = touch.axial;
+  // The plane passes through the surfaces as they were at that time: C(time) = separation(time).
+  contact.offset = touch.normal.dot(ball_from_limb_point(state, limb, touch.axial, time)) - touch.separation;
+  contact.start_separation = start.separation;
+  return true;
+}
+
+}  // namespace
+
+template <typename Scalar>
+void detect_ball_contacts(VerletState<Scalar>& state, double dt) {
+  state.ball_contacts.clear();
+  if (state.ball_particle < 0 || state.islands[state.ball_island].sleeping) return;
+  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+  const Eigen::Vector3d from = position_of(state.particles, ball, true), to = position_of(state.particles, ball);
+  const Eigen::Vector3d path = to - from;
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
+      // Bounding spheres first (thesis 2.4), the limb's against the ball's path this step; the
+      // exact test only when they overlap.
+      const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
+      const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
+      const Eigen::Vector3d centre = 0.5 * (head + tail);
+      const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb] + state.ball_radius;
+      const double along =
+          path.squaredNorm() > 0 ? std::clamp((centre - from).dot(path) / path.squaredNorm(), 0.0, 1.0) : 0.0;
+      if ((centre - (from + along * path)).squaredNorm() > reach * reach) continue;
+      BallContact contact;
+      if (!find_ball_contact(state, limb, contact)) continue;
+      wake_island(state, k);
+      contact.approach_speed = ball_normal_speed(state, contact, dt);
+      state.ball_contacts.push_back(contact);
+    }
+  }
+}
+
+template <typename Scalar>
+void detect_plane_contacts(VerletState<Scalar>& state, double dt) {
+  state.plane_contacts.clear();
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t f = island.feature_begin; f < island.feature_end; ++f) {
+      for (std::uint32_t plane = 0; plane < state.planes.size(); ++plane) {
+        const PlaneFeatureConstraint constraint = plane_constraint(state, f, plane);
+        if (constraint.separation >= 0) continue;
+        state.plane_contacts.push_back({f, plane, plane_normal_speed(state, state.features[f], constraint, dt),
+                                        plane_constraint(state, f, plane, /*previous=*/true).separation});
+      }
+    }
+  }
+}
+
+template <typename Scalar>
+double project_plane_contacts(VerletState<Scalar>& state, double dt) {
+  const double recovery = state.settings.contact_recovery_speed * dt;
+  auto& particles = state.particles;
+  double largest = 0;
+  for (const PlaneContact& contact : state.plane_contacts) {
+    const ContactFeature& feature = state.features[contact.feature];
+    const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
+    const double push = allowed_separation(contact.start_separation, recovery) - constraint.separation;
+    const double inverse_mass = plane_inverse_mass(state, feature, constraint);
+    if (push <= 0 || inverse_mass <= 0) continue;
+    // λ = −C / Σ w|∇C|²; each particle moves w·λ·∇C (for a sphere: the whole push along n).
+    const double lambda = push / inverse_mass;
+    const std::uint32_t p = feature.particle, q = feature.axis_partner;
+    Eigen::Vector3d delta = particles.inverse_mass[p] * lambda * constraint.gradient_point;
+    if (q != p) {
+      const Eigen::Vector3d delta_partner = particles.inverse_mass[q] * lambda * constraint.gradient_partner;
+      move(particles, q, delta_partner);
+      largest = std::max(largest, delta_partner.norm());
+    }
+    // Coulomb friction on the particle's tangential displacement this step, at most μ times the push.
+    const Plane& plane = state.planes[contact.plane];
+    if (particles.inverse_mass[p] > 0) {
+      const Eigen::Vector3d step = (particles.position(p) - particles.previous(p)).template cast<double>();
+      const Eigen::Vector3d tangential = step - step.dot(plane.normal) * plane.normal;
+      const double slide = tangential.norm(), grip = plane.friction * push;
+      if (slide > 0) delta -= (slide <= grip ? 1.0 : grip / slide) * tangential;
+    }
+    move(particles, p, delta);
+    largest = std::max(largest, delta.norm());
+  }
+  state.counters.contact_projections += state.plane_contacts.size();
+  return largest;
+}
+
+template <typename Scalar>
+double project_ball_contacts(VerletState<Scalar>& state, double dt) {
+  const double recovery = state.settings.contact_recovery_speed * dt;
+  double largest = 0;
+  for (const BallContact& contact : state.ball_contacts) {
+    const double error = ball_separation(state, contact) - allowed_separation(contact.start_separation, recovery);
+    const double inverse_mass = ball_limb_inverse_mass(state, contact.limb, contact.axial);
+    if (error >= 0 || inverse_mass <= 0) continue;
+    const Eigen::Vector3d impulse = (-error / inverse_mass) * contact.normal;  // kg·m
+    share_ball_limb_impulse(state, contact.limb, contact.axial, impulse, [&](std::uint32_t p, const Eigen::Vector3d& d) {
+      move(state.particles, p, d);
+      largest = std::max(largest, d.norm());
+    });
+  }
+  state.counters.contact_projections += state.ball_contacts.size();
+  return largest;
+}
+
+template <typename Scalar>
+void apply_restitution(VerletState<Scalar>& state, double dt) {
+  const double resting_speed = 2 * state.gravity.template cast<double>().norm() * dt;
+  auto& particles = state.particles;
+  for (const PlaneContact& contact : state.plane_contacts) {
+    const ContactFeature& feature = state.features[contact.feature];
+    const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
+    const double inverse_mass = plane_inverse_mass(state, feature, constraint);
+    if (constraint.separation > kTouchingSlop || inverse_mass <= 0) continue;  // lifted off, or fixed
+    const double restitution = std::max(state.planes[contact.plane].restitution, feature.restitution);
+    const double target = bounce_speed(contact.approach_speed, restitution, resting_speed);
+    const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / inverse_mass;  // N·s
+    change_velocity(particles, feature.particle,
+                    particles.inverse_mass[feature.particle] * impulse * constraint.gradient_point, dt);
+    if (feature.axis_partner != feature.particle) {
+      change_velocity(particles, feature.axis_partner,
+                      particles.inverse_mass[feature.axis_partner] * impulse * constraint.gradient_partner, dt);
+    }
+  }
+  for (const BallContact& contact : state.ball_contacts) {
+    const double inverse_mass = ball_limb_inverse_mass(state, contact.limb, contact.axial);
+    if (ball_separation(state, contact) > kTouchingSlop || inverse_mass <= 0) continue;
+    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting_speed);
+    // Thesis eq. 2.33: J = Δv_n / (Σ generalized inverse masses), shared like the projection.
+    const double normal_speed = ball_normal_speed(state, contact, dt);
+    const Eigen::Vector3d impulse = ((target - normal_speed) / inverse_mass) * contact.normal;  // N·s
+    share_ball_limb_impulse(state, contact.limb, contact.axial, impulse,
+                            [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(particles, p, dv, dt); });
+  }
+}
+
+#define LIMBER_INSTANTIATE(Scalar)                                                \
+  template void detect_ball_contacts<Scalar>(VerletState<Scalar>&, double);      \
+  template void detect_plane_contacts<Scalar>(VerletState<Scalar>&, double);     \
+  template double project_plane_contacts<Scalar>(VerletState<Scalar>&, double);  \
+  template double project_ball_contacts<Scalar>(VerletState<Scalar>&, double);   \
+  template void apply_restitution<Scalar>(VerletState<Scalar>&, double);
+LIMBER_INSTANTIATE(float)
+LIMBER_INSTANTIATE(double)
+#undef LIMBER_INSTANTIATE
+
+}  // namespace limber

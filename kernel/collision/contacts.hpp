@@ -1,0 +1,49 @@
+// Contact passes of the Verlet step: detection, position projection, restitution.
+//
+// Contacts are position constraints solved inside relaxation, like the joints (thesis 3.2.3:
+// the stick in a box loops its length and box constraints together):
+// - plane contacts (ground, bound walls) push a particle out along the plane normal — the
+//   box clamp of eq. 3.8 — and apply Coulomb friction to the step's tangential displacement
+//   (static when it is within μ times the normal push, else reduced by that much;
+//   Macklin et al. 2014, "Unified particle physics", eq. 24);
+// - ball–limb contacts are a weighted projection (eq. 4.7 generalized to a point on a segment):
+//   the ball and the limb's two particles move in inverse proportion to their masses, with the
+//   limb's share split by where on its axis the contact lies (C = separation,
+//   gradients +n, −(1−a)·n, −a·n; λ = −C / (w_ball + (1−a)² w_head + a² w_tail)).
+// Penetration made by the step's own motion is removed in full; penetration the step began with
+// (an initial overlap) is removed at most at Settings::contact_recovery_speed, because pushing a
+// particle out also drags its neighbours through the joints, as real velocity.
+// Restitution is then a velocity pass (Müller et al. 2020, "Detailed rigid body simulation with
+// extended position based dynamics", 3.6): a contact still touching after relaxation leaves with
+// normal speed exactly e·v, v its approach speed before the step (thesis eq. 2.33, the impulse
+// spread by inverse mass) — which also removes any push-out velocity; approach speeds below
+// 2|g|Δt bounce with e = 0 so resting contacts stay at rest.
+#pragma once
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// Finds the ball's contacts with every limb (asleep or not) and wakes the islands it touches.
+/// Needs the ball's island awake. dt converts displacements to velocities.
+template <typename Scalar>
+void detect_ball_contacts(VerletState<Scalar>& state, double dt);
+
+/// Finds the plane contacts of the awake islands' features.
+template <typename Scalar>
+void detect_plane_contacts(VerletState<Scalar>& state, double dt);
+
+/// One projection of every plane contact (dt: the step's, for the recovery limit). Returns the
+/// largest particle displacement, m.
+template <typename Scalar>
+double project_plane_contacts(VerletState<Scalar>& state, double dt);
+
+/// One projection of every ball contact. Returns the largest particle displacement, m.
+template <typename Scalar>
+double project_ball_contacts(VerletState<Scalar>& state, double dt);
+
+/// The restitution pass over all contacts of the step (changes previous positions only).
+template <typename Scalar>
+void apply_restitution(VerletState<Scalar>& state, double dt);
+
+}  // namespace limber

@@ -1,0 +1,91 @@
+#include "kernel/collision/geometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace limber {
+namespace {
+
+// Any unit vector perpendicular to `u` (used when the closest points coincide).
+Eigen::Vector3d any_perpendicular(const Eigen::Vector3d& u) {
+  const Eigen::Vector3d other = std::abs(u.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  return u.cross(other).normalized();
+}
+
+}  // namespace
+
+SphereLimbContact sphere_limb_contact(const Eigen::Vector3d& centre, double sphere_radius,
+                                      const Eigen::Vector3d& head, const Eigen::Vector3d& tail,
+                                      ShapeType shape, double limb_radius) {
+  SphereLimbContact contact;
+  const Eigen::Vector3d segment = tail - head;
+  const double length = segment.norm();
+  const Eigen::Vector3d axis = length > 0 ? Eigen::Vector3d(segment / length) : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d relative = centre - head;
+  const double along = relative.dot(axis);                  // m from the head
+  const Eigen::Vector3d radial = relative - along * axis;   // from the axis to the centre
+  const double radial_distance = radial.norm();
+  const Eigen::Vector3d radial_direction = radial_distance > 0 ? Eigen::Vector3d(radial / radial_distance)
+                                                               : any_perpendicular(axis);
+  const double clamped = std::clamp(along, 0.0, length);
+  contact.axial = length > 0 ? clamped / length : 0.0;
+
+  if (shape == ShapeType::capsule || limb_radius == 0) {
+    // Distance to the segment, less both radii.
+    const Eigen::Vector3d offset = centre - (head + clamped * axis);
+    const double distance = offset.norm();
+    contact.normal = distance > 0 ? Eigen::Vector3d(offset / distance) : radial_direction;
+    contact.separation = distance - limb_radius - sphere_radius;
+    return contact;
+  }
+
+  const bool inside = along >= 0 && along <= length && radial_distance <= limb_radius;
+  if (!inside) {
+    // Closest point of the solid cylinder: clamp along the axis, then radially.
+    const Eigen::Vector3d closest =
+        head + clamped * axis + std::min(radial_distance, limb_radius) * radial_direction;
+    const Eigen::Vector3d offset = centre - closest;
+    const double distance = offset.norm();
+    contact.normal = distance > 0 ? Eigen::Vector3d(offset / distance) : radial_direction;
+    contact.separation = distance - sphere_radius;
+    return contact;
+  }
+  // Centre inside: leave through the nearest of the side, the head face and the tail face.
+  const double to_side = limb_radius - radial_distance, to_head = along, to_tail = length - along;
+  if (to_side <= to_head && to_side <= to_tail) {
+    contact.normal = radial_direction;
+    contact.separation = -to_side - sphere_radius;
+  } else if (to_head <= to_tail) {
+    contact.normal = -axis;
+    contact.separation = -to_head - sphere_radius;
+  } else {
+    contact.normal = axis;
+    contact.separation = -to_tail - sphere_radius;
+  }
+  return contact;
+}
+
+PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, double offset,
+                                                const Eigen::Vector3d& point, const Eigen::Vector3d& partner,
+                                                double radius, bool is_disk) {
+  PlaneFeatureConstraint constraint;
+  constraint.gradient_point = normal;
+  const Eigen::Vector3d along = point - partner;
+  const double length = along.norm();
+  if (!is_disk || !(length > 0)) {
+    constraint.separation = normal.dot(point) - offset - radius;
+    return constraint;
+  }
+  const Eigen::Vector3d axis = along / length;
+  const double cosine = normal.dot(axis);
+  const double sine = std::sqrt(std::max(0.0, 1.0 - cosine * cosine));
+  constraint.separation = normal.dot(point) - offset - radius * sine;
+  if (sine > 1e-9) {
+    const Eigen::Vector3d tilt = (radius * cosine / (sine * length)) * (normal - cosine * axis);
+    constraint.gradient_point += tilt;
+    constraint.gradient_partner = -tilt;
+  }
+  return constraint;
+}
+
+}  // namespace limber

@@ -1,0 +1,42 @@
+// Closest-point geometry between the ball, limbs and planes (double precision; few contacts).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "kernel/model/model.hpp"
+
+namespace limber {
+
+/// A sphere against a limb: where they are closest, and how far apart.
+struct SphereLimbContact {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();  ///< unit, from the limb's surface towards the sphere
+  double separation = 0;  ///< m; < 0 when they overlap (penetration depth = −separation)
+  double axial = 0;       ///< where on the axis the contact is: 0 at the head, 1 at the tail
+};
+
+/// Sphere (centre, radius) against the limb whose axis runs head → tail with `shape`'s radius:
+/// a capsule is the segment swept by a sphere; a cylinder is solid with flat ends (a centre
+/// inside it is pushed out through the nearest face). Exact for both.
+SphereLimbContact sphere_limb_contact(const Eigen::Vector3d& centre, double sphere_radius,
+                                      const Eigen::Vector3d& head, const Eigen::Vector3d& tail,
+                                      ShapeType shape, double limb_radius);
+
+/// The contact of a feature with the half-space n·x ≥ offset (n unit, solid below), as a
+/// constraint on two particles for position-based projection. The feature is a sphere of
+/// `radius` about `point`, or (`is_disk`) the end disk of a cylinder of `radius` centred at
+/// `point` with axis u = (point − partner)/|point − partner|, whose lowest rim point sits
+/// r·√(1 − (n·u)²) below its centre. C is the signed distance of the lowest point (< 0 inside). For a sphere (or a disk with coincident particles) ∇_point C = n and
+/// ∇_partner C = 0. For a disk, with c = n·u and f = √(1 − c²), tilting the axis moves the rim:
+///   ∇_point C = n + (r·c / (f·L))·(n − c·u),   ∇_partner C = −(r·c / (f·L))·(n − c·u),
+/// L = |point − partner|; |n − c·u| = f, so the rim term has magnitude r|c|/L and stays finite
+/// (taken as 0 where the disk lies flat, f → 0, and the rim has no single lowest point).
+struct PlaneFeatureConstraint {
+  double separation = 0;  ///< C, m
+  Eigen::Vector3d gradient_point = Eigen::Vector3d::Zero();
+  Eigen::Vector3d gradient_partner = Eigen::Vector3d::Zero();
+};
+PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, double offset,
+                                                const Eigen::Vector3d& point, const Eigen::Vector3d& partner,
+                                                double radius, bool is_disk);
+
+}  // namespace limber

@@ -1,0 +1,34 @@
+// Observers: what a step did to the physics — joint gap, stretch, centre of mass, momentum,
+// energy, sleeping. Read-only over a state; every method will expose the same quantities.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+struct Observation {
+  double time = 0;                 ///< s
+  /// Joint gaps |x_inboard − x_outboard| relative to the mean length of the two limbs joined
+  /// (the outboard limb's for a joint to the world); 0 with shared-particle joints.
+  double max_joint_gap = 0, rms_joint_gap = 0;
+  /// Largest relative link stretch | |x_head − x_tail| − L | / L.
+  double max_link_stretch = 0;
+  Eigen::Vector3d body_centre_of_mass = Eigen::Vector3d::Zero();  ///< of the limbs (not the ball), m
+  Eigen::Vector3d linear_momentum = Eigen::Vector3d::Zero();      ///< everything, kg·m/s
+  double kinetic_energy = 0;    ///< J, with v = (x − x*)/Δt of the last step
+  double potential_energy = 0;  ///< J, −Σ m g·x (zero at the origin)
+  int islands = 0, islands_sleeping = 0;
+  bool body_sleeping = false;   ///< every limb island asleep
+
+  double energy() const { return kinetic_energy + potential_energy; }
+};
+
+template <typename Scalar>
+Observation observe(const VerletState<Scalar>& state);
+
+extern template Observation observe<float>(const VerletState<float>&);
+extern template Observation observe<double>(const VerletState<double>&);
+
+}  // namespace limber

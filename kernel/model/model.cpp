@@ -1,0 +1,143 @@
+// GCC 12 false positive in Eigen's AVX-512 reductions (the SVD inside FromTwoVectors): the
+// pragma must precede the Eigen headers, where the warning is located.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/model/model.hpp"
+
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include "kernel/model/checks.hpp"
+
+namespace limber {
+
+using namespace checks;
+
+double volume(const Shape& shape) {
+  const double r = shape.radius;
+  const double cylinder = std::numbers::pi * r * r * shape.length;
+  switch (shape.type) {
+    case ShapeType::cylinder:
+      return cylinder;
+    case ShapeType::capsule:
+      return cylinder + 4.0 / 3.0 * std::numbers::pi * r * r * r;
+  }
+  return cylinder;
+}
+
+Eigen::Quaterniond Body::orientation() const {
+  return Eigen::Quaterniond::FromTwoVectors(Vector3::UnitZ(), axis);
+}
+
+Vector3 Body::to_world(const Vector3& local_point) const {
+  return position + orientation() * local_point;
+}
+
+Vector3 Body::velocity_at(const Vector3& local_point) const {
+  return linear_velocity + angular_velocity.cross(orientation() * local_point);
+}
+
+int Model::find_body(std::string_view body_name) const {
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    if (bodies[i].name == body_name) return static_cast<int>(i);
+  return -1;
+}
+
+double Model::body_mass() const {
+  return std::accumulate(bodies.begin(), bodies.end(), 0.0,
+                         [](double sum, const Body& body) { return sum + body.mass; });
+}
+
+namespace {
+
+void validate_body(const Body& body, const std::string& path) {
+  require_name(body.name, path + ".name", /*is_body=*/true);
+  require_positive(body.shape.length, path + ".shape.length");
+  require_non_negative(body.shape.radius, path + ".shape.radius");
+  require_positive(body.mass, path + ".mass");
+  require_finite(body.position, path + ".position");
+  require_unit(body.axis, path + ".axis");
+  require_finite(body.linear_velocity, path + ".linear_velocity");
+  require_finite(body.angular_velocity, path + ".angular_velocity");
+}
+
+void require_body_index(int index, std::size_t body_count, const std::string& path) {
+  if (index < 0 || static_cast<std::size_t>(index) >= body_count) {
+    fail(path, "names body index " + std::to_string(index) + " but there are " +
+                   std::to_string(body_count) + " bodies");
+  }
+}
+
+void validate_joint(const Joint& joint, std::size_t body_count, const std::string& path) {
+  require_name(joint.name, path + ".name", /*is_body=*/false);
+  if (joint.inboard != kWorld) require_body_index(joint.inboard, body_count, path + ".inboard");
+  require_body_index(joint.outboard, body_count, path + ".outboard");
+  if (joint.inboard == joint.outboard) {
+    fail(path + ".outboard",
+         "must differ from inboard, both are body index " + std::to_string(joint.inboard));
+  }
+  require_finite(joint.inboard_anchor, path + ".inboard_anchor");
+  require_finite(joint.outboard_anchor, path + ".outboard_anchor");
+}
+
+void validate_settings(const Settings& settings) {
+  require_finite(settings.gravity, "settings.gravity");
+  require_positive(settings.time_step, "settings.time_step");
+  require_positive(settings.duration, "settings.duration");
+  require_non_negative(settings.damping, "settings.damping");
+  require_positive(settings.divergence_speed, "settings.divergence_speed");
+  require_non_negative(settings.contact_recovery_speed, "settings.contact_recovery_speed");
+  require_at_least(settings.relaxation.iterations, 1, "settings.relaxation.iterations");
+  require_non_negative(settings.relaxation.tolerance, "settings.relaxation.tolerance");
+  require_non_negative(settings.relaxation.budget_us, "settings.relaxation.budget_us");
+  require_in_range(settings.relaxation.over_relaxation, 0, 2, "settings.relaxation.over_relaxation",
+                   /*low_open=*/true, /*high_open=*/true);
+  require_non_negative(settings.sleep.speed_threshold, "settings.sleep.speed_threshold");
+  require_non_negative(settings.sleep.time_to_sleep, "settings.sleep.time_to_sleep");
+  if (settings.verlet.drag_factor) {
+    require_in_range(*settings.verlet.drag_factor, 1, 2, "settings.verlet.drag_factor",
+                     /*low_open=*/true);
+  }
+}
+
+}  // namespace
+
+void validate(const Model& model) {
+  NameRegistry body_names;
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
+    const std::string path = indexed("bodies", i);
+    validate_body(model.bodies[i], path);
+    require_unique(body_names, model.bodies[i].name, path);
+  }
+
+  NameRegistry joint_names;
+  for (std::size_t i = 0; i < model.joints.size(); ++i) {
+    const std::string path = indexed("joints", i);
+    validate_joint(model.joints[i], model.bodies.size(), path);
+    require_unique(joint_names, model.joints[i].name, path);
+  }
+
+  if (const auto& ground = model.ground) {
+    require_finite(ground->height, "ground.height");
+    require_in_range(ground->restitution, 0, 1, "ground.restitution");
+    require_non_negative(ground->friction, "ground.friction");
+  }
+
+  if (const auto& bounds = model.bounds) {
+    require_box(bounds->min, bounds->max, "bounds");
+    require_in_range(bounds->restitution, 0, 1, "bounds.restitution");
+    require_non_negative(bounds->friction, "bounds.friction");
+  }
+
+  if (const auto& ball = model.ball) {
+    require_positive(ball->radius, "ball.radius");
+    require_positive(ball->mass, "ball.mass");
+    require_in_range(ball->restitution, 0, 1, "ball.restitution");
+    require_finite(ball->position, "ball.position");
+    require_finite(ball->velocity, "ball.velocity");
+  }
+
+  validate_settings(model.settings);
+}
+
+}  // namespace limber

@@ -1,0 +1,179 @@
+// The model: an immutable, solver-independent description of a scene (DESIGN.md, "Model").
+//
+// Every method (Verlet + relaxation now; springs, Lagrange, Featherstone later) compiles from
+// this one description, so the same scene can be run by each and the numbers compared. Nothing
+// here changes while stepping; everything that does lives in a method's State.
+//
+// Units are SI throughout (m, kg, s, N); z is up. The thesis's cm, ms and lb are converted at
+// the scene boundary (tools/scenes/*.json are already in SI), never here.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace limber {
+
+using Vector3 = Eigen::Vector3d;
+
+/// A scene or model that fails validation. what() is one line: "<where>: <problem>", where
+/// <where> names the field (e.g. "bodies[2].mass") and, from a file, the file first.
+class ModelError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class ShapeType { cylinder, capsule };
+
+/// A limb's shape in its body frame: the axis is local +z, the centre is the origin.
+/// - cylinder: flat end faces at z = ±length/2, radius `radius`.
+/// - capsule: hemispherical caps centred at z = ±length/2 (total extent length + 2·radius).
+/// The axis end points (0, 0, ±length/2) are the limb's *head* (+) and *tail* (−).
+struct Shape {
+  ShapeType type = ShapeType::cylinder;
+  double length = 0;  ///< m, > 0
+  double radius = 0;  ///< m, ≥ 0
+};
+
+/// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule.
+double volume(const Shape& shape);
+
+/// A rigid limb with distributed mass.
+struct Body {
+  std::string name;
+  Shape shape;
+  double mass = 0;                            ///< kg, > 0 (a scene may give density × volume instead)
+  Vector3 position = Vector3::Zero();         ///< world position of the body-frame origin (the centre), m
+  Vector3 axis = Vector3::UnitZ();            ///< unit world direction of local +z (tail → head)
+  Vector3 linear_velocity = Vector3::Zero();  ///< of the centre, m/s
+  Vector3 angular_velocity = Vector3::Zero(); ///< world frame, rad/s
+
+  /// Rotation from body frame to world: the shortest arc taking local +z onto `axis`.
+  Eigen::Quaterniond orientation() const;
+  /// World position of a body-frame point, m.
+  Vector3 to_world(const Vector3& local_point) const;
+  /// World velocity of a body-frame point, m/s (v + ω × r).
+  Vector3 velocity_at(const Vector3& local_point) const;
+  Vector3 head() const { return position + 0.5 * shape.length * axis; }
+  Vector3 tail() const { return position - 0.5 * shape.length * axis; }
+};
+
+enum class JointType { spherical };
+
+/// Index that stands for the world (a fixed frame) in Joint::inboard.
+inline constexpr int kWorld = -1;
+
+/// A joint between an inboard and an outboard body, at an anchor fixed in each body's frame.
+/// With inboard == kWorld, inboard_anchor is a world point, m.
+struct Joint {
+  std::string name;
+  JointType type = JointType::spherical;
+  int inboard = kWorld;                       ///< body index or kWorld
+  int outboard = 0;                           ///< body index
+  Vector3 inboard_anchor = Vector3::Zero();   ///< m, inboard body frame (world if inboard == kWorld)
+  Vector3 outboard_anchor = Vector3::Zero();  ///< m, outboard body frame
+};
+
+/// The plane z = height, solid below. Coulomb friction and restitution against everything.
+struct Ground {
+  double height = 0;       ///< m
+  double restitution = 0;  ///< [0, 1]
+  double friction = 0;     ///< Coulomb coefficient, ≥ 0
+};
+
+/// An axis-aligned box that keeps everything inside it (thesis 3.2.3, eq. 3.8).
+struct Bounds {
+  Vector3 min = Vector3::Zero();  ///< m
+  Vector3 max = Vector3::Zero();  ///< m, > min on every axis
+  double restitution = 0;
+  double friction = 0;
+};
+
+/// A solid sphere thrown at the scene (thesis 4.5): the elastic ball.
+struct Ball {
+  double radius = 0;                    ///< m, > 0
+  double mass = 0;                      ///< kg, > 0
+  double restitution = 0;               ///< [0, 1], used for its contacts with limbs
+  Vector3 position = Vector3::Zero();   ///< centre, m
+  Vector3 velocity = Vector3::Zero();   ///< initial, m/s
+};
+
+/// When relaxation stops (thesis 3.2.3): after `iterations` sweeps, or earlier when the largest
+/// correction of a sweep falls below `tolerance`, or when `budget_us` of wall-clock time has
+/// passed (the hard real-time stop; not deterministic).
+struct RelaxationSettings {
+  int iterations = 100;    ///< ≥ 1; the thesis's program used 100
+  double tolerance = 0;    ///< m; 0 disables
+  double budget_us = 0;    ///< µs per step; 0 disables
+  /// Successive over-relaxation factor ω in (0, 2) for distance constraints: each projection
+  /// moves ω times the plain correction (thesis 3.2.3, "over-relaxation techniques"). 1 is the
+  /// thesis's Gauss-Seidel; > 1 converges faster along chains. Contacts are never over-relaxed.
+  double over_relaxation = 1;
+};
+
+/// Bodies at rest are not simulated (thesis 4.5.3): an island sleeps after its particles have
+/// moved slower than `speed_threshold` for `time_to_sleep`, and wakes on contact or force.
+struct SleepSettings {
+  bool enabled = true;
+  bool start_asleep = false;      ///< islands with no initial velocity start asleep (the standing humanoid)
+  double speed_threshold = 0.05;  ///< m/s
+  double time_to_sleep = 0.5;     ///< s
+};
+
+/// How the particle (Verlet) methods build a spherical joint (thesis 3.2.5).
+enum class ParticleJoints {
+  zero_length_constraint,  ///< inboard and outboard anchor particles joined by a distance constraint with d = 0
+  shared_particle,         ///< the two limbs share one particle carrying both mass shares
+};
+
+struct VerletSettings {
+  ParticleJoints joints = ParticleJoints::zero_length_constraint;
+  /// The thesis's drag (3.2.1, [Jak03]): x' = f·x − (f − 1)·x* + a·Δt², e.g. f = 1.99. Depends on
+  /// Δt; prefer Settings::damping. When set it replaces the damping.
+  std::optional<double> drag_factor;
+};
+
+struct Settings {
+  Vector3 gravity{0, 0, -9.81};  ///< m/s²
+  double time_step = 1.0 / 240;  ///< s, > 0
+  double duration = 5;           ///< simulated time of a run, s, > 0
+  /// Linear velocity damping, 1/s: without forces, speed decays as exp(−damping·t), whatever Δt.
+  double damping = 0;
+  RelaxationSettings relaxation;
+  SleepSettings sleep;
+  VerletSettings verlet;
+  /// A particle faster than this is reported as divergence, m/s.
+  double divergence_speed = 1000;
+  /// Penetration that a step begins with (an initial overlap, a deep hit) is pushed out at most
+  /// this fast, m/s, so resolving it cannot fling bodies (Box2D's contact push-out limit).
+  /// Penetration made by the step's own motion is always resolved in full.
+  double contact_recovery_speed = 0.5;
+};
+
+/// A whole scene. Build one in C++ or load it with load_scene (kernel/scene/scene_file.hpp).
+struct Model {
+  std::string name;
+  std::vector<Body> bodies;
+  std::vector<Joint> joints;
+  std::optional<Ground> ground;
+  std::optional<Bounds> bounds;
+  std::optional<Ball> ball;
+  Settings settings;
+
+  /// Index of the body called `name`, or −1.
+  int find_body(std::string_view name) const;
+  /// Total mass of the bodies (not the ball), kg.
+  double body_mass() const;
+};
+
+/// Checks every field for range and consistency (finite numbers, positive masses and lengths,
+/// unit axes, joints naming existing and distinct bodies, unique names, ...).
+/// Throws ModelError naming the first bad field.
+void validate(const Model& model);
+
+}  // namespace limber

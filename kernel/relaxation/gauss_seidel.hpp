@@ -1,0 +1,22 @@
+// Gauss-Seidel relaxation of distance constraints (thesis 3.2.2, 4.3).
+//
+// One sweep projects every constraint of the awake islands once, in storage order, each
+// projection seeing the positions the previous ones left (that is what makes it Gauss-Seidel
+// rather than Jacobi). Storage order is breadth-first from each island's root (compile.cpp),
+// so on a chain hanging from a pin a sweep runs from the pin down.
+#pragma once
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// One Gauss-Seidel sweep over the constraints of the awake islands with `state.options.rule`
+/// and the over-relaxation factor of the settings.
+/// Returns the largest particle displacement it made, m.
+template <typename Scalar>
+double gauss_seidel_sweep(VerletState<Scalar>& state);
+
+extern template double gauss_seidel_sweep<float>(VerletState<float>&);
+extern template double gauss_seidel_sweep<double>(VerletState<double>&);
+
+}  // namespace limber

@@ -1,0 +1,698 @@
+// The scene loader: JSON (format in scene_file.hpp) -> validated Model.
+//
+// Values are checked as they are read, with paths in the file's own terms, so a message points
+// at what the user must edit. Everything inside throws ModelError("<path>: <problem>");
+// load_scene_text adds the "<source>: " prefix in one place. validate() runs last, for what only
+// the assembled Model shows (e.g. a chain link whose generated name clashes).
+#include "kernel/scene/scene_file.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <unordered_map>
+#include <vector>
+
+#include "kernel/model/checks.hpp"
+
+namespace limber {
+namespace {
+
+// Ordered, so unknown fields and available variants are reported in file order.
+using Json = nlohmann::ordered_json;
+using namespace checks;
+
+std::string child(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+std::string in_quotes(std::string_view text) { return "\"" + std::string(text) + "\""; }
+
+// ---- Typed values: each failure names the path and what was found instead.
+
+[[noreturn]] void wrong_type(const Json& value, const std::string& path, std::string_view wanted) {
+  fail(path, "must be " + std::string(wanted) + ", got " + value.type_name());
+}
+
+double read_number(const Json& value, const std::string& path) {
+  if (!value.is_number()) wrong_type(value, path, "a number");
+  const double number = value.get<double>();
+  require_finite(number, path);  // a guard: nlohmann itself refuses 1e999 (ParseErrorLocator)
+  return number;
+}
+
+/// A JSON integer literal that fits an int (body and joint indices are ints).
+int read_int(const Json& value, const std::string& path) {
+  if (value.is_number_float()) fail(path, "must be an integer, got " + value.dump());
+  if (!value.is_number_integer()) wrong_type(value, path, "an integer");
+  if (value.is_number_unsigned() ? value.get<std::uint64_t>() > INT_MAX
+                                 : value.get<std::int64_t>() > INT_MAX) {
+    fail(path, "must be at most " + std::to_string(INT_MAX) + ", got " + value.dump());
+  }
+  if (value.get<std::int64_t>() < INT_MIN) {
+    fail(path, "must be at least " + std::to_string(INT_MIN) + ", got " + value.dump());
+  }
+  return value.get<int>();
+}
+
+std::string read_string(const Json& value, const std::string& path) {
+  if (!value.is_string()) wrong_type(value, path, "a string");
+  return value.get<std::string>();
+}
+
+bool read_bool(const Json& value, const std::string& path) {
+  if (!value.is_boolean()) wrong_type(value, path, "true or false");
+  return value.get<bool>();
+}
+
+Vector3 read_vector(const Json& value, const std::string& path) {
+  if (!value.is_array() || value.size() != 3) {
+    const std::string found = value.is_array() ? "an array of " + std::to_string(value.size())
+                                               : std::string(value.type_name());
+    fail(path, "must be an array of 3 numbers, got " + found);
+  }
+  return {read_number(value[0], indexed(path, 0)), read_number(value[1], indexed(path, 1)),
+          read_number(value[2], indexed(path, 2))};
+}
+
+/// A non-zero vector, normalized (axes and directions).
+Vector3 read_direction(const Json& value, const std::string& path) {
+  const Vector3 direction = read_vector(value, path);
+  require_non_zero(direction, path);
+  return direction.normalized();
+}
+
+ShapeType read_shape_type(const Json& value, const std::string& path) {
+  const std::string type = read_string(value, path);
+  if (type == "cylinder") return ShapeType::cylinder;
+  if (type == "capsule") return ShapeType::capsule;
+  fail(path, "must be \"cylinder\" or \"capsule\", got " + in_quotes(type));
+}
+
+/// A JSON object being read: known fields only, required ones present.
+class Object {
+ public:
+  Object(const Json& json, std::string path) : json_(json), path_(std::move(path)) {
+    if (!json.is_object()) wrong_type(json, path_, "an object");
+  }
+
+  void allow_only(std::initializer_list<std::string_view> known) const {
+    for (const auto& [key, value] : json_.items()) {
+      if (std::find(known.begin(), known.end(), key) == known.end()) {
+        fail(path_, "unknown field " + in_quotes(key));
+      }
+    }
+  }
+
+  const std::string& path() const { return path_; }
+  std::string path(const std::string& key) const { return child(path_, key); }
+  const Json& json() const { return json_; }
+
+  const Json* find(const std::string& key) const {
+    const auto it = json_.find(key);
+    return it == json_.end() ? nullptr : &*it;
+  }
+  const Json& at(const std::string& key) const {
+    if (const Json* value = find(key)) return *value;
+    fail(path(key), "missing required field");
+  }
+
+  double number(const std::string& key) const { return read_number(at(key), path(key)); }
+  int integer(const std::string& key) const { return read_int(at(key), path(key)); }
+  std::string string(const std::string& key) const { return read_string(at(key), path(key)); }
+  bool boolean(const std::string& key) const { return read_bool(at(key), path(key)); }
+  Vector3 vector(const std::string& key) const { return read_vector(at(key), path(key)); }
+  Vector3 direction(const std::string& key) const { return read_direction(at(key), path(key)); }
+
+  // Optional fields keep the target's default (model.hpp's member initializers) when absent.
+  void optional(const std::string& key, double& target) const {
+    if (const Json* value = find(key)) target = read_number(*value, path(key));
+  }
+  void optional(const std::string& key, bool& target) const {
+    if (const Json* value = find(key)) target = read_bool(*value, path(key));
+  }
+  void optional(const std::string& key, Vector3& target) const {
+    if (const Json* value = find(key)) target = read_vector(*value, path(key));
+  }
+
+ private:
+  const Json& json_;
+  std::string path_;
+};
+
+// ---- Sections
+
+Settings read_settings(const Object& object) {
+  object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
+                     "contact_recovery_speed", "relaxation", "sleep", "verlet"});
+  Settings settings;
+  settings.gravity = object.vector("gravity");
+  settings.time_step = object.number("time_step");
+  require_positive(settings.time_step, object.path("time_step"));
+  settings.duration = object.number("duration");
+  require_positive(settings.duration, object.path("duration"));
+  object.optional("damping", settings.damping);
+  require_non_negative(settings.damping, object.path("damping"));
+  object.optional("divergence_speed", settings.divergence_speed);
+  require_positive(settings.divergence_speed, object.path("divergence_speed"));
+  object.optional("contact_recovery_speed", settings.contact_recovery_speed);
+  require_non_negative(settings.contact_recovery_speed, object.path("contact_recovery_speed"));
+
+  if (const Json* json = object.find("relaxation")) {
+    const Object relaxation(*json, object.path("relaxation"));
+    relaxation.allow_only({"iterations", "tolerance", "budget_us", "over_relaxation"});
+    RelaxationSettings& target = settings.relaxation;
+    if (relaxation.find("iterations")) target.iterations = relaxation.integer("iterations");
+    require_at_least(target.iterations, 1, relaxation.path("iterations"));
+    relaxation.optional("tolerance", target.tolerance);
+    require_non_negative(target.tolerance, relaxation.path("tolerance"));
+    relaxation.optional("budget_us", target.budget_us);
+    require_non_negative(target.budget_us, relaxation.path("budget_us"));
+    relaxation.optional("over_relaxation", target.over_relaxation);
+    require_in_range(target.over_relaxation, 0, 2, relaxation.path("over_relaxation"),
+                     /*low_open=*/true, /*high_open=*/true);
+  }
+
+  if (const Json* json = object.find("sleep")) {
+    const Object sleep(*json, object.path("sleep"));
+    sleep.allow_only({"enabled", "start_asleep", "speed_threshold", "time_to_sleep"});
+    SleepSettings& target = settings.sleep;
+    sleep.optional("enabled", target.enabled);
+    sleep.optional("start_asleep", target.start_asleep);
+    sleep.optional("speed_threshold", target.speed_threshold);
+    require_non_negative(target.speed_threshold, sleep.path("speed_threshold"));
+    sleep.optional("time_to_sleep", target.time_to_sleep);
+    require_non_negative(target.time_to_sleep, sleep.path("time_to_sleep"));
+  }
+
+  if (const Json* json = object.find("verlet")) {
+    const Object verlet(*json, object.path("verlet"));
+    verlet.allow_only({"joints", "drag_factor"});
+    if (verlet.find("joints")) {
+      const std::string joints = verlet.string("joints");
+      if (joints == "zero_length_constraint") {
+        settings.verlet.joints = ParticleJoints::zero_length_constraint;
+      } else if (joints == "shared_particle") {
+        settings.verlet.joints = ParticleJoints::shared_particle;
+      } else {
+        fail(verlet.path("joints"),
+             "must be \"zero_length_constraint\" or \"shared_particle\", got " + in_quotes(joints));
+      }
+    }
+    if (verlet.find("drag_factor")) {
+      const double drag_factor = verlet.number("drag_factor");
+      require_in_range(drag_factor, 1, 2, verlet.path("drag_factor"), /*low_open=*/true);
+      settings.verlet.drag_factor = drag_factor;
+    }
+  }
+  return settings;
+}
+
+Ground read_ground(const Object& object) {
+  object.allow_only({"height", "restitution", "friction"});
+  Ground ground;
+  ground.height = object.number("height");
+  ground.restitution = object.number("restitution");
+  require_in_range(ground.restitution, 0, 1, object.path("restitution"));
+  ground.friction = object.number("friction");
+  require_non_negative(ground.friction, object.path("friction"));
+  return ground;
+}
+
+Bounds read_bounds(const Object& object) {
+  object.allow_only({"min", "max", "restitution", "friction"});
+  Bounds bounds;
+  bounds.min = object.vector("min");
+  bounds.max = object.vector("max");
+  require_box(bounds.min, bounds.max, object.path());
+  bounds.restitution = object.number("restitution");
+  require_in_range(bounds.restitution, 0, 1, object.path("restitution"));
+  bounds.friction = object.number("friction");
+  require_non_negative(bounds.friction, object.path("friction"));
+  return bounds;
+}
+
+Ball read_ball(const Object& object) {
+  object.allow_only({"radius", "mass", "restitution", "position", "speed", "direction"});
+  Ball ball;
+  ball.radius = object.number("radius");
+  require_positive(ball.radius, object.path("radius"));
+  ball.mass = object.number("mass");
+  require_positive(ball.mass, object.path("mass"));
+  ball.restitution = object.number("restitution");
+  require_in_range(ball.restitution, 0, 1, object.path("restitution"));
+  ball.position = object.vector("position");
+  const double speed = object.number("speed");
+  require_non_negative(speed, object.path("speed"));
+  ball.velocity = speed * object.direction("direction");
+  return ball;
+}
+
+/// A body as read, before its mass is settled: variants may still change radius and mass, and
+/// a density becomes a mass only afterwards.
+struct BodySpec {
+  Body body;
+  std::optional<double> density;  ///< set instead of body.mass when the mass comes from density
+  std::string density_path;       ///< where that density was given, for messages
+};
+
+/// Reads "mass" or "density" (exactly one, > 0) into `spec`; `object` is a body or an override.
+void read_mass(const Object& object, BodySpec& spec, bool required) {
+  const bool has_mass = object.find("mass") != nullptr;
+  const bool has_density = object.find("density") != nullptr;
+  if (has_mass && has_density) fail(object.path(), "give either \"mass\" or \"density\", not both");
+  if (has_mass) {
+    spec.body.mass = object.number("mass");
+    require_positive(spec.body.mass, object.path("mass"));
+    spec.density.reset();
+  } else if (has_density) {
+    spec.density = object.number("density");
+    require_positive(*spec.density, object.path("density"));
+    spec.density_path = object.path("density");
+  } else if (required) {
+    fail(object.path(), "missing required field \"mass\" (or \"density\")");
+  }
+}
+
+BodySpec read_body(const Object& object) {
+  object.allow_only({"name", "shape", "mass", "density", "position", "axis", "linear_velocity",
+                     "angular_velocity"});
+  BodySpec spec;
+  Body& body = spec.body;
+  body.name = object.string("name");
+  require_name(body.name, object.path("name"), /*is_body=*/true);
+
+  const Object shape(object.at("shape"), object.path("shape"));
+  shape.allow_only({"type", "length", "radius"});
+  body.shape.type = read_shape_type(shape.at("type"), shape.path("type"));
+  body.shape.length = shape.number("length");
+  require_positive(body.shape.length, shape.path("length"));
+  body.shape.radius = shape.number("radius");
+  require_non_negative(body.shape.radius, shape.path("radius"));
+
+  read_mass(object, spec, /*required=*/true);
+  body.position = object.vector("position");
+  body.axis = object.direction("axis");
+  object.optional("linear_velocity", body.linear_velocity);
+  object.optional("angular_velocity", body.angular_velocity);
+  return spec;
+}
+
+/// The "chain" generator: links laid head to tail from the anchor along the direction.
+struct Chain {
+  int links = 0;
+  Shape shape;
+  double link_mass = 0;
+  double end_mass = 0;
+  Vector3 anchor = Vector3::Zero();
+  Vector3 direction = Vector3::UnitX();  ///< unit, from each link's head to its tail
+  bool pinned = false;
+};
+
+Chain read_chain(const Object& object) {
+  object.allow_only({"links", "shape", "link_length", "link_radius", "link_mass", "end_mass",
+                     "anchor", "direction", "pinned"});
+  Chain chain;
+  chain.links = object.integer("links");
+  require_at_least(chain.links, 1, object.path("links"));
+  chain.shape.type = read_shape_type(object.at("shape"), object.path("shape"));
+  chain.shape.length = object.number("link_length");
+  require_positive(chain.shape.length, object.path("link_length"));
+  chain.shape.radius = object.number("link_radius");
+  require_non_negative(chain.shape.radius, object.path("link_radius"));
+  chain.link_mass = object.number("link_mass");
+  require_positive(chain.link_mass, object.path("link_mass"));
+  chain.end_mass = object.number("end_mass");
+  require_positive(chain.end_mass, object.path("end_mass"));
+  chain.anchor = object.vector("anchor");
+  chain.direction = object.direction("direction");
+  chain.pinned = object.boolean("pinned");
+  return chain;
+}
+
+/// Appends links "link_k" to `bodies` and joints to `joints` (bodies are indexed from
+/// `first_body`, the number of explicit bodies).
+void generate_chain(const Chain& chain, std::vector<BodySpec>& bodies, std::vector<Joint>& joints) {
+  const int first_body = static_cast<int>(bodies.size());
+  const double length = chain.shape.length;
+  const Vector3 head_anchor(0, 0, 0.5 * length);
+  for (int k = 0; k < chain.links; ++k) {
+    BodySpec spec;
+    Body& link = spec.body;
+    link.name = "link_" + std::to_string(k);
+    link.shape = chain.shape;
+    link.mass = k + 1 == chain.links ? chain.end_mass : chain.link_mass;
+    link.position = chain.anchor + (k + 0.5) * length * chain.direction;
+    link.axis = -chain.direction;  // tail -> head points back towards the anchor
+    bodies.push_back(std::move(spec));
+
+    Joint joint;
+    joint.name = "joint_" + std::to_string(k);
+    joint.outboard = first_body + k;
+    joint.outboard_anchor = head_anchor;
+    if (k == 0) {
+      if (!chain.pinned) continue;
+      joint.inboard = kWorld;
+      joint.inboard_anchor = chain.anchor;
+    } else {
+      joint.inboard = first_body + k - 1;
+      joint.inboard_anchor = -head_anchor;  // the previous link's tail
+    }
+    joints.push_back(std::move(joint));
+  }
+}
+
+/// One variant's changes to one body.
+struct Override {
+  int body = 0;
+  std::optional<double> radius;
+  const Json* json = nullptr;  ///< kept to re-read the mass with its own paths when applied
+  std::string path;
+};
+
+using Variant = std::vector<Override>;
+
+std::vector<std::pair<std::string, Variant>> read_variants(
+    const Object& object, const std::unordered_map<std::string, int>& body_index) {
+  std::vector<std::pair<std::string, Variant>> variants;
+  for (const auto& [name, json] : object.json().items()) {
+    const Object variant(json, object.path(name));
+    Variant overrides;
+    for (const auto& [body_name, body_json] : json.items()) {
+      const Object override_object(body_json, variant.path(body_name));
+      override_object.allow_only({"radius", "mass", "density"});
+      const auto body = body_index.find(body_name);
+      if (body == body_index.end())
+        fail(override_object.path(), "no body named " + in_quotes(body_name));
+      Override entry{body->second, std::nullopt, &body_json, override_object.path()};
+      if (override_object.find("radius")) {
+        entry.radius = override_object.number("radius");
+        require_non_negative(*entry.radius, override_object.path("radius"));
+      }
+      BodySpec scratch;  // checks the mass fields now, so an unused variant is still checked
+      read_mass(override_object, scratch, /*required=*/false);
+      overrides.push_back(std::move(entry));
+    }
+    variants.emplace_back(name, std::move(overrides));
+  }
+  return variants;
+}
+
+void apply_variant(const Variant& variant, std::vector<BodySpec>& bodies) {
+  for (const Override& entry : variant) {
+    BodySpec& spec = bodies[entry.body];
+    if (entry.radius) spec.body.shape.radius = *entry.radius;
+    read_mass(Object(*entry.json, entry.path), spec, /*required=*/false);
+  }
+}
+
+/// The variant to apply: SceneOptions::variant, else the scene's "variant".
+const Variant* select_variant(const Object& root,
+                              const std::vector<std::pair<std::string, Variant>>* variants,
+                              const SceneOptions& options) {
+  if (!variants) {
+    if (root.find("variant")) fail("variant", "given but the scene has no \"variants\"");
+    if (options.variant) {
+      fail("variants", "variant " + in_quotes(*options.variant) +
+                           " requested but the scene has no \"variants\"");
+    }
+    return nullptr;
+  }
+  const auto find = [&](const std::string& name) -> const Variant* {
+    for (const auto& [variant_name, variant] : *variants)
+      if (variant_name == name) return &variant;
+    std::string available;
+    for (const auto& [variant_name, variant] : *variants)
+      available += (available.empty() ? "" : ", ") + variant_name;
+    fail("variant", "no variant named " + in_quotes(name) +
+                        "; available: " + (available.empty() ? "(none)" : available));
+  };
+  const Variant* file_choice = find(root.string("variant"));  // checked even when overridden
+  return options.variant ? find(*options.variant) : file_choice;
+}
+
+/// "head" | "tail" (the axis end points of `shape`) or a 3-vector; a world point when `shape`
+/// is null (inboard "world").
+Vector3 read_anchor(const Json& value, const std::string& path, const Shape* shape) {
+  if (value.is_string()) {
+    const std::string end = value.get<std::string>();
+    if (!shape) {
+      fail(path,
+           "must be a world point [x, y, z] when inboard is \"world\", got " + in_quotes(end));
+    }
+    if (end == "head") return {0, 0, 0.5 * shape->length};
+    if (end == "tail") return {0, 0, -0.5 * shape->length};
+    fail(path, "must be \"head\", \"tail\" or [x, y, z], got " + in_quotes(end));
+  }
+  return read_vector(value, path);
+}
+
+Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
+                 const std::unordered_map<std::string, int>& body_index) {
+  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor"});
+  Joint joint;
+  joint.name = object.string("name");
+  require_name(joint.name, object.path("name"), /*is_body=*/false);
+  const std::string type = object.string("type");
+  if (type != "spherical")
+    fail(object.path("type"), "must be \"spherical\", got " + in_quotes(type));
+
+  const auto body_named = [&](const std::string& key) {
+    const std::string name = object.string(key);
+    if (name == "world") {
+      if (key == "outboard") fail(object.path(key), "must name a body, not \"world\"");
+      return kWorld;
+    }
+    const auto found = body_index.find(name);
+    if (found == body_index.end()) fail(object.path(key), "no body named " + in_quotes(name));
+    return found->second;
+  };
+  joint.inboard = body_named("inboard");
+  joint.outboard = body_named("outboard");
+  if (joint.inboard == joint.outboard) {
+    fail(object.path("outboard"),
+         "must differ from inboard, both are " + in_quotes(bodies[joint.outboard].body.name));
+  }
+
+  const Shape* inboard_shape =
+      joint.inboard == kWorld ? nullptr : &bodies[joint.inboard].body.shape;
+  joint.inboard_anchor =
+      read_anchor(object.at("inboard_anchor"), object.path("inboard_anchor"), inboard_shape);
+  joint.outboard_anchor = read_anchor(object.at("outboard_anchor"), object.path("outboard_anchor"),
+                                      &bodies[joint.outboard].body.shape);
+  return joint;
+}
+
+Model read_model(const Json& json, const SceneOptions& options) {
+  const Object root(json, "");
+  root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
+                   "bodies", "joints", "chain", "variants", "variant"});
+  const int version = root.integer("limber_scene");
+  if (version != 1) {
+    fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
+  }
+
+  Model model;
+  model.name = root.string("name");
+  if (model.name.empty()) fail("name", "must be a non-empty name");
+  if (root.find("description")) root.string("description");  // type-checked, not kept
+  model.settings = read_settings(Object(root.at("settings"), "settings"));
+  if (const Json* ground = root.find("ground"))
+    model.ground = read_ground(Object(*ground, "ground"));
+  if (const Json* bounds = root.find("bounds"))
+    model.bounds = read_bounds(Object(*bounds, "bounds"));
+  if (const Json* ball = root.find("ball")) model.ball = read_ball(Object(*ball, "ball"));
+
+  // Bodies: the explicit ones, then the chain's links.
+  const Json* bodies_json = root.find("bodies");
+  const Json* chain_json = root.find("chain");
+  if (!bodies_json && !chain_json) fail("bodies", "missing required field (or give a \"chain\")");
+  std::vector<BodySpec> bodies;
+  NameRegistry body_names;
+  if (bodies_json) {
+    if (!bodies_json->is_array()) wrong_type(*bodies_json, "bodies", "an array");
+    for (std::size_t i = 0; i < bodies_json->size(); ++i) {
+      const std::string path = indexed("bodies", i);
+      bodies.push_back(read_body(Object((*bodies_json)[i], path)));
+      require_unique(body_names, bodies.back().body.name, path);
+    }
+  }
+  std::vector<Joint> chain_joints;
+  if (chain_json) {
+    Chain chain = read_chain(Object(*chain_json, "chain"));
+    if (options.links) {
+      require_at_least(*options.links, 1, "chain.links (SceneOptions::links)");
+      if (*options.links > INT_MAX) fail("chain.links", "too many links requested");
+      chain.links = static_cast<int>(*options.links);
+    }
+    generate_chain(chain, bodies, chain_joints);
+  } else if (options.links) {
+    fail("chain", std::to_string(*options.links) +
+                      " links requested but the scene has no \"chain\" generator");
+  }
+  std::unordered_map<std::string, int> body_index;
+  for (std::size_t i = 0; i < bodies.size(); ++i)
+    body_index.emplace(bodies[i].body.name, static_cast<int>(i));
+
+  // Variants change radii and masses before densities become masses.
+  std::optional<std::vector<std::pair<std::string, Variant>>> variants;
+  if (const Json* variants_json = root.find("variants"))
+    variants = read_variants(Object(*variants_json, "variants"), body_index);
+  if (const Variant* variant = select_variant(root, variants ? &*variants : nullptr, options))
+    apply_variant(*variant, bodies);
+  for (BodySpec& spec : bodies) {
+    if (spec.density) {
+      const double body_volume = volume(spec.body.shape);
+      spec.body.mass = *spec.density * body_volume;
+      if (!(spec.body.mass > 0)) {
+        fail(spec.density_path, "gives mass " + format_number(spec.body.mass) + " kg (volume " +
+                                    format_number(body_volume) + " m^3); mass must be > 0");
+      }
+    }
+  }
+
+  // Joints: the explicit ones, then the chain's.
+  if (const Json* joints_json = root.find("joints")) {
+    if (!joints_json->is_array()) wrong_type(*joints_json, "joints", "an array");
+    NameRegistry joint_names;
+    for (std::size_t i = 0; i < joints_json->size(); ++i) {
+      const std::string path = indexed("joints", i);
+      model.joints.push_back(read_joint(Object((*joints_json)[i], path), bodies, body_index));
+      require_unique(joint_names, model.joints.back().name, path);
+    }
+  }
+  model.joints.insert(model.joints.end(), chain_joints.begin(), chain_joints.end());
+  for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));
+  return model;
+}
+
+/// Replays a parse that failed to find where and why: nlohmann's exceptions carry only a byte
+/// offset, and its number-overflow error (1e999, which it refuses) not even that. Tracks the
+/// JSON path so an overflowing number is reported like any other bad value.
+class ParseErrorLocator : public nlohmann::json_sax<Json> {
+ public:
+  std::size_t position = 0;  ///< characters read, the offending one included
+  std::string token;         ///< the offending token as read
+  int error_id = 0;          ///< nlohmann's error id (406: number overflow)
+  std::string detail;        ///< nlohmann's message without its "[json.exception...]" prefix
+  std::string path;          ///< JSON path of the value being read
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return open(false); }
+  bool key(string_t& key) override {
+    frames_.back().key = key;
+    return true;
+  }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(true); }
+  bool end_array() override { return close(); }
+
+  bool parse_error(std::size_t at, const std::string& last_token,
+                   const Json::exception& error) override {
+    position = at;
+    token = last_token;
+    error_id = error.id;
+    detail = error.what();
+    if (const std::size_t end = detail.find("] "); end != std::string::npos)
+      detail.erase(0, end + 2);
+    // "parse error at line 1, column 2: <detail>": we report the position ourselves.
+    if (detail.starts_with("parse error")) {
+      if (const std::size_t colon = detail.find(": "); colon != std::string::npos) {
+        detail.erase(0, colon + 2);
+      }
+    }
+    std::replace(detail.begin(), detail.end(), '\n', ' ');
+    for (const Frame& frame : frames_) {
+      path = frame.is_array ? indexed(path, frame.index) : child(path, frame.key);
+    }
+    return false;
+  }
+
+ private:
+  struct Frame {
+    bool is_array = false;
+    std::size_t index = 0;  ///< of the element being read, in an array
+    std::string key;        ///< of the member being read, in an object
+  };
+  std::vector<Frame> frames_;
+
+  bool value() {
+    if (!frames_.empty() && frames_.back().is_array) ++frames_.back().index;
+    return true;
+  }
+  bool open(bool is_array) {
+    frames_.push_back({is_array, 0, {}});
+    return true;
+  }
+  bool close() {
+    frames_.pop_back();
+    return value();  // the finished container is a value of its parent
+  }
+};
+
+/// The message for text that nlohmann cannot parse: "<source>:<line>:<column>: malformed JSON:
+/// <detail>" (line and column 1-based, in bytes), or for a number beyond double range the usual
+/// "<source>: <path>: must be a finite number, got <token>".
+std::string parse_error_message(std::string_view text, std::string_view source) {
+  ParseErrorLocator locator;
+  Json::sax_parse(text.begin(), text.end(), &locator);
+  if (locator.error_id == 406) {
+    const std::string where = locator.path.empty() ? "" : locator.path + ": ";
+    return std::string(source) + ": " + where + "must be a finite number, got " + locator.token;
+  }
+  const std::size_t offset = std::min(locator.position > 0 ? locator.position - 1 : 0, text.size());
+  const std::string_view before = text.substr(0, offset);
+  const std::size_t line = 1 + std::count(before.begin(), before.end(), '\n');
+  const std::size_t line_start = before.rfind('\n');
+  const std::size_t column =
+      offset - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
+  return std::string(source) + ":" + std::to_string(line) + ":" + std::to_string(column) +
+         ": malformed JSON: " + locator.detail;
+}
+
+}  // namespace
+
+Model load_scene_text(std::string_view json_text, std::string_view source,
+                      const SceneOptions& options) {
+  Json json;
+  try {
+    json = Json::parse(json_text.begin(), json_text.end());
+  } catch (const Json::exception&) {  // parse_error, or out_of_range for 1e999
+    throw ModelError(parse_error_message(json_text, source));
+  }
+  try {
+    Model model = read_model(json, options);
+    validate(model);
+    return model;
+  } catch (const ModelError& error) {
+    throw ModelError(std::string(source) + ": " + error.what());
+  }
+}
+
+Model load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
+  const std::string source = path.string();
+  const auto cannot_read = [&] {
+    throw ModelError(source + ": cannot read file: " + std::strerror(errno));
+  };
+  errno = 0;
+  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(source.c_str(), "rb"),
+                                                             &std::fclose);
+  if (!file) cannot_read();
+  std::string text;
+  char buffer[1 << 16];
+  std::size_t count = 0;
+  while ((count = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, count);
+  if (std::ferror(file.get())) cannot_read();
+  return load_scene_text(text, source, options);
+}
+
+}  // namespace limber

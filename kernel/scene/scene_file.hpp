@@ -1,0 +1,106 @@
+// Scene files: JSON in, validated Model out, or one clear error line.
+//
+// Format (version 1). All numbers SI (m, kg, s). "required" fields missing, unknown fields,
+// wrong types and non-finite numbers (e.g. 1e999) are errors. Optional fields and their
+// defaults are listed here and in README.md; no other value is ever filled in silently.
+//
+// {
+//   "limber_scene": 1,                         required, must be 1
+//   "name": "humanoid",                        required, non-empty string
+//   "description": "...",                      optional string
+//   "settings": {                              required
+//     "gravity": [0, 0, -9.81],                required, m/s²
+//     "time_step": 0.004166667,                required, s, > 0
+//     "duration": 5,                           required, s, > 0
+//     "damping": 0,                            optional (0), 1/s, ≥ 0
+//     "divergence_speed": 1000,                optional (1000), m/s, > 0
+//     "contact_recovery_speed": 0.5,           optional (0.5), m/s, ≥ 0: push-out speed of old penetration
+//     "relaxation": {                          optional; each field optional
+//       "iterations": 100,                     (100) integer ≥ 1
+//       "tolerance": 0,                        (0) m, ≥ 0; 0 disables
+//       "budget_us": 0,                        (0) µs, ≥ 0; 0 disables
+//       "over_relaxation": 1 },                (1) in (0, 2): successive over-relaxation factor
+//     "sleep": {                               optional; each field optional
+//       "enabled": true,                       (true)
+//       "start_asleep": false,                 (false)
+//       "speed_threshold": 0.05,               (0.05) m/s, ≥ 0
+//       "time_to_sleep": 0.5 },                (0.5) s, ≥ 0
+//     "verlet": {                              optional; each field optional
+//       "joints": "zero_length_constraint",    ("zero_length_constraint") or "shared_particle"
+//       "drag_factor": 1.99 } },               (absent) in (1, 2]
+//   "ground": { "height": 0, "restitution": 0.1, "friction": 0.6 },      optional object; all fields required;
+//                                              restitution in [0, 1], friction ≥ 0
+//   "bounds": { "min": [0,0,0], "max": [5,5,5], "restitution": 0.5, "friction": 0.3 },
+//                                              optional object; all required; max > min on every axis
+//   "ball": { "radius": 0.05, "mass": 2.268, "restitution": 0.8,
+//             "position": [0.8, 0, 0.25], "speed": 6, "direction": [-1, 0, 0] },
+//                                              optional object; all required; radius, mass > 0;
+//                                              restitution in [0, 1]; speed ≥ 0; direction non-zero
+//                                              (normalized); velocity = speed · direction
+//   "bodies": [ {                              required unless "chain" is given
+//       "name": "neck",                        required, unique, non-empty, not "world"
+//       "shape": { "type": "cylinder", "length": 0.05, "radius": 0.02 },
+//                                              required; type "cylinder" | "capsule"; length > 0; radius ≥ 0
+//       "mass": 2.268,                         exactly one of "mass" (kg, > 0) or
+//       "density": 1000,                       "density" (kg/m³, > 0; mass = density × volume(shape))
+//       "position": [0, 0, 1.02],              required, m, centre
+//       "axis": [0, 0, 1],                     required, non-zero (normalized), tail → head
+//       "linear_velocity": [0, 0, 0],          optional ([0,0,0]), m/s
+//       "angular_velocity": [0, 0, 0] } ],     optional ([0,0,0]), rad/s
+//   "joints": [ {                              optional (none)
+//       "name": "head-neck",                   required, unique, non-empty
+//       "type": "spherical",                   required; "spherical" is the only type so far
+//       "inboard": "head",                     required: a body name, or "world"
+//       "outboard": "neck",                    required: a body name, different from inboard
+//       "inboard_anchor": "tail",              required: "head" | "tail" (the axis end points,
+//       "outboard_anchor": "head" } ],         local (0,0,±length/2)) or a local [x,y,z] in m;
+//                                              with inboard "world", a world [x,y,z] in m
+//   "chain": {                                 optional generator of a straight chain of links
+//       "links": 5,                            required integer ≥ 1 (SceneOptions::links overrides)
+//       "shape": "capsule",                    required: "cylinder" | "capsule"
+//       "link_length": 0.2, "link_radius": 0.015,     required; > 0 and ≥ 0
+//       "link_mass": 2.268, "end_mass": 4.536,        required, kg, > 0 (end_mass: the last link)
+//       "anchor": [0, 0, 1.5],                 required: world point of link_0's head
+//       "direction": [1, 0, 0],                required, non-zero: from each link's head to its tail
+//       "pinned": true },                      required: joint "joint_0" holds link_0's head to the world
+//     It appends bodies "link_0" … "link_{N−1}" (after any explicit ones), laid head to tail from
+//     the anchor, and spherical joints "joint_k" (k ≥ 1) from link_{k−1}'s tail to link_k's head.
+//   "variants": {                              optional: named sets of per-body overrides
+//       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
+//                                              each override may give "radius" and/or "mass" (or
+//                                              "density") for a body that exists
+//   "variant": "medium"                        required when "variants" is given: the default one
+// }
+//
+// Errors: ModelError whose what() is one line "<source>: <path>: <problem>", the path in JSON
+// terms (e.g. "bodies[3].shape.radius", "joints[1].outboard", "variants.thin.neck.mass"). A
+// malformed file reports "<source>:<line>:<column>: malformed JSON: <detail>".
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "kernel/model/model.hpp"
+
+namespace limber {
+
+/// Choices made when loading, for scenes that offer them.
+struct SceneOptions {
+  std::optional<std::string> variant;  ///< select one of "variants" (e.g. the humanoid's "thin")
+  std::optional<long> links;           ///< number of links of the "chain" generator
+};
+
+/// Parses and validates a scene. `source` names it in error messages (usually the file path).
+/// Throws ModelError (one line naming source, field and problem) on any bad input, including
+/// an option the scene cannot honour (a variant it lacks, links without a "chain").
+Model load_scene_text(std::string_view json_text, std::string_view source, const SceneOptions& options = {});
+
+/// Reads and loads a scene file. Throws ModelError when it cannot be read or is invalid.
+Model load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
+
+/// The text of tools/scenes/humanoid.json, compiled into the library: the default scene.
+std::string_view embedded_humanoid_scene();
+
+}  // namespace limber

@@ -1,0 +1,76 @@
+// Sleeping islands (thesis 4.5.3): bodies at rest cost nothing until a contact or force wakes them.
+//
+// An island is a connected set of particles stored contiguously (compile.cpp), so every pass
+// walks state.awake_islands — a few index ranges — and a sleeping island is simply absent. An
+// island falls asleep once all its particles have stayed below Settings::sleep.speed_threshold
+// for sleep.time_to_sleep; its velocity is then zeroed (x_previous = x), so it wakes at rest.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// Refreshes state.awake_islands (ascending island order) after islands slept or woke.
+template <typename Scalar>
+void rebuild_awake_islands(VerletState<Scalar>& state) {
+  state.awake_islands.clear();
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) state.awake_islands.push_back(k);
+  }
+}
+
+/// Wakes island `k` (no-op when awake). Returns true when it was asleep.
+template <typename Scalar>
+bool wake_island(VerletState<Scalar>& state, std::uint32_t k) {
+  Island& island = state.islands[k];
+  if (!island.sleeping) return false;
+  island.sleeping = false;
+  island.still_time = 0;
+  rebuild_awake_islands(state);
+  return true;
+}
+
+/// After a step of length dt: measures each awake island's fastest particle, reports divergence
+/// (non-finite or faster than settings.divergence_speed), and puts islands that have been still
+/// for long enough to sleep.
+template <typename Scalar>
+StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
+  const auto& x = state.particles;
+  const double divergence_speed2 = state.settings.divergence_speed * state.settings.divergence_speed;
+  const double threshold2 = state.settings.sleep.speed_threshold * state.settings.sleep.speed_threshold;
+  StepStatus status = StepStatus::ok;
+  bool changed = false;
+  for (std::uint32_t k : state.awake_islands) {
+    Island& island = state.islands[k];
+    double largest_step2 = 0;
+    for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
+      const double dx = x.position_x[p] - x.previous_x[p];
+      const double dy = x.position_y[p] - x.previous_y[p];
+      const double dz = x.position_z[p] - x.previous_z[p];
+      const double step2 = dx * dx + dy * dy + dz * dz;
+      largest_step2 = step2 > largest_step2 || std::isnan(step2) ? step2 : largest_step2;
+    }
+    const double speed2 = largest_step2 / (dt * dt);
+    if (!std::isfinite(speed2)) {
+      status = StepStatus::diverged_non_finite;
+    } else if (speed2 > divergence_speed2 && status == StepStatus::ok) {
+      status = StepStatus::diverged_speed;
+    }
+    if (!state.settings.sleep.enabled) continue;
+    island.still_time = speed2 < threshold2 ? island.still_time + dt : 0.0;
+    if (island.still_time >= state.settings.sleep.time_to_sleep && island.still_time > 0) {
+      island.sleeping = true;
+      changed = true;
+      for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
+        state.particles.set_previous(p, state.particles.position(p));
+      }
+    }
+  }
+  if (changed) rebuild_awake_islands(state);
+  return status;
+}
+
+}  // namespace limber

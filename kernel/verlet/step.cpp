@@ -1,0 +1,120 @@
+#include "kernel/verlet/step.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "kernel/collision/contacts.hpp"
+#include "kernel/relaxation/gauss_seidel.hpp"
+#include "kernel/sleeping/sleeping.hpp"
+
+namespace limber {
+namespace {
+
+// Fraction of the last step's displacement a particle keeps (its implicit velocity).
+template <typename Scalar>
+double velocity_retention(const VerletState<Scalar>& state, double dt) {
+  const Settings& settings = state.settings;
+  const double kept = settings.verlet.drag_factor ? *settings.verlet.drag_factor - 1.0
+                                                  : std::exp(-settings.damping * dt);
+  return kept * dt / state.previous_time_step;
+}
+
+// Verlet integration (thesis eq. 3.6): x' = x + k·(x − x*) + g·Δt², x* ← x. Pinned particles
+// (w = 0) stay where they are.
+template <typename Scalar>
+void integrate(VerletState<Scalar>& state, double dt) {
+  auto& p = state.particles;
+  const Scalar k = static_cast<Scalar>(velocity_retention(state, dt));
+  const Scalar dt2 = static_cast<Scalar>(dt * dt);
+  const Scalar gx = state.gravity.x() * dt2, gy = state.gravity.y() * dt2, gz = state.gravity.z() * dt2;
+  std::uint64_t integrated = 0;
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      const Scalar x = p.position_x[i], y = p.position_y[i], z = p.position_z[i];
+      p.position_x[i] = x + k * (x - p.previous_x[i]) + gx;
+      p.position_y[i] = y + k * (y - p.previous_y[i]) + gy;
+      p.position_z[i] = z + k * (z - p.previous_z[i]) + gz;
+      p.previous_x[i] = x, p.previous_y[i] = y, p.previous_z[i] = z;
+    }
+    integrated += island.particle_end - island.particle_begin;
+  }
+  // Applied forces: x += w·f·Δt².
+  for (const auto& [i, force] : state.pending_forces) {
+    const Scalar scale = p.inverse_mass[i] * dt2;
+    p.position_x[i] += scale * static_cast<Scalar>(force.x());
+    p.position_y[i] += scale * static_cast<Scalar>(force.y());
+    p.position_z[i] += scale * static_cast<Scalar>(force.z());
+  }
+  state.pending_forces.clear();
+  state.counters.particles_integrated += integrated;
+}
+
+}  // namespace
+
+template <typename Scalar>
+StepReport step(VerletState<Scalar>& state, double dt) {
+  StepReport report;
+  if (!(dt > 0) || !std::isfinite(dt)) {
+    report.status = StepStatus::invalid_time_step;
+    return state.last_report = report;
+  }
+  const bool has_ball = state.ball_particle >= 0;
+  const bool has_planes = !state.planes.empty();
+
+  integrate(state, dt);
+  if (has_ball) detect_ball_contacts(state, dt);
+  if (has_planes) detect_plane_contacts(state, dt);
+
+  const RelaxationSettings& relaxation = state.settings.relaxation;
+  const auto start = std::chrono::steady_clock::now();
+  if (!state.awake_islands.empty()) {
+    for (int iteration = 1; iteration <= relaxation.iterations; ++iteration) {
+      double largest = gauss_seidel_sweep(state);
+      if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
+      if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
+      report.iterations = iteration;
+      report.largest_correction = largest;
+      report.stop = RelaxationStop::iterations;
+      if (relaxation.tolerance > 0 && largest < relaxation.tolerance) {
+        report.stop = RelaxationStop::tolerance;
+        break;
+      }
+      if (relaxation.budget_us > 0 && iteration < relaxation.iterations) {
+        const std::chrono::duration<double, std::micro> elapsed = std::chrono::steady_clock::now() - start;
+        if (elapsed.count() >= relaxation.budget_us) {
+          report.stop = RelaxationStop::budget;
+          break;
+        }
+      }
+    }
+  }
+  if (has_ball || has_planes) apply_restitution(state, dt);
+
+  report.status = update_sleep(state, dt);
+  state.time += dt;
+  state.previous_time_step = dt;
+  ++state.counters.steps;
+  return state.last_report = report;
+}
+
+template <typename Scalar>
+void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force) {
+  const std::uint32_t limb = state.body_limb.at(static_cast<std::size_t>(body));
+  const Eigen::Vector3d half = 0.5 * force;
+  state.pending_forces.emplace_back(state.limbs.head[limb], half);
+  state.pending_forces.emplace_back(state.limbs.tail[limb], half);
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    const Island& island = state.islands[k];
+    if (limb >= island.limb_begin && limb < island.limb_end) wake_island(state, k);
+  }
+}
+
+template StepReport step<float>(VerletState<float>&, double);
+template StepReport step<double>(VerletState<double>&, double);
+template void apply_force<float>(VerletState<float>&, int, const Eigen::Vector3d&);
+template void apply_force<double>(VerletState<double>&, int, const Eigen::Vector3d&);
+
+}  // namespace limber

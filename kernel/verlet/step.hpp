@@ -1,0 +1,39 @@
+// step(State, dt): one time step of the Verlet method.
+#pragma once
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// Advances `state` by dt seconds. The passes follow the thesis's loop (figure 2.5; 4.2.2):
+///  1. integrate   Verlet, x' = x + k·(x − x*) + a·Δt² (eq. 3.6 / 4.5), over awake islands;
+///                 k = exp(−damping·Δt) (physical damping) or the thesis's f − 1 (f = 1.99),
+///                 scaled by Δt/Δt_previous when Δt changes (time-corrected Verlet);
+///  2. collide     the ball against every limb (waking the islands it touches), then features
+///                 against planes — skipped when the scene has neither;
+///  3. relax       Gauss-Seidel sweeps over joints and links, then contacts, until the
+///                 iteration count, the tolerance or the wall-clock budget stops it (3.2.3);
+///  4. restitution the velocity pass for contacts (eq. 2.33);
+///  5. sleep       still islands fall asleep; divergence is detected.
+/// Allocates nothing and never throws; a bad Δt or a divergence is reported in the result
+/// (also kept in state.last_report).
+template <typename Scalar>
+StepReport step(VerletState<Scalar>& state, double dt);
+
+/// step() with the scene's own time step.
+template <typename Scalar>
+StepReport step(VerletState<Scalar>& state) {
+  return step(state, state.settings.time_step);
+}
+
+/// Applies `force` (N, world) at the centre of Model body `body` during the next step, split
+/// over the limb's two particles, and wakes its island. No allocation for up to 64 forces a step.
+template <typename Scalar>
+void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force);
+
+extern template StepReport step<float>(VerletState<float>&, double);
+extern template StepReport step<double>(VerletState<double>&, double);
+extern template void apply_force<float>(VerletState<float>&, int, const Eigen::Vector3d&);
+extern template void apply_force<double>(VerletState<double>&, int, const Eigen::Vector3d&);
+
+}  // namespace limber

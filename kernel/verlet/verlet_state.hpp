@@ -1,0 +1,160 @@
+// The mutable state of the Verlet method: everything that changes while stepping, in layouts/
+// buffers, plus the cold data the passes and observers need. Built by compile() (compile.hpp)
+// from an immutable Model; stepped by step() (step.hpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kernel/model/model.hpp"
+#include "layouts/aligned_array.hpp"
+#include "layouts/constraints/distance_constraint_buffer.hpp"
+#include "layouts/particles/particle_buffer.hpp"
+
+namespace limber {
+
+/// How a distance constraint's correction is shared between its two particles.
+enum class RelaxationRule {
+  weighted,    ///< inverse-mass weights w_i/(w_i+w_j), w_j/(w_i+w_j) — thesis eq. 4.7, the thesis's contribution
+  unweighted,  ///< ½ and ½ (the whole gap to the free end when the other is pinned) — thesis eq. 4.6 [Jak03]
+};
+
+/// Choices the Verlet method takes besides the Model.
+struct VerletOptions {
+  RelaxationRule rule = RelaxationRule::weighted;
+};
+
+/// Why relaxation stopped in a step (thesis 3.2.3 lists the three).
+enum class RelaxationStop : std::uint8_t {
+  iterations,  ///< ran the configured number of sweeps
+  tolerance,   ///< the largest correction of a sweep fell below the tolerance
+  budget,      ///< the wall-clock budget ran out (hard real-time stop)
+  idle,        ///< nothing awake to relax
+};
+
+/// Outcome of one step. step() never throws; divergence is reported here.
+enum class StepStatus : std::uint8_t {
+  ok,
+  diverged_non_finite,  ///< a position became NaN or infinite
+  diverged_speed,       ///< a particle exceeded Settings::divergence_speed
+  invalid_time_step,    ///< Δt was not a positive finite number; nothing was done
+};
+
+struct StepReport {
+  StepStatus status = StepStatus::ok;
+  RelaxationStop stop = RelaxationStop::idle;
+  int iterations = 0;              ///< relaxation sweeps run
+  double largest_correction = 0;   ///< largest particle displacement in the last sweep, m
+};
+
+/// A connected set of particles (joined by constraints), stored contiguously in every buffer so
+/// a pass over the awake islands is a pass over a few index ranges. Islands sleep and wake whole.
+struct Island {
+  std::uint32_t particle_begin = 0, particle_end = 0;
+  std::uint32_t constraint_begin = 0, constraint_end = 0;
+  std::uint32_t limb_begin = 0, limb_end = 0;
+  std::uint32_t feature_begin = 0, feature_end = 0;  ///< contact features (plane contacts)
+  bool sleeping = false;
+  double still_time = 0;  ///< s spent below the sleep speed threshold
+};
+
+/// Limbs as the particle method sees them (structure of arrays, cold: contact geometry and
+/// metrics). A limb is the segment head → tail with a cylinder or capsule around it.
+struct LimbBuffer {
+  std::vector<std::uint32_t> head, tail;      ///< particle indices
+  std::vector<std::uint32_t> body;            ///< Model body index
+  std::vector<std::uint32_t> link_constraint; ///< index of its head–tail distance constraint
+  std::vector<double> radius;                 ///< m
+  std::vector<ShapeType> shape;
+  std::size_t size() const { return head.size(); }
+};
+
+/// A point of a limb or of the ball that can touch a plane: a sphere of `radius` about a
+/// particle (ball, capsule end) or the rim of a cylinder's end disk, whose axis runs from
+/// `axis_partner` to `particle`.
+struct ContactFeature {
+  std::uint32_t particle = 0;
+  std::uint32_t axis_partner = 0;  ///< == particle for a sphere
+  double radius = 0;
+  bool is_disk = false;
+  double restitution = 0;  ///< the feature's own (the ball's); a contact uses the larger of it and the plane's
+};
+
+/// A half-space n·x ≥ offset (ground, a wall of the bounds), solid where n·x < offset.
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0;
+  double restitution = 0;
+  double friction = 0;
+};
+
+/// Active contacts of the current step (capacity fixed at compile: no allocation in step()).
+struct PlaneContact {
+  std::uint32_t feature = 0, plane = 0;
+  double approach_speed = 0;    ///< normal velocity before relaxation, m/s (< 0 approaching)
+  double start_separation = 0;  ///< at the previous positions, m (< 0: it began the step inside)
+};
+/// A ball–limb contact as a contact plane fixed when the contact was found: normal n (limb →
+/// ball), the point a of the way from head to tail, and the offset k, so that
+/// C = n·(x_ball − ((1−a)·x_head + a·x_tail)) − k is the separation (< 0 overlapping).
+struct BallContact {
+  std::uint32_t limb = 0;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
+  double axial = 0;
+  double offset = 0;            ///< k, m
+  double approach_speed = 0;    ///< relative normal velocity before relaxation, m/s
+  double start_separation = 0;  ///< at the previous positions, m
+};
+
+/// Work counters, accumulated over all steps (for benchmarks and the "sleeping costs nothing" test).
+struct StepCounters {
+  std::uint64_t steps = 0;
+  std::uint64_t particles_integrated = 0;
+  std::uint64_t constraint_projections = 0;
+  std::uint64_t contact_projections = 0;
+};
+
+template <typename Scalar>
+struct VerletState {
+  using Vector3s = Eigen::Matrix<Scalar, 3, 1>;
+
+  // --- hot: the buffers the passes stream over ---
+  ParticleBuffer<Scalar> particles;
+  DistanceConstraintBuffer<Scalar> constraints;
+
+  // --- structure (fixed at compile) ---
+  std::vector<Island> islands;
+  LimbBuffer limbs;
+  std::vector<ContactFeature> features;
+  std::vector<Plane> planes;              ///< ground first (if any), then the six bound walls
+  std::vector<double> particle_mass;      ///< kg, the physical mass share even when pinned (metrics)
+  std::vector<std::uint32_t> body_limb;   ///< Model body index → limb index
+  /// Joint constraints and the length the gap is measured against (mean of the two limbs), m.
+  std::vector<std::pair<std::uint32_t, double>> joint_constraints;
+  std::vector<std::string> particle_names;    ///< "<body>.head", "<body>.tail", "<joint>.pin", "ball"
+  std::int64_t ball_particle = -1;
+  std::int64_t ball_island = -1;
+  double ball_radius = 0, ball_restitution = 0;
+
+  // --- settings, resolved ---
+  VerletOptions options;
+  Settings settings;
+  Vector3s gravity = Vector3s::Zero();
+
+  // --- changing ---
+  double time = 0;            ///< s
+  double previous_time_step;  ///< Δt of the last step (for the implicit velocity), s
+  std::vector<std::uint32_t> awake_islands;
+  std::vector<PlaneContact> plane_contacts;
+  std::vector<BallContact> ball_contacts;
+  std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
+  StepReport last_report;
+  StepCounters counters;
+};
+
+}  // namespace limber

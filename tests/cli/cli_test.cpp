@@ -1,0 +1,116 @@
+// The `limber` program: the summary it prints, and one clear line for every kind of bad input.
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tools/cli/cli.hpp"
+
+namespace limber::cli {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+struct Result {
+  int code;
+  std::string out, err;
+};
+
+Result run(std::vector<std::string> arguments) {
+  arguments.insert(arguments.begin(), "limber");
+  std::vector<const char*> argv;
+  for (const std::string& a : arguments) argv.push_back(a.c_str());
+  std::ostringstream out, err;
+  const int code = run_main(static_cast<int>(argv.size()), argv.data(), out, err);
+  return {code, out.str(), err.str()};
+}
+
+std::string scene(const std::string& file) { return std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file; }
+
+// A bad input: exit code 2, nothing on stdout, exactly one line on stderr mentioning `needle`.
+void expect_rejected(const std::vector<std::string>& arguments, const std::string& needle) {
+  const Result r = run(arguments);
+  EXPECT_EQ(r.code, kBadInput) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_THAT(r.err, HasSubstr(needle));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST(Cli, DefaultRunSimulatesTheEmbeddedHumanoid) {
+  const Result r = run({"run", "--steps", "300"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("limber run: humanoid"));
+  EXPECT_THAT(r.out, HasSubstr("9 limbs, 8 joints, ground, ball"));
+  EXPECT_THAT(r.out, HasSubstr("joint gap"));
+  EXPECT_THAT(r.out, HasSubstr("travelled"));
+  EXPECT_THAT(r.out, HasSubstr("woke at t ="));
+  EXPECT_THAT(r.out, HasSubstr("status      ok"));
+}
+
+TEST(Cli, ChainRunsWithAHundredLinks) {
+  const Result r = run({"run", scene("chain.json"), "--links", "100", "--steps", "20", "--precision", "float"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("100 limbs, 100 joints"));
+}
+
+TEST(Cli, OutWritesOneCsvRowPerStepPlusTheStart) {
+  const std::string path = ::testing::TempDir() + "limber_cli_trajectory.csv";
+  const Result r = run({"run", scene("stick_in_box.json"), "--steps", "25", "--out", path});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  std::ifstream csv(path);
+  std::string header, line;
+  std::getline(csv, header);
+  EXPECT_EQ(header, "time,stick.head_x,stick.head_y,stick.head_z,stick.tail_x,stick.tail_y,stick.tail_z");
+  int rows = 0;
+  while (std::getline(csv, line)) ++rows;
+  EXPECT_EQ(rows, 26);
+}
+
+TEST(Cli, RejectsUnknownFlag) { expect_rejected({"run", "--speed", "3"}, "--speed"); }
+TEST(Cli, RejectsUnknownMethod) { expect_rejected({"run", "--method", "midpoint"}, "midpoint"); }
+TEST(Cli, RejectsMissingSubcommand) { expect_rejected({}, "subcommand"); }
+TEST(Cli, RejectsNonPositiveTimeStep) { expect_rejected({"run", "--dt", "0"}, "--dt: must be > 0"); }
+TEST(Cli, RejectsNotANumberTimeStep) { expect_rejected({"run", "--dt", "nan"}, "--dt"); }
+TEST(Cli, RejectsZeroIterations) { expect_rejected({"run", "--iterations", "0"}, "--iterations: must be >= 1"); }
+TEST(Cli, RejectsNegativeBallMass) { expect_rejected({"run", "--ball-mass", "-1"}, "--ball-mass: must be > 0"); }
+TEST(Cli, RejectsInfiniteBallSpeed) { expect_rejected({"run", "--ball-speed", "inf"}, "--ball-speed"); }
+TEST(Cli, RejectsRestitutionAboveOne) { expect_rejected({"run", "--ball-restitution", "1.5"}, "--ball-restitution"); }
+TEST(Cli, RejectsZeroBallDirection) { expect_rejected({"run", "--ball-direction", "0,0,0"}, "--ball-direction"); }
+TEST(Cli, RejectsShortBallDirection) { expect_rejected({"run", "--ball-direction", "1,0"}, "--ball-direction"); }
+TEST(Cli, RejectsNegativeFriction) { expect_rejected({"run", "--friction", "-0.1"}, "--friction: must be >= 0"); }
+TEST(Cli, RejectsFrictionWithoutGround) { expect_rejected({"run", scene("chain.json"), "--friction", "0.3"}, "no ground"); }
+TEST(Cli, RejectsBallFlagsWithoutBall) { expect_rejected({"run", scene("chain.json"), "--ball-speed", "3"}, "no ball"); }
+TEST(Cli, RejectsUnknownBodyVariant) { expect_rejected({"run", "--body", "giant"}, "giant"); }
+TEST(Cli, RejectsLinksOnASceneWithoutChain) { expect_rejected({"run", "--links", "10"}, "chain"); }
+TEST(Cli, RejectsZeroSteps) { expect_rejected({"run", "--steps", "0"}, "--steps"); }
+TEST(Cli, RejectsMissingSceneFile) { expect_rejected({"run", "no/such/scene.json"}, "no/such/scene.json"); }
+
+TEST(Cli, RejectsABadSceneFileNamingFileAndField) {
+  const std::string path = ::testing::TempDir() + "limber_cli_bad_scene.json";
+  std::ifstream in(scene("chain.json"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string json = text.str();
+  const auto at = json.find("\"link_mass\"");
+  ASSERT_NE(at, std::string::npos);
+  json.replace(at, std::string("\"link_mass\"").size(), "\"link_mass\": -1, \"unused\"");
+  std::ofstream(path) << json;
+  const Result r = run({"run", path});
+  EXPECT_EQ(r.code, kBadInput);
+  EXPECT_THAT(r.err, HasSubstr(path));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST(Cli, HelpExitsCleanly) {
+  const Result r = run({"run", "--help"});
+  EXPECT_EQ(r.code, kSuccess);
+  EXPECT_THAT(r.out, HasSubstr("--ball-speed"));
+  EXPECT_THAT(r.err, Not(HasSubstr("limber:")));
+}
+
+}  // namespace
+}  // namespace limber::cli

@@ -1,0 +1,415 @@
+// The scene loader: every bad input gives one line naming source, field and problem; the
+// shipped scenes load with the thesis's numbers.
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "kernel/scene/scene_file.hpp"
+
+namespace limber {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::StartsWith;
+
+constexpr double kPound = 0.45359237;  // kg
+const std::string kScenes = LIMBER_SOURCE_DIR "/tools/scenes/";
+
+// A pendulum of two limbs pinned to the world, with ground and ball: valid as written.
+// upper spans z 1.1..1.5, lower z 0.9..1.1.
+constexpr std::string_view kPendulum = R"({
+  "limber_scene": 1,
+  "name": "pendulum",
+  "settings": {"gravity": [0, 0, -9.81], "time_step": 0.01, "duration": 1},
+  "ground": {"height": 0, "restitution": 0.1, "friction": 0.6},
+  "ball": {"radius": 0.05, "mass": 2.5, "restitution": 0.8, "position": [1, 0, 0.5],
+           "speed": 6, "direction": [-2, 0, 0]},
+  "bodies": [
+    {"name": "upper", "shape": {"type": "cylinder", "length": 0.4, "radius": 0.02},
+     "mass": 2, "position": [0, 0, 1.3], "axis": [0, 0, 3]},
+    {"name": "lower", "shape": {"type": "capsule", "length": 0.2, "radius": 0.01},
+     "density": 1000, "position": [0, 0, 1.0], "axis": [0, 0, 1]}
+  ],
+  "joints": [
+    {"name": "pin", "type": "spherical", "inboard": "world", "outboard": "upper",
+     "inboard_anchor": [0, 0, 1.5], "outboard_anchor": "head"},
+    {"name": "elbow", "type": "spherical", "inboard": "upper", "outboard": "lower",
+     "inboard_anchor": "tail", "outboard_anchor": "head"}
+  ]
+})";
+
+/// `text` with its one occurrence of `from` replaced by `to` (fails the test if absent).
+std::string with(std::string_view text, std::string_view from, std::string_view to) {
+  std::string result(text);
+  const std::size_t at = result.find(from);
+  EXPECT_NE(at, std::string::npos) << "test setup: \"" << from << "\" not in the scene";
+  EXPECT_EQ(result.find(from, at + 1), std::string::npos) << "test setup: \"" << from << "\" twice";
+  if (at != std::string::npos) result.replace(at, from.size(), to);
+  return result;
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+/// The loader's message for `text` (source "test.json"); fails the test if it loads.
+std::string load_error(std::string_view text, const SceneOptions& options = {}) {
+  try {
+    load_scene_text(text, "test.json", options);
+  } catch (const ModelError& error) {
+    const std::string message = error.what();
+    EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
+    EXPECT_THAT(message, StartsWith("test.json"));
+    return message;
+  }
+  ADD_FAILURE() << "loaded without error";
+  return "";
+}
+
+std::string pendulum_error(std::string_view from, std::string_view to) {
+  return load_error(with(kPendulum, from, to));
+}
+
+// ---- Bad input: one line naming source, field and problem
+
+TEST(SceneErrors, MalformedJsonReportsLineAndColumn) {
+  const std::string message = load_error("{\n  \"name\": \"x\",\n  \"settings\": }\n");
+  EXPECT_THAT(message, StartsWith("test.json:3:15: malformed JSON: "));
+  EXPECT_THAT(message, HasSubstr("unexpected '}'"));
+}
+
+TEST(SceneErrors, TruncatedJsonReportsTheEnd) {
+  EXPECT_THAT(load_error("{\"limber_scene\": 1,\n"), StartsWith("test.json:2:1: malformed JSON: "));
+}
+
+TEST(SceneErrors, MissingRequiredFieldIsNamed) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2, "position": [0, 0, 1.3], )", R"("mass": 2, )"),
+            "test.json: bodies[0].position: missing required field");
+  EXPECT_EQ(pendulum_error(R"("duration": 1)", R"("damping": 0)"),
+            "test.json: settings.duration: missing required field");
+}
+
+TEST(SceneErrors, UnknownFieldIsNamed) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("masss": 2,)"),
+            "test.json: bodies[0]: unknown field \"masss\"");
+  EXPECT_EQ(pendulum_error(R"("duration": 1)", R"("duration": 1, "substeps": 4)"),
+            "test.json: settings: unknown field \"substeps\"");
+}
+
+TEST(SceneErrors, WrongTypeIsNamed) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("mass": "2",)"),
+            "test.json: bodies[0].mass: must be a number, got string");
+  EXPECT_EQ(pendulum_error(R"("position": [0, 0, 1.3])", R"("position": [0, 1.3])"),
+            "test.json: bodies[0].position: must be an array of 3 numbers, got an array of 2");
+}
+
+TEST(SceneErrors, IntegerFieldRejectsAFraction) {
+  const std::string fraction = R"("duration": 1, "relaxation": {"iterations": 2.5})";
+  EXPECT_EQ(pendulum_error(R"("duration": 1)", fraction),
+            "test.json: settings.relaxation.iterations: must be an integer, got 2.5");
+}
+
+TEST(SceneErrors, NegativeMassIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("mass": -1,)"),
+            "test.json: bodies[0].mass: must be > 0, got -1");
+}
+
+TEST(SceneErrors, ZeroMassIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("mass": 0,)"),
+            "test.json: bodies[0].mass: must be > 0, got 0");
+}
+
+TEST(SceneErrors, NegativeRadiusIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("radius": 0.01})", R"("radius": -0.01})"),
+            "test.json: bodies[1].shape.radius: must be >= 0, got -0.01");
+}
+
+TEST(SceneErrors, NonFiniteNumberIsRejected) {
+  EXPECT_EQ(pendulum_error(R"([0, 0, 1.0])", R"([0, 1e999, 1.0])"),
+            "test.json: bodies[1].position[1]: must be a finite number, got 1e999");
+}
+
+TEST(SceneErrors, JointNamingAMissingBodyIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("outboard": "lower")", R"("outboard": "lowr")"),
+            "test.json: joints[1].outboard: no body named \"lowr\"");
+}
+
+TEST(SceneErrors, NonPositiveTimeStepIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("time_step": 0.01)", R"("time_step": 0)"),
+            "test.json: settings.time_step: must be > 0, got 0");
+}
+
+TEST(SceneErrors, MassAndDensityTogetherAreRejected) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("mass": 2, "density": 1000,)"),
+            "test.json: bodies[0]: give either \"mass\" or \"density\", not both");
+}
+
+TEST(SceneErrors, NeitherMassNorDensityNamesBoth) {
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", ""),
+            "test.json: bodies[0]: missing required field \"mass\" (or \"density\")");
+}
+
+TEST(SceneErrors, UnknownShapeTypeIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("type": "capsule")", R"("type": "sphere")"),
+            "test.json: bodies[1].shape.type: must be \"cylinder\" or \"capsule\", got \"sphere\"");
+}
+
+TEST(SceneErrors, DuplicateBodyNameIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("name": "lower")", R"("name": "upper")"),
+            "test.json: bodies[1].name: duplicate name \"upper\" (also bodies[0])");
+}
+
+TEST(SceneErrors, UnknownVariantListsTheAvailableOnes) {
+  SceneOptions options;
+  options.variant = "huge";
+  const std::string message = load_error(embedded_humanoid_scene(), options);
+  EXPECT_THAT(message, StartsWith("test.json: variant: no variant named \"huge\""));
+  EXPECT_THAT(message, HasSubstr("available: thin, medium, wide"));
+}
+
+TEST(SceneErrors, VariantForASceneWithoutVariantsIsRejected) {
+  SceneOptions options;
+  options.variant = "thin";
+  EXPECT_EQ(load_error(kPendulum, options),
+            "test.json: variants: variant \"thin\" requested but the scene has no \"variants\"");
+}
+
+TEST(SceneErrors, VariantOverrideOfAMissingBodyIsRejected) {
+  const std::string scene =
+      with(embedded_humanoid_scene(), R"("thin": {)", R"("thin": {"nek": {"mass": 1},)");
+  EXPECT_EQ(load_error(scene), "test.json: variants.thin.nek: no body named \"nek\"");
+}
+
+TEST(SceneErrors, LinksForASceneWithoutChainAreRejected) {
+  SceneOptions options;
+  options.links = 100;
+  EXPECT_EQ(load_error(kPendulum, options),
+            "test.json: chain: 100 links requested but the scene has no \"chain\" generator");
+}
+
+TEST(SceneErrors, ZeroLinksAreRejected) {
+  const std::string chain = read_text(kScenes + "chain.json");
+  SceneOptions options;
+  options.links = 0;
+  EXPECT_THAT(load_error(chain, options), StartsWith("test.json: chain.links"));
+  EXPECT_THAT(load_error(chain, options), HasSubstr("must be >= 1, got 0"));
+  EXPECT_EQ(load_error(with(chain, R"("links": 5)", R"("links": 0)")),
+            "test.json: chain.links: must be >= 1, got 0");
+}
+
+TEST(SceneErrors, ZeroBallDirectionIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("direction": [-2, 0, 0])", R"("direction": [0, 0, 0])"),
+            "test.json: ball.direction: must be a non-zero vector, got [0, 0, 0]");
+}
+
+TEST(SceneErrors, RestitutionOutOfRangeIsRejected) {
+  EXPECT_EQ(pendulum_error(R"("restitution": 0.1)", R"("restitution": 1.5)"),
+            "test.json: ground.restitution: must be in [0, 1], got 1.5");
+}
+
+TEST(SceneErrors, HeadAnchorOnAWorldJointIsRejected) {
+  EXPECT_EQ(
+      pendulum_error(R"("inboard_anchor": [0, 0, 1.5])", R"("inboard_anchor": "head")"),
+      "test.json: joints[0].inboard_anchor: must be a world point [x, y, z] when inboard is "
+      "\"world\", got \"head\"");
+}
+
+TEST(SceneErrors, UnreadableFileIsReported) {
+  try {
+    load_scene_file("/nonexistent/limber/scene.json");
+    FAIL() << "loaded a file that does not exist";
+  } catch (const ModelError& error) {
+    EXPECT_STREQ(error.what(),
+                 "/nonexistent/limber/scene.json: cannot read file: No such file or directory");
+  }
+  try {
+    load_scene_file(kScenes);  // a directory
+    FAIL() << "loaded a directory";
+  } catch (const ModelError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("cannot read file: Is a directory"));
+  }
+}
+
+TEST(SceneErrors, ErrorsFoundByValidateNameTheSource) {
+  // A generated link name clashing with an explicit body is only visible in the Model.
+  const std::string chain = with(read_text(kScenes + "chain.json"), R"("chain": {)",
+                                 R"("bodies": [{"name": "link_2", "shape": {"type": "cylinder",
+      "length": 1, "radius": 0}, "mass": 1, "position": [0, 0, 0], "axis": [0, 0, 1]}],
+  "chain": {)");
+  EXPECT_EQ(load_error(chain),
+            "test.json: bodies[3].name: duplicate name \"link_2\" (also bodies[0])");
+}
+
+// ---- Shipped scenes and what the loader builds
+
+TEST(ShippedScenes, HumanoidHasNineLimbsEightJointsGroundAndBall) {
+  const Model model = load_scene_file(kScenes + "humanoid.json");
+  EXPECT_EQ(model.name, "humanoid");
+  EXPECT_EQ(model.bodies.size(), 9u);
+  EXPECT_EQ(model.joints.size(), 8u);
+  ASSERT_TRUE(model.ground.has_value());
+  ASSERT_TRUE(model.ball.has_value());
+  EXPECT_FALSE(model.bounds.has_value());
+  // Thesis 4.5: a 5 lb ball of radius 5 cm, 80 cm from the body, level with the spine's centre
+  // (the thesis's code puts both at height 25 cm), thrown at the body.
+  EXPECT_DOUBLE_EQ(model.ball->mass, 5 * kPound);
+  EXPECT_DOUBLE_EQ(model.ball->radius, 0.05);
+  const Body& spine = model.bodies[model.find_body("spine")];
+  EXPECT_NEAR(model.ball->position.z(), spine.position.z(), 1e-9);
+  EXPECT_NEAR((model.ball->position - spine.position).norm(), 0.8, 1e-9);
+  EXPECT_GT(model.ball->velocity.dot(spine.position - model.ball->position), 0) << "thrown towards the body";
+  EXPECT_TRUE(model.settings.sleep.start_asleep);
+  // The default variant is medium: a 140 lb torso of radius 10 cm.
+  const Body& torso = model.bodies[model.find_body("upper_torso")];
+  EXPECT_DOUBLE_EQ(torso.mass, 140 * kPound);
+  EXPECT_DOUBLE_EQ(torso.shape.radius, 0.10);
+}
+
+TEST(ShippedScenes, HumanoidVariantsGiveTheThesisMassesAndRadii) {
+  SceneOptions thin;
+  thin.variant = "thin";
+  const Model thin_model = load_scene_text(embedded_humanoid_scene(), "humanoid", thin);
+  const Body& thin_torso = thin_model.bodies[thin_model.find_body("upper_torso")];
+  EXPECT_DOUBLE_EQ(thin_torso.mass, 84 * kPound);
+  EXPECT_DOUBLE_EQ(thin_torso.shape.radius, 0.06);
+  EXPECT_DOUBLE_EQ(thin_model.bodies[thin_model.find_body("tibia_left")].shape.radius, 0.02);
+
+  SceneOptions wide;
+  wide.variant = "wide";
+  const Model wide_model = load_scene_text(embedded_humanoid_scene(), "humanoid", wide);
+  const Body& wide_spine = wide_model.bodies[wide_model.find_body("spine")];
+  EXPECT_DOUBLE_EQ(wide_spine.mass, 25 * kPound);
+  EXPECT_DOUBLE_EQ(wide_spine.shape.radius, 0.02);
+  EXPECT_DOUBLE_EQ(wide_model.bodies[wide_model.find_body("basin")].mass, 87.5 * kPound);
+  EXPECT_DOUBLE_EQ(wide_model.body_mass(), (40 + 5 + 350 + 25 + 87.5 + 4 * 90) * kPound);
+}
+
+TEST(ShippedScenes, HumanoidStandsAssembledInEveryVariant) {
+  for (const char* variant : {"thin", "medium", "wide"}) {
+    SceneOptions options;
+    options.variant = variant;
+    const Model model = load_scene_text(embedded_humanoid_scene(), "humanoid", options);
+    for (const Joint& joint : model.joints) {
+      const Vector3 inboard = model.bodies[joint.inboard].to_world(joint.inboard_anchor);
+      const Vector3 outboard = model.bodies[joint.outboard].to_world(joint.outboard_anchor);
+      EXPECT_LT((inboard - outboard).norm(), 1e-9) << variant << " " << joint.name;
+    }
+    // Standing on the ground: the tibias' tails touch z = 0.
+    EXPECT_NEAR(model.bodies[model.find_body("tibia_left")].tail().z(), 0, 1e-12);
+  }
+}
+
+TEST(ShippedScenes, ChainHasFiveLinksWithADoubleEndLink) {
+  const Model model = load_scene_file(kScenes + "chain.json");
+  ASSERT_EQ(model.bodies.size(), 5u);
+  EXPECT_EQ(model.joints.size(), 5u);
+  EXPECT_FALSE(model.ground.has_value());
+  EXPECT_FALSE(model.ball.has_value());
+  EXPECT_EQ(model.bodies[0].shape.type, ShapeType::capsule);
+  EXPECT_DOUBLE_EQ(model.bodies[4].mass, 2 * model.bodies[3].mass);
+  EXPECT_DOUBLE_EQ(model.bodies[0].mass, 5 * kPound);
+}
+
+TEST(ShippedScenes, StickInBoxHasOneStickInsideItsBounds) {
+  const Model model = load_scene_file(kScenes + "stick_in_box.json");
+  ASSERT_EQ(model.bodies.size(), 1u);
+  EXPECT_TRUE(model.joints.empty());
+  ASSERT_TRUE(model.bounds.has_value());
+  EXPECT_EQ(model.bounds->max, Vector3(5, 5, 5));
+  const Body& stick = model.bodies[0];
+  EXPECT_NEAR(stick.axis.norm(), 1, 1e-15);
+  EXPECT_EQ(stick.angular_velocity, Vector3(0, 4, 0));
+  for (const Vector3& end : {stick.head(), stick.tail()}) {
+    EXPECT_TRUE((end.array() > model.bounds->min.array()).all());
+    EXPECT_TRUE((end.array() < model.bounds->max.array()).all());
+  }
+}
+
+TEST(ShippedScenes, EmbeddedHumanoidIsTheFileAndLoads) {
+  EXPECT_EQ(embedded_humanoid_scene(), read_text(kScenes + "humanoid.json"));
+  EXPECT_EQ(load_scene_text(embedded_humanoid_scene(), "embedded").bodies.size(), 9u);
+}
+
+TEST(SceneLoading, LinksOptionBuildsALongChainLaidHeadToTail) {
+  SceneOptions options;
+  options.links = 100;
+  const Model model = load_scene_file(kScenes + "chain.json", options);
+  ASSERT_EQ(model.bodies.size(), 100u);
+  ASSERT_EQ(model.joints.size(), 100u);
+  EXPECT_EQ(model.bodies[99].name, "link_99");
+  EXPECT_EQ(model.joints[99].name, "joint_99");
+  EXPECT_DOUBLE_EQ(model.bodies[98].mass, 5 * kPound);
+  EXPECT_DOUBLE_EQ(model.bodies[99].mass, 10 * kPound);
+  // Pinned at the anchor; link k from anchor + k·L·dir (head) to anchor + (k+1)·L·dir (tail).
+  EXPECT_EQ(model.joints[0].inboard, kWorld);
+  EXPECT_EQ(model.joints[0].inboard_anchor, Vector3(0, 0, 1.5));
+  EXPECT_LT((model.bodies[0].head() - Vector3(0, 0, 1.5)).norm(), 1e-12);
+  EXPECT_LT((model.bodies[99].tail() - Vector3(20, 0, 1.5)).norm(), 1e-9);
+  EXPECT_LT((model.bodies[7].axis - Vector3(-1, 0, 0)).norm(), 1e-15);
+  for (const Joint& joint : model.joints) {
+    const Vector3 inboard = joint.inboard == kWorld
+                                ? joint.inboard_anchor
+                                : model.bodies[joint.inboard].to_world(joint.inboard_anchor);
+    const Vector3 outboard = model.bodies[joint.outboard].to_world(joint.outboard_anchor);
+    EXPECT_LT((inboard - outboard).norm(), 1e-9) << joint.name;
+  }
+}
+
+TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {
+  const Model model = load_scene_text(kPendulum, "test.json");
+  const double r = 0.01;
+  const double capsule_volume =
+      std::numbers::pi * r * r * 0.2 + 4.0 / 3 * std::numbers::pi * r * r * r;
+  EXPECT_DOUBLE_EQ(model.bodies[1].mass, 1000 * capsule_volume);
+}
+
+TEST(SceneLoading, VariantRadiusAppliesBeforeDensityBecomesMass) {
+  const std::string scene = with(kPendulum, R"(  "joints": [)", R"(  "variants": {
+    "fat": {"lower": {"radius": 0.02}}, "heavy": {"lower": {"mass": 7}}},
+  "variant": "fat",
+  "joints": [)");
+  const Model fat = load_scene_text(scene, "test.json");
+  EXPECT_DOUBLE_EQ(fat.bodies[1].shape.radius, 0.02);
+  EXPECT_DOUBLE_EQ(fat.bodies[1].mass, 1000 * volume(fat.bodies[1].shape));
+  SceneOptions heavy;
+  heavy.variant = "heavy";
+  EXPECT_DOUBLE_EQ(load_scene_text(scene, "test.json", heavy).bodies[1].mass, 7);
+}
+
+TEST(SceneLoading, HeadAndTailAnchorsAreTheAxisEnds) {
+  const Model model = load_scene_text(kPendulum, "test.json");
+  EXPECT_EQ(model.joints[0].outboard_anchor, Vector3(0, 0, 0.2));   // upper's head, length 0.4
+  EXPECT_EQ(model.joints[1].inboard_anchor, Vector3(0, 0, -0.2));   // upper's tail
+  EXPECT_EQ(model.joints[1].outboard_anchor, Vector3(0, 0, 0.1));   // lower's head, length 0.2
+  EXPECT_EQ(model.joints[0].inboard, kWorld);
+  EXPECT_EQ(model.joints[1].inboard, 0);
+  EXPECT_EQ(model.joints[1].outboard, 1);
+}
+
+TEST(SceneLoading, AxisAndBallDirectionAreNormalized) {
+  const Model model = load_scene_text(kPendulum, "test.json");
+  EXPECT_EQ(model.bodies[0].axis, Vector3(0, 0, 1));  // given as [0, 0, 3]
+  EXPECT_EQ(model.ball->velocity, Vector3(-6, 0, 0));  // speed 6 along [-2, 0, 0]
+}
+
+TEST(SceneLoading, OmittedOptionalFieldsKeepTheModelDefaults) {
+  const Model model = load_scene_text(kPendulum, "test.json");
+  const Settings defaults;
+  EXPECT_EQ(model.settings.damping, defaults.damping);
+  EXPECT_EQ(model.settings.divergence_speed, defaults.divergence_speed);
+  EXPECT_EQ(model.settings.relaxation.iterations, defaults.relaxation.iterations);
+  EXPECT_EQ(model.settings.sleep.time_to_sleep, defaults.sleep.time_to_sleep);
+  EXPECT_FALSE(model.settings.verlet.drag_factor.has_value());
+  EXPECT_EQ(model.bodies[0].linear_velocity, Vector3::Zero());
+}
+
+}  // namespace
+}  // namespace limber

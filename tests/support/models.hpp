@@ -1,0 +1,43 @@
+// Small models built in C++ for tests, and access to the shipped scene files.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernel/model/model.hpp"
+#include "kernel/scene/scene_file.hpp"
+
+namespace limber::testing {
+
+inline std::string scene_path(const std::string& file) { return std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file; }
+
+inline Model load_shipped_scene(const std::string& file, const SceneOptions& options = {}) {
+  return load_scene_file(scene_path(file), options);
+}
+
+/// A straight chain along +x of capsule links with the given masses (kg), each `link_length` m,
+/// link 0's head at `start`; joints link k−1 tail → link k head; optionally pinned to the world.
+inline Model make_chain(const std::vector<double>& masses, double link_length, bool pinned,
+                        const Vector3& start = Vector3(0, 0, 1)) {
+  Model model;
+  model.name = "test_chain";
+  for (std::size_t k = 0; k < masses.size(); ++k) {
+    Body body;
+    body.name = "link_" + std::to_string(k);
+    body.shape = {ShapeType::capsule, link_length, 0.01};
+    body.mass = masses[k];
+    body.axis = -Vector3::UnitX();  // tail → head points back towards the start
+    body.position = start + Vector3((k + 0.5) * link_length, 0, 0);
+    model.bodies.push_back(body);
+  }
+  const Vector3 head(0, 0, 0.5 * link_length), tail(0, 0, -0.5 * link_length);
+  if (pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, start, head});
+  for (std::size_t k = 1; k < masses.size(); ++k) {
+    model.joints.push_back({"joint_" + std::to_string(k), JointType::spherical, static_cast<int>(k - 1),
+                            static_cast<int>(k), tail, head});
+  }
+  model.settings.sleep.enabled = false;
+  return model;
+}
+
+}  // namespace limber::testing
