@@ -20,10 +20,10 @@ Scalar sweep_range(ParticleBuffer<Scalar>& particles, const DistanceConstraintBu
 }  // namespace
 
 template <typename Scalar>
-double gauss_seidel_sweep(VerletState<Scalar>& state) {
+double gauss_seidel_sweep(VerletState<Scalar>& state, double over_relaxation) {
   Scalar largest = 0;
   std::uint64_t projections = 0;
-  const auto omega = static_cast<Scalar>(state.settings.relaxation.over_relaxation);
+  const auto omega = static_cast<Scalar>(over_relaxation);
   for (std::uint32_t k : state.awake_islands) {
     const Island& island = state.islands[k];
     // The rule is fixed per run: choose the loop once, not per constraint.
@@ -40,7 +40,7 @@ double gauss_seidel_sweep(VerletState<Scalar>& state) {
   return static_cast<double>(largest);
 }
 
-template double gauss_seidel_sweep<float>(VerletState<float>&);
-template double gauss_seidel_sweep<double>(VerletState<double>&);
+template double gauss_seidel_sweep<float>(VerletState<float>&, double);
+template double gauss_seidel_sweep<double>(VerletState<double>&, double);
 
 }  // namespace limber

@@ -11,12 +11,12 @@
 namespace limber {
 
 /// One Gauss-Seidel sweep over the constraints of the awake islands with `state.options.rule`
-/// and the over-relaxation factor of the settings.
-/// Returns the largest particle displacement it made, m.
+/// and the over-relaxation factor ω (1: plain projections). Returns the largest particle
+/// displacement it made, m.
 template <typename Scalar>
-double gauss_seidel_sweep(VerletState<Scalar>& state);
+double gauss_seidel_sweep(VerletState<Scalar>& state, double over_relaxation);
 
-extern template double gauss_seidel_sweep<float>(VerletState<float>&);
-extern template double gauss_seidel_sweep<double>(VerletState<double>&);
+extern template double gauss_seidel_sweep<float>(VerletState<float>&, double);
+extern template double gauss_seidel_sweep<double>(VerletState<double>&, double);
 
 }  // namespace limber

@@ -72,7 +72,9 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const auto start = std::chrono::steady_clock::now();
   if (!state.awake_islands.empty()) {
     for (int iteration = 1; iteration <= relaxation.iterations; ++iteration) {
-      double largest = gauss_seidel_sweep(state);
+      // The first sweep starts from the unconstrained prediction, far from the solution;
+      // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
+      double largest = gauss_seidel_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
       if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
       if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
       report.iterations = iteration;

@@ -73,6 +73,43 @@ TYPED_TEST(VerletMethod, HeavyEndChainKeepsJointsClosedWith100Iterations) {
   EXPECT_LT(largest_stretch, 1e-4);
 }
 
+TYPED_TEST(VerletMethod, OverRelaxationConvergesFasterWithoutGainingEnergy) {
+  auto run = [](double omega, int sweeps) {
+    Model model = load_shipped_scene("chain.json");
+    model.settings.relaxation.over_relaxation = omega;
+    model.settings.relaxation.iterations = sweeps;
+    auto state = compile<TypeParam>(model);
+    const double initial = observe(state).energy();
+    double largest_gap = 0, highest = initial;
+    for (int s = 0; s < 1200; ++s) {
+      EXPECT_EQ(step(state).status, StepStatus::ok);
+      const Observation o = observe(state);
+      largest_gap = std::max(largest_gap, o.max_joint_gap);
+      highest = std::max(highest, o.energy());
+    }
+    EXPECT_LE(highest, initial * (1 + 1e-6)) << "ω " << omega << ", " << sweeps << " sweeps";
+    return largest_gap;
+  };
+  for (int sweeps : {1, 2, 5}) run(1.8, sweeps);
+  EXPECT_LT(run(1.5, 100), 0.2 * run(1.0, 100));
+}
+
+TYPED_TEST(VerletMethod, SharedParticleJointsMoveLikeClosedZeroLengthJoints) {
+  // Thesis 3.2.5: a spherical joint is two limbs sharing a particle. Converged zero-length
+  // constraints are the same joint, so the chains must move together.
+  Model model = load_shipped_scene("chain.json");
+  model.settings.relaxation.iterations = 1000;
+  auto constrained = compile<TypeParam>(model);
+  model.settings.verlet.joints = ParticleJoints::shared_particle;
+  auto shared = compile<TypeParam>(model);
+  EXPECT_EQ(shared.particles.size(), 6u);  // a pin and five limb tails
+  EXPECT_TRUE(shared.joint_constraints.empty());
+  for (int s = 0; s < 120; ++s) step(constrained), step(shared);  // 0.5 s, before chaos sets in
+  const auto end = [](const auto& state) { return state.particles.position(state.limbs.tail.back()).template cast<double>().eval(); };
+  EXPECT_LT((end(constrained) - end(shared)).norm(), 1e-3);
+  EXPECT_GT((end(shared) - Eigen::Vector3d(1.0, 0, 1.5)).norm(), 0.3) << "the chain must have swung";
+}
+
 TYPED_TEST(VerletMethod, WeightedAndUnweightedDifferOnlyWhenMassesDiffer) {
   auto run = [](const Model& model, RelaxationRule rule) {
     auto state = compile<TypeParam>(model, {rule});

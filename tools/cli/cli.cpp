@@ -199,6 +199,11 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   std::array<long, 4> stops{};
   std::vector<std::string> sleep_events;
   bool body_sleeping = start.body_sleeping;
+  // The knock (tests/verlet/humanoid_test.cpp): how far the body's centre of mass moves along the
+  // ball's path in the 0.3 s after the ball first touches it.
+  constexpr double kKnockWindow = 0.3;
+  double first_contact = -1, knock = 0;
+  const Eigen::Vector3d ball_path = model.ball ? Eigen::Vector3d(model.ball->velocity.normalized()) : Eigen::Vector3d::Zero();
   double wall_seconds = 0;
   long steps_done = 0;
   StepReport report;
@@ -209,6 +214,10 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
     wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++stops[static_cast<int>(report.stop)];
     end = observe(state);
+    if (first_contact < 0 && !state.ball_contacts.empty()) first_contact = end.time;
+    if (first_contact >= 0 && end.time <= first_contact + kKnockWindow + 1e-9) {
+      knock = (end.body_centre_of_mass - start.body_centre_of_mass).dot(ball_path);
+    }
     largest_gap = std::max(largest_gap, end.max_joint_gap);
     largest_stretch = std::max(largest_stretch, end.max_link_stretch);
     if (end.body_sleeping != body_sleeping && sleep_events.size() < 8) {
@@ -225,9 +234,10 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   std::size_t joints = state.joint_constraints.size();
   out << "limber run: " << model.name << " (" << source << ")\n";
   out << format("method      %s relaxation (Verlet), %s precision\n", flags.method.c_str(), flags.precision.c_str());
-  out << format("model       %zu limbs, %zu joints%s%s%s; %zu particles, %zu constraints, %zu islands\n",
+  out << format("model       %zu limbs, %zu joints%s%s%s; %zu particles, %zu constraints, %zu island%s\n",
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size());
+                model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size(),
+                state.islands.size() == 1 ? "" : "s");
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", steps_done, dt,
                 state.time, wall_seconds, wall_seconds > 0 ? steps_done / wall_seconds : 0.0);
   out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
@@ -249,6 +259,10 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   out << format("body        centre of mass %s -> %s m; travelled %.4g m horizontally\n",
                 vector_text(start.body_centre_of_mass).c_str(), vector_text(end.body_centre_of_mass).c_str(),
                 std::hypot(travel.x(), travel.y()));
+  if (first_contact >= 0) {
+    out << format("impact      ball first touched the body at t = %.3f s; in the next %.1f s the body's centre of mass moved %.4f m along the ball's path\n",
+                  first_contact, kKnockWindow, knock);
+  }
   out << format("energy      %.6g J at start (kinetic %.4g), %.6g J at end (kinetic %.4g)\n", start.energy(),
                 start.kinetic_energy, end.energy(), end.kinetic_energy);
   out << format("momentum    %s -> %s kg m/s\n", vector_text(start.linear_momentum).c_str(),
