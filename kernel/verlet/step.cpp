@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "kernel/collision/contacts.hpp"
+#include "kernel/numerics/flush_denormals.hpp"
 #include "kernel/relaxation/gauss_seidel.hpp"
 #include "kernel/sleeping/sleeping.hpp"
 
@@ -61,6 +62,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     report.status = StepStatus::invalid_time_step;
     return state.last_report = report;
   }
+  const FlushDenormals flush_denormals;
   const bool has_ball = state.ball_particle >= 0;
   const bool has_planes = !state.planes.empty();
 

@@ -16,7 +16,8 @@ namespace limber {
 ///  4. restitution the velocity pass for contacts (eq. 2.33);
 ///  5. sleep       still islands fall asleep; divergence is detected.
 /// Allocates nothing and never throws; a bad Δt or a divergence is reported in the result
-/// (also kept in state.last_report).
+/// (also kept in state.last_report). Denormals are flushed to zero while it runs
+/// (kernel/numerics/flush_denormals.hpp).
 template <typename Scalar>
 StepReport step(VerletState<Scalar>& state, double dt);
 

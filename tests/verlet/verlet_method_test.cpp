@@ -4,6 +4,9 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#if defined(__SSE__) || defined(__x86_64__)
+#include <xmmintrin.h>
+#endif
 
 #include "kernel/metrics/observers.hpp"
 #include "kernel/verlet/compile.hpp"
@@ -256,6 +259,15 @@ TYPED_TEST(VerletMethod, VelocitySurvivesAChangeOfTimeStep) {
   EXPECT_EQ(step(state, 0.0).status, StepStatus::invalid_time_step);
   EXPECT_EQ(step(state, std::nan("")).status, StepStatus::invalid_time_step);
 }
+
+#if defined(__SSE__) || defined(__x86_64__)
+TEST(FloatingPointMode, StepFlushesDenormalsOnlyWhileItRuns) {
+  auto state = compile<float>(load_shipped_scene("chain.json"));
+  const unsigned before = _mm_getcsr();
+  step(state);
+  EXPECT_EQ(_mm_getcsr(), before) << "the caller's MXCSR must be restored";
+}
+#endif
 
 // --- Sleeping (thesis 4.5.3) ---
 
