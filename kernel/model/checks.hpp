@@ -6,7 +6,11 @@
 #include <cmath>
 #include <string>
 #include <string_view>
-#include <unordered_map>
+#include <algorithm>
+#include <functional>
+#include <type_traits>
+#include <utility>
+#include <vector>
 
 #include "kernel/model/model.hpp"
 
@@ -30,36 +34,55 @@ inline std::string indexed(std::string_view path, std::size_t index) {
   return std::string(path) + "[" + std::to_string(index) + "]";
 }
 
+/// A field path is a string, or a callable returning one: validating a million bodies must not
+/// build a million path strings, so validate() passes callables, formatted only on failure.
+template <typename Path>
+std::string path_text(const Path& path) {
+  if constexpr (std::is_invocable_v<const Path&>) {
+    return std::string(path());
+  } else {
+    return std::string(path);
+  }
+}
+
 /// Throws ModelError "<path>: <problem>" (just the problem when the path is empty: the root).
-[[noreturn]] inline void fail(std::string_view path, std::string_view problem) {
-  std::string message(path);
+template <typename Path>
+[[noreturn]] void fail(const Path& path, std::string_view problem) {
+  std::string message = path_text(path);
   if (!message.empty()) message += ": ";
   message += problem;
   throw ModelError(message);
 }
 
-inline void require_finite(double value, std::string_view path) {
+template <typename Path>
+void require_finite(double value, const Path& path) {
   if (!std::isfinite(value)) fail(path, "must be a finite number, got " + format_number(value));
 }
 
 /// Each component, named "<path>[i]".
-inline void require_finite(const Vector3& value, std::string_view path) {
-  for (int i = 0; i < 3; ++i) require_finite(value[i], indexed(path, i));
+template <typename Path>
+void require_finite(const Vector3& value, const Path& path) {
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(value[i])) require_finite(value[i], indexed(path_text(path), i));
+  }
 }
 
-inline void require_positive(double value, std::string_view path) {
+template <typename Path>
+void require_positive(double value, const Path& path) {
   require_finite(value, path);
   if (!(value > 0)) fail(path, "must be > 0, got " + format_number(value));
 }
 
-inline void require_non_negative(double value, std::string_view path) {
+template <typename Path>
+void require_non_negative(double value, const Path& path) {
   require_finite(value, path);
   if (!(value >= 0)) fail(path, "must be >= 0, got " + format_number(value));
 }
 
 /// value in [low, high]; `low_open` / `high_open` exclude an end.
-inline void require_in_range(double value, double low, double high, std::string_view path,
-                             bool low_open = false, bool high_open = false) {
+template <typename Path>
+void require_in_range(double value, double low, double high, const Path& path, bool low_open = false,
+                      bool high_open = false) {
   require_finite(value, path);
   const bool above_low = low_open ? value > low : value >= low;
   const bool below_high = high_open ? value < high : value <= high;
@@ -69,20 +92,23 @@ inline void require_in_range(double value, double low, double high, std::string_
   }
 }
 
-inline void require_at_least(long value, long low, std::string_view path) {
+template <typename Path>
+void require_at_least(long value, long low, const Path& path) {
   if (value < low) {
     fail(path, "must be >= " + std::to_string(low) + ", got " + std::to_string(value));
   }
 }
 
 /// A direction the loader will normalize: finite and not (numerically) zero.
-inline void require_non_zero(const Vector3& value, std::string_view path) {
+template <typename Path>
+void require_non_zero(const Vector3& value, const Path& path) {
   require_finite(value, path);
   if (!(value.norm() > 0)) fail(path, "must be a non-zero vector, got " + format_vector(value));
 }
 
 /// |value| within 1e-9 of 1.
-inline void require_unit(const Vector3& value, std::string_view path) {
+template <typename Path>
+void require_unit(const Vector3& value, const Path& path) {
   require_finite(value, path);
   const double length = value.norm();
   if (!(std::abs(length - 1) <= 1e-9))
@@ -90,7 +116,8 @@ inline void require_unit(const Vector3& value, std::string_view path) {
 }
 
 /// Names must be non-empty; body names also must not be "world" (the fixed frame in joints).
-inline void require_name(std::string_view name, std::string_view path, bool is_body) {
+template <typename Path>
+void require_name(std::string_view name, const Path& path, bool is_body) {
   if (name.empty()) fail(path, "must be a non-empty name");
   if (is_body && name == "world") fail(path, "\"world\" is reserved for the fixed frame");
 }
@@ -109,14 +136,31 @@ inline void require_box(const Vector3& min, const Vector3& max, std::string_view
   }
 }
 
-/// Name -> where it was first seen (e.g. "bodies[1]").
-using NameRegistry = std::unordered_map<std::string, std::string>;
-
-/// Registers the name of `owner`; fails at "<owner>.name" when it was seen before.
-inline void require_unique(NameRegistry& seen, const std::string& name, const std::string& owner) {
-  const auto [first, inserted] = seen.emplace(name, owner);
-  if (!inserted)
-    fail(owner + ".name", "duplicate name \"" + name + "\" (also " + first->second + ")");
+/// Every item's name differs from the others'. Fails at "<collection>[j].name" for the first j
+/// whose name an earlier item has. Sorts contiguous (hash, index) pairs — no allocation per name,
+/// ~0.1 s for a million — and compares names only where hashes meet.
+template <typename Items, typename NameOf>
+void require_unique_names(const Items& items, NameOf&& name_of, std::string_view collection) {
+  std::vector<std::pair<std::size_t, std::size_t>> hashed(items.size());
+  for (std::size_t i = 0; i < items.size(); ++i) hashed[i] = {std::hash<std::string_view>{}(name_of(items[i])), i};
+  std::sort(hashed.begin(), hashed.end());
+  std::size_t later = items.size(), earlier = 0;  // the duplicate to report
+  for (std::size_t run = 0; run < hashed.size();) {
+    std::size_t end = run + 1;
+    while (end < hashed.size() && hashed[end].first == hashed[run].first) ++end;
+    for (std::size_t a = run; a < end; ++a) {  // indices ascend within a run
+      for (std::size_t b = a + 1; b < end && hashed[b].second < later; ++b) {
+        if (name_of(items[hashed[a].second]) == name_of(items[hashed[b].second])) {
+          later = hashed[b].second, earlier = hashed[a].second;
+        }
+      }
+    }
+    run = end;
+  }
+  if (later < items.size()) {
+    fail(indexed(collection, later) + ".name", "duplicate name \"" + std::string(name_of(items[later])) + "\" (also " +
+                                                   indexed(collection, earlier) + ")");
+  }
 }
 
 }  // namespace limber::checks

@@ -50,34 +50,43 @@ double Model::body_mass() const {
 
 namespace {
 
-void validate_body(const Body& body, const std::string& path) {
-  require_name(body.name, path + ".name", /*is_body=*/true);
-  require_positive(body.shape.length, path + ".shape.length");
-  require_non_negative(body.shape.radius, path + ".shape.radius");
-  require_positive(body.mass, path + ".mass");
-  require_finite(body.position, path + ".position");
-  require_unit(body.axis, path + ".axis");
-  require_finite(body.linear_velocity, path + ".linear_velocity");
-  require_finite(body.angular_velocity, path + ".angular_velocity");
+// "<collection>[index].<field>", built only when a check fails.
+auto field_path(const char* collection, std::size_t index) {
+  return [collection, index](const char* field) {
+    return [collection, index, field] { return indexed(collection, index) + "." + field; };
+  };
 }
 
-void require_body_index(int index, std::size_t body_count, const std::string& path) {
+void validate_body(const Body& body, std::size_t index) {
+  const auto path = field_path("bodies", index);
+  require_name(body.name, path("name"), /*is_body=*/true);
+  require_positive(body.shape.length, path("shape.length"));
+  require_non_negative(body.shape.radius, path("shape.radius"));
+  require_positive(body.mass, path("mass"));
+  require_finite(body.position, path("position"));
+  require_unit(body.axis, path("axis"));
+  require_finite(body.linear_velocity, path("linear_velocity"));
+  require_finite(body.angular_velocity, path("angular_velocity"));
+}
+
+template <typename Path>
+void require_body_index(int index, std::size_t body_count, const Path& path) {
   if (index < 0 || static_cast<std::size_t>(index) >= body_count) {
     fail(path, "names body index " + std::to_string(index) + " but there are " +
                    std::to_string(body_count) + " bodies");
   }
 }
 
-void validate_joint(const Joint& joint, std::size_t body_count, const std::string& path) {
-  require_name(joint.name, path + ".name", /*is_body=*/false);
-  if (joint.inboard != kWorld) require_body_index(joint.inboard, body_count, path + ".inboard");
-  require_body_index(joint.outboard, body_count, path + ".outboard");
+void validate_joint(const Joint& joint, std::size_t body_count, std::size_t index) {
+  const auto path = field_path("joints", index);
+  require_name(joint.name, path("name"), /*is_body=*/false);
+  if (joint.inboard != kWorld) require_body_index(joint.inboard, body_count, path("inboard"));
+  require_body_index(joint.outboard, body_count, path("outboard"));
   if (joint.inboard == joint.outboard) {
-    fail(path + ".outboard",
-         "must differ from inboard, both are body index " + std::to_string(joint.inboard));
+    fail(path("outboard"), "must differ from inboard, both are body index " + std::to_string(joint.inboard));
   }
-  require_finite(joint.inboard_anchor, path + ".inboard_anchor");
-  require_finite(joint.outboard_anchor, path + ".outboard_anchor");
+  require_finite(joint.inboard_anchor, path("inboard_anchor"));
+  require_finite(joint.outboard_anchor, path("outboard_anchor"));
 }
 
 void validate_settings(const Settings& settings) {
@@ -103,19 +112,10 @@ void validate_settings(const Settings& settings) {
 }  // namespace
 
 void validate(const Model& model) {
-  NameRegistry body_names;
-  for (std::size_t i = 0; i < model.bodies.size(); ++i) {
-    const std::string path = indexed("bodies", i);
-    validate_body(model.bodies[i], path);
-    require_unique(body_names, model.bodies[i].name, path);
-  }
-
-  NameRegistry joint_names;
-  for (std::size_t i = 0; i < model.joints.size(); ++i) {
-    const std::string path = indexed("joints", i);
-    validate_joint(model.joints[i], model.bodies.size(), path);
-    require_unique(joint_names, model.joints[i].name, path);
-  }
+  for (std::size_t i = 0; i < model.bodies.size(); ++i) validate_body(model.bodies[i], i);
+  require_unique_names(model.bodies, [](const Body& body) -> std::string_view { return body.name; }, "bodies");
+  for (std::size_t i = 0; i < model.joints.size(); ++i) validate_joint(model.joints[i], model.bodies.size(), i);
+  require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
 
   if (const auto& ground = model.ground) {
     require_finite(ground->height, "ground.height");

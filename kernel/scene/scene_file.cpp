@@ -3,7 +3,8 @@
 // Values are checked as they are read, with paths in the file's own terms, so a message points
 // at what the user must edit. Everything inside throws ModelError("<path>: <problem>");
 // load_scene_text adds the "<source>: " prefix in one place. validate() runs last, for what only
-// the assembled Model shows (e.g. a chain link whose generated name clashes).
+// the assembled Model shows: duplicate names (explicit bodies and joints keep their file indices
+// in the Model, so its paths match the file) and generated chain links that clash.
 #include "kernel/scene/scene_file.hpp"
 
 #include <algorithm>
@@ -511,14 +512,13 @@ Model read_model(const Json& json, const SceneOptions& options) {
   const Json* chain_json = root.find("chain");
   if (!bodies_json && !chain_json) fail("bodies", "missing required field (or give a \"chain\")");
   std::vector<BodySpec> bodies;
-  NameRegistry body_names;
   if (bodies_json) {
     if (!bodies_json->is_array()) wrong_type(*bodies_json, "bodies", "an array");
     for (std::size_t i = 0; i < bodies_json->size(); ++i) {
-      const std::string path = indexed("bodies", i);
-      bodies.push_back(read_body(Object((*bodies_json)[i], path)));
-      require_unique(body_names, bodies.back().body.name, path);
+      bodies.push_back(read_body(Object((*bodies_json)[i], indexed("bodies", i))));
     }
+    // Before any name is looked up; generated links are checked by validate().
+    require_unique_names(bodies, [](const BodySpec& spec) -> std::string_view { return spec.body.name; }, "bodies");
   }
   std::vector<Joint> chain_joints;
   if (chain_json) {
@@ -533,9 +533,13 @@ Model read_model(const Json& json, const SceneOptions& options) {
     fail("chain", std::to_string(*options.links) +
                       " links requested but the scene has no \"chain\" generator");
   }
+  // Names become indices only for what refers to bodies by name (variants, explicit joints); a
+  // generated million-link chain needs no map.
   std::unordered_map<std::string, int> body_index;
-  for (std::size_t i = 0; i < bodies.size(); ++i)
-    body_index.emplace(bodies[i].body.name, static_cast<int>(i));
+  if (root.find("variants") || root.find("joints")) {
+    body_index.reserve(bodies.size());
+    for (std::size_t i = 0; i < bodies.size(); ++i) body_index.emplace(bodies[i].body.name, static_cast<int>(i));
+  }
 
   // Variants change radii and masses before densities become masses.
   std::optional<std::vector<std::pair<std::string, Variant>>> variants;
@@ -557,12 +561,10 @@ Model read_model(const Json& json, const SceneOptions& options) {
   // Joints: the explicit ones, then the chain's.
   if (const Json* joints_json = root.find("joints")) {
     if (!joints_json->is_array()) wrong_type(*joints_json, "joints", "an array");
-    NameRegistry joint_names;
     for (std::size_t i = 0; i < joints_json->size(); ++i) {
-      const std::string path = indexed("joints", i);
-      model.joints.push_back(read_joint(Object((*joints_json)[i], path), bodies, body_index));
-      require_unique(joint_names, model.joints.back().name, path);
+      model.joints.push_back(read_joint(Object((*joints_json)[i], indexed("joints", i)), bodies, body_index));
     }
+    require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
   }
   model.joints.insert(model.joints.end(), chain_joints.begin(), chain_joints.end());
   for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));

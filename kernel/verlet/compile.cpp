@@ -4,10 +4,11 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <queue>
+#include <span>
 #include <sstream>
 
 #include "kernel/sleeping/sleeping.hpp"
+#include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
@@ -98,51 +99,63 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     for (std::size_t k = 0; k < joint_count; ++k) merged.unite(joint_inboard_slot[k], joint_outboard_slot[k]);
   }
 
-  // Islands: bodies connected through joints (the world does not connect them).
+  // Islands: bodies connected through joints (the world does not connect them). Per body: its
+  // (joint, other body) neighbours and its joints to the world.
   DisjointSets connected(body_count);
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> neighbours(body_count);  // (joint, body)
-  std::vector<std::vector<std::uint32_t>> world_joints(body_count);
+  using Neighbour = std::pair<std::uint32_t, std::uint32_t>;
+  std::vector<std::pair<std::uint32_t, Neighbour>> neighbour_pairs;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> world_joint_pairs;
   for (std::size_t k = 0; k < joint_count; ++k) {
     const Joint& joint = model.joints[k];
+    const auto j = static_cast<std::uint32_t>(k);
+    const auto outboard = static_cast<std::uint32_t>(joint.outboard);
     if (joint.inboard == kWorld) {
-      world_joints[joint.outboard].push_back(static_cast<std::uint32_t>(k));
+      world_joint_pairs.emplace_back(outboard, j);
       continue;
     }
-    connected.unite(joint.inboard, joint.outboard);
-    neighbours[joint.inboard].emplace_back(static_cast<std::uint32_t>(k), joint.outboard);
-    neighbours[joint.outboard].emplace_back(static_cast<std::uint32_t>(k), joint.inboard);
+    const auto inboard = static_cast<std::uint32_t>(joint.inboard);
+    connected.unite(inboard, outboard);
+    neighbour_pairs.push_back({inboard, {j, outboard}});
+    neighbour_pairs.push_back({outboard, {j, inboard}});
+  }
+  const CompressedRows<Neighbour> neighbours = group_by_row(body_count, neighbour_pairs);
+  const CompressedRows<std::uint32_t> world_joints = group_by_row(body_count, world_joint_pairs);
+
+  // Each island starts from its first body held by the world, else its first body. The union-find
+  // representative of an island is its lowest body index.
+  std::vector<std::uint32_t> island_root(body_count);
+  for (std::uint32_t b = 0; b < body_count; ++b) island_root[b] = b;  // read only at representatives
+  for (std::size_t b = body_count; b-- > 0;) {  // descending, so the lowest held body wins
+    if (!world_joints.row(b).empty()) island_root[connected.find(static_cast<std::uint32_t>(b))] = static_cast<std::uint32_t>(b);
   }
 
   // Breadth-first order of each island's bodies from its root, and the tree joint reaching each.
-  std::vector<std::vector<std::uint32_t>> island_bodies;
+  // body_order doubles as the search queue; island i's bodies are body_order[island_begin[i] ..
+  // island_begin[i + 1]).
+  std::vector<std::uint32_t> body_order, island_begin;
+  body_order.reserve(body_count);
   std::vector<std::int64_t> tree_joint(body_count, -1);
   std::vector<bool> visited(body_count, false);
   for (std::size_t b = 0; b < body_count; ++b) {
-    if (connected.find(static_cast<std::uint32_t>(b)) != b) continue;  // roots are each island's lowest index
-    std::uint32_t root = static_cast<std::uint32_t>(b);
-    for (std::size_t c = b; c < body_count; ++c) {
-      if (connected.find(static_cast<std::uint32_t>(c)) == b && !world_joints[c].empty()) {
-        root = static_cast<std::uint32_t>(c);
-        break;
-      }
-    }
-    std::vector<std::uint32_t> order;
-    std::queue<std::uint32_t> frontier;
-    frontier.push(root);
+    if (connected.find(static_cast<std::uint32_t>(b)) != b) continue;  // one search per island
+    island_begin.push_back(static_cast<std::uint32_t>(body_order.size()));
+    const std::uint32_t root = island_root[b];
+    body_order.push_back(root);
     visited[root] = true;
-    while (!frontier.empty()) {
-      const std::uint32_t body = frontier.front();
-      frontier.pop();
-      order.push_back(body);
-      for (const auto& [joint, other] : neighbours[body]) {
+    for (std::size_t next = island_begin.back(); next < body_order.size(); ++next) {
+      for (const auto& [joint, other] : neighbours.row(body_order[next])) {
         if (visited[other]) continue;
         visited[other] = true;
         tree_joint[other] = joint;
-        frontier.push(other);
+        body_order.push_back(other);
       }
     }
-    island_bodies.push_back(std::move(order));
   }
+  island_begin.push_back(static_cast<std::uint32_t>(body_order.size()));
+  const std::size_t island_count = island_begin.size() - 1;
+  const auto island_bodies = [&](std::size_t island) {
+    return std::span<const std::uint32_t>(body_order.data() + island_begin[island], body_order.data() + island_begin[island + 1]);
+  };
 
   // Particles, island by island, body by body (pins first, then head, tail).
   const std::uint32_t unassigned = std::numeric_limits<std::uint32_t>::max();
@@ -156,9 +169,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     }
   };
   std::vector<std::uint32_t> island_particle_end;
-  for (const auto& bodies : island_bodies) {
-    for (std::uint32_t b : bodies) {
-      if (!shared) for (std::uint32_t k : world_joints[b]) assign(pin_slot_of_joint[k]);
+  for (std::size_t island = 0; island < island_count; ++island) {
+    for (std::uint32_t b : island_bodies(island)) {
+      if (!shared) for (std::uint32_t k : world_joints.row(b)) assign(pin_slot_of_joint[k]);
       assign(2 * b);
       assign(2 * b + 1);
     }
@@ -174,7 +187,8 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
 
   // Merge slot properties into particles: masses add, positions and velocities average by mass
   // (momentum is kept); a pin wins.
-  std::vector<Vector3> momentum(body_particle_count, Vector3::Zero()), moment(body_particle_count, Vector3::Zero());
+  std::vector<Vector3> momentum(body_particle_count, Vector3::Zero());
+  std::vector<Vector3> mass_weighted_position(body_particle_count, Vector3::Zero());
   std::vector<bool> pinned(body_particle_count, false);
   std::vector<Vector3> pin_position(body_particle_count, Vector3::Zero());
   for (std::size_t slot = 0; slot < slot_count; ++slot) {
@@ -182,12 +196,12 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     if (p == unassigned) continue;
     state.particle_mass[p] += slot_mass[slot];
     momentum[p] += slot_mass[slot] * slot_velocity[slot];
-    moment[p] += slot_mass[slot] * slot_position[slot];
+    mass_weighted_position[p] += slot_mass[slot] * slot_position[slot];
     if (slot_pinned[slot]) pinned[p] = true, pin_position[p] = slot_position[slot];
   }
   for (std::size_t p = 0; p < body_particle_count; ++p) {
     const double mass = state.particle_mass[p];
-    Vector3 position = mass > 0 ? Vector3(moment[p] / mass) : slot_position[first_slot_of_particle[p]];
+    Vector3 position = mass > 0 ? Vector3(mass_weighted_position[p] / mass) : slot_position[first_slot_of_particle[p]];
     Vector3 velocity = mass > 0 ? Vector3(momentum[p] / mass) : Vector3::Zero();
     if (pinned[p]) position = pin_position[p], velocity.setZero();
     state.particles.set_position(p, position.cast<Scalar>());
@@ -215,14 +229,14 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   std::vector<bool> joint_done(joint_count, false);
   state.body_limb.assign(body_count, 0);
   std::uint32_t particle_begin = 0;
-  for (std::size_t island_index = 0; island_index < island_bodies.size(); ++island_index) {
+  for (std::size_t island_index = 0; island_index < island_count; ++island_index) {
     Island island;
     island.particle_begin = particle_begin;
     island.particle_end = particle_begin = island_particle_end[island_index];
     island.constraint_begin = checked_index(pairs.size());
     island.limb_begin = checked_index(state.limbs.size());
-    for (std::uint32_t b : island_bodies[island_index]) {
-      for (std::uint32_t k : world_joints[b]) add_joint_constraint(k), joint_done[k] = true;
+    for (std::uint32_t b : island_bodies(island_index)) {
+      for (std::uint32_t k : world_joints.row(b)) add_joint_constraint(k), joint_done[k] = true;
       if (tree_joint[b] >= 0) add_joint_constraint(static_cast<std::size_t>(tree_joint[b])), joint_done[tree_joint[b]] = true;
       const Body& body = model.bodies[b];
       const std::uint32_t head = particle_of(2 * b), tail = particle_of(2 * b + 1);
@@ -235,8 +249,8 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       state.limbs.shape.push_back(body.shape.type);
     }
     // Joints that close loops inside the island come last.
-    for (std::uint32_t b : island_bodies[island_index]) {
-      for (const auto& neighbour : neighbours[b]) {
+    for (std::uint32_t b : island_bodies(island_index)) {
+      for (const auto& neighbour : neighbours.row(b)) {
         if (!joint_done[neighbour.first]) add_joint_constraint(neighbour.first), joint_done[neighbour.first] = true;
       }
     }
@@ -250,15 +264,17 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     state.constraints.particle_j[c] = pairs[c][1];
     state.constraints.rest_length[c] = static_cast<Scalar>(rest[c]);
   }
-  // Names for outputs: a particle is named after the first slot that created it.
+  // Where each particle comes from (for names in outputs): the first slot that created it.
+  std::vector<std::uint32_t> joint_of_pin_slot(slot_count - pin_slot_base);
+  for (std::size_t k = 0; k < joint_count; ++k) {
+    if (model.joints[k].inboard == kWorld) joint_of_pin_slot[pin_slot_of_joint[k] - pin_slot_base] = static_cast<std::uint32_t>(k);
+  }
+  state.particle_origins.resize(particle_count);
   for (std::size_t p = 0; p < body_particle_count; ++p) {
     const std::uint32_t slot = first_slot_of_particle[p];
-    if (slot < pin_slot_base) {
-      state.particle_names.push_back(model.bodies[slot / 2].name + (slot % 2 ? ".tail" : ".head"));
-    } else {
-      const auto k = std::find(pin_slot_of_joint.begin(), pin_slot_of_joint.end(), slot) - pin_slot_of_joint.begin();
-      state.particle_names.push_back(model.joints[k].name + ".pin");
-    }
+    state.particle_origins[p] = slot < pin_slot_base
+        ? ParticleOrigin{slot / 2, slot % 2 ? ParticleOrigin::Kind::limb_tail : ParticleOrigin::Kind::limb_head}
+        : ParticleOrigin{joint_of_pin_slot[slot - pin_slot_base], ParticleOrigin::Kind::world_pin};
   }
 
   // The ball: one particle, its own island.
@@ -266,7 +282,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     const Ball& ball = *model.ball;
     const std::uint32_t p = checked_index(body_particle_count);
     state.ball_particle = p;
-    state.particle_names.push_back("ball");
+    state.particle_origins[p] = {0, ParticleOrigin::Kind::ball};
     state.ball_radius = ball.radius;
     state.ball_restitution = ball.restitution;
     state.particle_mass[p] = ball.mass;
@@ -328,6 +344,16 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   }
   rebuild_awake_islands(state);
   return state;
+}
+
+std::string particle_name(const Model& model, const ParticleOrigin& origin) {
+  switch (origin.kind) {
+    case ParticleOrigin::Kind::limb_head: return model.bodies[origin.index].name + ".head";
+    case ParticleOrigin::Kind::limb_tail: return model.bodies[origin.index].name + ".tail";
+    case ParticleOrigin::Kind::world_pin: return model.joints[origin.index].name + ".pin";
+    case ParticleOrigin::Kind::ball: return "ball";
+  }
+  return "?";
 }
 
 template VerletState<float> compile<float>(const Model&, const VerletOptions&);

@@ -1,6 +1,8 @@
 // compile(Model, VerletOptions) -> VerletState: the Model as particles and distance constraints.
 #pragma once
 
+#include <string>
+
 #include "kernel/model/model.hpp"
 #include "kernel/verlet/verlet_state.hpp"
 
@@ -22,6 +24,10 @@ namespace limber {
 /// represent (an anchor that is not an axis end point), naming the joint.
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options = {});
+
+/// A particle's name for outputs: "<body>.head", "<body>.tail", "<joint>.pin" or "ball".
+/// `model` is the one the state was compiled from.
+std::string particle_name(const Model& model, const ParticleOrigin& origin);
 
 extern template VerletState<float> compile<float>(const Model&, const VerletOptions&);
 extern template VerletState<double> compile<double>(const Model&, const VerletOptions&);

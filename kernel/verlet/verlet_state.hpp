@@ -5,7 +5,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <string>
 #include <utility>
 #include <vector>
 
@@ -111,6 +110,14 @@ struct BallContact {
   double start_separation = 0;  ///< at the previous positions, m
 };
 
+/// What a particle stands for: a limb's head or tail (index: Model body), the world end of a
+/// joint to the world (index: Model joint), or the ball.
+struct ParticleOrigin {
+  enum class Kind : std::uint8_t { limb_head, limb_tail, world_pin, ball };
+  std::uint32_t index = 0;
+  Kind kind = Kind::limb_head;
+};
+
 /// Work counters, accumulated over all steps (for benchmarks and the "sleeping costs nothing" test).
 struct StepCounters {
   std::uint64_t steps = 0;
@@ -136,7 +143,7 @@ struct VerletState {
   std::vector<std::uint32_t> body_limb;   ///< Model body index → limb index
   /// Joint constraints and the length the gap is measured against (mean of the two limbs), m.
   std::vector<std::pair<std::uint32_t, double>> joint_constraints;
-  std::vector<std::string> particle_names;    ///< "<body>.head", "<body>.tail", "<joint>.pin", "ball"
+  std::vector<ParticleOrigin> particle_origins;  ///< names them in outputs (particle_name, compile.hpp)
   std::int64_t ball_particle = -1;
   std::int64_t ball_island = -1;
   double ball_radius = 0, ball_restitution = 0;

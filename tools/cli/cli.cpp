@@ -159,9 +159,12 @@ const char* status_name(StepStatus status) {
 std::string vector_text(const Eigen::Vector3d& v) { return format("(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z()); }
 
 template <typename Scalar>
-void write_csv_header(std::ostream& csv, const VerletState<Scalar>& state) {
+void write_csv_header(std::ostream& csv, const Model& model, const VerletState<Scalar>& state) {
   csv << "time";
-  for (const std::string& name : state.particle_names) csv << ',' << name << "_x," << name << "_y," << name << "_z";
+  for (const ParticleOrigin& origin : state.particle_origins) {
+    const std::string name = particle_name(model, origin);
+    csv << ',' << name << "_x," << name << "_y," << name << "_z";
+  }
   csv << '\n';
 }
 template <typename Scalar>
@@ -190,7 +193,7 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   if (given(flags.out_option)) {
     csv.open(flags.out_path);
     if (!csv) throw InputError(format("--out: cannot write '%s'", flags.out_path.c_str()));
-    write_csv_header(csv, state);
+    write_csv_header(csv, model, state);
     write_csv_row(csv, state);
   }
 
