@@ -243,7 +243,6 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       state.body_limb[b] = checked_index(state.limbs.size());
       state.limbs.head.push_back(head);
       state.limbs.tail.push_back(tail);
-      state.limbs.body.push_back(b);
       state.limbs.link_constraint.push_back(add_constraint(head, tail, body.shape.length));
       state.limbs.radius.push_back(body.shape.radius);
       state.limbs.shape.push_back(body.shape.type);
@@ -333,6 +332,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.plane_contacts.reserve(state.features.size() * state.planes.size());
   state.ball_contacts.reserve(has_ball ? state.limbs.size() : 0);
   state.pending_forces.reserve(64);
+  state.awake_islands.reserve(state.islands.size());
 
   // The thesis's standing humanoid: islands at rest start asleep and wait for a contact.
   for (Island& island : state.islands) {

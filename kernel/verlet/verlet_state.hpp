@@ -66,7 +66,6 @@ struct Island {
 /// metrics). A limb is the segment head → tail with a cylinder or capsule around it.
 struct LimbBuffer {
   std::vector<std::uint32_t> head, tail;      ///< particle indices
-  std::vector<std::uint32_t> body;            ///< Model body index
   std::vector<std::uint32_t> link_constraint; ///< index of its head–tail distance constraint
   std::vector<double> radius;                 ///< m
   std::vector<ShapeType> shape;
@@ -120,7 +119,6 @@ struct ParticleOrigin {
 
 /// Work counters, accumulated over all steps (for benchmarks and the "sleeping costs nothing" test).
 struct StepCounters {
-  std::uint64_t steps = 0;
   std::uint64_t particles_integrated = 0;
   std::uint64_t constraint_projections = 0;
   std::uint64_t contact_projections = 0;
@@ -155,7 +153,7 @@ struct VerletState {
 
   // --- changing ---
   double time = 0;            ///< s
-  double previous_time_step;  ///< Δt of the last step (for the implicit velocity), s
+  double previous_time_step = 0;  ///< Δt of the last step (for the implicit velocity), s
   std::vector<std::uint32_t> awake_islands;
   std::vector<PlaneContact> plane_contacts;
   std::vector<BallContact> ball_contacts;

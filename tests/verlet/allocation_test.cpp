@@ -1,0 +1,70 @@
+// step() allocates nothing after its first call (DESIGN.md): counted by replacing the global
+// allocation functions in this test program only.
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include <gtest/gtest.h>
+
+#include "kernel/verlet/compile.hpp"
+#include "kernel/verlet/step.hpp"
+#include "tests/support/models.hpp"
+
+namespace {
+std::atomic<long> allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  ++allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
+void* operator new(std::size_t size, std::align_val_t alignment) {
+  ++allocations;
+  const std::size_t a = static_cast<std::size_t>(alignment);
+  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
+
+namespace limber {
+namespace {
+
+template <typename Scalar>
+long allocations_while_stepping(const Model& model, int steps, bool push) {
+  auto state = compile<Scalar>(model);
+  step(state);  // the first call may allocate
+  const long before = allocations.load();
+  for (int s = 0; s < steps; ++s) {
+    if (push && s % 50 == 0) apply_force(state, 0, Eigen::Vector3d(0, 5, 0));
+    step(state);
+  }
+  return allocations.load() - before;
+}
+
+TEST(Allocation, StepAllocatesNothingAfterItsFirstCall) {
+  // The humanoid wakes, hits the ground and falls asleep again; the box bounces a stick; the
+  // chain takes applied forces.
+  const Model humanoid = testing::load_shipped_scene("humanoid.json");
+  const Model box = testing::load_shipped_scene("stick_in_box.json");
+  Model chain = testing::load_shipped_scene("chain.json");
+  chain.settings.damping = 3;
+  chain.settings.sleep = {true, false, 0.01, 0.2};  // sleeps, then the pushes wake it
+  EXPECT_EQ(allocations_while_stepping<float>(humanoid, 1200, false), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(humanoid, 1200, false), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(box, 1200, false), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(chain, 1200, true), 0);
+}
+
+TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail
+  const long before = allocations.load();
+  auto* vector = new std::vector<int>(100);
+  delete vector;
+  EXPECT_GE(allocations.load() - before, 2);
+}
+
+}  // namespace
+}  // namespace limber
