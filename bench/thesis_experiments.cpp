@@ -8,6 +8,7 @@
 #include <functional>
 #include <string>
 
+#include "kernel/metrics/knock.hpp"
 #include "kernel/metrics/observers.hpp"
 #include "kernel/scene/scene_file.hpp"
 #include "kernel/verlet/compile.hpp"
@@ -46,9 +47,6 @@ void relaxation_sweeps() {
   std::printf("\nLargest over 5 s, relative to the link length.\n\n");
 }
 
-// The tail particle of the last limb.
-std::uint32_t state_end_particle(const VerletState<double>& state) { return state.limbs.tail.back(); }
-
 // Thesis 4.4.2: with the weighted rule the heavy end "has more control over the global motion";
 // with the midpoint rule mass makes no difference.
 void weighted_against_midpoint() {
@@ -59,7 +57,7 @@ void weighted_against_midpoint() {
     model.bodies.back().mass = factor * model.bodies.front().mass;
     auto weighted = compile<double>(model, {RelaxationRule::weighted});
     auto midpoint = compile<double>(model, {RelaxationRule::unweighted});
-    const std::uint32_t end = state_end_particle(weighted);
+    const std::uint32_t end = weighted.limbs.tail.back();  // the chain's free end
     double largest = 0, weighted_height = 0, midpoint_height = 0;
     for (int s = 0; s < 480; ++s) {
       step(weighted), step(midpoint);
@@ -80,18 +78,16 @@ void humanoid_knocks() {
   const auto row = [](const char* body, const char* label, const std::function<void(Ball&)>& adjust) {
     Model model = scene("humanoid.json", {.variant = std::string(body), .links = {}});
     adjust(*model.ball);
-    const Eigen::Vector3d path = model.ball->velocity.normalized();
     auto state = compile<double>(model);
     const Eigen::Vector3d start = observe(state).body_centre_of_mass;
-    double contact = -1, knock = 0;
+    KnockMeter knock(model.ball->velocity, start);
     const long steps = std::lround(model.settings.duration / model.settings.time_step);
     for (long s = 0; s < steps; ++s) {
       step(state);
-      if (contact < 0 && !state.ball_contacts.empty()) contact = state.time;
-      if (contact >= 0 && state.time <= contact + 0.3 + 1e-9) knock = (observe(state).body_centre_of_mass - start).dot(path);
+      knock.update(state.time, !state.ball_contacts.empty(), observe(state).body_centre_of_mass);
     }
     const Eigen::Vector3d moved = observe(state).body_centre_of_mass - start;
-    std::printf("| %s | %s | %.3f m | %.3f m |\n", body, label, knock, std::hypot(moved.x(), moved.y()));
+    std::printf("| %s | %s | %.3f m | %.3f m |\n", body, label, knock.distance(), std::hypot(moved.x(), moved.y()));
   };
   const auto speed = [](double v) { return [v](Ball& b) { b.velocity = v * b.velocity.normalized(); }; };
   for (double v : {4.0, 10.0, 16.0}) row("medium", (std::to_string(int(v)) + " m/s").c_str(), speed(v));

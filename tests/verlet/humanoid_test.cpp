@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "kernel/metrics/knock.hpp"
 #include "kernel/metrics/observers.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
@@ -18,24 +19,20 @@
 namespace limber {
 namespace {
 
-constexpr double kWindow = 0.3;  // s after first contact
-
 double knock(const std::string& variant, const std::function<void(Ball&)>& adjust_ball) {
   Model model = testing::load_shipped_scene("humanoid.json", {.variant = variant, .links = {}});
   adjust_ball(*model.ball);
-  const Eigen::Vector3d path = model.ball->velocity.normalized();
   auto state = compile<double>(model);
-  const Eigen::Vector3d start = observe(state).body_centre_of_mass;
-  double contact_time = -1;
-  while (contact_time < 0 || state.time < contact_time + kWindow) {
+  KnockMeter meter(model.ball->velocity, observe(state).body_centre_of_mass);
+  while (!meter.finished(state.time)) {
     EXPECT_EQ(step(state).status, StepStatus::ok);
-    if (contact_time < 0 && !state.ball_contacts.empty()) contact_time = state.time;
+    meter.update(state.time, !state.ball_contacts.empty(), observe(state).body_centre_of_mass);
     if (state.time > model.settings.duration) {
       ADD_FAILURE() << "the ball never reached the body";
       break;
     }
   }
-  return (observe(state).body_centre_of_mass - start).dot(path);
+  return meter.distance();
 }
 
 void set_speed(Ball& ball, double speed) { ball.velocity = speed * ball.velocity.normalized(); }

@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "kernel/metrics/knock.hpp"
 #include "kernel/metrics/observers.hpp"
 #include "kernel/model/model.hpp"
 #include "kernel/scene/scene_file.hpp"
@@ -202,11 +203,7 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   std::array<long, 4> stops{};
   std::vector<std::string> sleep_events;
   bool body_sleeping = start.body_sleeping;
-  // The knock (tests/verlet/humanoid_test.cpp): how far the body's centre of mass moves along the
-  // ball's path in the 0.3 s after the ball first touches it.
-  constexpr double kKnockWindow = 0.3;
-  double first_contact = -1, knock = 0;
-  const Eigen::Vector3d ball_path = model.ball ? Eigen::Vector3d(model.ball->velocity.normalized()) : Eigen::Vector3d::Zero();
+  KnockMeter knock(model.ball ? model.ball->velocity : Eigen::Vector3d::UnitX(), start.body_centre_of_mass);
   double wall_seconds = 0;
   long steps_done = 0;
   StepReport report;
@@ -217,10 +214,7 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
     wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++stops[static_cast<int>(report.stop)];
     end = observe(state);
-    if (first_contact < 0 && !state.ball_contacts.empty()) first_contact = end.time;
-    if (first_contact >= 0 && end.time <= first_contact + kKnockWindow + 1e-9) {
-      knock = (end.body_centre_of_mass - start.body_centre_of_mass).dot(ball_path);
-    }
+    knock.update(end.time, !state.ball_contacts.empty(), end.body_centre_of_mass);
     largest_gap = std::max(largest_gap, end.max_joint_gap);
     largest_stretch = std::max(largest_stretch, end.max_link_stretch);
     if (end.body_sleeping != body_sleeping && sleep_events.size() < 8) {
@@ -262,9 +256,9 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   out << format("body        centre of mass %s -> %s m; travelled %.4g m horizontally\n",
                 vector_text(start.body_centre_of_mass).c_str(), vector_text(end.body_centre_of_mass).c_str(),
                 std::hypot(travel.x(), travel.y()));
-  if (first_contact >= 0) {
+  if (knock.touched()) {
     out << format("impact      ball first touched the body at t = %.3f s; in the next %.1f s the body's centre of mass moved %.4f m along the ball's path\n",
-                  first_contact, kKnockWindow, knock);
+                  knock.first_contact_time(), knock.window(), knock.distance());
   }
   out << format("energy      %.6g J at start (kinetic %.4g), %.6g J at end (kinetic %.4g)\n", start.energy(),
                 start.kinetic_energy, end.energy(), end.kinetic_energy);
