@@ -10,9 +10,10 @@
 
 namespace limber {
 
-/// One Gauss-Seidel sweep over the constraints of the awake islands with `state.options.rule`
-/// and the over-relaxation factor ω (1: plain projections). Returns the largest particle
-/// displacement it made, m.
+/// One sequential Gauss-Seidel sweep over the constraints of the awake islands with
+/// `state.options.rule`, in storage order (or its reverse, SweepDirection::pinned_last), with
+/// the over-relaxation factor ω (1: plain projections). Returns the largest particle
+/// displacement it made, m. The coloured sweep is relaxation.hpp's.
 template <typename Scalar>
 double gauss_seidel_sweep(VerletState<Scalar>& state, double over_relaxation);
 

@@ -17,6 +17,7 @@ namespace limber {
 template <typename Scalar>
 void rebuild_awake_islands(VerletState<Scalar>& state) {
   state.awake_islands.clear();
+  ++state.awake_generation;
   for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
     if (!state.islands[k].sleeping) state.awake_islands.push_back(k);
   }

@@ -7,6 +7,7 @@
 #include <span>
 #include <sstream>
 
+#include "kernel/relaxation/relaxation.hpp"
 #include "kernel/sleeping/sleeping.hpp"
 #include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/disjoint_sets.hpp"
@@ -333,6 +334,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.ball_contacts.reserve(has_ball ? state.limbs.size() : 0);
   state.pending_forces.reserve(64);
   state.awake_islands.reserve(state.islands.size());
+  state.contact_particles.reserve(2 * state.plane_contacts.capacity() + 3 * state.ball_contacts.capacity());
 
   // The thesis's standing humanoid: islands at rest start asleep and wait for a contact.
   for (Island& island : state.islands) {
@@ -343,6 +345,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     island.sleeping = model.settings.sleep.enabled && model.settings.sleep.start_asleep && at_rest;
   }
   rebuild_awake_islands(state);
+  prepare_relaxation_plan(state);
   return state;
 }
 

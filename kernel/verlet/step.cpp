@@ -6,7 +6,7 @@
 
 #include "kernel/collision/contacts.hpp"
 #include "kernel/numerics/flush_denormals.hpp"
-#include "kernel/relaxation/gauss_seidel.hpp"
+#include "kernel/relaxation/relaxation.hpp"
 #include "kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -53,6 +53,22 @@ void integrate(VerletState<Scalar>& state, double dt) {
   state.counters.particles_integrated += integrated;
 }
 
+// The particles this step's contacts move (for the interleaved layouts, which keep the
+// relaxation's positions outside state.particles).
+template <typename Scalar>
+void collect_contact_particles(VerletState<Scalar>& state) {
+  state.contact_particles.clear();
+  for (const PlaneContact& contact : state.plane_contacts) {
+    state.contact_particles.push_back(state.features[contact.feature].particle);
+    state.contact_particles.push_back(state.features[contact.feature].axis_partner);
+  }
+  for (const BallContact& contact : state.ball_contacts) {
+    state.contact_particles.push_back(static_cast<std::uint32_t>(state.ball_particle));
+    state.contact_particles.push_back(state.limbs.head[contact.limb]);
+    state.contact_particles.push_back(state.limbs.tail[contact.limb]);
+  }
+}
+
 }  // namespace
 
 template <typename Scalar>
@@ -69,16 +85,22 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   integrate(state, dt);
   if (has_ball) detect_ball_contacts(state, dt);
   if (has_planes) detect_plane_contacts(state, dt);
+  const bool interleaved = state.options.layout != ParticleLayout::soa;
+  if (interleaved) collect_contact_particles(state);
 
   const RelaxationSettings& relaxation = state.settings.relaxation;
   const auto start = std::chrono::steady_clock::now();
   if (!state.awake_islands.empty()) {
+    begin_relaxation(state);
+    const bool has_contacts = !state.plane_contacts.empty() || !state.ball_contacts.empty();
     for (int iteration = 1; iteration <= relaxation.iterations; ++iteration) {
       // The first sweep starts from the unconstrained prediction, far from the solution;
       // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
-      double largest = gauss_seidel_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
+      double largest = relaxation_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
+      if (interleaved && has_contacts) contact_particles_to_buffer(state);
       if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
       if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
+      if (interleaved && has_contacts) contact_particles_from_buffer(state);
       report.iterations = iteration;
       report.largest_correction = largest;
       report.stop = RelaxationStop::iterations;
@@ -94,6 +116,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
         }
       }
     }
+    end_relaxation(state);
   }
   if (has_ball || has_planes) apply_restitution(state, dt);
 

@@ -11,8 +11,11 @@
 #include <Eigen/Core>
 
 #include "kernel/model/model.hpp"
+#include "kernel/relaxation/relaxation_plan.hpp"
+#include "kernel/threading/block_runner.hpp"
 #include "layouts/aligned_array.hpp"
 #include "layouts/constraints/distance_constraint_buffer.hpp"
+#include "layouts/particles/interleaved_particles.hpp"
 #include "layouts/particles/particle_buffer.hpp"
 
 namespace limber {
@@ -23,9 +26,41 @@ enum class RelaxationRule {
   unweighted,  ///< ½ and ½ (the whole gap to the free end when the other is pinned) — thesis eq. 4.6 [Jak03]
 };
 
-/// Choices the Verlet method takes besides the Model.
+/// How one relaxation sweep visits the constraints.
+enum class RelaxationSolver : std::uint8_t {
+  gauss_seidel,  ///< each projection sees the positions the previous ones left (thesis 3.2.2)
+  jacobi,        ///< every projection reads the same positions; corrections are averaged per particle
+};
+
+/// The order of a Gauss-Seidel sweep.
+enum class SweepOrder : std::uint8_t {
+  coloured,    ///< colour after colour, SIMD lanes and threads inside a colour (the default)
+  sequential,  ///< storage order (breadth-first from the pinned root), one constraint at a time:
+               ///< the thesis's loop, scalar and single-threaded
+};
+
+/// Which end of the sweep holds the constraints at pinned particles.
+enum class SweepDirection : std::uint8_t {
+  pinned_first,  ///< coloured: pinned and overflow constraints, then colours 0, 1, …; sequential: root first
+  pinned_last,   ///< the reverse
+};
+
+/// Choices the Verlet method takes besides the Model. None changes the physics model; the
+/// solver, order and direction change how relaxation converges, the rest only how fast it runs
+/// (results are the same bits for every thread count, lane width and layout).
 struct VerletOptions {
   RelaxationRule rule = RelaxationRule::weighted;
+  RelaxationSolver solver = RelaxationSolver::gauss_seidel;
+  SweepOrder order = SweepOrder::coloured;
+  SweepDirection direction = SweepDirection::pinned_first;
+  bool simd = true;                          ///< false: the scalar path (one lane)
+  ParticleLayout layout = ParticleLayout::soa;
+  int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
+  Threading threading = Threading::workers;  ///< how a colour is split across threads
+  /// Colours a stage must have at least this many constraint slots to be split across threads;
+  /// 0 picks the crossover measured on the reference machine (README, "Threads").
+  std::uint32_t parallel_minimum_slots = 0;
+  std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
 };
 
 /// Why relaxation stopped in a step (thesis 3.2.3 lists the three).
@@ -141,7 +176,11 @@ struct VerletState {
   std::vector<std::uint32_t> body_limb;   ///< Model body index → limb index
   /// Joint constraints and the length the gap is measured against (mean of the two limbs), m.
   std::vector<std::pair<std::uint32_t, double>> joint_constraints;
-  std::vector<ParticleOrigin> particle_origins;  ///< names them in outputs (particle_name, compile.hpp)
+  std::vector<ParticleOrigin> particle_origins;
+  /// Colour of each constraint (constraint_colouring.hpp; kNoColour: overflow or never moved)
+  /// and the number of colours.
+  std::vector<std::uint8_t> constraint_colour;
+  std::uint32_t colour_count = 0;  ///< names them in outputs (particle_name, compile.hpp)
   std::int64_t ball_particle = -1;
   std::int64_t ball_island = -1;
   double ball_radius = 0, ball_restitution = 0;
@@ -155,6 +194,9 @@ struct VerletState {
   double time = 0;            ///< s
   double previous_time_step = 0;  ///< Δt of the last step (for the implicit velocity), s
   std::vector<std::uint32_t> awake_islands;
+  std::uint64_t awake_generation = 0;  ///< counts changes of awake_islands
+  RelaxationPlan<Scalar> plan;
+  std::vector<std::uint32_t> contact_particles;  ///< particles the contacts of this step move
   std::vector<PlaneContact> plane_contacts;
   std::vector<BallContact> ball_contacts;
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step

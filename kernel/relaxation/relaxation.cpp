@@ -1,0 +1,305 @@
+#include "kernel/relaxation/relaxation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+#include "kernel/relaxation/batch_projection.hpp"
+#include "kernel/relaxation/distance_projection.hpp"
+#include "kernel/relaxation/gauss_seidel.hpp"
+#include "layouts/graph/constraint_colouring.hpp"
+
+namespace limber {
+namespace {
+
+// Work handed to a thread at a time: 512 constraint slots (32 AVX-512 float blocks), or a range
+// of particles for Jacobi's apply pass. Large enough to amortize a claim, small enough to
+// balance two threads on a 10^4-link colour.
+constexpr std::size_t kSlotsPerTask = 512;
+constexpr std::size_t kParticlesPerTask = 4096;
+// Below this many slots a colour runs on one thread: the fork/join or stage hand-off costs more
+// than the second core saves (measured crossover, README "Threads").
+constexpr std::uint32_t kDefaultParallelMinimumSlots = 4096;
+
+template <typename Scalar>
+void build_batches(VerletState<Scalar>& state) {
+  RelaxationPlan<Scalar>& plan = state.plan;
+  ConstraintBatches<Scalar>& batches = plan.batches;
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  const AlignedArray<Scalar>& inverse_mass = state.particles.inverse_mass;
+  using Index = typename ConstraintBatches<Scalar>::Index;
+  const auto null_particle = static_cast<Index>(state.particles.null_particle());
+  auto push = [&](std::uint32_t c) {
+    const std::uint32_t i = constraints.particle_i[c], j = constraints.particle_j[c];
+    Scalar s_i = 0, s_j = 0;
+    correction_shares(state.options.rule, inverse_mass[i], inverse_mass[j], s_i, s_j);
+    batches.push(static_cast<Index>(i), static_cast<Index>(j), constraints.rest_length[c], s_i, s_j);
+  };
+  batches.clear();
+  for (std::uint32_t colour = 0; colour < state.colour_count; ++colour) {
+    for (std::uint32_t k : state.awake_islands) {
+      const Island& island = state.islands[k];
+      for (std::uint32_t c = island.constraint_begin; c < island.constraint_end; ++c) {
+        if (state.constraint_colour[c] == colour) push(c);
+      }
+    }
+    batches.close_colour(null_particle);
+  }
+  const bool forward = state.options.direction == SweepDirection::pinned_first;
+  const auto push_overflow = [&](std::uint32_t c) {
+    const bool movable = inverse_mass[constraints.particle_i[c]] > 0 || inverse_mass[constraints.particle_j[c]] > 0;
+    if (state.constraint_colour[c] == kNoColour && movable) push(c);
+  };
+  for (std::size_t n = 0; n < state.awake_islands.size(); ++n) {
+    const Island& island = state.islands[state.awake_islands[forward ? n : state.awake_islands.size() - 1 - n]];
+    for (std::uint32_t c = island.constraint_begin; c < island.constraint_end; ++c) {
+      push_overflow(forward ? c : island.constraint_end - 1 - (c - island.constraint_begin));
+    }
+  }
+
+  plan.particle_tasks.clear();
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t p = island.particle_begin; p < island.particle_end; p += kParticlesPerTask) {
+      plan.particle_tasks.emplace_back(p, std::min<std::uint32_t>(island.particle_end, p + kParticlesPerTask));
+    }
+  }
+  if (state.options.solver == RelaxationSolver::jacobi) {
+    for (const auto& [begin, end] : plan.particle_tasks) {
+      std::fill(plan.inverse_count.begin() + begin, plan.inverse_count.begin() + end, Scalar(0));
+    }
+    for (std::size_t slot = 0; slot < batches.slot_count(); ++slot) {
+      if (batches.share_i[slot] > 0) plan.inverse_count[batches.particle_i[slot]] += 1;
+      if (batches.share_j[slot] > 0) plan.inverse_count[batches.particle_j[slot]] += 1;
+    }
+    for (const auto& [begin, end] : plan.particle_tasks) {
+      for (std::uint32_t p = begin; p < end; ++p) {
+        if (plan.inverse_count[p] > 0) plan.inverse_count[p] = Scalar(1) / plan.inverse_count[p];
+      }
+    }
+  }
+  plan.built_for = state.awake_generation;
+}
+
+// One stage's work, as the BlockRunner hands it out: tasks of kSlotsPerTask slots of
+// [begin, end), or of particle_tasks.
+template <typename Scalar, typename Lanes, typename Positions>
+struct StageContext {
+  const RelaxationPlan<Scalar>* plan;
+  Positions positions;
+  Scalar over_relaxation;
+  std::size_t begin, end;
+  CorrectionSums<Scalar> sums;
+
+  std::size_t task_count() const { return (end - begin + kSlotsPerTask - 1) / kSlotsPerTask; }
+  std::size_t task_begin(std::size_t task) const { return begin + task * kSlotsPerTask; }
+  std::size_t task_end(std::size_t task) const { return std::min(end, task_begin(task) + kSlotsPerTask); }
+
+  static double project(const void* context, std::size_t task) {
+    const auto& stage = *static_cast<const StageContext*>(context);
+    return project_blocks<Lanes>(stage.plan->batches, stage.task_begin(task), stage.task_end(task), stage.positions,
+                                 stage.over_relaxation);
+  }
+  static double accumulate(const void* context, std::size_t task) {
+    const auto& stage = *static_cast<const StageContext*>(context);
+    accumulate_blocks<Lanes>(stage.plan->batches, stage.task_begin(task), stage.task_end(task), stage.positions,
+                             stage.sums);
+    return 0;
+  }
+  // Jacobi's apply pass over one range of particles: x += ω·(sum)/(count), sum ← 0.
+  static double apply(const void* context, std::size_t task) {
+    const auto& stage = *static_cast<const StageContext*>(context);
+    const RelaxationPlan<Scalar>& plan = *stage.plan;
+    const auto [begin, end] = plan.particle_tasks[task];
+    Scalar largest = 0;
+    for (std::uint32_t p = begin; p < end; ++p) {
+      const Scalar factor = stage.over_relaxation * plan.inverse_count[p];
+      const Scalar dx = factor * stage.sums.x[p], dy = factor * stage.sums.y[p], dz = factor * stage.sums.z[p];
+      const auto offset = Positions::offset(p);
+      stage.positions.x[offset] += dx, stage.positions.y[offset] += dy, stage.positions.z[offset] += dz;
+      stage.sums.x[p] = stage.sums.y[p] = stage.sums.z[p] = 0;
+      largest = std::max(largest, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    return largest;
+  }
+};
+
+template <typename Scalar>
+double run_stage(RelaxationPlan<Scalar>& plan, std::size_t slots, std::size_t tasks, BlockRunner::BlockFunction function,
+                 const void* context) {
+  if (slots >= plan.parallel_minimum_slots) return plan.runner->run(tasks, function, context);
+  double largest = 0;
+  for (std::size_t task = 0; task < tasks; ++task) largest = std::max(largest, function(context, task));
+  return largest;
+}
+
+template <typename Scalar, typename Lanes, typename Positions>
+double coloured_sweep(VerletState<Scalar>& state, Positions positions, Scalar over_relaxation) {
+  RelaxationPlan<Scalar>& plan = state.plan;
+  const ConstraintBatches<Scalar>& batches = plan.batches;
+  using Simd = StageContext<Scalar, Lanes, Positions>;
+  using Scalar1 = StageContext<Scalar, ScalarLanes<Scalar>, Positions>;
+  const CorrectionSums<Scalar> sums{plan.sum_x.data(), plan.sum_y.data(), plan.sum_z.data()};
+  const std::size_t colours = batches.colour_count();
+  const Scalar1 overflow{&plan, positions, over_relaxation, batches.overflow_begin(), batches.slot_count(), sums};
+  double largest = 0;
+
+  if (state.options.solver == RelaxationSolver::jacobi) {
+    for (std::size_t k = 0; k < colours; ++k) {
+      const Simd colour{&plan, positions, over_relaxation, batches.colour_begin[k], batches.colour_begin[k + 1], sums};
+      run_stage(plan, colour.end - colour.begin, colour.task_count(), &Simd::accumulate, &colour);
+    }
+    for (std::size_t task = 0; task < overflow.task_count(); ++task) Scalar1::accumulate(&overflow, task);
+    const Simd apply{&plan, positions, over_relaxation, 0, 0, sums};
+    return run_stage(plan, batches.slot_count(), plan.particle_tasks.size(), &Simd::apply, &apply);
+  }
+
+  const auto project_overflow = [&] {
+    for (std::size_t task = 0; task < overflow.task_count(); ++task) {
+      largest = std::max(largest, Scalar1::project(&overflow, task));
+    }
+  };
+  const bool pinned_first = state.options.direction == SweepDirection::pinned_first;
+  if (pinned_first) project_overflow();
+  for (std::size_t n = 0; n < colours; ++n) {
+    const std::size_t k = pinned_first ? n : colours - 1 - n;
+    const Simd colour{&plan, positions, over_relaxation, batches.colour_begin[k], batches.colour_begin[k + 1], sums};
+    largest = std::max(largest, run_stage(plan, colour.end - colour.begin, colour.task_count(), &Simd::project, &colour));
+  }
+  if (!pinned_first) project_overflow();
+  return largest;
+}
+
+template <typename Scalar, typename Lanes>
+double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
+  RelaxationPlan<Scalar>& plan = state.plan;
+  switch (state.options.layout) {
+    case ParticleLayout::aos:
+      return coloured_sweep<Scalar, Lanes>(state, InterleavedPositions<Scalar, 1>(plan.array_of_structures), over_relaxation);
+    case ParticleLayout::aosoa:
+      return coloured_sweep<Scalar, Lanes>(
+          state, InterleavedPositions<Scalar, kLanesPerLine<Scalar>>(plan.blocked_structures), over_relaxation);
+    case ParticleLayout::soa: break;
+  }
+  return coloured_sweep<Scalar, Lanes>(state, SoaPositions<Scalar>(state.particles), over_relaxation);
+}
+
+// Applies `copy(store)` to the interleaved store in use, if any.
+template <typename Scalar, typename Function>
+void with_interleaved(VerletState<Scalar>& state, Function&& copy) {
+  if (state.options.layout == ParticleLayout::aos) copy(state.plan.array_of_structures);
+  if (state.options.layout == ParticleLayout::aosoa) copy(state.plan.blocked_structures);
+}
+
+}  // namespace
+
+template <typename Scalar>
+void prepare_relaxation_plan(VerletState<Scalar>& state) {
+  const VerletOptions& options = state.options;
+  if (options.threads < 0) throw std::invalid_argument("options: threads must be 0 (automatic) or at least 1");
+  if (options.max_colours < 1 || options.max_colours > kMaxColours) {
+    throw std::invalid_argument("options: max_colours must be in [1, 64]");
+  }
+  if (options.order == SweepOrder::sequential &&
+      (options.layout != ParticleLayout::soa || options.solver == RelaxationSolver::jacobi)) {
+    throw std::invalid_argument("options: the sequential sweep is scalar Gauss-Seidel over the SoA layout only");
+  }
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  std::vector<bool> movable(state.particles.size());
+  for (std::size_t p = 0; p < movable.size(); ++p) movable[p] = state.particles.inverse_mass[p] > 0;
+  // Only constraints between two movable particles enter a colour: the others go to the overflow.
+  std::vector<std::uint32_t> order;
+  order.reserve(constraints.size());
+  for (std::uint32_t c = 0; c < constraints.size(); ++c) {
+    if (movable[constraints.particle_i[c]] && movable[constraints.particle_j[c]]) order.push_back(c);
+  }
+  ConstraintColouring colouring =
+      colour_constraints({constraints.particle_i.data(), constraints.size()},
+                         {constraints.particle_j.data(), constraints.size()}, order, movable, options.max_colours);
+  state.constraint_colour = std::move(colouring.colour);
+  state.colour_count = colouring.colour_count();
+
+  RelaxationPlan<Scalar>& plan = state.plan;
+  const std::size_t lanes = ConstraintBatches<Scalar>::kBlockLanes;
+  plan.batches.reserve(constraints.size() + state.colour_count * (lanes - 1), state.colour_count);
+  plan.particle_tasks.reserve(state.islands.size() + state.particles.size() / kParticlesPerTask + 1);
+  if (options.solver == RelaxationSolver::jacobi) {
+    for (auto* array : {&plan.sum_x, &plan.sum_y, &plan.sum_z, &plan.inverse_count}) {
+      array->assign(state.particles.capacity(), Scalar(0));
+    }
+  }
+  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  plan.runner.reset(options.threading, threads);
+  plan.parallel_minimum_slots = options.parallel_minimum_slots > 0 ? options.parallel_minimum_slots : kDefaultParallelMinimumSlots;
+  if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
+  plan.built_for = ~std::uint64_t{0};
+  with_interleaved(state, [&](auto& store) { store.copy_from(state.particles, 0, state.particles.capacity()); });
+}
+
+template <typename Scalar>
+void begin_relaxation(VerletState<Scalar>& state) {
+  if (state.options.order == SweepOrder::sequential) return;
+  RelaxationPlan<Scalar>& plan = state.plan;
+  if (plan.built_for != state.awake_generation) build_batches(state);
+  with_interleaved(state, [&](auto& store) {
+    for (std::uint32_t k : state.awake_islands) {
+      store.copy_from(state.particles, state.islands[k].particle_begin, state.islands[k].particle_end);
+    }
+  });
+  // Helpers only when some colour is big enough to be split.
+  bool parallel = false;
+  for (std::size_t k = 0; k < plan.batches.colour_count(); ++k) {
+    parallel = parallel || plan.batches.colour_begin[k + 1] - plan.batches.colour_begin[k] >= plan.parallel_minimum_slots;
+  }
+  if (parallel) plan.runner->begin();
+}
+
+template <typename Scalar>
+double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
+  std::uint64_t projections = 0;
+  for (std::uint32_t k : state.awake_islands) projections += state.islands[k].constraint_end - state.islands[k].constraint_begin;
+  state.counters.constraint_projections += projections;
+  if (state.options.order == SweepOrder::sequential) return gauss_seidel_sweep(state, over_relaxation);
+  const auto omega = static_cast<Scalar>(over_relaxation);
+  return state.options.simd ? coloured_sweep<Scalar, SimdLanes<Scalar>>(state, omega)
+                            : coloured_sweep<Scalar, ScalarLanes<Scalar>>(state, omega);
+}
+
+template <typename Scalar>
+void end_relaxation(VerletState<Scalar>& state) {
+  if (state.options.order == SweepOrder::sequential) return;
+  state.plan.runner->end();
+  with_interleaved(state, [&](auto& store) {
+    for (std::uint32_t k : state.awake_islands) {
+      store.copy_positions_to(state.particles, state.islands[k].particle_begin, state.islands[k].particle_end);
+    }
+  });
+}
+
+template <typename Scalar>
+void contact_particles_to_buffer(VerletState<Scalar>& state) {
+  with_interleaved(state, [&](auto& store) {
+    for (std::uint32_t p : state.contact_particles) store.copy_position_to(state.particles, p);
+  });
+}
+
+template <typename Scalar>
+void contact_particles_from_buffer(VerletState<Scalar>& state) {
+  with_interleaved(state, [&](auto& store) {
+    for (std::uint32_t p : state.contact_particles) store.copy_position_from(state.particles, p);
+  });
+}
+
+#define LIMBER_INSTANTIATE(Scalar)                                                  \
+  template void prepare_relaxation_plan<Scalar>(VerletState<Scalar>&);              \
+  template void begin_relaxation<Scalar>(VerletState<Scalar>&);                     \
+  template double relaxation_sweep<Scalar>(VerletState<Scalar>&, double);           \
+  template void end_relaxation<Scalar>(VerletState<Scalar>&);                       \
+  template void contact_particles_to_buffer<Scalar>(VerletState<Scalar>&);          \
+  template void contact_particles_from_buffer<Scalar>(VerletState<Scalar>&);
+LIMBER_INSTANTIATE(float)
+LIMBER_INSTANTIATE(double)
+#undef LIMBER_INSTANTIATE
+
+}  // namespace limber

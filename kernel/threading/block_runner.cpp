@@ -1,0 +1,155 @@
+#include "kernel/threading/block_runner.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_reduce.h>
+#include <oneapi/tbb/task_arena.h>
+#include <oneapi/tbb/task_group.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#endif
+
+namespace limber {
+namespace {
+
+void spin_pause(int& spins) {
+  // Spin briefly, then give the core away: on a shared 2-core machine a helper that only spins
+  // would take the core from the thread doing the serial parts.
+  if (++spins < 64) {
+#if defined(__x86_64__) || defined(__i386__)
+    _mm_pause();
+#endif
+  } else {
+    std::this_thread::yield();
+  }
+}
+
+}  // namespace
+
+struct BlockRunner::Shared {
+  // The stage word: stage number (high 32 bits) and next unclaimed block (low 32 bits). A
+  // successful compare-and-swap from (s, b) to (s, b + 1) gives block b of stage s to the
+  // caller; it can only succeed while stage s is current, and stage s stays current (its
+  // descriptor unchanged) until every claimed block has completed.
+  alignas(64) std::atomic<std::uint64_t> claim{0};
+  alignas(64) std::atomic<std::uint32_t> completed{0};
+  std::atomic<std::uint32_t> count{0};
+  std::atomic<BlockFunction> function{nullptr};
+  std::atomic<const void*> context{nullptr};
+  std::atomic<bool> done{false};
+  // Per helper: the largest value of the blocks it ran in `stage` (read by the caller once the
+  // stage completed, before the next is published).
+  struct alignas(64) Result {
+    std::uint64_t stage = 0;
+    double largest = 0;
+  };
+  std::vector<Result> results;
+  std::uint64_t stage = 0;
+
+  tbb::task_arena arena;
+  tbb::task_group helpers;
+
+  explicit Shared(int threads) : results(static_cast<std::size_t>(threads)), arena(threads) {}
+
+  // Claims and runs blocks of the current stage until none is left; returns false when the
+  // stage word did not name a runnable stage. `result` collects the largest value.
+  bool work(Result& result) {
+    std::uint64_t word = claim.load(std::memory_order_acquire);
+    const std::uint64_t s = word >> 32;
+    bool ran = false;
+    while ((word >> 32) == s && (word & 0xFFFFFFFFu) < count.load(std::memory_order_relaxed)) {
+      if (!claim.compare_exchange_weak(word, word + 1, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
+      const double value = function.load(std::memory_order_relaxed)(context.load(std::memory_order_relaxed),
+                                                                    word & 0xFFFFFFFFu);
+      if (result.stage != s) result.stage = s, result.largest = value;
+      else result.largest = std::max(result.largest, value);
+      completed.fetch_add(1, std::memory_order_release);
+      ran = true;
+      word = claim.load(std::memory_order_acquire);
+    }
+    return ran;
+  }
+
+  void helper_loop(std::size_t slot) {
+    int spins = 0;
+    while (!done.load(std::memory_order_acquire)) {
+      if (work(results[slot])) spins = 0;
+      else spin_pause(spins);
+    }
+  }
+};
+
+BlockRunner::BlockRunner(Threading threading, int threads) : threading_(threading), threads_(threads) {
+  if (threads < 1) throw std::invalid_argument("BlockRunner: threads must be at least 1");
+  if (threads == 1) threading_ = Threading::serial;
+  if (threading_ != Threading::serial) shared_ = std::make_unique<Shared>(threads);
+}
+
+BlockRunner::~BlockRunner() { end(); }
+
+void BlockRunner::begin() {
+  if (threading_ != Threading::workers) return;
+  Shared& shared = *shared_;
+  shared.done.store(false, std::memory_order_release);
+  shared.arena.execute([&] {
+    for (int k = 1; k < threads_; ++k) {
+      shared.helpers.run([&shared, k] { shared.helper_loop(static_cast<std::size_t>(k)); });
+    }
+  });
+}
+
+void BlockRunner::end() {
+  if (threading_ != Threading::workers || !shared_) return;
+  Shared& shared = *shared_;
+  shared.done.store(true, std::memory_order_release);
+  // A helper that never started runs here, sees `done` and returns at once.
+  shared.arena.execute([&] { shared.helpers.wait(); });
+}
+
+double BlockRunner::run_serial(std::size_t count, BlockFunction function, const void* context) {
+  double largest = 0;
+  for (std::size_t block = 0; block < count; ++block) largest = std::max(largest, function(context, block));
+  return largest;
+}
+
+double BlockRunner::run(std::size_t count, BlockFunction function, const void* context) {
+  if (threading_ == Threading::serial || count <= 1) return run_serial(count, function, context);
+  Shared& shared = *shared_;
+  if (threading_ == Threading::parallel_for) {
+    return shared.arena.execute([&] {
+      return tbb::parallel_reduce(
+          tbb::blocked_range<std::size_t>(0, count, 1), 0.0,
+          [&](const tbb::blocked_range<std::size_t>& range, double largest) {
+            for (std::size_t block = range.begin(); block != range.end(); ++block) {
+              largest = std::max(largest, function(context, block));
+            }
+            return largest;
+          },
+          [](double a, double b) { return std::max(a, b); });
+    });
+  }
+  // Publish the stage: descriptor first, then the stage word (release).
+  const std::uint64_t stage = ++shared.stage;
+  shared.count.store(static_cast<std::uint32_t>(count), std::memory_order_relaxed);
+  shared.function.store(function, std::memory_order_relaxed);
+  shared.context.store(context, std::memory_order_relaxed);
+  shared.completed.store(0, std::memory_order_relaxed);
+  shared.claim.store(stage << 32, std::memory_order_release);
+  Shared::Result& own = shared.results[0];
+  own.largest = 0, own.stage = stage;
+  shared.work(own);
+  int spins = 0;
+  while (shared.completed.load(std::memory_order_acquire) != count) spin_pause(spins);
+  double largest = own.largest;
+  for (std::size_t k = 1; k < shared.results.size(); ++k) {
+    if (shared.results[k].stage == stage) largest = std::max(largest, shared.results[k].largest);
+  }
+  return largest;
+}
+
+}  // namespace limber

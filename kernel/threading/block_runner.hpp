@@ -1,0 +1,53 @@
+// Runs a relaxation's stages — each a list of independent blocks (the blocks of one colour) —
+// on one or more threads, with three strategies to compare (issue 3 measures them):
+//
+// - serial: the calling thread runs every block; no synchronization at all.
+// - parallel_for: oneTBB's parallel_reduce over each stage; a fork and join per stage.
+// - workers: long-lived helper tasks (started once per step, in a oneTBB arena) that spin on a
+//   shared stage word and claim blocks with a compare-and-swap, as Box2D v3's solver stages do.
+//   The calling thread claims blocks too and never waits for a helper to *start*, so a stage
+//   completes even if the helpers never run; it only waits for blocks already claimed.
+//
+// Blocks of a stage must be independent (different colours' blocks are not). Which thread runs
+// a block never changes its result, so results are the same bits for any thread count.
+#pragma once
+
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+
+namespace limber {
+
+enum class Threading : std::uint8_t { serial, parallel_for, workers };
+
+class BlockRunner {
+ public:
+  /// Runs block `block` of a stage with `context`; returns a value to maximize over the stage.
+  using BlockFunction = double (*)(const void* context, std::size_t block);
+
+  /// `threads` ≥ 1 (1 makes every strategy serial). Throws std::invalid_argument otherwise.
+  BlockRunner(Threading threading, int threads);
+  ~BlockRunner();
+  BlockRunner(const BlockRunner&) = delete;
+  BlockRunner& operator=(const BlockRunner&) = delete;
+
+  Threading threading() const { return threading_; }
+  int threads() const { return threads_; }
+
+  /// Brackets the stages of one step: starts and stops the helper tasks (workers only).
+  void begin();
+  void end();
+
+  /// Runs blocks [0, count) and returns the largest value they returned (0 when count is 0).
+  double run(std::size_t count, BlockFunction function, const void* context);
+
+ private:
+  struct Shared;
+  double run_serial(std::size_t count, BlockFunction function, const void* context);
+  Threading threading_;
+  int threads_;
+  std::unique_ptr<Shared> shared_;
+};
+
+}  // namespace limber
