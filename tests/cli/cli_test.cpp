@@ -70,6 +70,30 @@ TEST(Cli, OutWritesOneCsvRowPerStepPlusTheStart) {
   EXPECT_EQ(rows, 26);
 }
 
+TEST(Cli, EverySolverPathGivesTheSameSummaryOfAChain) {
+  // Layouts, lanes and threads change nothing but speed: the physics lines must be identical.
+  const auto physics = [](const std::string& out) { return out.substr(out.find("joint gap")); };
+  const Result reference = run({"run", scene("chain.json"), "--links", "40", "--steps", "50", "--scalar", "--threads", "1"});
+  ASSERT_EQ(reference.code, 0) << reference.err;
+  EXPECT_THAT(reference.out, HasSubstr("2 colours"));
+  for (const std::vector<std::string>& variant :
+       {std::vector<std::string>{"--layout", "aos"}, {"--layout", "aosoa", "--threads", "2"}, {"--threading", "parallel-for", "--threads", "2"}}) {
+    std::vector<std::string> arguments{"run", scene("chain.json"), "--links", "40", "--steps", "50"};
+    arguments.insert(arguments.end(), variant.begin(), variant.end());
+    const Result r = run(arguments);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(physics(r.out), physics(reference.out)) << variant[0] << " " << variant[1];
+  }
+}
+TEST(Cli, RunsJacobiAndTheSequentialSweep) {
+  for (const char* solver : {"--solver=jacobi", "--sweep=sequential"}) {
+    const Result r = run({"run", scene("chain.json"), "--steps", "20", solver});
+    EXPECT_EQ(r.code, 0) << r.err;
+  }
+}
+TEST(Cli, RejectsSequentialJacobi) { expect_rejected({"run", "--sweep", "sequential", "--solver", "jacobi"}, "--sweep"); }
+TEST(Cli, RejectsUnknownLayout) { expect_rejected({"run", "--layout", "soaos"}, "soaos"); }
+TEST(Cli, RejectsNegativeThreads) { expect_rejected({"run", "--threads", "-2"}, "--threads"); }
 TEST(Cli, RejectsUnknownFlag) { expect_rejected({"run", "--speed", "3"}, "--speed"); }
 TEST(Cli, RejectsUnknownMethod) { expect_rejected({"run", "--method", "midpoint"}, "midpoint"); }
 TEST(Cli, RejectsMissingSubcommand) { expect_rejected({}, "subcommand"); }

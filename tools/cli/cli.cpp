@@ -18,6 +18,7 @@
 #include "kernel/scene/scene_file.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
+#include "layouts/graph/constraint_colouring.hpp"
 
 namespace limber::cli {
 namespace {
@@ -46,6 +47,9 @@ struct RunFlags {
   int iterations = 0;
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
+  std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "soa", threading = "workers";
+  int threads = 0;
+  bool scalar = false;
 
   CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
       *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
@@ -78,6 +82,45 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.over_relaxation_option =
       run.add_option("--over-relaxation", flags.over_relaxation, "Successive over-relaxation factor, in (0, 2)");
   flags.out_option = run.add_option("--out", flags.out_path, "Write the trajectory (time, particle positions) as CSV");
+  run.add_option("--solver", flags.solver, "Relaxation sweep: gauss-seidel or jacobi")
+      ->check(CLI::IsMember({"gauss-seidel", "jacobi"}))
+      ->capture_default_str();
+  run.add_option("--sweep", flags.sweep,
+                 "Gauss-Seidel order: coloured (SIMD, threads) or sequential (the thesis's loop, scalar)")
+      ->check(CLI::IsMember({"coloured", "sequential"}))
+      ->capture_default_str();
+  run.add_option("--pinned", flags.pinned, "Sweep the constraints at pinned particles first or last")
+      ->check(CLI::IsMember({"first", "last"}))
+      ->capture_default_str();
+  run.add_option("--threads", flags.threads, "Threads for relaxation; 0: the hardware's, where they pay off")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  run.add_option("--threading", flags.threading, "How a colour is split: workers (long-lived) or parallel-for")
+      ->check(CLI::IsMember({"workers", "parallel-for"}))
+      ->capture_default_str();
+  run.add_option("--layout", flags.layout, "Particle storage for relaxation: soa, aos or aosoa")
+      ->check(CLI::IsMember({"soa", "aos", "aosoa"}))
+      ->capture_default_str();
+  run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
+}
+
+// The VerletOptions the flags ask for; a combination the sequential sweep cannot run is an error.
+VerletOptions verlet_options(const RunFlags& flags) {
+  VerletOptions options;
+  options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
+  options.solver = flags.solver == "jacobi" ? RelaxationSolver::jacobi : RelaxationSolver::gauss_seidel;
+  options.order = flags.sweep == "sequential" ? SweepOrder::sequential : SweepOrder::coloured;
+  options.direction = flags.pinned == "last" ? SweepDirection::pinned_last : SweepDirection::pinned_first;
+  options.threads = flags.threads;
+  options.threading = flags.threading == "parallel-for" ? Threading::parallel_for : Threading::workers;
+  options.layout = flags.layout == "aos" ? ParticleLayout::aos
+                   : flags.layout == "aosoa" ? ParticleLayout::aosoa : ParticleLayout::soa;
+  options.simd = !flags.scalar;
+  if (options.order == SweepOrder::sequential) {
+    if (options.solver == RelaxationSolver::jacobi) throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver jacobi");
+    if (options.layout != ParticleLayout::soa) throw InputError("--sweep sequential: runs on the soa layout only, got --layout " + flags.layout);
+  }
+  return options;
 }
 
 bool given(const CLI::Option* option) { return option->count() > 0; }
@@ -181,12 +224,32 @@ void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
   csv << '\n';
 }
 
+// "solver" line: the sweep, the colour count and batch sizes, the overflow, lanes, layout, threads.
+template <typename Scalar>
+std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state) {
+  std::vector<std::size_t> sizes(state.colour_count, 0);
+  std::size_t overflow = 0;
+  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+    const std::uint8_t colour = state.constraint_colour[c];
+    const bool movable = state.particles.inverse_mass[state.constraints.particle_i[c]] > 0 ||
+                         state.particles.inverse_mass[state.constraints.particle_j[c]] > 0;
+    if (colour != kNoColour) ++sizes[colour];
+    else if (movable) ++overflow;
+  }
+  std::string batches;
+  for (std::size_t k = 0; k < sizes.size() && k < 8; ++k) batches += (k ? " " : "") + std::to_string(sizes[k]);
+  if (sizes.size() > 8) batches += " …";
+  if (flags.sweep == "sequential") return format("solver      sequential gauss-seidel, pinned end %s, scalar, 1 thread\n", flags.pinned.c_str());
+  return format("solver      %s by colour: %u colours (batches %s), %zu overflow; pinned end %s; %s, %s layout, %d thread%s (%s)\n",
+                flags.solver.c_str(), state.colour_count, batches.c_str(), overflow, flags.pinned.c_str(),
+                flags.scalar ? "scalar" : "SIMD", flags.layout.c_str(), state.plan.runner->threads(),
+                state.plan.runner->threads() == 1 ? "" : "s", flags.threading.c_str());
+}
+
 // Runs the model and prints the summary; returns the exit code.
 template <typename Scalar>
 int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
-  VerletOptions options;
-  options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
-  VerletState<Scalar> state = compile<Scalar>(model, options);
+  VerletState<Scalar> state = compile<Scalar>(model, verlet_options(flags));
 
   const double dt = model.settings.time_step;
   const long steps = given(flags.steps_option) ? flags.steps : std::max(1L, std::lround(model.settings.duration / dt));
@@ -235,6 +298,7 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
                 model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
+  out << solver_line(flags, state);
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", steps_done, dt,
                 state.time, wall_seconds, wall_seconds > 0 ? steps_done / wall_seconds : 0.0);
   out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
