@@ -41,6 +41,54 @@ std::uint32_t checked_index(std::size_t value) {
   return static_cast<std::uint32_t>(value);
 }
 
+// Renumbers each island's particles in `options.ordering` (particle_ordering.hpp), moving
+// every per-particle array and rewriting every particle index. Islands keep their ranges.
+template <typename Scalar>
+void renumber_particles(VerletState<Scalar>& state) {
+  const ParticleOrder ordering = state.options.ordering;
+  if (ordering == ParticleOrder::breadth_first) return;
+  const std::size_t count = state.particles.size();
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> neighbour_pairs;
+  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+    const std::uint32_t i = state.constraints.particle_i[c], j = state.constraints.particle_j[c];
+    neighbour_pairs.emplace_back(i, j), neighbour_pairs.emplace_back(j, i);
+  }
+  const CompressedRows<std::uint32_t> adjacency = group_by_row(count, neighbour_pairs);
+  std::vector<std::uint32_t> new_index(count);
+  for (const Island& island : state.islands) {
+    const std::vector<std::uint32_t> order =
+        ordering == ParticleOrder::shuffled ? shuffled_order(island.particle_begin, island.particle_end)
+                                            : reverse_cuthill_mckee(adjacency, island.particle_begin, island.particle_end);
+    for (std::size_t k = 0; k < order.size(); ++k) new_index[order[k]] = island.particle_begin + static_cast<std::uint32_t>(k);
+  }
+  ParticleBuffer<Scalar> particles;
+  particles.resize(count);
+  std::vector<double> particle_mass(count);
+  std::vector<ParticleOrigin> origins(count);
+  for (std::size_t p = 0; p < count; ++p) {
+    const std::uint32_t q = new_index[p];
+    particles.set_position(q, state.particles.position(p));
+    particles.set_previous(q, state.particles.previous(p));
+    particles.inverse_mass[q] = state.particles.inverse_mass[p];
+    particle_mass[q] = state.particle_mass[p];
+    origins[q] = state.particle_origins[p];
+  }
+  state.particles = std::move(particles);
+  state.particle_mass = std::move(particle_mass);
+  state.particle_origins = std::move(origins);
+  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+    state.constraints.particle_i[c] = new_index[state.constraints.particle_i[c]];
+    state.constraints.particle_j[c] = new_index[state.constraints.particle_j[c]];
+  }
+  for (auto* list : {&state.limbs.head, &state.limbs.tail}) {
+    for (std::uint32_t& p : *list) p = new_index[p];
+  }
+  for (ContactFeature& feature : state.features) {
+    feature.particle = new_index[feature.particle], feature.axis_partner = new_index[feature.axis_partner];
+  }
+  if (state.ball_particle >= 0) state.ball_particle = new_index[static_cast<std::size_t>(state.ball_particle)];
+}
+
 }  // namespace
 
 template <typename Scalar>
@@ -345,6 +393,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     island.sleeping = model.settings.sleep.enabled && model.settings.sleep.start_asleep && at_rest;
   }
   rebuild_awake_islands(state);
+  renumber_particles(state);
   prepare_relaxation_plan(state);
   return state;
 }

@@ -15,6 +15,7 @@
 #include "kernel/threading/block_runner.hpp"
 #include "layouts/aligned_array.hpp"
 #include "layouts/constraints/distance_constraint_buffer.hpp"
+#include "layouts/graph/particle_ordering.hpp"
 #include "layouts/particles/interleaved_particles.hpp"
 #include "layouts/particles/particle_buffer.hpp"
 
@@ -55,6 +56,7 @@ struct VerletOptions {
   SweepDirection direction = SweepDirection::pinned_first;
   bool simd = true;                          ///< false: the scalar path (one lane)
   ParticleLayout layout = ParticleLayout::soa;
+  ParticleOrder ordering = ParticleOrder::breadth_first;  ///< particle numbering inside islands
   int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
   Threading threading = Threading::workers;  ///< how a colour is split across threads
   /// Colours a stage must have at least this many constraint slots to be split across threads;

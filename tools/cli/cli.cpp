@@ -48,6 +48,7 @@ struct RunFlags {
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
   std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "soa", threading = "workers";
+  std::string ordering = "breadth-first";
   int threads = 0;
   bool scalar = false;
 
@@ -101,6 +102,9 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("--layout", flags.layout, "Particle storage for relaxation: soa, aos or aosoa")
       ->check(CLI::IsMember({"soa", "aos", "aosoa"}))
       ->capture_default_str();
+  run.add_option("--ordering", flags.ordering, "Particle numbering: breadth-first, rcm (reverse Cuthill-McKee) or shuffled")
+      ->check(CLI::IsMember({"breadth-first", "rcm", "shuffled"}))
+      ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
 }
 
@@ -116,6 +120,8 @@ VerletOptions verlet_options(const RunFlags& flags) {
   options.layout = flags.layout == "aos" ? ParticleLayout::aos
                    : flags.layout == "aosoa" ? ParticleLayout::aosoa : ParticleLayout::soa;
   options.simd = !flags.scalar;
+  options.ordering = flags.ordering == "rcm" ? ParticleOrder::reverse_cuthill_mckee
+                     : flags.ordering == "shuffled" ? ParticleOrder::shuffled : ParticleOrder::breadth_first;
   if (options.order == SweepOrder::sequential) {
     if (options.solver == RelaxationSolver::jacobi) throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver jacobi");
     if (options.layout != ParticleLayout::soa) throw InputError("--sweep sequential: runs on the soa layout only, got --layout " + flags.layout);
