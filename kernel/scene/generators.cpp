@@ -1,0 +1,246 @@
+// GCC 12 false positive (bug 105329) in operator+(const char*, std::string&&), here and in
+// checks.hpp's format_vector. The warning is located in <string>, so the pragma precedes it.
+#pragma GCC diagnostic ignored "-Wrestrict"
+#include "kernel/scene/generators.hpp"
+
+#include <charconv>
+#include <climits>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <string_view>
+#include <utility>
+
+#include "kernel/model/checks.hpp"
+#include "kernel/scene/scene_file.hpp"
+
+namespace limber {
+
+using namespace checks;
+
+namespace {
+
+/// A count of at least `minimum`.
+void require_count(std::size_t value, std::size_t minimum, std::string_view path) {
+  if (value < minimum) {
+    fail(path, "must be >= " + std::to_string(minimum) + ", got " + std::to_string(value));
+  }
+}
+
+/// Joint::inboard and Joint::outboard are int. The count is a double so that computing it from
+/// a spec's sizes cannot overflow.
+void require_int_indices(double body_count, std::string_view path) {
+  if (body_count <= INT_MAX) return;
+  char digits[320];  // any double in fixed notation
+  const auto end = std::to_chars(digits, digits + sizeof digits, body_count, std::chars_format::fixed).ptr;
+  fail(path, std::string(digits, end) + " bodies, more than int body indices can name");
+}
+
+/// A capsule link whose head is at `head`, its tail `length` along the unit `direction`.
+Body make_link(std::string name, const Vector3& head, const Vector3& direction, double length, double mass) {
+  Body body;
+  body.name = std::move(name);
+  body.shape = {ShapeType::capsule, length, 0.01 * length};
+  body.mass = mass;
+  body.position = head + 0.5 * length * direction;
+  body.axis = -direction;  // tail → head
+  return body;
+}
+
+Vector3 head_anchor(double length) { return {0, 0, 0.5 * length}; }
+Vector3 tail_anchor(double length) { return {0, 0, -0.5 * length}; }
+
+/// Joint `name` from the inboard body's tail to the outboard body's head (equal lengths).
+Joint tail_to_head(std::string name, std::size_t inboard, std::size_t outboard, double length) {
+  return {std::move(name), JointType::spherical, static_cast<int>(inboard), static_cast<int>(outboard),
+          tail_anchor(length), head_anchor(length)};
+}
+
+/// Settings of a workload: sleeping would skip the work being measured.
+Settings workload_settings(ParticleJoints joints) {
+  Settings settings;
+  settings.sleep.enabled = false;
+  settings.verlet.joints = joints;
+  return settings;
+}
+
+}  // namespace
+
+Model make_chain_model(const ChainSpec& spec) {
+  require_count(spec.links, 1, "chain.links");
+  require_int_indices(double(spec.links), "chain.links");
+  require_positive(spec.link_length, "chain.link_length");
+  require_positive(spec.link_mass, "chain.link_mass");
+  require_positive(spec.end_mass_ratio, "chain.end_mass_ratio");
+  require_finite(spec.anchor, "chain.anchor");
+  require_non_zero(spec.direction, "chain.direction");
+
+  const double length = spec.link_length;
+  const Vector3 direction = spec.direction.normalized();
+  Model model;
+  model.name = "chain";
+  model.settings = workload_settings(spec.joints);
+  model.bodies.reserve(spec.links);
+  model.joints.reserve(spec.links);
+  for (std::size_t k = 0; k < spec.links; ++k) {
+    const double mass = k + 1 == spec.links ? spec.end_mass_ratio * spec.link_mass : spec.link_mass;
+    model.bodies.push_back(make_link("link_" + std::to_string(k), spec.anchor + double(k) * length * direction,
+                                     direction, length, mass));
+  }
+  if (spec.pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, spec.anchor, head_anchor(length)});
+  for (std::size_t k = 1; k < spec.links; ++k) model.joints.push_back(tail_to_head("joint_" + std::to_string(k), k - 1, k, length));
+  return model;
+}
+
+Model make_tree_model(const TreeSpec& spec) {
+  require_count(spec.links, 1, "tree.links");
+  require_int_indices(double(spec.links), "tree.links");
+  require_count(spec.branching, 1, "tree.branching");
+  require_positive(spec.link_length, "tree.link_length");
+  require_positive(spec.link_mass, "tree.link_mass");
+
+  const double length = spec.link_length;
+  // Child j of a parent points (j + ½)/b of the way across [−45°, 45°] from −z, in the x-z plane.
+  const auto child_direction = [&](std::size_t j) {
+    const double angle = std::numbers::pi / 2 * ((double(j) + 0.5) / double(spec.branching) - 0.5);
+    return Vector3(std::sin(angle), 0, -std::cos(angle));
+  };
+  Model model;
+  model.name = "tree";
+  model.settings = workload_settings(spec.joints);
+  model.bodies.reserve(spec.links);
+  model.joints.reserve(spec.links);
+  model.bodies.push_back(make_link("link_0", Vector3::Zero(), -Vector3::UnitZ(), length, spec.link_mass));
+  if (spec.pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, Vector3::Zero(), head_anchor(length)});
+  for (std::size_t k = 1; k < spec.links; ++k) {
+    const std::size_t parent = (k - 1) / spec.branching;
+    const std::string suffix = std::to_string(k);
+    model.bodies.push_back(make_link("link_" + suffix, model.bodies[parent].tail(),
+                                     child_direction((k - 1) % spec.branching), length, spec.link_mass));
+    model.joints.push_back(tail_to_head("joint_" + suffix, parent, k, length));
+  }
+  return model;
+}
+
+Model make_grid_model(const GridSpec& spec) {
+  require_count(spec.columns, 2, "grid.columns");
+  require_count(spec.rows, 2, "grid.rows");
+  require_positive(spec.spacing, "grid.spacing");
+  require_positive(spec.link_mass, "grid.link_mass");
+
+  const std::size_t rows = spec.rows, columns = spec.columns;
+  require_int_indices(double(rows) * double(columns - 1) + double(columns) * double(rows - 1), "grid");
+  const std::size_t horizontal_count = rows * (columns - 1);
+  const double length = spec.spacing;
+  const auto node_position = [&](std::size_t r, std::size_t c) {
+    return Vector3(double(c) * length, 0, -double(r) * length);
+  };
+  // Body indices: horizontal edges row by row, then vertical ones.
+  const auto horizontal = [&](std::size_t r, std::size_t c) { return r * (columns - 1) + c; };
+  const auto vertical = [&](std::size_t r, std::size_t c) { return horizontal_count + r * columns + c; };
+
+  Model model;
+  model.name = "grid";
+  model.settings = workload_settings(ParticleJoints::shared_particle);
+  model.bodies.resize(horizontal_count + columns * (rows - 1));
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < columns; ++c) {
+      const std::string node = std::to_string(r) + "_" + std::to_string(c);
+      if (c + 1 < columns) {
+        model.bodies[horizontal(r, c)] =
+            make_link("h_" + node, node_position(r, c), Vector3::UnitX(), length, spec.link_mass);
+      }
+      if (r + 1 < rows) {
+        model.bodies[vertical(r, c)] =
+            make_link("v_" + node, node_position(r, c), -Vector3::UnitZ(), length, spec.link_mass);
+      }
+    }
+  }
+
+  // Joints: at each node, the first link end meeting there joined to each other one.
+  struct End {
+    std::size_t body;
+    bool head;
+  };
+  const Vector3 head = head_anchor(length), tail = tail_anchor(length);
+  model.joints.reserve(2 * model.bodies.size() - rows * columns + 2);
+  for (std::size_t r = 0; r < rows; ++r) {
+    for (std::size_t c = 0; c < columns; ++c) {
+      End ends[4];
+      std::size_t count = 0;
+      if (c > 0) ends[count++] = {horizontal(r, c - 1), false};
+      if (c + 1 < columns) ends[count++] = {horizontal(r, c), true};
+      if (r > 0) ends[count++] = {vertical(r - 1, c), false};
+      if (r + 1 < rows) ends[count++] = {vertical(r, c), true};
+      const std::string node = "node_" + std::to_string(r) + "_" + std::to_string(c) + "_";
+      for (std::size_t k = 1; k < count; ++k) {
+        model.joints.push_back({node + std::to_string(k), JointType::spherical, static_cast<int>(ends[0].body),
+                                static_cast<int>(ends[k].body), ends[0].head ? head : tail, ends[k].head ? head : tail});
+      }
+    }
+  }
+  if (spec.pin_top_corners) {
+    const std::size_t last = columns - 1;
+    model.joints.push_back({"pin_top_left", JointType::spherical, kWorld, static_cast<int>(horizontal(0, 0)),
+                            node_position(0, 0), head});
+    model.joints.push_back({"pin_top_right", JointType::spherical, kWorld, static_cast<int>(horizontal(0, last - 1)),
+                            node_position(0, last), tail});
+  }
+  return model;
+}
+
+Model make_humanoid_pile(std::size_t count, double spacing) {
+  require_count(count, 1, "humanoid_pile.count");
+  const Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid");
+  require_int_indices(double(count) * double(humanoid.bodies.size()), "humanoid_pile.count");
+
+  // Footprint: the larger x or y extent of the limbs' bounding boxes (axis end points ± radius).
+  constexpr double infinity = std::numeric_limits<double>::infinity();
+  Vector3 low = Vector3::Constant(infinity), high = Vector3::Constant(-infinity);
+  for (const Body& body : humanoid.bodies) {
+    const Vector3 reach = Vector3::Constant(body.shape.radius);
+    low = low.cwiseMin(body.head() - reach).cwiseMin(body.tail() - reach);
+    high = high.cwiseMax(body.head() + reach).cwiseMax(body.tail() + reach);
+  }
+  const double footprint = (high - low).head<2>().maxCoeff();
+  require_finite(spacing, "humanoid_pile.spacing");
+  if (!(spacing >= footprint)) {
+    fail("humanoid_pile.spacing", "must be >= " + format_number(footprint) +
+                                      " (the humanoid's footprint, m) so copies do not overlap, got " +
+                                      format_number(spacing));
+  }
+
+  std::size_t per_row = 1;
+  while (per_row * per_row < count) ++per_row;
+
+  Model pile;
+  pile.name = "humanoid_pile";
+  pile.ground = humanoid.ground;
+  pile.settings = humanoid.settings;
+  pile.bodies.reserve(count * humanoid.bodies.size());
+  pile.joints.reserve(count * humanoid.joints.size());
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::string prefix = "h" + std::to_string(k) + ".";
+    const Vector3 offset = spacing * Vector3(double(k % per_row), double(k / per_row), 0);
+    const int first_body = static_cast<int>(k * humanoid.bodies.size());
+    for (Body body : humanoid.bodies) {
+      body.name = prefix + body.name;
+      body.position += offset;
+      pile.bodies.push_back(std::move(body));
+    }
+    for (Joint joint : humanoid.joints) {
+      joint.name = prefix + joint.name;
+      if (joint.inboard == kWorld) {
+        joint.inboard_anchor += offset;
+      } else {
+        joint.inboard += first_body;
+      }
+      joint.outboard += first_body;
+      pile.joints.push_back(std::move(joint));
+    }
+  }
+  return pile;
+}
+
+}  // namespace limber
