@@ -14,24 +14,24 @@ namespace limber {
 /// How particle fields are laid out in memory.
 enum class ParticleLayout : std::uint8_t {
   soa,    ///< one array per field (ParticleBuffer): a SIMD load takes consecutive particles
-  aos,    ///< one record per particle: x y z x* y* z* w (pad)
+  aos,    ///< one record per particle: x y z w (16 bytes in float, 32 in double)
   aosoa,  ///< blocks of kLanesPerLine particles, one line per field inside a block
 };
 
-/// Particles interleaved in blocks of `Width` particles: a block holds, for each of the 8 record
-/// fields (x, y, z, previous x, y, z, inverse mass, padding), Width consecutive values. Width 1
-/// is the array of structures (a 32-byte float or 64-byte double record per particle); Width =
-/// kLanesPerLine is AoSoA (one cache line per field per block). The record carries the fields
-/// relaxation does not touch too, so the cache footprint is that of a real particle record.
+/// Particles interleaved in blocks of `Width` particles: a block holds, for each of the 4 record
+/// fields (position x, y, z and inverse mass w — what relaxation reads; the previous positions
+/// stay in the ParticleBuffer), Width consecutive values. Width 1 is the array of structures
+/// (the "float4" particle: one aligned 16-byte record in float, 32 in double); Width =
+/// kLanesPerLine is AoSoA (one cache line per field per block).
 ///
-/// Field f of particle p sits at data[(p / Width)·8·Width + f·Width + p mod Width].
+/// Field f of particle p sits at data[(p / Width)·4·Width + f·Width + p mod Width].
 /// Shapes: capacity for the source buffer's capacity() particles, null particle included.
 template <typename Scalar, std::size_t Width>
 struct InterleavedParticles {
   static_assert(std::has_single_bit(Width), "Width must be a power of two");
-  static constexpr std::size_t kFields = 8;
+  static constexpr std::size_t kFields = 4;
   static constexpr unsigned kWidthShift = static_cast<unsigned>(std::countr_zero(Width));
-  enum Field : std::size_t { x, y, z, previous_x, previous_y, previous_z, inverse_mass };
+  enum Field : std::size_t { x, y, z, inverse_mass };
 
   AlignedArray<Scalar> data;
 
@@ -39,7 +39,7 @@ struct InterleavedParticles {
   /// SIMD integer types alike.
   template <typename IndexType>
   static IndexType offset(IndexType p) {
-    return ((p >> kWidthShift) << (kWidthShift + 3)) + (p & IndexType(Width - 1));
+    return ((p >> kWidthShift) << (kWidthShift + 2)) + (p & IndexType(Width - 1));
   }
   static constexpr std::size_t field_stride = Width;
 
@@ -50,8 +50,6 @@ struct InterleavedParticles {
       Scalar* record = data.data() + offset(p);
       record[x * Width] = source.position_x[p], record[y * Width] = source.position_y[p];
       record[z * Width] = source.position_z[p];
-      record[previous_x * Width] = source.previous_x[p], record[previous_y * Width] = source.previous_y[p];
-      record[previous_z * Width] = source.previous_z[p];
       record[inverse_mass * Width] = source.inverse_mass[p];
     }
   }
