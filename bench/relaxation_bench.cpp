@@ -1,0 +1,197 @@
+// The data-oriented core under load: coloured relaxation on chains, trees, a particle grid, a
+// pile of humanoids and a heavy-end chain, for every path (scalar, SIMD, SIMD on two threads,
+// float and double, three layouts), next to a streaming benchmark that measures the machine's
+// memory bandwidth in the same run.
+//
+//   build/bench/relaxation_bench                                  everything (several minutes)
+//   build/bench/relaxation_bench --benchmark_filter='Sweep/chain' one family
+//   tools/relaxation_report.py                                    runs it and prints the README tables
+//
+// Names: <kind>/<workload>/<scalar type>/<path>, path = scalar | simd | simd_2t_workers |
+// simd_2t_parallel_for | simd_aos | simd_aosoa | jacobi_simd ….
+// "Sweep" times one relaxation iteration over every constraint; "Step" one full step (Verlet
+// integration + 10 sweeps + sleep bookkeeping). Counters: constraints, projections/s, and
+// bytes/s of the data a sweep must stream (see streamed_bytes).
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "kernel/relaxation/relaxation.hpp"
+#include "kernel/scene/generators.hpp"
+#include "kernel/verlet/compile.hpp"
+#include "kernel/verlet/step.hpp"
+
+namespace limber {
+namespace {
+
+struct Workload {
+  std::string name;
+  std::function<Model()> build;
+};
+
+Model without_sleep(Model model) {
+  model.settings.sleep.enabled = false;
+  model.settings.relaxation.iterations = 10;
+  return model;
+}
+
+std::vector<Workload> workloads() {
+  std::vector<Workload> list;
+  for (std::size_t links : {10u, 100u, 1000u, 10000u, 100000u, 1000000u}) {
+    list.push_back({"chain_" + std::to_string(links), [links] {
+                      ChainSpec spec;
+                      spec.links = links;
+                      return without_sleep(make_chain_model(spec));
+                    }});
+    list.push_back({"tree_" + std::to_string(links), [links] {
+                      TreeSpec spec;
+                      spec.links = links;
+                      return without_sleep(make_tree_model(spec));
+                    }});
+  }
+  list.push_back({"grid_100x100", [] { return without_sleep(make_grid_model(GridSpec{})); }});
+  list.push_back({"humanoids_160", [] { return without_sleep(make_humanoid_pile(160)); }});
+  list.push_back({"heavy_end_chain_1000", [] {
+                    ChainSpec spec;
+                    spec.links = 1000;
+                    spec.end_mass_ratio = 670;
+                    return without_sleep(make_chain_model(spec));
+                  }});
+  return list;
+}
+
+// Compiled states are cached per workload and scalar type: compiling 10^6 links takes seconds.
+template <typename Scalar>
+const VerletState<Scalar>& compiled(const Workload& workload) {
+  static std::map<std::string, std::unique_ptr<VerletState<Scalar>>> cache;
+  auto& slot = cache[workload.name];
+  if (!slot) {
+    slot = std::make_unique<VerletState<Scalar>>(compile<Scalar>(workload.build()));
+    for (int s = 0; s < 3; ++s) step(*slot);  // settle the first-step work
+  }
+  return *slot;
+}
+
+struct Path {
+  std::string name;
+  VerletOptions options;
+};
+
+std::vector<Path> paths() {
+  auto make = [](const char* name, bool simd, int threads, Threading threading, ParticleLayout layout,
+                 RelaxationSolver solver) {
+    VerletOptions options;
+    options.simd = simd, options.threads = threads, options.threading = threading, options.layout = layout;
+    options.solver = solver;
+    // Always split across threads when asked to: the crossover is what the benchmark measures.
+    options.parallel_minimum_slots = 1;
+    return Path{name, options};
+  };
+  const auto gs = RelaxationSolver::gauss_seidel, jacobi = RelaxationSolver::jacobi;
+  const auto soa = ParticleLayout::soa;
+  return {
+      make("scalar", false, 1, Threading::serial, soa, gs),
+      make("simd", true, 1, Threading::serial, soa, gs),
+      make("simd_2t_workers", true, 2, Threading::workers, soa, gs),
+      make("simd_2t_parallel_for", true, 2, Threading::parallel_for, soa, gs),
+      make("simd_aos", true, 1, Threading::serial, ParticleLayout::aos, gs),
+      make("simd_aosoa", true, 1, Threading::serial, ParticleLayout::aosoa, gs),
+      make("scalar_aos", false, 1, Threading::serial, ParticleLayout::aos, gs),
+      make("jacobi_simd", true, 1, Threading::serial, soa, jacobi),
+      make("jacobi_simd_2t_workers", true, 2, Threading::workers, soa, jacobi),
+  };
+}
+
+// The data one sweep must move at least once: the batch arrays (two indices, rest length, two
+// shares per slot) and the positions of the particles they touch, read and written.
+template <typename Scalar>
+double streamed_bytes(const VerletState<Scalar>& state) {
+  const auto& batches = state.plan.batches;
+  const double slot_bytes = 2.0 * sizeof(typename ConstraintBatches<Scalar>::Index) + 3.0 * sizeof(Scalar);
+  return static_cast<double>(batches.slot_count()) * slot_bytes + 2.0 * 3.0 * sizeof(Scalar) * static_cast<double>(state.particles.size());
+}
+
+template <typename Scalar>
+VerletState<Scalar> prepared(const Workload& workload, const VerletOptions& options) {
+  VerletState<Scalar> state = compiled<Scalar>(workload);
+  state.options = options;
+  prepare_relaxation_plan(state);
+  return state;
+}
+
+template <typename Scalar>
+void sweep_benchmark(benchmark::State& run, const Workload& workload, const VerletOptions& options) {
+  VerletState<Scalar> state = prepared<Scalar>(workload, options);
+  begin_relaxation(state);
+  for (auto _ : run) benchmark::DoNotOptimize(relaxation_sweep(state, 1.0));
+  end_relaxation(state);
+  const double constraints = static_cast<double>(state.constraints.size());
+  run.counters["constraints"] = constraints;
+  run.counters["colours"] = state.colour_count;
+  run.counters["projections/s"] = benchmark::Counter(constraints * static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
+  run.counters["bytes/s"] = benchmark::Counter(streamed_bytes(state) * static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
+}
+
+template <typename Scalar>
+void step_benchmark(benchmark::State& run, const Workload& workload, const VerletOptions& options) {
+  VerletState<Scalar> state = prepared<Scalar>(workload, options);
+  for (auto _ : run) benchmark::DoNotOptimize(step(state));
+  run.counters["constraints"] = static_cast<double>(state.constraints.size());
+  run.counters["steps/s"] = benchmark::Counter(static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
+}
+
+// The machine's streaming bandwidth: a[i] = b[i] + s·c[i] over 3 × 64 MiB (far beyond the
+// caches), counted as 3 arrays moved (the write-allocate read of `a` is not counted, as STREAM).
+void BM_StreamTriad(benchmark::State& run) {
+  const std::size_t n = std::size_t{16} << 20;
+  AlignedArray<float> a(n, 0.f), b(n, 1.f), c(n, 2.f);
+  for (auto _ : run) {
+    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + 0.5f * c[i];
+    benchmark::DoNotOptimize(a.data());
+    benchmark::ClobberMemory();
+  }
+  run.counters["bytes/s"] = benchmark::Counter(3.0 * sizeof(float) * n * run.iterations(), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_StreamTriad)->Unit(benchmark::kMillisecond)->MinTime(0.5);
+
+void register_all() {
+  for (const Workload& workload : workloads()) {
+    for (const Path& path : paths()) {
+      for (const bool use_float : {true, false}) {
+        const std::string type = use_float ? "float" : "double";
+        // Layout, scalar-AoS and Jacobi variants in float only: the cache study's one workload type.
+        const bool main_path = path.name == "scalar" || path.name == "simd" || path.name.rfind("simd_2t", 0) == 0;
+        if (!use_float && !main_path) continue;
+        const std::string suffix = workload.name + "/" + type + "/" + path.name;
+        if (use_float) {
+          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<float>, workload, path.options)
+              ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+          if (main_path) benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<float>, workload, path.options)
+              ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+        } else {
+          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<double>, workload, path.options)
+              ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+          benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<double>, workload, path.options)
+              ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace limber
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  limber::register_all();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
