@@ -32,6 +32,8 @@ struct ScalarLanes {
   static constexpr std::size_t size = 1;
   static value load(const Scalar* p) { return *p; }
   static index load(const Index* p) { return *p; }
+  static value load_unaligned(const Scalar* p) { return *p; }
+  static void store_unaligned(value v, Scalar* p) { *p = v; }
   static value broadcast(Scalar v) { return v; }
   static value gather(const Scalar* base, index offset) { return base[offset]; }
   static void scatter(value v, Scalar* base, index offset) { base[offset] = v; }
@@ -52,6 +54,8 @@ struct SimdLanes {
   static constexpr std::size_t size = value::size;
   static value load(const Scalar* p) { return value::load_aligned(p); }
   static index load(const Index* p) { return index::load_aligned(p); }
+  static value load_unaligned(const Scalar* p) { return value::load_unaligned(p); }
+  static void store_unaligned(value v, Scalar* p) { v.store_unaligned(p); }
   static value broadcast(Scalar v) { return value(v); }
   // xsimd 8.1 resolves gather and scatter on AVX-512 to its element-by-element fallback (a
   // quarter of the sweep's time in perf); the AVX-512 instructions are called directly instead.
@@ -96,13 +100,23 @@ struct SoaPositions {
       : x(particles.position_x.data()), y(particles.position_y.data()), z(particles.position_z.data()) {}
   template <typename IndexType>
   static IndexType offset(IndexType p) { return p; }
+  // `consecutive`: the lanes' particles are particle[0], particle[0] + 1, … (plain vector loads).
   template <typename Lanes>
-  LanePositions<Lanes> load(const typename Lanes::Index* particle) const {
+  LanePositions<Lanes> load(const typename Lanes::Index* particle, bool consecutive) const {
+    if (consecutive) {
+      const auto p = particle[0];
+      return {Lanes::load_unaligned(x + p), Lanes::load_unaligned(y + p), Lanes::load_unaligned(z + p), Lanes::broadcast(Scalar(0))};
+    }
     const auto p = Lanes::load(particle);
     return {Lanes::gather(x, p), Lanes::gather(y, p), Lanes::gather(z, p), Lanes::broadcast(Scalar(0))};
   }
   template <typename Lanes>
-  void store(const typename Lanes::Index* particle, const LanePositions<Lanes>& v) const {
+  void store(const typename Lanes::Index* particle, bool consecutive, const LanePositions<Lanes>& v) const {
+    if (consecutive) {
+      const auto p = particle[0];
+      Lanes::store_unaligned(v.x, x + p), Lanes::store_unaligned(v.y, y + p), Lanes::store_unaligned(v.z, z + p);
+      return;
+    }
     const auto p = Lanes::load(particle);
     Lanes::scatter(v.x, x, p), Lanes::scatter(v.y, y, p), Lanes::scatter(v.z, z, p);
   }
@@ -113,10 +127,15 @@ struct SoaPositions {
 // load each and transposed into coordinate registers with two-source permutes — 16 loads and 8
 // permutes instead of three 16-element gathers, and 16 stores instead of three scatters. (Box2D
 // v3 gathers its body states the same way, by loading records and transposing.)
-inline void load_records(const float* base, const std::int32_t* particle, __m512& x, __m512& y, __m512& z, __m512& w) {
+inline void load_records(const float* base, const std::int32_t* particle, bool consecutive, __m512& x, __m512& y,
+                         __m512& z, __m512& w) {
   const auto o = [&](int k) { return 4 * static_cast<std::ptrdiff_t>(particle[k]); };
   __m512 r[4];
   for (int k = 0; k < 4; ++k) {  // r[k] holds records 4k … 4k+3
+    if (consecutive) {
+      r[k] = _mm512_loadu_ps(base + o(0) + 16 * k);
+      continue;
+    }
     r[k] = _mm512_castps128_ps512(_mm_load_ps(base + o(4 * k)));
     r[k] = _mm512_insertf32x4(r[k], _mm_load_ps(base + o(4 * k + 1)), 1);
     r[k] = _mm512_insertf32x4(r[k], _mm_load_ps(base + o(4 * k + 2)), 2);
@@ -131,7 +150,8 @@ inline void load_records(const float* base, const std::int32_t* particle, __m512
   x = _mm512_permutex2var_ps(xy_first, low, xy_second), y = _mm512_permutex2var_ps(xy_first, high, xy_second);
   z = _mm512_permutex2var_ps(zw_first, low, zw_second), w = _mm512_permutex2var_ps(zw_first, high, zw_second);
 }
-inline void store_records(float* base, const std::int32_t* particle, __m512 x, __m512 y, __m512 z, __m512 w) {
+inline void store_records(float* base, const std::int32_t* particle, bool consecutive, __m512 x, __m512 y, __m512 z,
+                          __m512 w) {
   const auto o = [&](int k) { return 4 * static_cast<std::ptrdiff_t>(particle[k]); };
   const __m512i first = _mm512_setr_epi32(0, 16, 1, 17, 2, 18, 3, 19, 4, 20, 5, 21, 6, 22, 7, 23);
   const __m512i second = _mm512_setr_epi32(8, 24, 9, 25, 10, 26, 11, 27, 12, 28, 13, 29, 14, 30, 15, 31);
@@ -142,17 +162,22 @@ inline void store_records(float* base, const std::int32_t* particle, __m512 x, _
   const __m512 r[4] = {_mm512_permutex2var_ps(xy_first, even, zw_first), _mm512_permutex2var_ps(xy_first, odd, zw_first),
                        _mm512_permutex2var_ps(xy_second, even, zw_second), _mm512_permutex2var_ps(xy_second, odd, zw_second)};
   for (int k = 0; k < 4; ++k) {
+    if (consecutive) {
+      _mm512_storeu_ps(base + o(0) + 16 * k, r[k]);
+      continue;
+    }
     _mm_store_ps(base + o(4 * k), _mm512_castps512_ps128(r[k]));
     _mm_store_ps(base + o(4 * k + 1), _mm512_extractf32x4_ps(r[k], 1));
     _mm_store_ps(base + o(4 * k + 2), _mm512_extractf32x4_ps(r[k], 2));
     _mm_store_ps(base + o(4 * k + 3), _mm512_extractf32x4_ps(r[k], 3));
   }
 }
-inline void load_records(const double* base, const std::int64_t* particle, __m512d& x, __m512d& y, __m512d& z, __m512d& w) {
+inline void load_records(const double* base, const std::int64_t* particle, bool consecutive, __m512d& x, __m512d& y,
+                         __m512d& z, __m512d& w) {
   const auto o = [&](int k) { return 4 * static_cast<std::ptrdiff_t>(particle[k]); };
   __m512d r[4];
   for (int k = 0; k < 4; ++k) {  // r[k] holds records 2k, 2k+1
-    r[k] = _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(base + o(2 * k))), _mm256_load_pd(base + o(2 * k + 1)), 1);
+    r[k] = consecutive ? _mm512_loadu_pd(base + o(0) + 8 * k) : _mm512_insertf64x4(_mm512_castpd256_pd512(_mm256_load_pd(base + o(2 * k))), _mm256_load_pd(base + o(2 * k + 1)), 1);
   }
   const __m512i xy = _mm512_setr_epi64(0, 4, 8, 12, 1, 5, 9, 13), zw = _mm512_setr_epi64(2, 6, 10, 14, 3, 7, 11, 15);
   const __m512i low = _mm512_setr_epi64(0, 1, 2, 3, 8, 9, 10, 11), high = _mm512_setr_epi64(4, 5, 6, 7, 12, 13, 14, 15);
@@ -161,7 +186,8 @@ inline void load_records(const double* base, const std::int64_t* particle, __m51
   x = _mm512_permutex2var_pd(xy_first, low, xy_second), y = _mm512_permutex2var_pd(xy_first, high, xy_second);
   z = _mm512_permutex2var_pd(zw_first, low, zw_second), w = _mm512_permutex2var_pd(zw_first, high, zw_second);
 }
-inline void store_records(double* base, const std::int64_t* particle, __m512d x, __m512d y, __m512d z, __m512d w) {
+inline void store_records(double* base, const std::int64_t* particle, bool consecutive, __m512d x, __m512d y, __m512d z,
+                          __m512d w) {
   const auto o = [&](int k) { return 4 * static_cast<std::ptrdiff_t>(particle[k]); };
   const __m512i first = _mm512_setr_epi64(0, 8, 1, 9, 2, 10, 3, 11), second = _mm512_setr_epi64(4, 12, 5, 13, 6, 14, 7, 15);
   const __m512i even = _mm512_setr_epi64(0, 1, 8, 9, 2, 3, 10, 11), odd = _mm512_setr_epi64(4, 5, 12, 13, 6, 7, 14, 15);
@@ -170,6 +196,10 @@ inline void store_records(double* base, const std::int64_t* particle, __m512d x,
   const __m512d r[4] = {_mm512_permutex2var_pd(xy_first, even, zw_first), _mm512_permutex2var_pd(xy_first, odd, zw_first),
                         _mm512_permutex2var_pd(xy_second, even, zw_second), _mm512_permutex2var_pd(xy_second, odd, zw_second)};
   for (int k = 0; k < 4; ++k) {
+    if (consecutive) {
+      _mm512_storeu_pd(base + o(0) + 8 * k, r[k]);
+      continue;
+    }
     _mm256_store_pd(base + o(2 * k), _mm512_castpd512_pd256(r[k]));
     _mm256_store_pd(base + o(2 * k + 1), _mm512_extractf64x4_pd(r[k], 1));
   }
@@ -197,11 +227,11 @@ struct InterleavedPositions {
 #endif
   }
   template <typename Lanes>
-  LanePositions<Lanes> load(const typename Lanes::Index* particle) const {
+  LanePositions<Lanes> load(const typename Lanes::Index* particle, [[maybe_unused]] bool consecutive) const {
     if constexpr (transposes<Lanes>()) {
       LanePositions<Lanes> v;
       typename Lanes::value::register_type rx, ry, rz, rw;
-      load_records(x, particle, rx, ry, rz, rw);
+      load_records(x, particle, consecutive, rx, ry, rz, rw);
       v.x = rx, v.y = ry, v.z = rz, v.w = rw;
       return v;
     } else {
@@ -210,9 +240,9 @@ struct InterleavedPositions {
     }
   }
   template <typename Lanes>
-  void store(const typename Lanes::Index* particle, const LanePositions<Lanes>& v) const {
+  void store(const typename Lanes::Index* particle, [[maybe_unused]] bool consecutive, const LanePositions<Lanes>& v) const {
     if constexpr (transposes<Lanes>()) {
-      store_records(x, particle, v.x, v.y, v.z, v.w);
+      store_records(x, particle, consecutive, v.x, v.y, v.z, v.w);
     } else {
       const auto o = offset(Lanes::load(particle));
       Lanes::scatter(v.x, x, o), Lanes::scatter(v.y, y, o), Lanes::scatter(v.z, z, o);
@@ -237,7 +267,10 @@ Scalar project_blocks(const ConstraintBatches<Scalar>& batches, std::size_t begi
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
     const auto* i = &batches.particle_i[slot];
     const auto* j = &batches.particle_j[slot];
-    LanePositions<Lanes> a = positions.template load<Lanes>(i), b = positions.template load<Lanes>(j);
+    const std::uint8_t consecutive = batches.consecutive[slot / ConstraintBatches<Scalar>::kBlockLanes];
+    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
+    LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
+    LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
     const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
     const V error = length - Lanes::load(&batches.rest_length[slot]);
@@ -247,7 +280,7 @@ Scalar project_blocks(const ConstraintBatches<Scalar>& batches, std::size_t begi
     const V move_i = s_i * scale, move_j = s_j * scale;
     a.x = a.x - move_i * dx, a.y = a.y - move_i * dy, a.z = a.z - move_i * dz;
     b.x = b.x + move_j * dx, b.y = b.y + move_j * dy, b.z = b.z + move_j * dz;
-    positions.template store<Lanes>(i, a), positions.template store<Lanes>(j, b);
+    positions.template store<Lanes>(i, i_consecutive, a), positions.template store<Lanes>(j, j_consecutive, b);
     largest = Lanes::max(largest, Lanes::if_positive(length, Lanes::abs(omega * error) * Lanes::max(s_i, s_j)));
   }
   return Lanes::reduce_max(largest);
@@ -261,8 +294,9 @@ void accumulate_blocks(const ConstraintBatches<Scalar>& batches, std::size_t beg
                        Positions positions, CorrectionSums<Scalar> sums) {
   using V = typename Lanes::value;
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const LanePositions<Lanes> a = positions.template load<Lanes>(&batches.particle_i[slot]);
-    const LanePositions<Lanes> b = positions.template load<Lanes>(&batches.particle_j[slot]);
+    const std::uint8_t consecutive = batches.consecutive[slot / ConstraintBatches<Scalar>::kBlockLanes];
+    const LanePositions<Lanes> a = positions.template load<Lanes>(&batches.particle_i[slot], consecutive & 1);
+    const LanePositions<Lanes> b = positions.template load<Lanes>(&batches.particle_j[slot], consecutive & 2);
     const auto i = Lanes::load(&batches.particle_i[slot]), j = Lanes::load(&batches.particle_j[slot]);
     const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);

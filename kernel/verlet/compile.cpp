@@ -57,8 +57,9 @@ void renumber_particles(VerletState<Scalar>& state) {
   std::vector<std::uint32_t> new_index(count);
   for (const Island& island : state.islands) {
     const std::vector<std::uint32_t> order =
-        ordering == ParticleOrder::shuffled ? shuffled_order(island.particle_begin, island.particle_end)
-                                            : reverse_cuthill_mckee(adjacency, island.particle_begin, island.particle_end);
+        ordering == ParticleOrder::shuffled       ? shuffled_order(island.particle_begin, island.particle_end)
+        : ordering == ParticleOrder::depth_parity ? depth_parity_order(adjacency, island.particle_begin, island.particle_end)
+                                                  : reverse_cuthill_mckee(adjacency, island.particle_begin, island.particle_end);
     for (std::size_t k = 0; k < order.size(); ++k) new_index[order[k]] = island.particle_begin + static_cast<std::uint32_t>(k);
   }
   ParticleBuffer<Scalar> particles;

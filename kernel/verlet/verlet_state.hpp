@@ -56,7 +56,7 @@ struct VerletOptions {
   SweepDirection direction = SweepDirection::pinned_first;
   bool simd = true;                          ///< false: the scalar path (one lane)
   ParticleLayout layout = ParticleLayout::soa;
-  ParticleOrder ordering = ParticleOrder::breadth_first;  ///< particle numbering inside islands
+  ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
   int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
   Threading threading = Threading::workers;  ///< how a colour is split across threads
   /// Colours a stage must have at least this many constraint slots to be split across threads;

@@ -35,6 +35,10 @@ struct ConstraintBatches {
   AlignedArray<Scalar> rest_length;        ///< m
   AlignedArray<Scalar> share_i, share_j;   ///< fraction of the correction each end takes
   std::vector<std::uint32_t> colour_begin{0};  ///< slot offsets, colour_count() + 1 entries
+  /// Per block of the colours: bit 0 set when its particle_i are consecutive (p, p + 1, …),
+  /// bit 1 the same for particle_j — then the sweep loads positions with vector loads instead
+  /// of gathers. Overflow slots have no entry.
+  std::vector<std::uint8_t> consecutive;
 
   template <typename Visitor>
   void for_each_field(Visitor&& visit) {
@@ -54,12 +58,14 @@ struct ConstraintBatches {
   void reserve(std::size_t slots, std::size_t colours) {
     for_each_field([&](const char*, auto& array) { array.reserve(slots); });
     colour_begin.reserve(colours + 1);
+    consecutive.reserve(slots / kBlockLanes + colours);
   }
 
   /// Empties every colour and the overflow, keeping the capacity.
   void clear() {
     for_each_field([&](const char*, auto& array) { array.clear(); });
     colour_begin.assign(1, 0);
+    consecutive.clear();
   }
 
   /// Appends one slot: to the colour being filled, or to the overflow once the colours are closed.
@@ -72,6 +78,15 @@ struct ConstraintBatches {
   /// `null_particle` and closes it.
   void close_colour(Index null_particle) {
     while (particle_i.size() % kBlockLanes != 0) push(null_particle, null_particle, 0, 0, 0);
+    for (std::size_t slot = colour_begin.back(); slot < particle_i.size(); slot += kBlockLanes) {
+      const auto runs = [&](const AlignedArray<Index>& particle) {
+        for (std::size_t lane = 1; lane < kBlockLanes; ++lane) {
+          if (particle[slot + lane] != particle[slot] + static_cast<Index>(lane)) return false;
+        }
+        return true;
+      };
+      consecutive.push_back(static_cast<std::uint8_t>((runs(particle_i) ? 1 : 0) | (runs(particle_j) ? 2 : 0)));
+    }
     colour_begin.push_back(static_cast<std::uint32_t>(particle_i.size()));
   }
 };

@@ -7,6 +7,11 @@
 // - reverse Cuthill-McKee (Cuthill & McKee 1969; George 1971): breadth-first from a
 //   minimum-degree particle, neighbours by increasing degree, the whole order reversed — the
 //   classic bandwidth-reducing order for sparse matrices (grids, meshes);
+// - depth parity (red-black): the particles at even breadth-first depth, then those at odd
+//   depth, each in breadth-first order. On a chain, a colour's constraints then join runs of
+//   consecutive particles — lane k of a block touches particles p + k and q + k — so the sweep
+//   loads and stores whole vectors instead of gathering (ConstraintBatches::consecutive). It is
+//   the ordering of red-black Gauss-Seidel on grids;
 // - shuffled: a fixed pseudo-random permutation, the no-locality baseline.
 #pragma once
 
@@ -22,7 +27,8 @@ namespace limber {
 
 /// How particles are numbered inside each island.
 enum class ParticleOrder : std::uint8_t {
-  breadth_first,          ///< from the island's root (compile's own order, the default)
+  breadth_first,          ///< from the island's root (compile's own order)
+  depth_parity,           ///< red-black: even breadth-first depth, then odd (the default)
   reverse_cuthill_mckee,  ///< bandwidth-reducing
   shuffled,               ///< no locality (the baseline of the cache study)
 };
@@ -55,6 +61,29 @@ inline std::vector<std::uint32_t> reverse_cuthill_mckee(const CompressedRows<std
   }
   std::reverse(order.begin(), order.end());
   return order;
+}
+
+/// Depth-parity order of particles [begin, end) (neighbours inside the range): breadth-first from
+/// `begin` (and from the lowest unreached particle, for any part not connected to it), even
+/// depths first. Returns the particles in their new order.
+inline std::vector<std::uint32_t> depth_parity_order(const CompressedRows<std::uint32_t>& adjacency, std::uint32_t begin,
+                                                     std::uint32_t end) {
+  std::vector<std::uint32_t> visit;
+  visit.reserve(end - begin);
+  std::vector<std::uint32_t> depth(end - begin, ~0u);
+  for (std::uint32_t root = begin; root < end; ++root) {
+    if (depth[root - begin] != ~0u) continue;
+    depth[root - begin] = 0;
+    visit.push_back(root);
+    for (std::size_t next = visit.size() - 1; next < visit.size(); ++next) {
+      const std::uint32_t p = visit[next];
+      for (const std::uint32_t q : adjacency.row(p)) {
+        if (depth[q - begin] == ~0u) depth[q - begin] = depth[p - begin] + 1, visit.push_back(q);
+      }
+    }
+  }
+  std::stable_partition(visit.begin(), visit.end(), [&](std::uint32_t p) { return depth[p - begin] % 2 == 0; });
+  return visit;
 }
 
 /// A fixed pseudo-random order of [begin, end) (the same for the same range and seed).

@@ -155,6 +155,7 @@ TYPED_TEST(ColouredRelaxation, ParticleOrderingRenumbersButChangesNoBit) {
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
     const auto expected = final_positions(ParticleOrder::breadth_first, solver);
     EXPECT_EQ(final_positions(ParticleOrder::reverse_cuthill_mckee, solver), expected);
+    EXPECT_EQ(final_positions(ParticleOrder::depth_parity, solver), expected);
     EXPECT_EQ(final_positions(ParticleOrder::shuffled, solver), expected);
   }
 }

@@ -48,7 +48,7 @@ struct RunFlags {
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
   std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "soa", threading = "workers";
-  std::string ordering = "breadth-first";
+  std::string ordering = "depth-parity";
   int threads = 0;
   bool scalar = false;
 
@@ -102,8 +102,9 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("--layout", flags.layout, "Particle storage for relaxation: soa, aos or aosoa")
       ->check(CLI::IsMember({"soa", "aos", "aosoa"}))
       ->capture_default_str();
-  run.add_option("--ordering", flags.ordering, "Particle numbering: breadth-first, rcm (reverse Cuthill-McKee) or shuffled")
-      ->check(CLI::IsMember({"breadth-first", "rcm", "shuffled"}))
+  run.add_option("--ordering", flags.ordering,
+                 "Particle numbering: depth-parity (red-black), breadth-first, rcm (reverse Cuthill-McKee) or shuffled")
+      ->check(CLI::IsMember({"depth-parity", "breadth-first", "rcm", "shuffled"}))
       ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
 }
@@ -120,8 +121,10 @@ VerletOptions verlet_options(const RunFlags& flags) {
   options.layout = flags.layout == "aos" ? ParticleLayout::aos
                    : flags.layout == "aosoa" ? ParticleLayout::aosoa : ParticleLayout::soa;
   options.simd = !flags.scalar;
-  options.ordering = flags.ordering == "rcm" ? ParticleOrder::reverse_cuthill_mckee
-                     : flags.ordering == "shuffled" ? ParticleOrder::shuffled : ParticleOrder::breadth_first;
+  options.ordering = flags.ordering == "rcm"             ? ParticleOrder::reverse_cuthill_mckee
+                     : flags.ordering == "shuffled"      ? ParticleOrder::shuffled
+                     : flags.ordering == "breadth-first" ? ParticleOrder::breadth_first
+                                                         : ParticleOrder::depth_parity;
   if (options.order == SweepOrder::sequential) {
     if (options.solver == RelaxationSolver::jacobi) throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver jacobi");
     if (options.layout != ParticleLayout::soa) throw InputError("--sweep sequential: runs on the soa layout only, got --layout " + flags.layout);
