@@ -8,7 +8,6 @@
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/parallel_reduce.h>
 #include <oneapi/tbb/task_arena.h>
-#include <oneapi/tbb/task_group.h>
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
@@ -38,10 +37,14 @@ struct BlockRunner::Shared {
   // descriptor unchanged) until every claimed block has completed.
   alignas(64) std::atomic<std::uint64_t> claim{0};
   alignas(64) std::atomic<std::uint32_t> completed{0};
-  std::atomic<std::uint32_t> count{0};
+  // The stage descriptor, read on every claim: a line of its own, away from the counters.
+  alignas(64) std::atomic<std::uint32_t> count{0};
   std::atomic<BlockFunction> function{nullptr};
   std::atomic<const void*> context{nullptr};
-  std::atomic<bool> done{false};
+  // Odd while a step runs (helpers spin and claim), even between steps (helpers sleep in
+  // atomic wait); `exit` ends them.
+  alignas(64) std::atomic<std::uint32_t> session{0};
+  std::atomic<bool> exit{false};
   // Per helper: the largest value of the blocks it ran in `stage` (read by the caller once the
   // stage completed, before the next is published).
   struct alignas(64) Result {
@@ -51,8 +54,8 @@ struct BlockRunner::Shared {
   std::vector<Result> results;
   std::uint64_t stage = 0;
 
-  tbb::task_arena arena;
-  tbb::task_group helpers;
+  tbb::task_arena arena;     // parallel_for
+  std::vector<std::thread> helpers;  // workers: created once, live as long as the runner
 
   explicit Shared(int threads) : results(static_cast<std::size_t>(threads)), arena(threads) {}
 
@@ -76,10 +79,16 @@ struct BlockRunner::Shared {
   }
 
   void helper_loop(std::size_t slot) {
-    int spins = 0;
-    while (!done.load(std::memory_order_acquire)) {
-      if (work(results[slot])) spins = 0;
-      else spin_pause(spins);
+    std::uint32_t seen = 0;
+    for (;;) {
+      session.wait(seen, std::memory_order_acquire);
+      seen = session.load(std::memory_order_acquire);
+      if (exit.load(std::memory_order_acquire)) return;
+      int spins = 0;
+      while (session.load(std::memory_order_acquire) == seen && !exit.load(std::memory_order_relaxed)) {
+        if (work(results[slot])) spins = 0;
+        else spin_pause(spins);
+      }
     }
   }
 };
@@ -87,28 +96,35 @@ struct BlockRunner::Shared {
 BlockRunner::BlockRunner(Threading threading, int threads) : threading_(threading), threads_(threads) {
   if (threads < 1) throw std::invalid_argument("BlockRunner: threads must be at least 1");
   if (threads == 1) threading_ = Threading::serial;
-  if (threading_ != Threading::serial) shared_ = std::make_unique<Shared>(threads);
+  if (threading_ == Threading::serial) return;
+  shared_ = std::make_unique<Shared>(threads);
+  if (threading_ == Threading::workers) {
+    for (int k = 1; k < threads; ++k) {
+      shared_->helpers.emplace_back([shared = shared_.get(), k] { shared->helper_loop(static_cast<std::size_t>(k)); });
+    }
+  }
 }
 
-BlockRunner::~BlockRunner() { end(); }
+BlockRunner::~BlockRunner() {
+  if (!shared_) return;
+  shared_->exit.store(true, std::memory_order_release);
+  shared_->session.fetch_add(1, std::memory_order_acq_rel);
+  shared_->session.notify_all();
+  for (std::thread& helper : shared_->helpers) helper.join();
+}
 
 void BlockRunner::begin() {
-  if (threading_ != Threading::workers) return;
-  Shared& shared = *shared_;
-  shared.done.store(false, std::memory_order_release);
-  shared.arena.execute([&] {
-    for (int k = 1; k < threads_; ++k) {
-      shared.helpers.run([&shared, k] { shared.helper_loop(static_cast<std::size_t>(k)); });
-    }
-  });
+  if (threading_ != Threading::workers || active_) return;
+  active_ = true;
+  shared_->session.fetch_add(1, std::memory_order_acq_rel);
+  shared_->session.notify_all();
 }
 
 void BlockRunner::end() {
-  if (threading_ != Threading::workers || !shared_) return;
-  Shared& shared = *shared_;
-  shared.done.store(true, std::memory_order_release);
-  // A helper that never started runs here, sees `done` and returns at once.
-  shared.arena.execute([&] { shared.helpers.wait(); });
+  if (!active_) return;
+  // Every stage has completed, so no block is left to claim: the helpers go back to sleep.
+  active_ = false;
+  shared_->session.fetch_add(1, std::memory_order_acq_rel);
 }
 
 double BlockRunner::run_serial(std::size_t count, BlockFunction function, const void* context) {

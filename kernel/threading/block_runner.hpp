@@ -3,10 +3,12 @@
 //
 // - serial: the calling thread runs every block; no synchronization at all.
 // - parallel_for: oneTBB's parallel_reduce over each stage; a fork and join per stage.
-// - workers: long-lived helper tasks (started once per step, in a oneTBB arena) that spin on a
-//   shared stage word and claim blocks with a compare-and-swap, as Box2D v3's solver stages do.
-//   The calling thread claims blocks too and never waits for a helper to *start*, so a stage
-//   completes even if the helpers never run; it only waits for blocks already claimed.
+// - workers: long-lived helper threads (created with the runner, asleep between steps) that
+//   spin on a shared stage word during a step and claim blocks with a compare-and-swap, as
+//   Box2D v3's solver stages do. The calling thread claims blocks too and never waits for a
+//   helper to *start*, so a stage completes even if a helper is descheduled; it only waits for
+//   blocks already claimed. (A oneTBB task as the helper was tried first: a task spawned from
+//   arena.execute() stayed in the caller's pool and ran only when the caller waited for it.)
 //
 // Blocks of a stage must be independent (different colours' blocks are not). Which thread runs
 // a block never changes its result, so results are the same bits for any thread count.
@@ -35,7 +37,8 @@ class BlockRunner {
   Threading threading() const { return threading_; }
   int threads() const { return threads_; }
 
-  /// Brackets the stages of one step: starts and stops the helper tasks (workers only).
+  /// Brackets the stages of one step: wakes the helper threads and sends them back to sleep
+  /// (workers only; otherwise no-ops).
   void begin();
   void end();
 
@@ -47,6 +50,7 @@ class BlockRunner {
   double run_serial(std::size_t count, BlockFunction function, const void* context);
   Threading threading_;
   int threads_;
+  bool active_ = false;
   std::unique_ptr<Shared> shared_;
 };
 
