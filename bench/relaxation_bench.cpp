@@ -7,7 +7,7 @@
 //   build/bench/relaxation_bench --benchmark_filter='Sweep/chain' one family
 //   tools/relaxation_report.py                                    runs it and prints the README tables
 //
-// Names: <kind>/<workload>/<scalar type>/<path>, path = scalar | simd | simd_2t_workers |
+// Names: Colour/<workload> (colouring alone), <kind>/<workload>/<scalar type>/<path>, path = scalar | simd | simd_2t_workers |
 // simd_2t_parallel_for | simd_aos | simd_aosoa | jacobi_simd ….
 // "Sweep" times one relaxation iteration over every constraint; "Step" one full step (Verlet
 // integration + 10 sweeps + sleep bookkeeping). Counters: constraints, projections/s, and
@@ -25,6 +25,7 @@
 #include "kernel/scene/generators.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
+#include "layouts/graph/constraint_colouring.hpp"
 
 namespace limber {
 namespace {
@@ -145,6 +146,28 @@ void step_benchmark(benchmark::State& run, const Workload& workload, const Verle
   run.counters["steps/s"] = benchmark::Counter(static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
 }
 
+// Colouring alone (constraint_colouring.hpp) on the compiled constraints, as compile() runs it.
+void colouring_benchmark(benchmark::State& run, const Workload& workload) {
+  const VerletState<float>& state = compiled<float>(workload);
+  const auto& constraints = state.constraints;
+  std::vector<bool> movable(state.particles.size());
+  for (std::size_t p = 0; p < movable.size(); ++p) movable[p] = state.particles.inverse_mass[p] > 0;
+  std::vector<std::uint32_t> order;
+  for (std::uint32_t c = 0; c < constraints.size(); ++c) {
+    if (movable[constraints.particle_i[c]] && movable[constraints.particle_j[c]]) order.push_back(c);
+  }
+  std::uint32_t colours = 0;
+  for (auto _ : run) {
+    const ConstraintColouring colouring = colour_constraints({constraints.particle_i.data(), constraints.size()},
+                                                             {constraints.particle_j.data(), constraints.size()}, order,
+                                                             movable, 16);
+    colours = colouring.colour_count();
+    benchmark::DoNotOptimize(colouring.colour.data());
+  }
+  run.counters["constraints"] = static_cast<double>(constraints.size());
+  run.counters["colours"] = colours;
+}
+
 // The machine's streaming bandwidth: a[i] = b[i] + s·c[i] over 3 × 64 MiB (far beyond the
 // caches), counted as 3 arrays moved (the write-allocate read of `a` is not counted, as STREAM).
 void BM_StreamTriad(benchmark::State& run) {
@@ -161,6 +184,8 @@ BENCHMARK(BM_StreamTriad)->Unit(benchmark::kMillisecond)->MinTime(0.5);
 
 void register_all() {
   for (const Workload& workload : workloads()) {
+    benchmark::RegisterBenchmark(("Colour/" + workload.name).c_str(), colouring_benchmark, workload)
+        ->MinTime(0.05)->Unit(benchmark::kMillisecond);
     for (const Path& path : paths()) {
       for (const bool use_float : {true, false}) {
         const std::string type = use_float ? "float" : "double";

@@ -1,0 +1,56 @@
+// The block runner: every block of every stage runs exactly once, whichever strategy and thread
+// count, and the stage's largest value comes back.
+#include <atomic>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "kernel/threading/block_runner.hpp"
+
+namespace limber {
+namespace {
+
+struct Stage {
+  std::vector<std::atomic<int>>* runs;
+  int offset;
+};
+
+double run_block(const void* context, std::size_t block) {
+  const auto& stage = *static_cast<const Stage*>(context);
+  (*stage.runs)[block].fetch_add(1, std::memory_order_relaxed);
+  return static_cast<double>((block * 7919 + static_cast<std::size_t>(stage.offset)) % 1000);
+}
+
+TEST(BlockRunner, EveryBlockRunsOnceAndTheLargestValueReturns) {
+  for (const Threading threading : {Threading::serial, Threading::parallel_for, Threading::workers}) {
+    for (const int threads : {1, 2, 3}) {
+      BlockRunner runner(threading, threads);
+      for (int step = 0; step < 20; ++step) {
+        runner.begin();
+        for (int s = 0; s < 50; ++s) {
+          const std::size_t count = static_cast<std::size_t>(1 + (step * 50 + s) % 97);
+          std::vector<std::atomic<int>> runs(count);
+          const Stage stage{&runs, s};
+          double expected = 0;
+          for (std::size_t b = 0; b < count; ++b) expected = std::max(expected, double((b * 7919 + std::size_t(s)) % 1000));
+          ASSERT_EQ(runner.run(count, run_block, &stage), expected);
+          for (std::size_t b = 0; b < count; ++b) ASSERT_EQ(runs[b].load(), 1) << "block " << b;
+        }
+        runner.end();
+      }
+    }
+  }
+}
+
+TEST(BlockRunner, RunsWithoutBeginAndStopsCleanly) {
+  // Outside begin()/end() the workers sleep: the calling thread runs every block itself.
+  BlockRunner runner(Threading::workers, 2);
+  std::vector<std::atomic<int>> runs(10);
+  const Stage stage{&runs, 0};
+  EXPECT_GE(runner.run(10, run_block, &stage), 0.0);
+  for (auto& r : runs) EXPECT_EQ(r.load(), 1);
+  EXPECT_THROW(BlockRunner(Threading::workers, 0), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace limber
