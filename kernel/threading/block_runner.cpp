@@ -84,6 +84,7 @@ struct BlockRunner::Shared {
       session.wait(seen, std::memory_order_acquire);
       seen = session.load(std::memory_order_acquire);
       if (exit.load(std::memory_order_acquire)) return;
+      if (seen % 2 == 0) continue;  // between steps: back to sleep
       int spins = 0;
       while (session.load(std::memory_order_acquire) == seen && !exit.load(std::memory_order_relaxed)) {
         if (work(results[slot])) spins = 0;
