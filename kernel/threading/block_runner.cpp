@@ -30,6 +30,9 @@ void spin_pause(int& spins) {
 
 }  // namespace
 
+// Low half of a closed stage word: no block number reaches it.
+constexpr std::uint64_t kClosed = 0xFFFFFFFFu;
+
 struct BlockRunner::Shared {
   // The stage word: stage number (high 32 bits) and next unclaimed block (low 32 bits). A
   // successful compare-and-swap from (s, b) to (s, b + 1) gives block b of stage s to the
@@ -65,7 +68,7 @@ struct BlockRunner::Shared {
     std::uint64_t word = claim.load(std::memory_order_acquire);
     const std::uint64_t s = word >> 32;
     bool ran = false;
-    while ((word >> 32) == s && (word & 0xFFFFFFFFu) < count.load(std::memory_order_relaxed)) {
+    while ((word >> 32) == s && (word & 0xFFFFFFFFu) < count.load(std::memory_order_acquire)) {
       if (!claim.compare_exchange_weak(word, word + 1, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
       const double value = function.load(std::memory_order_relaxed)(context.load(std::memory_order_relaxed),
                                                                     word & 0xFFFFFFFFu);
@@ -150,9 +153,12 @@ double BlockRunner::run(std::size_t count, BlockFunction function, const void* c
           [](double a, double b) { return std::max(a, b); });
     });
   }
-  // Publish the stage: descriptor first, then the stage word (release).
+  // Close the previous stage's word first: a helper holding a stale word (previous stage, block b)
+  // that reads the new, larger count must not be able to claim block b with it.
+  shared.claim.store((shared.stage << 32) | kClosed, std::memory_order_release);
+  // Publish the stage: descriptor, then the stage word (release).
   const std::uint64_t stage = ++shared.stage;
-  shared.count.store(static_cast<std::uint32_t>(count), std::memory_order_relaxed);
+  shared.count.store(static_cast<std::uint32_t>(count), std::memory_order_release);
   shared.function.store(function, std::memory_order_relaxed);
   shared.context.store(context, std::memory_order_relaxed);
   shared.completed.store(0, std::memory_order_relaxed);

@@ -42,6 +42,23 @@ TEST(BlockRunner, EveryBlockRunsOnceAndTheLargestValueReturns) {
   }
 }
 
+TEST(BlockRunner, ShortStagesFollowingEachOtherNeverRunABlockTwice) {
+  // Stage hand-over is where a helper holding the previous stage's word could claim a block of
+  // the next (it did, before the word was closed between stages: a step then never finished).
+  // Short stages of alternating size make hand-overs frequent.
+  BlockRunner runner(Threading::workers, 2);
+  runner.begin();
+  std::vector<std::atomic<int>> runs(64);
+  for (int s = 0; s < 200000; ++s) {
+    const std::size_t count = s % 2 ? 64 : 2;
+    for (std::size_t b = 0; b < count; ++b) runs[b].store(0, std::memory_order_relaxed);
+    const Stage stage{&runs, s};
+    runner.run(count, run_block, &stage);
+    for (std::size_t b = 0; b < count; ++b) ASSERT_EQ(runs[b].load(), 1) << "stage " << s << " block " << b;
+  }
+  runner.end();
+}
+
 TEST(BlockRunner, RunsWithoutBeginAndStopsCleanly) {
   // Outside begin()/end() the workers sleep: the calling thread runs every block itself.
   BlockRunner runner(Threading::workers, 2);
