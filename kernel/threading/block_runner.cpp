@@ -64,17 +64,24 @@ struct BlockRunner::Shared {
 
   // Claims and runs blocks of the current stage until none is left; returns false when the
   // stage word did not name a runnable stage. `result` collects the largest value.
+  // Claims are guided (OpenMP's schedule): a claim takes half of the remaining blocks' fair
+  // share, so a stage costs a few contended compare-and-swaps instead of one per block.
   bool work(Result& result) {
     std::uint64_t word = claim.load(std::memory_order_acquire);
     const std::uint64_t s = word >> 32;
     bool ran = false;
-    while ((word >> 32) == s && (word & 0xFFFFFFFFu) < count.load(std::memory_order_acquire)) {
-      if (!claim.compare_exchange_weak(word, word + 1, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
-      const double value = function.load(std::memory_order_relaxed)(context.load(std::memory_order_relaxed),
-                                                                    word & 0xFFFFFFFFu);
-      if (result.stage != s) result.stage = s, result.largest = value;
-      else result.largest = std::max(result.largest, value);
-      completed.fetch_add(1, std::memory_order_release);
+    for (;;) {
+      const std::uint64_t total = count.load(std::memory_order_acquire);
+      const std::uint64_t next = word & 0xFFFFFFFFu;
+      if ((word >> 32) != s || next >= total) break;
+      const std::uint64_t take = std::max<std::uint64_t>(1, (total - next) / (2 * results.size()));
+      if (!claim.compare_exchange_weak(word, word + take, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
+      const BlockFunction run_block = function.load(std::memory_order_relaxed);
+      const void* run_context = context.load(std::memory_order_relaxed);
+      double largest = result.stage == s ? result.largest : 0.0;
+      for (std::uint64_t block = next; block < next + take; ++block) largest = std::max(largest, run_block(run_context, block));
+      result.stage = s, result.largest = largest;
+      completed.fetch_add(static_cast<std::uint32_t>(take), std::memory_order_release);
       ran = true;
       word = claim.load(std::memory_order_acquire);
     }
