@@ -34,8 +34,8 @@ namespace limber {
 namespace {
 
 template <typename Scalar>
-long allocations_while_stepping(const Model& model, int steps, bool push) {
-  auto state = compile<Scalar>(model);
+long allocations_while_stepping(const Model& model, int steps, bool push, const VerletOptions& options = {}) {
+  auto state = compile<Scalar>(model, options);
   step(state);  // the first call may allocate
   const long before = allocations.load();
   for (int s = 0; s < steps; ++s) {
@@ -57,6 +57,21 @@ TEST(Allocation, StepAllocatesNothingAfterItsFirstCall) {
   EXPECT_EQ(allocations_while_stepping<double>(humanoid, 1200, false), 0);
   EXPECT_EQ(allocations_while_stepping<double>(box, 1200, false), 0);
   EXPECT_EQ(allocations_while_stepping<double>(chain, 1200, true), 0);
+}
+
+TEST(Allocation, EveryRelaxationPathAllocatesNothing) {
+  // Threads on every colour, the AoS copy with contacts between sweeps, Jacobi's sums, and
+  // batches rebuilt as the humanoid wakes and sleeps.
+  const Model humanoid = testing::load_shipped_scene("humanoid.json");
+  for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
+    for (const ParticleLayout layout : {ParticleLayout::soa, ParticleLayout::aos, ParticleLayout::aosoa}) {
+      VerletOptions options;
+      options.solver = solver, options.layout = layout;
+      options.threads = 2, options.threading = Threading::workers, options.parallel_minimum_slots = 1;
+      EXPECT_EQ(allocations_while_stepping<float>(humanoid, 600, false, options), 0)
+          << "solver " << int(solver) << " layout " << int(layout);
+    }
+  }
 }
 
 TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail
