@@ -98,6 +98,7 @@ struct SoaPositions {
   Scalar *x, *y, *z;
   explicit SoaPositions(ParticleBuffer<Scalar>& particles)
       : x(particles.position_x.data()), y(particles.position_y.data()), z(particles.position_z.data()) {}
+  SoaPositions(Scalar* x_array, Scalar* y_array, Scalar* z_array) : x(x_array), y(y_array), z(z_array) {}
   template <typename IndexType>
   static IndexType offset(IndexType p) { return p; }
   // `consecutive`: the lanes' particles are particle[0], particle[0] + 1, … (plain vector loads).
@@ -252,9 +253,18 @@ struct InterleavedPositions {
 
 /// Per-particle accumulators of Jacobi corrections (structure of arrays, by particle index).
 template <typename Scalar>
-struct CorrectionSums {
-  Scalar *x, *y, *z;
-};
+using CorrectionSums = SoaPositions<Scalar>;
+
+/// The ConstraintBatches::consecutive bits of the block holding `slot` (0 for one lane, which
+/// also serves the overflow slots, which have no block).
+template <typename Lanes, typename Scalar>
+std::uint8_t consecutive_bits(const ConstraintBatches<Scalar>& batches, std::size_t slot) {
+  if constexpr (Lanes::size == 1) {
+    return 0;
+  } else {
+    return batches.consecutive[slot / ConstraintBatches<Scalar>::kBlockLanes];
+  }
+}
 
 /// Projects slots [begin, end) of `batches` (whole blocks of one colour) in place, Gauss-Seidel
 /// style, with over-relaxation ω. Returns the largest particle displacement, m.
@@ -267,7 +277,7 @@ Scalar project_blocks(const ConstraintBatches<Scalar>& batches, std::size_t begi
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
     const auto* i = &batches.particle_i[slot];
     const auto* j = &batches.particle_j[slot];
-    const std::uint8_t consecutive = batches.consecutive[slot / ConstraintBatches<Scalar>::kBlockLanes];
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
     const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
     LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
     LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
@@ -294,21 +304,22 @@ void accumulate_blocks(const ConstraintBatches<Scalar>& batches, std::size_t beg
                        Positions positions, CorrectionSums<Scalar> sums) {
   using V = typename Lanes::value;
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const std::uint8_t consecutive = batches.consecutive[slot / ConstraintBatches<Scalar>::kBlockLanes];
-    const LanePositions<Lanes> a = positions.template load<Lanes>(&batches.particle_i[slot], consecutive & 1);
-    const LanePositions<Lanes> b = positions.template load<Lanes>(&batches.particle_j[slot], consecutive & 2);
-    const auto i = Lanes::load(&batches.particle_i[slot]), j = Lanes::load(&batches.particle_j[slot]);
+    const auto* i = &batches.particle_i[slot];
+    const auto* j = &batches.particle_j[slot];
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
+    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
+    const LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
+    const LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
     const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
     const V error = length - Lanes::load(&batches.rest_length[slot]);
     const V scale = Lanes::if_positive(length, error / length);
     const V move_i = Lanes::load(&batches.share_i[slot]) * scale, move_j = Lanes::load(&batches.share_j[slot]) * scale;
-    Lanes::scatter(Lanes::gather(sums.x, i) - move_i * dx, sums.x, i);
-    Lanes::scatter(Lanes::gather(sums.y, i) - move_i * dy, sums.y, i);
-    Lanes::scatter(Lanes::gather(sums.z, i) - move_i * dz, sums.z, i);
-    Lanes::scatter(Lanes::gather(sums.x, j) + move_j * dx, sums.x, j);
-    Lanes::scatter(Lanes::gather(sums.y, j) + move_j * dy, sums.y, j);
-    Lanes::scatter(Lanes::gather(sums.z, j) + move_j * dz, sums.z, j);
+    LanePositions<Lanes> sum_i = sums.template load<Lanes>(i, i_consecutive);
+    LanePositions<Lanes> sum_j = sums.template load<Lanes>(j, j_consecutive);
+    sum_i.x = sum_i.x - move_i * dx, sum_i.y = sum_i.y - move_i * dy, sum_i.z = sum_i.z - move_i * dz;
+    sum_j.x = sum_j.x + move_j * dx, sum_j.y = sum_j.y + move_j * dy, sum_j.z = sum_j.z + move_j * dz;
+    sums.template store<Lanes>(i, i_consecutive, sum_i), sums.template store<Lanes>(j, j_consecutive, sum_j);
   }
 }
 
