@@ -190,8 +190,9 @@ void register_all() {
     for (const Path& path : paths()) {
       for (const bool use_float : {true, false}) {
         const std::string type = use_float ? "float" : "double";
-        // Layout, scalar-AoS and Jacobi variants in float only: the cache study's one workload type.
-        const bool main_path = path.name == "scalar" || path.name == "simd" || path.name.rfind("simd_2t", 0) == 0;
+        // AoSoA, scalar-AoS and Jacobi variants in float only.
+        const bool main_path = path.name == "scalar" || path.name == "simd" || path.name == "simd_aos" ||
+                               path.name.rfind("simd_2t", 0) == 0;
         if (!use_float && !main_path) continue;
         const std::string suffix = workload.name + "/" + type + "/" + path.name;
         if (use_float) {

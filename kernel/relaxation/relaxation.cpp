@@ -1,3 +1,6 @@
+// GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (the _mm512_undefined_*
+// operand of masked builtins; GCC bug 105593), instantiated here through xsimd.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "kernel/relaxation/relaxation.hpp"
 
 #include <algorithm>
@@ -25,8 +28,9 @@ constexpr std::size_t kParticlesPerTask = 4096;
 // on two threads, 10^5 links 1.9x faster.
 constexpr std::uint32_t kDefaultParallelMinimumSlots = 16384;
 
+// Fills the batches with the constraints of `islands` (state.awake_islands when stepping).
 template <typename Scalar>
-void build_batches(VerletState<Scalar>& state) {
+void build_batches(VerletState<Scalar>& state, const std::vector<std::uint32_t>& islands) {
   RelaxationPlan<Scalar>& plan = state.plan;
   ConstraintBatches<Scalar>& batches = plan.batches;
   const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
@@ -41,7 +45,7 @@ void build_batches(VerletState<Scalar>& state) {
   };
   batches.clear();
   for (std::uint32_t colour = 0; colour < state.colour_count; ++colour) {
-    for (std::uint32_t k : state.awake_islands) {
+    for (std::uint32_t k : islands) {
       const Island& island = state.islands[k];
       for (std::uint32_t c = island.constraint_begin; c < island.constraint_end; ++c) {
         if (state.constraint_colour[c] == colour) push(c);
@@ -54,15 +58,15 @@ void build_batches(VerletState<Scalar>& state) {
     const bool movable = inverse_mass[constraints.particle_i[c]] > 0 || inverse_mass[constraints.particle_j[c]] > 0;
     if (state.constraint_colour[c] == kNoColour && movable) push(c);
   };
-  for (std::size_t n = 0; n < state.awake_islands.size(); ++n) {
-    const Island& island = state.islands[state.awake_islands[forward ? n : state.awake_islands.size() - 1 - n]];
+  for (std::size_t n = 0; n < islands.size(); ++n) {
+    const Island& island = state.islands[islands[forward ? n : islands.size() - 1 - n]];
     for (std::uint32_t c = island.constraint_begin; c < island.constraint_end; ++c) {
       push_overflow(forward ? c : island.constraint_end - 1 - (c - island.constraint_begin));
     }
   }
 
   plan.particle_tasks.clear();
-  for (std::uint32_t k : state.awake_islands) {
+  for (std::uint32_t k : islands) {
     const Island& island = state.islands[k];
     for (std::uint32_t p = island.particle_begin; p < island.particle_end; p += kParticlesPerTask) {
       plan.particle_tasks.emplace_back(p, std::min<std::uint32_t>(island.particle_end, p + kParticlesPerTask));
@@ -197,13 +201,14 @@ double coloured_sweep(VerletState<Scalar>& state, Positions positions, Scalar ov
 template <typename Scalar, typename Lanes>
 double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
   RelaxationPlan<Scalar>& plan = state.plan;
-  switch (state.options.layout) {
+  switch (plan.layout) {
     case ParticleLayout::aos:
       return coloured_sweep<Scalar, Lanes>(state, InterleavedPositions<Scalar, 1>(plan.array_of_structures), over_relaxation);
     case ParticleLayout::aosoa:
       return coloured_sweep<Scalar, Lanes>(
           state, InterleavedPositions<Scalar, kLanesPerLine<Scalar>>(plan.blocked_structures), over_relaxation);
-    case ParticleLayout::soa: break;
+    case ParticleLayout::soa:
+    case ParticleLayout::automatic: break;  // resolved by prepare_relaxation_plan
   }
   return coloured_sweep<Scalar, Lanes>(state, SoaPositions<Scalar>(state.particles), over_relaxation);
 }
@@ -211,8 +216,23 @@ double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
 // Applies `copy(store)` to the interleaved store in use, if any.
 template <typename Scalar, typename Function>
 void with_interleaved(VerletState<Scalar>& state, Function&& copy) {
-  if (state.options.layout == ParticleLayout::aos) copy(state.plan.array_of_structures);
-  if (state.options.layout == ParticleLayout::aosoa) copy(state.plan.blocked_structures);
+  if (state.plan.layout == ParticleLayout::aos) copy(state.plan.array_of_structures);
+  if (state.plan.layout == ParticleLayout::aosoa) copy(state.plan.blocked_structures);
+}
+
+// SoA where most blocks join runs of consecutive particles at both ends (they load as plain
+// vectors: chains in depth-parity order); otherwise AoS, whose records load and transpose
+// faster than SoA gathers (trees, grids, piles of ragdolls: about 2x in both precisions).
+// The sequential sweep reads the ParticleBuffer itself.
+template <typename Scalar>
+ParticleLayout automatic_layout(VerletState<Scalar>& state) {
+  if (state.options.order == SweepOrder::sequential) return ParticleLayout::soa;
+  std::vector<std::uint32_t> all_islands(state.islands.size());
+  for (std::uint32_t k = 0; k < all_islands.size(); ++k) all_islands[k] = k;
+  build_batches(state, all_islands);
+  const auto& consecutive = state.plan.batches.consecutive;
+  const auto both = std::count(consecutive.begin(), consecutive.end(), std::uint8_t{3});
+  return 2 * both >= static_cast<std::ptrdiff_t>(consecutive.size()) ? ParticleLayout::soa : ParticleLayout::aos;
 }
 
 }  // namespace
@@ -225,7 +245,8 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
     throw std::invalid_argument("options: max_colours must be in [1, 64]");
   }
   if (options.order == SweepOrder::sequential &&
-      (options.layout != ParticleLayout::soa || options.solver == RelaxationSolver::jacobi)) {
+      ((options.layout != ParticleLayout::soa && options.layout != ParticleLayout::automatic) ||
+       options.solver == RelaxationSolver::jacobi)) {
     throw std::invalid_argument("options: the sequential sweep is scalar Gauss-Seidel over the SoA layout only");
   }
   const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
@@ -256,6 +277,8 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   plan.runner.reset(options.threading, threads);
   plan.parallel_minimum_slots = options.parallel_minimum_slots > 0 ? options.parallel_minimum_slots : kDefaultParallelMinimumSlots;
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
+  plan.layout = options.layout;
+  if (options.layout == ParticleLayout::automatic) plan.layout = automatic_layout(state);
   plan.built_for = ~std::uint64_t{0};
   with_interleaved(state, [&](auto& store) { store.copy_from(state.particles, 0, state.particles.capacity()); });
 }
@@ -264,7 +287,7 @@ template <typename Scalar>
 void begin_relaxation(VerletState<Scalar>& state) {
   if (state.options.order == SweepOrder::sequential) return;
   RelaxationPlan<Scalar>& plan = state.plan;
-  if (plan.built_for != state.awake_generation) build_batches(state);
+  if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
   with_interleaved(state, [&](auto& store) {
     for (std::uint32_t k : state.awake_islands) {
       store.copy_from(state.particles, state.islands[k].particle_begin, state.islands[k].particle_end);

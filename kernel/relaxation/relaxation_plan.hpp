@@ -46,6 +46,8 @@ struct RelaxationPlan {
   /// Jacobi's apply pass: the awake particles as [begin, end) ranges of at most a task's size.
   std::vector<std::pair<std::uint32_t, std::uint32_t>> particle_tasks;
   RunnerHandle runner;
+  /// The layout relaxation runs over (VerletOptions::layout, with automatic resolved).
+  ParticleLayout layout = ParticleLayout::soa;
   /// Whether a stage is large enough to split across threads: slots ≥ parallel_minimum_slots.
   std::uint32_t parallel_minimum_slots = 0;
   /// state.awake_generation the batches were built for (rebuilt when it changes).

@@ -85,7 +85,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   integrate(state, dt);
   if (has_ball) detect_ball_contacts(state, dt);
   if (has_planes) detect_plane_contacts(state, dt);
-  const bool interleaved = state.options.layout != ParticleLayout::soa;
+  const bool interleaved = state.plan.layout != ParticleLayout::soa;
   if (interleaved) collect_contact_particles(state);
 
   const RelaxationSettings& relaxation = state.settings.relaxation;

@@ -55,7 +55,7 @@ struct VerletOptions {
   SweepOrder order = SweepOrder::coloured;
   SweepDirection direction = SweepDirection::pinned_first;
   bool simd = true;                          ///< false: the scalar path (one lane)
-  ParticleLayout layout = ParticleLayout::soa;
+  ParticleLayout layout = ParticleLayout::automatic;  ///< of the relaxation's particle copy
   ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
   int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
   Threading threading = Threading::workers;  ///< how a colour is split across threads

@@ -16,6 +16,7 @@ enum class ParticleLayout : std::uint8_t {
   soa,    ///< one array per field (ParticleBuffer): a SIMD load takes consecutive particles
   aos,    ///< one record per particle: x y z w (16 bytes in float, 32 in double)
   aosoa,  ///< blocks of kLanesPerLine particles, one line per field inside a block
+  automatic,  ///< the relaxation picks soa or aos from how its blocks load (relaxation.cpp)
 };
 
 /// Particles interleaved in blocks of `Width` particles: a block holds, for each of the 4 record

@@ -47,7 +47,7 @@ struct RunFlags {
   int iterations = 0;
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
-  std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "soa", threading = "workers";
+  std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "auto", threading = "workers";
   std::string ordering = "depth-parity";
   int threads = 0;
   bool scalar = false;
@@ -99,8 +99,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("--threading", flags.threading, "How a colour is split: workers (long-lived) or parallel-for")
       ->check(CLI::IsMember({"workers", "parallel-for"}))
       ->capture_default_str();
-  run.add_option("--layout", flags.layout, "Particle storage for relaxation: soa, aos or aosoa")
-      ->check(CLI::IsMember({"soa", "aos", "aosoa"}))
+  run.add_option("--layout", flags.layout, "Particle storage for relaxation: auto, soa, aos or aosoa")
+      ->check(CLI::IsMember({"auto", "soa", "aos", "aosoa"}))
       ->capture_default_str();
   run.add_option("--ordering", flags.ordering,
                  "Particle numbering: depth-parity (red-black), breadth-first, rcm (reverse Cuthill-McKee) or shuffled")
@@ -118,8 +118,10 @@ VerletOptions verlet_options(const RunFlags& flags) {
   options.direction = flags.pinned == "last" ? SweepDirection::pinned_last : SweepDirection::pinned_first;
   options.threads = flags.threads;
   options.threading = flags.threading == "parallel-for" ? Threading::parallel_for : Threading::workers;
-  options.layout = flags.layout == "aos" ? ParticleLayout::aos
-                   : flags.layout == "aosoa" ? ParticleLayout::aosoa : ParticleLayout::soa;
+  options.layout = flags.layout == "aos"     ? ParticleLayout::aos
+                   : flags.layout == "aosoa" ? ParticleLayout::aosoa
+                   : flags.layout == "soa"   ? ParticleLayout::soa
+                                             : ParticleLayout::automatic;
   options.simd = !flags.scalar;
   options.ordering = flags.ordering == "rcm"             ? ParticleOrder::reverse_cuthill_mckee
                      : flags.ordering == "shuffled"      ? ParticleOrder::shuffled
@@ -127,7 +129,7 @@ VerletOptions verlet_options(const RunFlags& flags) {
                                                          : ParticleOrder::depth_parity;
   if (options.order == SweepOrder::sequential) {
     if (options.solver == RelaxationSolver::jacobi) throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver jacobi");
-    if (options.layout != ParticleLayout::soa) throw InputError("--sweep sequential: runs on the soa layout only, got --layout " + flags.layout);
+    if (options.layout != ParticleLayout::soa && options.layout != ParticleLayout::automatic) throw InputError("--sweep sequential: runs on the soa layout only, got --layout " + flags.layout);
   }
   return options;
 }
@@ -233,6 +235,16 @@ void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
   csv << '\n';
 }
 
+const char* layout_name(ParticleLayout layout) {
+  switch (layout) {
+    case ParticleLayout::aos: return "aos";
+    case ParticleLayout::aosoa: return "aosoa";
+    case ParticleLayout::soa: return "soa";
+    case ParticleLayout::automatic: break;
+  }
+  return "auto";
+}
+
 // "solver" line: the sweep, the colour count and batch sizes, the overflow, lanes, layout, threads.
 template <typename Scalar>
 std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state) {
@@ -251,7 +263,7 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
   if (flags.sweep == "sequential") return format("solver      sequential gauss-seidel, pinned end %s, scalar, 1 thread\n", flags.pinned.c_str());
   return format("solver      %s by colour: %u colours (batches %s), %zu overflow; pinned end %s; %s, %s layout, %d thread%s (%s)\n",
                 flags.solver.c_str(), state.colour_count, batches.c_str(), overflow, flags.pinned.c_str(),
-                flags.scalar ? "scalar" : "SIMD", flags.layout.c_str(), state.plan.runner->threads(),
+                flags.scalar ? "scalar" : "SIMD", layout_name(state.plan.layout), state.plan.runner->threads(),
                 state.plan.runner->threads() == 1 ? "" : "s", flags.threading.c_str());
 }
 
