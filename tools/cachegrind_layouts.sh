@@ -3,7 +3,7 @@
 # breadth-first, reverse Cuthill-McKee, shuffled) under cachegrind: a 100000-link chain, 1 thread,
 # 10 sweeps a step, double. Each case runs `limber run` for 21 steps and for 1 step and prints the
 # difference, so the table covers exactly 20 steps, not loading and compiling the scene. Takes
-# about 5 minutes.
+# about 4 minutes.
 #
 #   tools/cachegrind_layouts.sh [BUILD_DIR]        (default: build-valgrind, built if missing)
 #

@@ -261,10 +261,13 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
   for (std::size_t k = 0; k < sizes.size() && k < 8; ++k) batches += (k ? " " : "") + std::to_string(sizes[k]);
   if (sizes.size() > 8) batches += " …";
   if (flags.sweep == "sequential") return format("solver      sequential gauss-seidel, pinned end %s, scalar, 1 thread\n", flags.pinned.c_str());
-  return format("solver      %s by colour: %u colours (batches %s), %zu overflow; pinned end %s; %s, %s layout, %d thread%s (%s)\n",
+  const int threads = state.plan.runner->threads();
+  const std::string threading = threads == 1 ? "1 thread"
+      : format("%d threads (%s) on colours of %u+ constraints", threads, flags.threading.c_str(),
+               state.plan.parallel_minimum_slots);
+  return format("solver      %s by colour: %u colours (batches %s), %zu overflow; pinned end %s; %s, %s layout, %s\n",
                 flags.solver.c_str(), state.colour_count, batches.c_str(), overflow, flags.pinned.c_str(),
-                flags.scalar ? "scalar" : "SIMD", layout_name(state.plan.layout), state.plan.runner->threads(),
-                state.plan.runner->threads() == 1 ? "" : "s", flags.threading.c_str());
+                flags.scalar ? "scalar" : "SIMD", layout_name(state.plan.layout), threading.c_str());
 }
 
 // Runs the model and prints the summary; returns the exit code.
