@@ -7,8 +7,10 @@
 //   build/bench/relaxation_bench --benchmark_filter='Sweep/chain' one family
 //   tools/relaxation_report.py                                    runs it and prints the README tables
 //
-// Names: Colour/<workload> (colouring alone), <kind>/<workload>/<scalar type>/<path>, path = scalar | simd | simd_2t_workers |
-// simd_2t_parallel_for | simd_aos | simd_aosoa | jacobi_simd ….
+// Names: Colour/<workload> (colouring alone), <kind>/<workload>/<scalar type>/<path>, path =
+// scalar (one lane over SoA: the reference) | simd (the default: automatic layout) |
+// simd_2t_workers | simd_2t_parallel_for | simd_soa | simd_aos | simd_aosoa | scalar_aos |
+// jacobi_simd | jacobi_simd_2t_workers.
 // "Sweep" times one relaxation iteration over every constraint; "Step" one full step (Verlet
 // integration + 10 sweeps + sleep bookkeeping). Counters: constraints, projections/s, and
 // bytes/s of the data a sweep must stream (see streamed_bytes).
@@ -94,17 +96,18 @@ std::vector<Path> paths() {
     return Path{name, options};
   };
   const auto gs = RelaxationSolver::gauss_seidel, jacobi = RelaxationSolver::jacobi;
-  const auto soa = ParticleLayout::soa;
+  const auto automatic = ParticleLayout::automatic, soa = ParticleLayout::soa;
   return {
-      make("scalar", false, 1, Threading::serial, soa, gs),
-      make("simd", true, 1, Threading::serial, soa, gs),
-      make("simd_2t_workers", true, 2, Threading::workers, soa, gs),
-      make("simd_2t_parallel_for", true, 2, Threading::parallel_for, soa, gs),
+      make("scalar", false, 1, Threading::serial, soa, gs),  // the reference: scalar over SoA
+      make("simd", true, 1, Threading::serial, automatic, gs),
+      make("simd_2t_workers", true, 2, Threading::workers, automatic, gs),
+      make("simd_2t_parallel_for", true, 2, Threading::parallel_for, automatic, gs),
+      make("simd_soa", true, 1, Threading::serial, soa, gs),
       make("simd_aos", true, 1, Threading::serial, ParticleLayout::aos, gs),
       make("simd_aosoa", true, 1, Threading::serial, ParticleLayout::aosoa, gs),
       make("scalar_aos", false, 1, Threading::serial, ParticleLayout::aos, gs),
-      make("jacobi_simd", true, 1, Threading::serial, soa, jacobi),
-      make("jacobi_simd_2t_workers", true, 2, Threading::workers, soa, jacobi),
+      make("jacobi_simd", true, 1, Threading::serial, automatic, jacobi),
+      make("jacobi_simd_2t_workers", true, 2, Threading::workers, automatic, jacobi),
   };
 }
 
@@ -191,8 +194,8 @@ void register_all() {
       for (const bool use_float : {true, false}) {
         const std::string type = use_float ? "float" : "double";
         // AoSoA, scalar-AoS and Jacobi variants in float only.
-        const bool main_path = path.name == "scalar" || path.name == "simd" || path.name == "simd_aos" ||
-                               path.name.rfind("simd_2t", 0) == 0;
+        const bool main_path = path.name == "scalar" || path.name == "simd" || path.name == "simd_soa" ||
+                               path.name == "simd_aos" || path.name.rfind("simd_2t", 0) == 0;
         if (!use_float && !main_path) continue;
         const std::string suffix = workload.name + "/" + type + "/" + path.name;
         if (use_float) {
