@@ -285,8 +285,10 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
 
 template <typename Scalar>
 void begin_relaxation(VerletState<Scalar>& state) {
-  if (state.options.order == SweepOrder::sequential) return;
   RelaxationPlan<Scalar>& plan = state.plan;
+  plan.awake_constraints = 0;
+  for (std::uint32_t k : state.awake_islands) plan.awake_constraints += state.islands[k].constraint_end - state.islands[k].constraint_begin;
+  if (state.options.order == SweepOrder::sequential) return;
   if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
   with_interleaved(state, [&](auto& store) {
     for (std::uint32_t k : state.awake_islands) {
@@ -303,9 +305,7 @@ void begin_relaxation(VerletState<Scalar>& state) {
 
 template <typename Scalar>
 double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
-  std::uint64_t projections = 0;
-  for (std::uint32_t k : state.awake_islands) projections += state.islands[k].constraint_end - state.islands[k].constraint_begin;
-  state.counters.constraint_projections += projections;
+  state.counters.constraint_projections += state.plan.awake_constraints;
   if (state.options.order == SweepOrder::sequential) return gauss_seidel_sweep(state, over_relaxation);
   const auto omega = static_cast<Scalar>(over_relaxation);
   return state.options.simd ? coloured_sweep<Scalar, SimdLanes<Scalar>>(state, omega)

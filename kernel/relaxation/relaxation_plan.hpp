@@ -50,6 +50,8 @@ struct RelaxationPlan {
   ParticleLayout layout = ParticleLayout::soa;
   /// Whether a stage is large enough to split across threads: slots ≥ parallel_minimum_slots.
   std::uint32_t parallel_minimum_slots = 0;
+  /// Constraints of the awake islands this step (the work counter a sweep adds).
+  std::uint64_t awake_constraints = 0;
   /// state.awake_generation the batches were built for (rebuilt when it changes).
   std::uint64_t built_for = ~std::uint64_t{0};
 };
