@@ -22,7 +22,8 @@ namespace {
 // balance two threads on a 10^4-link colour.
 constexpr std::size_t kSlotsPerTask = 512;
 constexpr std::size_t kParticlesPerTask = 4096;
-// Below this many slots a colour runs on one thread. Measured (README, "Threads"): handing a
+// Below this many slots a colour runs on one thread. Measured (README, "The data-oriented core:
+// SIMD, threads, layouts"): handing a
 // stage to two threads costs ~4.6 us (either strategy) and a slot ~0.8 ns, so a colour pays
 // for the second core from ~12k slots; chains of 10^4 links (5k per colour) ran 1.6x slower
 // on two threads, 10^5 links 1.9x faster.

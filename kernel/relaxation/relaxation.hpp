@@ -20,7 +20,7 @@
 namespace limber {
 
 /// Colours the state's constraints and sets up its threads (called by compile()). Throws
-/// std::invalid_argument on options that do not go together (a non-SoA layout or Jacobi with
+/// std::invalid_argument on options that do not go together (the AoS or AoSoA layout or Jacobi with
 /// the sequential order, threads < 0, max_colours outside [1, 64]).
 template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state);

@@ -48,7 +48,7 @@ enum class SweepDirection : std::uint8_t {
 
 /// Choices the Verlet method takes besides the Model. None changes the physics model; the
 /// solver, order and direction change how relaxation converges, the rest only how fast it runs
-/// (results are the same bits for every thread count, lane width and layout).
+/// (results are the same bits for every thread count, lane width, layout and ordering).
 struct VerletOptions {
   RelaxationRule rule = RelaxationRule::weighted;
   RelaxationSolver solver = RelaxationSolver::gauss_seidel;
@@ -60,7 +60,8 @@ struct VerletOptions {
   int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
   Threading threading = Threading::workers;  ///< how a colour is split across threads
   /// Colours a stage must have at least this many constraint slots to be split across threads;
-  /// 0 picks the crossover measured on the reference machine (README, "Threads").
+  /// 0 picks the crossover measured on the reference machine (README, "The data-oriented core:
+  /// SIMD, threads, layouts").
   std::uint32_t parallel_minimum_slots = 0;
   std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
 };
