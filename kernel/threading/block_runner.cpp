@@ -34,11 +34,19 @@ void spin_pause(int& spins) {
 constexpr std::uint64_t kClosed = 0xFFFFFFFFu;
 
 struct BlockRunner::Shared {
-  // The stage word: stage number (high 32 bits) and next unclaimed block (low 32 bits). A
-  // successful compare-and-swap from (s, b) to (s, b + 1) gives block b of stage s to the
-  // caller; it can only succeed while stage s is current, and stage s stays current (its
-  // descriptor unchanged) until every claimed block has completed.
-  alignas(64) std::atomic<std::uint64_t> claim{0};
+  // Owner computes: a stage's blocks are split into one home range per thread, [t·n/T,
+  // (t+1)·n/T), so each thread works on the same part of every colour — and of the particles —
+  // from colour to colour, and a range is claimed through its own cursor: stage number (high
+  // 32 bits) and next unclaimed block (low 32 bits). A successful compare-and-swap from (s, b)
+  // to (s, b + k) gives blocks b … b+k−1 of stage s to the caller; it can only succeed while
+  // stage s is current, and stage s stays current (its descriptor unchanged) until every
+  // claimed block has completed. A thread that finishes its range steals from the others, so a
+  // stage completes even if a helper never wakes.
+  struct alignas(64) Cursor {
+    std::atomic<std::uint64_t> word{0};
+  };
+  std::unique_ptr<Cursor[]> cursors;
+  alignas(64) std::atomic<std::uint64_t> current{0};  // the published stage
   alignas(64) std::atomic<std::uint32_t> completed{0};
   // The stage descriptor, read on every claim: a line of its own, away from the counters.
   alignas(64) std::atomic<std::uint32_t> count{0};
@@ -60,30 +68,42 @@ struct BlockRunner::Shared {
   tbb::task_arena arena;     // parallel_for
   std::vector<std::thread> helpers;  // workers: created once, live as long as the runner
 
-  explicit Shared(int threads) : results(static_cast<std::size_t>(threads)), arena(threads) {}
+  explicit Shared(int threads)
+      : cursors(std::make_unique<Cursor[]>(static_cast<std::size_t>(threads))),
+        results(static_cast<std::size_t>(threads)),
+        arena(threads) {}
 
-  // Claims and runs blocks of the current stage until none is left; returns false when the
-  // stage word did not name a runnable stage. `result` collects the largest value.
-  // Claims are guided (OpenMP's schedule): a claim takes half of the remaining blocks' fair
-  // share, so a stage costs a few contended compare-and-swaps instead of one per block.
-  bool work(Result& result) {
-    std::uint64_t word = claim.load(std::memory_order_acquire);
-    const std::uint64_t s = word >> 32;
+  std::uint64_t range_begin(std::size_t t, std::uint64_t total) const { return t * total / results.size(); }
+
+  // Claims and runs blocks of the current stage, its home range first, until none is left;
+  // returns false when it ran none. `result` collects the largest value. Claims in the home
+  // range take one block (the cursor is nobody else's until the range runs low); steals take
+  // half of what is left of the other range.
+  bool work(Result& result, std::size_t home) {
+    const std::uint64_t s = current.load(std::memory_order_acquire);
+    if (s == 0) return false;
+    const std::uint64_t total = count.load(std::memory_order_acquire);
+    const std::size_t threads = results.size();
     bool ran = false;
-    for (;;) {
-      const std::uint64_t total = count.load(std::memory_order_acquire);
-      const std::uint64_t next = word & 0xFFFFFFFFu;
-      if ((word >> 32) != s || next >= total) break;
-      const std::uint64_t take = std::max<std::uint64_t>(1, (total - next) / (2 * results.size()));
-      if (!claim.compare_exchange_weak(word, word + take, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
-      const BlockFunction run_block = function.load(std::memory_order_relaxed);
-      const void* run_context = context.load(std::memory_order_relaxed);
-      double largest = result.stage == s ? result.largest : 0.0;
-      for (std::uint64_t block = next; block < next + take; ++block) largest = std::max(largest, run_block(run_context, block));
-      result.stage = s, result.largest = largest;
-      completed.fetch_add(static_cast<std::uint32_t>(take), std::memory_order_release);
-      ran = true;
-      word = claim.load(std::memory_order_acquire);
+    for (std::size_t k = 0; k < threads; ++k) {
+      const std::size_t t = (home + k) % threads;
+      const std::uint64_t end = range_begin(t + 1, total);
+      std::atomic<std::uint64_t>& cursor = cursors[t].word;
+      std::uint64_t word = cursor.load(std::memory_order_acquire);
+      for (;;) {
+        const std::uint64_t next = word & 0xFFFFFFFFu;
+        if ((word >> 32) != s || next >= end) break;
+        const std::uint64_t take = t == home ? 1 : std::max<std::uint64_t>(1, (end - next) / 2);
+        if (!cursor.compare_exchange_weak(word, word + take, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
+        const BlockFunction run_block = function.load(std::memory_order_relaxed);
+        const void* run_context = context.load(std::memory_order_relaxed);
+        double largest = result.stage == s ? result.largest : 0.0;
+        for (std::uint64_t block = next; block < next + take; ++block) largest = std::max(largest, run_block(run_context, block));
+        result.stage = s, result.largest = largest;
+        completed.fetch_add(static_cast<std::uint32_t>(take), std::memory_order_release);
+        ran = true;
+        word = cursor.load(std::memory_order_acquire);
+      }
     }
     return ran;
   }
@@ -97,7 +117,7 @@ struct BlockRunner::Shared {
       if (seen % 2 == 0) continue;  // between steps: back to sleep
       int spins = 0;
       while (session.load(std::memory_order_acquire) == seen && !exit.load(std::memory_order_relaxed)) {
-        if (work(results[slot])) spins = 0;
+        if (work(results[slot], slot)) spins = 0;
         else spin_pause(spins);
       }
     }
@@ -160,19 +180,23 @@ double BlockRunner::run(std::size_t count, BlockFunction function, const void* c
           [](double a, double b) { return std::max(a, b); });
     });
   }
-  // Close the previous stage's word first: a helper holding a stale word (previous stage, block b)
-  // that reads the new, larger count must not be able to claim block b with it.
-  shared.claim.store((shared.stage << 32) | kClosed, std::memory_order_release);
-  // Publish the stage: descriptor, then the stage word (release).
+  // Close the previous stage's cursors first: a helper holding a stale word (previous stage,
+  // block b) that reads the new, larger count must not be able to claim block b with it.
+  const std::size_t threads = shared.results.size();
+  for (std::size_t t = 0; t < threads; ++t) shared.cursors[t].word.store((shared.stage << 32) | kClosed, std::memory_order_release);
+  // Publish the stage: descriptor, cursors, then the stage number (release).
   const std::uint64_t stage = ++shared.stage;
   shared.count.store(static_cast<std::uint32_t>(count), std::memory_order_release);
   shared.function.store(function, std::memory_order_relaxed);
   shared.context.store(context, std::memory_order_relaxed);
   shared.completed.store(0, std::memory_order_relaxed);
-  shared.claim.store(stage << 32, std::memory_order_release);
+  for (std::size_t t = 0; t < threads; ++t) {
+    shared.cursors[t].word.store((stage << 32) | shared.range_begin(t, count), std::memory_order_release);
+  }
+  shared.current.store(stage, std::memory_order_release);
   Shared::Result& own = shared.results[0];
   own.largest = 0, own.stage = stage;
-  shared.work(own);
+  shared.work(own, 0);
   int spins = 0;
   while (shared.completed.load(std::memory_order_acquire) != count) spin_pause(spins);
   double largest = own.largest;
