@@ -4,8 +4,10 @@
 // - serial: the calling thread runs every block; no synchronization at all.
 // - parallel_for: oneTBB's parallel_reduce over each stage; a fork and join per stage.
 // - workers: long-lived helper threads (created with the runner, asleep between steps) that
-//   spin on a shared stage word during a step and claim blocks with a compare-and-swap, as
-//   Box2D v3's solver stages do. The calling thread claims blocks too and never waits for a
+//   spin during a step and claim blocks with compare-and-swaps, as Box2D v3's solver stages
+//   do: each thread first from its own share of the stage (owner computes: the same share of
+//   every colour, so its particles stay in its cache), then from the others'. The calling
+//   thread claims blocks too and never waits for a
 //   helper to *start*, so a stage completes even if a helper is descheduled; it only waits for
 //   blocks already claimed. (A oneTBB task as the helper was tried first: a task spawned from
 //   arena.execute() stayed in the caller's pool and ran only when the caller waited for it.)
