@@ -281,7 +281,10 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   plan.layout = options.layout;
   if (options.layout == ParticleLayout::automatic) plan.layout = automatic_layout(state);
   plan.built_for = ~std::uint64_t{0};
-  with_interleaved(state, [&](auto& store) { store.copy_from(state.particles, 0, state.particles.capacity()); });
+  with_interleaved(state, [&](auto& store) {
+    store.resize_for(state.particles);
+    store.copy_from(state.particles, 0, state.particles.capacity());
+  });
 }
 
 template <typename Scalar>

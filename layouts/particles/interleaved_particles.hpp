@@ -44,9 +44,11 @@ struct InterleavedParticles {
   }
   static constexpr std::size_t field_stride = Width;
 
-  /// Copies every field of particles [begin, end) from `source`, sizing the storage to match it.
+  /// Sizes the storage for `source`'s capacity (null particle and padding included), zeroed.
+  void resize_for(const ParticleBuffer<Scalar>& source) { data.assign(padded_size(source.capacity(), Width) * kFields, 0); }
+
+  /// Copies every field of particles [begin, end) from `source` (storage sized by resize_for).
   void copy_from(const ParticleBuffer<Scalar>& source, std::size_t begin, std::size_t end) {
-    data.resize(padded_size(source.capacity(), Width) * kFields);
     for (std::size_t p = begin; p < end; ++p) {
       Scalar* record = data.data() + offset(p);
       record[x * Width] = source.position_x[p], record[y * Width] = source.position_y[p];
