@@ -11,6 +11,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "kernel/model/model.hpp"
+
 namespace limber {
 namespace {
 
@@ -235,6 +237,21 @@ MassProperties combine(std::span<const MassProperties> parts) {
     result.inertia += part.inertia + part.mass * point_inertia(part.centre_of_mass - result.centre_of_mass);
   }
   return result;
+}
+
+MassProperties body_mass_properties(const Body& body) {
+  if (body.point_masses.empty()) {
+    return body.shape.type == ShapeType::capsule && body.shape.radius > 0 ? solid_capsule(body.mass, body.shape.radius, body.shape.length)
+                                                 : solid_cylinder(body.mass, body.shape.radius, body.shape.length);
+  }
+  std::vector<MassProperties> lumps;
+  lumps.reserve(body.point_masses.size());
+  for (const PointMass& lump : body.point_masses) {
+    MassProperties part{lump.mass, lump.position, Eigen::Matrix3d::Zero()};
+    if (lump.radius > 0) part.inertia = solid_sphere(lump.mass, lump.radius).inertia;
+    lumps.push_back(part);
+  }
+  return combine(lumps);
 }
 
 PrincipalAxes principal_axes(const Matrix3d& inertia) {

@@ -63,6 +63,12 @@ MassProperties transformed(const MassProperties& part, const Eigen::Quaterniond&
 /// I += m_k (|d_k|² E − d_k d_kᵀ), d_k = c_k − c.
 MassProperties combine(std::span<const MassProperties> parts);
 
+struct Body;
+/// A limb's mass properties in its body frame (kernel/model/model.hpp): its point masses (eq.
+/// 4.1, each a solid sphere of its radius) when it has any, else its mass spread uniformly over
+/// its shape (solid cylinder or capsule).
+MassProperties body_mass_properties(const Body& body);
+
 /// Principal moments (ascending) and axes (columns, a right-handed rotation) of an inertia
 /// tensor: inertia = axes · diag(moments) · axesᵀ. A body frame aligned with `axes` has a
 /// diagonal inertia tensor.

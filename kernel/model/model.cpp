@@ -3,6 +3,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "kernel/model/model.hpp"
 
+#include <cmath>
 #include <numbers>
 #include <numeric>
 #include <string>
@@ -63,6 +64,21 @@ void validate_body(const Body& body, std::size_t index) {
   require_positive(body.shape.length, path("shape.length"));
   require_non_negative(body.shape.radius, path("shape.radius"));
   require_positive(body.mass, path("mass"));
+  double point_mass_sum = 0;
+  for (std::size_t k = 0; k < body.point_masses.size(); ++k) {
+    const PointMass& lump = body.point_masses[k];
+    const auto lump_path = [&](const char* field) {
+      return [&, field] { return indexed(path("point_masses")(), k) + "." + field; };
+    };
+    require_finite(lump.position, lump_path("position"));
+    require_positive(lump.mass, lump_path("mass"));
+    require_non_negative(lump.radius, lump_path("radius"));
+    point_mass_sum += lump.mass;
+  }
+  if (!body.point_masses.empty() && std::abs(point_mass_sum - body.mass) > 1e-12 * point_mass_sum) {
+    fail(path("mass"), "must equal the sum of point_masses' masses, " + format_number(point_mass_sum) + ", got " +
+                           format_number(body.mass));
+  }
   require_finite(body.position, path("position"));
   require_unit(body.axis, path("axis"));
   require_finite(body.linear_velocity, path("linear_velocity"));

@@ -43,11 +43,25 @@ struct Shape {
 /// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule.
 double volume(const Shape& shape);
 
+/// A lump of a limb's mass (thesis 4.1, eq. 4.1): a solid sphere of `radius` (0: a point)
+/// centred at `position` in the body frame.
+struct PointMass {
+  Vector3 position = Vector3::Zero();  ///< m, body frame
+  double mass = 0;                     ///< kg, > 0
+  double radius = 0;                   ///< m, ≥ 0; its own inertia is (2/5) m r²
+};
+
 /// A rigid limb with distributed mass.
+///
+/// Its mass is spread uniformly over its shape, unless `point_masses` is given: then the limb's
+/// mass, centre of mass and inertia are those of the point masses (eq. 4.1), `mass` is their
+/// sum, and the shape is only its surface for contacts. body_mass_properties()
+/// (kernel/mass/mass_properties.hpp) gives the result either way.
 struct Body {
   std::string name;
   Shape shape;
   double mass = 0;                            ///< kg, > 0 (a scene may give density × volume instead)
+  std::vector<PointMass> point_masses;        ///< empty: uniform density over the shape
   Vector3 position = Vector3::Zero();         ///< world position of the body-frame origin (the centre), m
   Vector3 axis = Vector3::UnitZ();            ///< unit world direction of local +z (tail → head)
   Vector3 linear_velocity = Vector3::Zero();  ///< of the centre, m/s
@@ -134,8 +148,16 @@ enum class ParticleJoints {
   shared_particle,         ///< the two limbs share one particle carrying both mass shares
 };
 
+/// Where the particle (Verlet) methods put a limb's mass (thesis 4.1).
+enum class LimbMasses {
+  ends,     ///< half at each end: the thesis's program; a uniform rod's inertia is 3× too large
+  inertia,  ///< three particles (tail, centre, head) whose masses reproduce the limb's mass, centre
+            ///< of mass along the axis and inertia about a transverse axis (uniform rod: m/6, 2m/3, m/6)
+};
+
 struct VerletSettings {
   ParticleJoints joints = ParticleJoints::zero_length_constraint;
+  LimbMasses limb_masses = LimbMasses::ends;
   /// The thesis's drag (3.2.1, [Jak03]): x' = f·x − (f − 1)·x* + a·Δt², e.g. f = 1.99. Depends on
   /// Δt; prefer Settings::damping. When set it replaces the damping.
   std::optional<double> drag_factor;
