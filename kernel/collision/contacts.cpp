@@ -1,6 +1,7 @@
 #include "kernel/collision/contacts.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "kernel/collision/geometry.hpp"
@@ -138,6 +139,80 @@ void share_ball_limb_impulse(const VerletState<Scalar>& state, std::uint32_t lim
   apply(tail, Eigen::Vector3d(-a * w[tail] * impulse));
 }
 
+// --- The velocity pass on limbs with a centre particle ---
+
+// How a limb with a centre particle (LimbMasses::inertia) answers a velocity impulse λ that
+// reaches it through its end particles, as the gradients g_head, g_tail of a contact's
+// constraint. Given to the ends alone (Δv = w·λ·g, as for two-particle limbs) it would move only
+// their mass — a third of a uniform rod's — and the centre's constraints would take most of it
+// back the next step: a rod dropped flat with restitution 0.5 bounced with 0.05. So the limb
+// answers as the rigid body its three particles make, which is what a two-particle limb does
+// for impulses across its axis. With masses m_p = 1/w_p at x_p, centre of mass X, r_p = x_p − X,
+// axis u, transverse second moment S = Σ m_p (r_p·u)², g = g_head + g_tail and torque
+// τ = r_head × g_head + r_tail × g_tail, whose part τ⊥ across the axis is all that particles on
+// the axis can take:
+//   Δv_p = λ·(g/M + (τ⊥/S) × r_p),   generalized inverse mass K = |g|²/M + |τ⊥|²/S.
+// A limb held by one pinned particle q (w_q = 0) turns about it (r_p = x_p − x_q, no g/M term);
+// held by two it does not move (K = 0). Joints are not seen, as for two-particle limbs.
+struct RigidLimbResponse {
+  std::array<std::uint32_t, 3> particles{};  // head, centre, tail
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();   // g/M, 1/kg
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();  // τ⊥/S, 1/(kg·m)
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();   // X, or the pinned particle, m
+  double inverse_mass = 0;                            // K, 1/kg
+};
+
+template <typename Scalar>
+bool has_centre(const VerletState<Scalar>& state, std::uint32_t limb) {
+  return limb != kNoLimb && state.limbs.centre[limb] != kNoCentre;
+}
+
+template <typename Scalar>
+RigidLimbResponse rigid_limb_response(const VerletState<Scalar>& state, std::uint32_t limb,
+                                      const Eigen::Vector3d& gradient_head, const Eigen::Vector3d& gradient_tail) {
+  const auto& w = state.particles.inverse_mass;
+  RigidLimbResponse response;
+  response.particles = {state.limbs.head[limb], state.limbs.centre[limb], state.limbs.tail[limb]};
+  std::array<Eigen::Vector3d, 3> x;
+  int pinned_count = 0, pinned = 0;
+  double mass = 0;
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 3; ++k) {
+    x[k] = position_of(state.particles, response.particles[k]);
+    if (w[response.particles[k]] == 0) {
+      ++pinned_count, pinned = k;
+    } else {
+      mass += 1 / double(w[response.particles[k]]);
+      moment += x[k] / double(w[response.particles[k]]);
+    }
+  }
+  if (pinned_count > 1) return response;
+  response.origin = pinned_count == 0 ? Eigen::Vector3d(moment / mass) : x[pinned];
+  const Eigen::Vector3d axis = (x[0] - x[2]).normalized();
+  double second_moment = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (w[response.particles[k]] == 0) continue;
+    const double along = (x[k] - response.origin).dot(axis);
+    second_moment += along * along / double(w[response.particles[k]]);
+  }
+  const Eigen::Vector3d torque =
+      (x[0] - response.origin).cross(gradient_head) + (x[2] - response.origin).cross(gradient_tail);
+  const Eigen::Vector3d torque_across = torque - torque.dot(axis) * axis;
+  if (second_moment > 0) response.angular = torque_across / second_moment;
+  if (pinned_count == 0) response.linear = (gradient_head + gradient_tail) / mass;
+  response.inverse_mass = (gradient_head + gradient_tail).dot(response.linear) + torque_across.dot(response.angular);
+  return response;
+}
+
+// Changes the limb's particle velocities by the response to the impulse λ (N·s).
+template <typename Scalar>
+void apply_rigid_limb_impulse(VerletState<Scalar>& state, const RigidLimbResponse& response, double impulse, double dt) {
+  for (const std::uint32_t p : response.particles) {
+    const Eigen::Vector3d r = position_of(state.particles, p) - response.origin;
+    change_velocity(state.particles, p, impulse * (response.linear + response.angular.cross(r)), dt);
+  }
+}
+
 // Finds the ball's contact with a limb during the step. A fast ball can cross most of a thin
 // limb in one step, and the overlap at the end of the step then points sideways (it would wedge
 // the legs apart instead of striking them); so the contact plane is fixed where the surfaces
@@ -273,17 +348,32 @@ double project_ball_contacts(VerletState<Scalar>& state, double dt) {
   return largest;
 }
 
+namespace {
+
+// One pass of the restitution impulses over every contact of the step.
 template <typename Scalar>
-void apply_restitution(VerletState<Scalar>& state, double dt) {
+void restitution_pass(VerletState<Scalar>& state, double dt) {
   const double resting_speed = 2 * state.gravity.template cast<double>().norm() * dt;
   auto& particles = state.particles;
   for (const PlaneContact& contact : state.plane_contacts) {
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
-    const double inverse_mass = plane_inverse_mass(state, feature, constraint);
-    if (constraint.separation > kTouchingSlop || inverse_mass <= 0) continue;  // lifted off, or fixed
     const double restitution = std::max(state.planes[contact.plane].restitution, feature.restitution);
     const double target = bounce_speed(contact.approach_speed, restitution, resting_speed);
+    if (has_centre(state, feature.limb)) {
+      if (constraint.separation > kTouchingSlop) continue;
+      const bool at_head = feature.particle == state.limbs.head[feature.limb];
+      const Eigen::Vector3d partner =
+          feature.axis_partner != feature.particle ? constraint.gradient_partner : Eigen::Vector3d::Zero();
+      const RigidLimbResponse response = rigid_limb_response(state, feature.limb, at_head ? constraint.gradient_point : partner,
+                                                             at_head ? partner : constraint.gradient_point);
+      if (response.inverse_mass <= 0) continue;
+      const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / response.inverse_mass;
+      apply_rigid_limb_impulse(state, response, impulse, dt);
+      continue;
+    }
+    const double inverse_mass = plane_inverse_mass(state, feature, constraint);
+    if (constraint.separation > kTouchingSlop || inverse_mass <= 0) continue;  // lifted off, or fixed
     const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / inverse_mass;  // N·s
     change_velocity(particles, feature.particle,
                     particles.inverse_mass[feature.particle] * impulse * constraint.gradient_point, dt);
@@ -293,15 +383,43 @@ void apply_restitution(VerletState<Scalar>& state, double dt) {
     }
   }
   for (const BallContact& contact : state.ball_contacts) {
+    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting_speed);
+    const double normal_speed = ball_normal_speed(state, contact, dt);
+    if (has_centre(state, contact.limb)) {
+      if (ball_separation(state, contact) > kTouchingSlop) continue;
+      const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+      const RigidLimbResponse response = rigid_limb_response(state, contact.limb, -(1 - contact.axial) * contact.normal,
+                                                             -contact.axial * contact.normal);
+      const double inverse_mass = state.particles.inverse_mass[ball] + response.inverse_mass;
+      if (inverse_mass <= 0) continue;
+      const double impulse = (target - normal_speed) / inverse_mass;  // N·s, thesis eq. 2.33
+      change_velocity(particles, ball, state.particles.inverse_mass[ball] * impulse * contact.normal, dt);
+      apply_rigid_limb_impulse(state, response, impulse, dt);
+      continue;
+    }
     const double inverse_mass = ball_limb_inverse_mass(state, contact.limb, contact.axial);
     if (ball_separation(state, contact) > kTouchingSlop || inverse_mass <= 0) continue;
-    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting_speed);
     // Thesis eq. 2.33: J = Δv_n / (Σ generalized inverse masses), shared like the projection.
-    const double normal_speed = ball_normal_speed(state, contact, dt);
     const Eigen::Vector3d impulse = ((target - normal_speed) / inverse_mass) * contact.normal;  // N·s
     share_ball_limb_impulse(state, contact.limb, contact.axial, impulse,
                             [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(particles, p, dv, dt); });
   }
+}
+
+// Contacts on two-particle limbs meet their target speeds in one pass: an impulse across the
+// axis at one end leaves the other end's velocity alone. A rigid three-particle limb couples
+// them — the impulse at its head turns it and drives its tail the other way — so the pass is
+// repeated, Gauss-Seidel on the contacts' normal speeds: a uniform rod on its two ends loses 3/4
+// of the error a pass (the coupling −2/m over the diagonal 4/m, squared), about 1e-5 after 8.
+constexpr int kRigidLimbRestitutionPasses = 8;
+
+}  // namespace
+
+template <typename Scalar>
+void apply_restitution(VerletState<Scalar>& state, double dt) {
+  const bool centres = state.limbs.size() > 0 && state.limbs.centre[0] != kNoCentre;
+  const int passes = centres ? kRigidLimbRestitutionPasses : 1;
+  for (int pass = 0; pass < passes; ++pass) restitution_pass(state, dt);
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                                \

@@ -18,6 +18,12 @@
 // normal speed exactly e·v, v its approach speed before the step (thesis eq. 2.33, the impulse
 // spread by inverse mass) — which also removes any push-out velocity; approach speeds below
 // 2|g|Δt bounce with e = 0 so resting contacts stay at rest.
+// Limbs with a centre particle (LimbMasses::inertia): contacts act on the head and tail only
+// (the ends' features reach the whole surface); in relaxation the centre follows through its
+// constraints, sweep by sweep. The velocity pass has no sweeps after it, so there the impulse
+// moves the limb as the rigid body of its three particles — its effective mass at the contact
+// point is 1/(1/m + s²/I), as for the rigid limb — and the pass is repeated (8 times) because
+// such a limb couples its two ends' contacts.
 #pragma once
 
 #include "kernel/verlet/verlet_state.hpp"

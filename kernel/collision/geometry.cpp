@@ -88,4 +88,18 @@ PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, d
   return constraint;
 }
 
+std::vector<Plane> scene_planes(const Model& model) {
+  std::vector<Plane> planes;
+  if (model.ground) planes.push_back({Eigen::Vector3d::UnitZ(), model.ground->height, model.ground->restitution, model.ground->friction});
+  if (model.bounds) {
+    const Bounds& box = *model.bounds;
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3d normal = Eigen::Vector3d::Unit(axis);
+      planes.push_back({normal, box.min[axis], box.restitution, box.friction});
+      planes.push_back({-normal, -box.max[axis], box.restitution, box.friction});
+    }
+  }
+  return planes;
+}
+
 }  // namespace limber

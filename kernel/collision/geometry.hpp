@@ -1,11 +1,25 @@
 // Closest-point geometry between the ball, limbs and planes (double precision; few contacts).
 #pragma once
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "kernel/model/model.hpp"
 
 namespace limber {
+
+/// A half-space n·x ≥ offset (ground, a wall of the bounds), solid where n·x < offset.
+struct Plane {
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0;
+  double restitution = 0;
+  double friction = 0;
+};
+
+/// The ground and the six walls of the bounds as planes, ground first, each with its
+/// restitution and friction (what every method collides against).
+std::vector<Plane> scene_planes(const Model& model);
 
 /// A sphere against a limb: where they are closest, and how far apart.
 struct SphereLimbContact {

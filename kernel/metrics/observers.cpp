@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernel/springs/spring_forces.hpp"
+
 namespace limber {
 
 template <typename Scalar>
@@ -49,6 +51,42 @@ Observation observe(const VerletState<Scalar>& state) {
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     out.islands_sleeping += state.islands[k].sleeping;
     if (static_cast<std::int64_t>(k) != state.ball_island) out.body_sleeping = out.body_sleeping && state.islands[k].sleeping;
+  }
+  return out;
+}
+
+Observation observe(const SpringState& state) {
+  Observation out;
+  out.time = state.time;
+  const RigidBodyBuffer& bodies = state.bodies;
+  const RigidBodyState& y = bodies.state;
+  double gap_squares = 0;
+  for (std::size_t s = 0; s < state.springs.size(); ++s) {
+    const double gap = spring_separation(state, y, s).norm() / state.springs.reference_length[s];
+    out.max_joint_gap = std::max(out.max_joint_gap, gap);
+    gap_squares += gap * gap;
+  }
+  if (state.springs.size() > 0) out.rms_joint_gap = std::sqrt(gap_squares / state.springs.size());
+  double body_mass = 0;
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const double mass = bodies.mass[b];
+    out.linear_momentum += y.linear_momentum[b];
+    out.kinetic_energy += 0.5 * y.linear_momentum[b].squaredNorm() / mass +
+                          0.5 * bodies.angular_velocity(y, b).dot(y.angular_momentum[b]);
+    out.potential_energy -= mass * state.settings.gravity.dot(y.position[b]);
+    if (static_cast<std::int32_t>(b) != state.ball) {
+      out.body_centre_of_mass += mass * y.position[b];
+      body_mass += mass;
+    }
+  }
+  out.potential_energy += spring_energy(state);
+  if (body_mass > 0) out.body_centre_of_mass /= body_mass;
+  out.islands = static_cast<int>(state.islands.size());
+  out.body_sleeping = true;
+  for (const RigidIsland& island : state.islands) {
+    out.islands_sleeping += island.sleeping;
+    const bool is_ball = island.bodies.size() == 1 && static_cast<std::int32_t>(island.bodies[0]) == state.ball;
+    if (!is_ball) out.body_sleeping = out.body_sleeping && island.sleeping;
   }
   return out;
 }

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include "kernel/springs/spring_state.hpp"
 #include "kernel/verlet/verlet_state.hpp"
 
 namespace limber {
@@ -27,6 +28,11 @@ struct Observation {
 
 template <typename Scalar>
 Observation observe(const VerletState<Scalar>& state);
+
+/// The same quantities for the stiff-spring method: joint gaps between the springs' anchor
+/// points (relative to the same lengths as the Verlet method's), no stretch (limbs are rigid),
+/// kinetic energy ½ m v² + ½ ω·L, and potential energy including the springs' ½ k |d|².
+Observation observe(const SpringState& state);
 
 extern template Observation observe<float>(const VerletState<float>&);
 extern template Observation observe<double>(const VerletState<double>&);

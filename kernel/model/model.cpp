@@ -103,6 +103,8 @@ void validate_joint(const Joint& joint, std::size_t body_count, std::size_t inde
   }
   require_finite(joint.inboard_anchor, path("inboard_anchor"));
   require_finite(joint.outboard_anchor, path("outboard_anchor"));
+  if (joint.stiffness) require_positive(*joint.stiffness, path("stiffness"));
+  if (joint.damping) require_non_negative(*joint.damping, path("damping"));
 }
 
 void validate_settings(const Settings& settings) {
@@ -117,6 +119,12 @@ void validate_settings(const Settings& settings) {
   require_non_negative(settings.relaxation.budget_us, "settings.relaxation.budget_us");
   require_in_range(settings.relaxation.over_relaxation, 0, 2, "settings.relaxation.over_relaxation",
                    /*low_open=*/true, /*high_open=*/true);
+  require_positive(settings.springs.stiffness, "settings.springs.stiffness");
+  require_non_negative(settings.springs.damping, "settings.springs.damping");
+  for (int axis = 0; axis < 3; ++axis) {
+    require_non_negative(settings.drag.linear[axis], [axis] { return indexed("settings.drag.linear", axis); });
+    require_non_negative(settings.drag.angular[axis], [axis] { return indexed("settings.drag.angular", axis); });
+  }
   require_non_negative(settings.sleep.speed_threshold, "settings.sleep.speed_threshold");
   require_non_negative(settings.sleep.time_to_sleep, "settings.sleep.time_to_sleep");
   if (settings.verlet.drag_factor) {

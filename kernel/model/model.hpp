@@ -91,7 +91,20 @@ struct Joint {
   int outboard = 0;                           ///< body index
   Vector3 inboard_anchor = Vector3::Zero();   ///< m, inboard body frame (world if inboard == kWorld)
   Vector3 outboard_anchor = Vector3::Zero();  ///< m, outboard body frame
+  /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset: Settings::springs.
+  std::optional<double> stiffness;  ///< N/m, > 0
+  std::optional<double> damping;    ///< N·s/m, ≥ 0
 };
+
+/// A spherical joint with the scene's spring settings (the common case, without naming every field).
+inline Joint spherical_joint(std::string name, int inboard, int outboard, const Vector3& inboard_anchor,
+                             const Vector3& outboard_anchor) {
+  Joint joint;
+  joint.name = std::move(name);
+  joint.inboard = inboard, joint.outboard = outboard;
+  joint.inboard_anchor = inboard_anchor, joint.outboard_anchor = outboard_anchor;
+  return joint;
+}
 
 /// The plane z = height, solid below. Coulomb friction and restitution against everything.
 struct Ground {
@@ -163,6 +176,22 @@ struct VerletSettings {
   std::optional<double> drag_factor;
 };
 
+/// The stiff-spring method (thesis 3.3, 4.4.1): each spherical joint becomes a zero-length
+/// spring with damping between its two anchor points, f = −k·d − c·ḋ (eq. 3.11 with damping),
+/// d the inboard anchor minus the outboard anchor. Joint::stiffness / damping override these.
+struct SpringSettings {
+  double stiffness = 2e4;  ///< k, N/m, > 0
+  double damping = 20;     ///< c, N·s/m, ≥ 0
+};
+
+/// Drag on rigid bodies (thesis 2.1.5, 2.1.6), in each body's frame (z: the limb's axis), so a
+/// limb can move more freely along its axis than across it: F_body = −diag(linear)·v_body and
+/// τ_body = −diag(angular)·ω_body. Used by the rigid-body methods; Settings::damping applies too.
+struct DragSettings {
+  Vector3 linear = Vector3::Zero();   ///< N·s/m along body x, y, z, ≥ 0
+  Vector3 angular = Vector3::Zero();  ///< N·m·s about body x, y, z, ≥ 0
+};
+
 struct Settings {
   Vector3 gravity{0, 0, -9.81};  ///< m/s²
   double time_step = 1.0 / 240;  ///< s, > 0
@@ -172,6 +201,8 @@ struct Settings {
   RelaxationSettings relaxation;
   SleepSettings sleep;
   VerletSettings verlet;
+  SpringSettings springs;
+  DragSettings drag;
   /// A particle faster than this is reported as divergence, m/s.
   double divergence_speed = 1000;
   /// Penetration that a step begins with (an initial overlap, a deep hit) is pushed out at most

@@ -53,8 +53,8 @@ Vector3 tail_anchor(double length) { return {0, 0, -0.5 * length}; }
 
 /// Joint `name` from the inboard body's tail to the outboard body's head (equal lengths).
 Joint tail_to_head(std::string name, std::size_t inboard, std::size_t outboard, double length) {
-  return {std::move(name), JointType::spherical, static_cast<int>(inboard), static_cast<int>(outboard),
-          tail_anchor(length), head_anchor(length)};
+  return spherical_joint(std::move(name), static_cast<int>(inboard), static_cast<int>(outboard),
+          tail_anchor(length), head_anchor(length));
 }
 
 /// Settings of a workload: sleeping would skip the work being measured.
@@ -88,7 +88,7 @@ Model make_chain_model(const ChainSpec& spec) {
     model.bodies.push_back(make_link("link_" + std::to_string(k), spec.anchor + double(k) * length * direction,
                                      direction, length, mass));
   }
-  if (spec.pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, spec.anchor, head_anchor(length)});
+  if (spec.pinned) model.joints.push_back(spherical_joint("pin", kWorld, 0, spec.anchor, head_anchor(length)));
   for (std::size_t k = 1; k < spec.links; ++k) model.joints.push_back(tail_to_head("joint_" + std::to_string(k), k - 1, k, length));
   return model;
 }
@@ -112,7 +112,7 @@ Model make_tree_model(const TreeSpec& spec) {
   model.bodies.reserve(spec.links);
   model.joints.reserve(spec.links);
   model.bodies.push_back(make_link("link_0", Vector3::Zero(), -Vector3::UnitZ(), length, spec.link_mass));
-  if (spec.pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, Vector3::Zero(), head_anchor(length)});
+  if (spec.pinned) model.joints.push_back(spherical_joint("pin", kWorld, 0, Vector3::Zero(), head_anchor(length)));
   for (std::size_t k = 1; k < spec.links; ++k) {
     const std::size_t parent = (k - 1) / spec.branching;
     const std::string suffix = std::to_string(k);
@@ -175,17 +175,17 @@ Model make_grid_model(const GridSpec& spec) {
       if (r + 1 < rows) ends[count++] = {vertical(r, c), true};
       const std::string node = "node_" + std::to_string(r) + "_" + std::to_string(c) + "_";
       for (std::size_t k = 1; k < count; ++k) {
-        model.joints.push_back({node + std::to_string(k), JointType::spherical, static_cast<int>(ends[0].body),
-                                static_cast<int>(ends[k].body), ends[0].head ? head : tail, ends[k].head ? head : tail});
+        model.joints.push_back(spherical_joint(node + std::to_string(k), static_cast<int>(ends[0].body),
+                                static_cast<int>(ends[k].body), ends[0].head ? head : tail, ends[k].head ? head : tail));
       }
     }
   }
   if (spec.pin_top_corners) {
     const std::size_t last = columns - 1;
-    model.joints.push_back({"pin_top_left", JointType::spherical, kWorld, static_cast<int>(horizontal(0, 0)),
-                            node_position(0, 0), head});
-    model.joints.push_back({"pin_top_right", JointType::spherical, kWorld, static_cast<int>(horizontal(0, last - 1)),
-                            node_position(0, last), tail});
+    model.joints.push_back(spherical_joint("pin_top_left", kWorld, static_cast<int>(horizontal(0, 0)),
+                            node_position(0, 0), head));
+    model.joints.push_back(spherical_joint("pin_top_right", kWorld, static_cast<int>(horizontal(0, last - 1)),
+                            node_position(0, last), tail));
   }
   return model;
 }

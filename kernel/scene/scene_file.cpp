@@ -30,7 +30,14 @@ std::string child(const std::string& path, const std::string& key) {
   return path.empty() ? key : path + "." + key;
 }
 
-std::string in_quotes(std::string_view text) { return "\"" + std::string(text) + "\""; }
+// Appended rather than `"\"" + std::string(text) + "\""`, which GCC 12 flags with a false
+// -Wrestrict (GCC bug 105329).
+std::string in_quotes(std::string_view text) {
+  std::string quoted(1, '"');
+  quoted.append(text);
+  quoted.push_back('"');
+  return quoted;
+}
 
 // ---- Typed values: each failure names the path and what was found instead.
 
@@ -148,7 +155,7 @@ class Object {
 
 Settings read_settings(const Object& object) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
-                     "contact_recovery_speed", "relaxation", "sleep", "verlet"});
+                     "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag"});
   Settings settings;
   settings.gravity = object.vector("gravity");
   settings.time_step = object.number("time_step");
@@ -189,9 +196,31 @@ Settings read_settings(const Object& object) {
     require_non_negative(target.time_to_sleep, sleep.path("time_to_sleep"));
   }
 
+  if (const Json* json = object.find("springs")) {
+    const Object springs(*json, object.path("springs"));
+    springs.allow_only({"stiffness", "damping"});
+    if (springs.find("stiffness")) {
+      settings.springs.stiffness = springs.number("stiffness");
+      require_positive(settings.springs.stiffness, springs.path("stiffness"));
+    }
+    if (springs.find("damping")) {
+      settings.springs.damping = springs.number("damping");
+      require_non_negative(settings.springs.damping, springs.path("damping"));
+    }
+  }
+  if (const Json* json = object.find("drag")) {
+    const Object drag(*json, object.path("drag"));
+    drag.allow_only({"linear", "angular"});
+    for (const char* key : {"linear", "angular"}) {
+      if (!drag.find(key)) continue;
+      const Vector3 coefficients = drag.vector(key);
+      for (int axis = 0; axis < 3; ++axis) require_non_negative(coefficients[axis], indexed(drag.path(key), axis));
+      (std::string_view(key) == "linear" ? settings.drag.linear : settings.drag.angular) = coefficients;
+    }
+  }
   if (const Json* json = object.find("verlet")) {
     const Object verlet(*json, object.path("verlet"));
-    verlet.allow_only({"joints", "drag_factor"});
+    verlet.allow_only({"joints", "limb_masses", "drag_factor"});
     if (verlet.find("joints")) {
       const std::string joints = verlet.string("joints");
       if (joints == "zero_length_constraint") {
@@ -201,6 +230,16 @@ Settings read_settings(const Object& object) {
       } else {
         fail(verlet.path("joints"),
              "must be \"zero_length_constraint\" or \"shared_particle\", got " + in_quotes(joints));
+      }
+    }
+    if (verlet.find("limb_masses")) {
+      const std::string limb_masses = verlet.string("limb_masses");
+      if (limb_masses == "ends") {
+        settings.verlet.limb_masses = LimbMasses::ends;
+      } else if (limb_masses == "inertia") {
+        settings.verlet.limb_masses = LimbMasses::inertia;
+      } else {
+        fail(verlet.path("limb_masses"), "must be \"ends\" or \"inertia\", got " + in_quotes(limb_masses));
       }
     }
     if (verlet.find("drag_factor")) {
@@ -274,12 +313,33 @@ void read_mass(const Object& object, BodySpec& spec, bool required) {
     require_positive(*spec.density, object.path("density"));
     spec.density_path = object.path("density");
   } else if (required) {
-    fail(object.path(), "missing required field \"mass\" (or \"density\")");
+    fail(object.path(), "missing required field \"mass\" (or \"density\" or \"point_masses\")");
   }
 }
 
+/// "point_masses": a non-empty array of {"position": [x, y, z] (m, body frame), "mass" (kg, > 0),
+/// "radius" (m, ≥ 0, optional, 0)}.
+std::vector<PointMass> read_point_masses(const Json& value, const std::string& path) {
+  if (!value.is_array()) wrong_type(value, path, "an array");
+  if (value.empty()) fail(path, "must list at least one point mass");
+  std::vector<PointMass> lumps;
+  lumps.reserve(value.size());
+  for (std::size_t k = 0; k < value.size(); ++k) {
+    const Object object(value[k], indexed(path, k));
+    object.allow_only({"position", "mass", "radius"});
+    PointMass lump;
+    lump.position = object.vector("position");
+    lump.mass = object.number("mass");
+    require_positive(lump.mass, object.path("mass"));
+    object.optional("radius", lump.radius);
+    require_non_negative(lump.radius, object.path("radius"));
+    lumps.push_back(lump);
+  }
+  return lumps;
+}
+
 BodySpec read_body(const Object& object) {
-  object.allow_only({"name", "shape", "mass", "density", "position", "axis", "linear_velocity",
+  object.allow_only({"name", "shape", "mass", "density", "point_masses", "position", "axis", "linear_velocity",
                      "angular_velocity"});
   BodySpec spec;
   Body& body = spec.body;
@@ -294,7 +354,16 @@ BodySpec read_body(const Object& object) {
   body.shape.radius = shape.number("radius");
   require_non_negative(body.shape.radius, shape.path("radius"));
 
-  read_mass(object, spec, /*required=*/true);
+  if (const Json* lumps = object.find("point_masses")) {
+    for (const char* other : {"mass", "density"}) {
+      if (object.find(other)) fail(object.path(), "give either \"point_masses\" or \"" + std::string(other) + "\", not both");
+    }
+    body.point_masses = read_point_masses(*lumps, object.path("point_masses"));
+    body.mass = 0;
+    for (const PointMass& lump : body.point_masses) body.mass += lump.mass;  // as validate() sums them
+  } else {
+    read_mass(object, spec, /*required=*/true);
+  }
   body.position = object.vector("position");
   body.axis = object.direction("axis");
   object.optional("linear_velocity", body.linear_velocity);
@@ -377,7 +446,7 @@ struct Override {
 using Variant = std::vector<Override>;
 
 std::vector<std::pair<std::string, Variant>> read_variants(
-    const Object& object, const std::unordered_map<std::string, int>& body_index) {
+    const Object& object, const std::unordered_map<std::string, int>& body_index, const std::vector<BodySpec>& bodies) {
   std::vector<std::pair<std::string, Variant>> variants;
   for (const auto& [name, json] : object.json().items()) {
     const Object variant(json, object.path(name));
@@ -395,6 +464,13 @@ std::vector<std::pair<std::string, Variant>> read_variants(
       }
       BodySpec scratch;  // checks the mass fields now, so an unused variant is still checked
       read_mass(override_object, scratch, /*required=*/false);
+      if (!bodies[body->second].body.point_masses.empty()) {
+        for (const char* key : {"mass", "density"}) {
+          if (!override_object.find(key)) continue;
+          fail(override_object.path(key), "body " + in_quotes(body_name) +
+                                              " gives \"point_masses\", whose sum is its mass; a variant may change only its \"radius\"");
+        }
+      }
       overrides.push_back(std::move(entry));
     }
     variants.emplace_back(name, std::move(overrides));
@@ -453,7 +529,7 @@ Vector3 read_anchor(const Json& value, const std::string& path, const Shape* sha
 
 Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
                  const std::unordered_map<std::string, int>& body_index) {
-  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor"});
+  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor", "stiffness", "damping"});
   Joint joint;
   joint.name = object.string("name");
   require_name(joint.name, object.path("name"), /*is_body=*/false);
@@ -484,6 +560,14 @@ Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
       read_anchor(object.at("inboard_anchor"), object.path("inboard_anchor"), inboard_shape);
   joint.outboard_anchor = read_anchor(object.at("outboard_anchor"), object.path("outboard_anchor"),
                                       &bodies[joint.outboard].body.shape);
+  if (object.find("stiffness")) {
+    joint.stiffness = object.number("stiffness");
+    require_positive(*joint.stiffness, object.path("stiffness"));
+  }
+  if (object.find("damping")) {
+    joint.damping = object.number("damping");
+    require_non_negative(*joint.damping, object.path("damping"));
+  }
   return joint;
 }
 
@@ -544,7 +628,7 @@ Model read_model(const Json& json, const SceneOptions& options) {
   // Variants change radii and masses before densities become masses.
   std::optional<std::vector<std::pair<std::string, Variant>>> variants;
   if (const Json* variants_json = root.find("variants"))
-    variants = read_variants(Object(*variants_json, "variants"), body_index);
+    variants = read_variants(Object(*variants_json, "variants"), body_index, bodies);
   if (const Variant* variant = select_variant(root, variants ? &*variants : nullptr, options))
     apply_variant(*variant, bodies);
   for (BodySpec& spec : bodies) {

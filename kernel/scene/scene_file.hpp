@@ -27,6 +27,8 @@
 //       "time_to_sleep": 0.5 },                (0.5) s, ≥ 0
 //     "verlet": {                              optional; each field optional
 //       "joints": "zero_length_constraint",    ("zero_length_constraint") or "shared_particle"
+//       "limb_masses": "ends",                 ("ends": half each end, the thesis) or "inertia": three
+//                                              particles keeping mass, centre of mass, transverse inertia
 //       "drag_factor": 1.99 } },               (absent) in (1, 2]
 //   "ground": { "height": 0, "restitution": 0.1, "friction": 0.6 },      optional object; all fields required;
 //                                              restitution in [0, 1], friction ≥ 0
@@ -41,8 +43,11 @@
 //       "name": "neck",                        required, unique, non-empty, not "world"
 //       "shape": { "type": "cylinder", "length": 0.05, "radius": 0.02 },
 //                                              required; type "cylinder" | "capsule"; length > 0; radius ≥ 0
-//       "mass": 2.268,                         exactly one of "mass" (kg, > 0) or
-//       "density": 1000,                       "density" (kg/m³, > 0; mass = density × volume(shape))
+//       "mass": 2.268,                         exactly one of "mass" (kg, > 0),
+//       "density": 1000,                       "density" (kg/m³, > 0; mass = density × volume(shape)) or
+//       "point_masses": [ {"position": [0, 0, 0.01], "mass": 1.2, "radius": 0.02}, ... ],
+//                                              lumps in the body frame (m; kg > 0; radius m ≥ 0, optional
+//                                              0; a solid sphere); mass = their sum (thesis eq. 4.1)
 //       "position": [0, 0, 1.02],              required, m, centre
 //       "axis": [0, 0, 1],                     required, non-zero (normalized), tail → head
 //       "linear_velocity": [0, 0, 0],          optional ([0,0,0]), m/s
@@ -68,7 +73,8 @@
 //   "variants": {                              optional: named sets of per-body overrides
 //       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
 //                                              each override may give "radius" and/or "mass" (or
-//                                              "density") for a body that exists
+//                                              "density") for a body that exists; only "radius"
+//                                              for a body with "point_masses" (their sum is its mass)
 //   "variant": "medium"                        required when "variants" is given: the default one
 // }
 //

@@ -7,6 +7,8 @@
 #include <span>
 #include <sstream>
 
+#include "kernel/mass/mass_properties.hpp"
+#include "kernel/model/checks.hpp"
 #include "kernel/relaxation/relaxation.hpp"
 #include "kernel/sleeping/sleeping.hpp"
 #include "layouts/graph/compressed_rows.hpp"
@@ -32,6 +34,57 @@ End anchor_end(const Model& model, std::size_t joint_index, bool inboard) {
           << "at their axis end points, \"head\" (0, 0, " << half << ") or \"tail\" (0, 0, " << -half << ") of body '"
           << body.name << "'; got (" << anchor.x() << ", " << anchor.y() << ", " << anchor.z() << ")";
   throw ModelError(message.str());
+}
+
+// A limb's own mass at each of its particles, kg.
+struct LimbParticleMasses {
+  double tail = 0, centre = 0, head = 0;
+};
+
+// LimbMasses::inertia (thesis 4.1: placing particle masses so that a link's mass, centre of mass
+// and inertia are reproduced). Masses at z = −h, 0, +h on the axis (h = L/2) solve
+//   m_tail + m_centre + m_head = m,   h·(m_head − m_tail) = m·c_z,   h²·(m_head + m_tail) = S,
+// with S = I_t + m·c_z² the second moment about a transverse axis through the limb's centre and
+// I_t the transverse inertia about the centre of mass (body_mass_properties). Points on the axis
+// have the same inertia about every transverse axis and none about the axis itself, so I_t is
+// the mean of I_xx and I_yy (exact for cylinders, capsules and lumps on the axis; for a limb
+// that is not axially symmetric the difference is lost), and the spin about the axis is not
+// represented — as with two particles. Throws ModelError, naming the body, for what three
+// positive masses on the axis cannot represent: a centre of mass off the axis, or S outside
+// (m·|c_z|·h, m·h²) (a disc-like cylinder, radius²/4 ≥ L²/6; a lump beyond an end; all the mass
+// at one point).
+LimbParticleMasses inertia_particle_masses(const Model& model, std::size_t index) {
+  using checks::format_number;
+  const Body& body = model.bodies[index];
+  std::ostringstream message;
+  message << "bodies[" << index << "] '" << body.name << "': limb_masses \"inertia\" needs ";
+  const MassProperties properties = body_mass_properties(body);
+  const Vector3& centre_of_mass = properties.centre_of_mass;
+  if (centre_of_mass.head<2>().norm() > 1e-9 * body.shape.length) {
+    message << "the centre of mass on the limb's axis (body-frame x = y = 0), got [" << format_number(centre_of_mass.x())
+            << ", " << format_number(centre_of_mass.y()) << ", " << format_number(centre_of_mass.z())
+            << "] m; move the point masses onto the axis or use limb_masses \"ends\"";
+    throw ModelError(message.str());
+  }
+  const double mass = body.mass, h = 0.5 * body.shape.length, c = centre_of_mass.z();
+  const double transverse_inertia = 0.5 * (properties.inertia(0, 0) + properties.inertia(1, 1));
+  const double second_moment = transverse_inertia + mass * c * c;
+  LimbParticleMasses masses;
+  masses.head = 0.5 * (second_moment / (h * h) + mass * c / h);
+  masses.tail = 0.5 * (second_moment / (h * h) - mass * c / h);
+  masses.centre = mass - masses.head - masses.tail;
+  const double smallest = 1e-12 * mass;  // a zero lost to rounding is still zero (w = 0 would pin it)
+  if (!(masses.head > smallest && masses.tail > smallest && masses.centre > smallest)) {
+    message << "its transverse second moment about its centre in (m |c_z| L/2, m L^2/4) = ("
+            << format_number(mass * std::abs(c) * h) << ", " << format_number(mass * h * h)
+            << ") kg m^2 for positive tail, centre and head masses, got " << format_number(second_moment)
+            << " kg m^2 (masses " << format_number(masses.tail) << ", " << format_number(masses.centre) << ", "
+            << format_number(masses.head) << " kg: "
+            << (masses.centre > smallest ? "its mass is too concentrated" : "it is too wide for its length")
+            << "); use limb_masses \"ends\"";
+    throw ModelError(message.str());
+  }
+  return masses;
 }
 
 std::uint32_t checked_index(std::size_t value) {
@@ -81,8 +134,8 @@ void renumber_particles(VerletState<Scalar>& state) {
     state.constraints.particle_i[c] = new_index[state.constraints.particle_i[c]];
     state.constraints.particle_j[c] = new_index[state.constraints.particle_j[c]];
   }
-  for (auto* list : {&state.limbs.head, &state.limbs.tail}) {
-    for (std::uint32_t& p : *list) p = new_index[p];
+  for (auto* list : {&state.limbs.head, &state.limbs.tail, &state.limbs.centre}) {
+    for (std::uint32_t& p : *list) p = p == kNoCentre ? p : new_index[p];
   }
   for (ContactFeature& feature : state.features) {
     feature.particle = new_index[feature.particle], feature.axis_partner = new_index[feature.axis_partner];
@@ -98,6 +151,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   const std::size_t body_count = model.bodies.size();
   const std::size_t joint_count = model.joints.size();
   const bool shared = model.settings.verlet.joints == ParticleJoints::shared_particle;
+  const bool centres = model.settings.verlet.limb_masses == LimbMasses::inertia;
   const double dt = model.settings.time_step;
 
   VerletState<Scalar> state;
@@ -106,21 +160,33 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.gravity = model.settings.gravity.cast<Scalar>();
   state.previous_time_step = dt;
 
-  // Slots: every place a particle may sit. Body b has its head at 2b and tail at 2b+1; each joint
-  // to the world has a pin slot after them. Shared-particle joints merge slots into one particle.
-  const std::size_t pin_slot_base = 2 * body_count;
+  // Each limb's mass at its particles: half at each end, or three masses that keep its inertia.
+  std::vector<LimbParticleMasses> limb_masses(body_count);
+  for (std::size_t b = 0; b < body_count; ++b) {
+    const double half = 0.5 * model.bodies[b].mass;
+    limb_masses[b] = centres ? inertia_particle_masses(model, b) : LimbParticleMasses{half, 0.0, half};
+  }
+
+  // Slots: every place a particle may sit. Body b has its head at slot s·b, its tail at s·b + 1
+  // and, with centre particles (s = 3; else s = 2), its centre at s·b + 2; each joint to the world
+  // has a pin slot after them. Shared-particle joints merge slots into one particle.
+  const std::uint32_t slots_per_body = centres ? 3 : 2;
+  const auto head_slot = [&](std::size_t b) { return checked_index(slots_per_body * b); };
+  const auto tail_slot = [&](std::size_t b) { return checked_index(slots_per_body * b + 1); };
+  const auto centre_slot = [&](std::size_t b) { return checked_index(slots_per_body * b + 2); };
+  const std::size_t pin_slot_base = slots_per_body * body_count;
   std::vector<std::uint32_t> joint_inboard_slot(joint_count), joint_outboard_slot(joint_count);
   std::vector<std::uint32_t> pin_slot_of_joint(joint_count, 0);
   std::size_t slot_count = pin_slot_base;
   for (std::size_t k = 0; k < joint_count; ++k) {
     const Joint& joint = model.joints[k];
     const End outboard_end = anchor_end(model, k, false);
-    joint_outboard_slot[k] = checked_index(2 * joint.outboard + (outboard_end == End::tail));
+    joint_outboard_slot[k] = outboard_end == End::tail ? tail_slot(joint.outboard) : head_slot(joint.outboard);
     if (joint.inboard == kWorld) {
       pin_slot_of_joint[k] = checked_index(slot_count++);
       joint_inboard_slot[k] = pin_slot_of_joint[k];
     } else {
-      joint_inboard_slot[k] = checked_index(2 * joint.inboard + (anchor_end(model, k, true) == End::tail));
+      joint_inboard_slot[k] = anchor_end(model, k, true) == End::tail ? tail_slot(joint.inboard) : head_slot(joint.inboard);
     }
   }
 
@@ -131,11 +197,17 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   for (std::size_t b = 0; b < body_count; ++b) {
     const Body& body = model.bodies[b];
     const Vector3 head_local(0, 0, 0.5 * body.shape.length);
-    slot_position[2 * b] = body.head();
-    slot_position[2 * b + 1] = body.tail();
-    slot_velocity[2 * b] = body.velocity_at(head_local);
-    slot_velocity[2 * b + 1] = body.velocity_at(-head_local);
-    slot_mass[2 * b] = slot_mass[2 * b + 1] = 0.5 * body.mass;
+    slot_position[head_slot(b)] = body.head();
+    slot_position[tail_slot(b)] = body.tail();
+    slot_velocity[head_slot(b)] = body.velocity_at(head_local);
+    slot_velocity[tail_slot(b)] = body.velocity_at(-head_local);
+    slot_mass[head_slot(b)] = limb_masses[b].head;
+    slot_mass[tail_slot(b)] = limb_masses[b].tail;
+    if (centres) {
+      slot_position[centre_slot(b)] = body.position;
+      slot_velocity[centre_slot(b)] = body.linear_velocity;
+      slot_mass[centre_slot(b)] = limb_masses[b].centre;
+    }
   }
   for (std::size_t k = 0; k < joint_count; ++k) {
     if (model.joints[k].inboard != kWorld) continue;
@@ -207,7 +279,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     return std::span<const std::uint32_t>(body_order.data() + island_begin[island], body_order.data() + island_begin[island + 1]);
   };
 
-  // Particles, island by island, body by body (pins first, then head, tail).
+  // Particles, island by island, body by body (pins first, then head, centre, tail).
   const std::uint32_t unassigned = std::numeric_limits<std::uint32_t>::max();
   std::vector<std::uint32_t> particle_of_root(slot_count, unassigned);
   std::vector<std::uint32_t> first_slot_of_particle;
@@ -222,8 +294,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   for (std::size_t island = 0; island < island_count; ++island) {
     for (std::uint32_t b : island_bodies(island)) {
       if (!shared) for (std::uint32_t k : world_joints.row(b)) assign(pin_slot_of_joint[k]);
-      assign(2 * b);
-      assign(2 * b + 1);
+      assign(head_slot(b));
+      if (centres) assign(centre_slot(b));
+      assign(tail_slot(b));
     }
     island_particle_end.push_back(checked_index(first_slot_of_particle.size()));
   }
@@ -260,7 +333,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   }
 
   // Constraints and limbs, island by island in the same breadth-first order: each body's tree
-  // joint (or world pins) before its link, so a sweep runs from the root outwards.
+  // joint (or world pins) before its link, so a sweep runs from the root outwards. A centre
+  // particle hangs on the half-length constraints head–centre and centre–tail; the head–tail
+  // link stays, so the limb's length does not depend on how well the centre has converged.
   std::vector<std::array<std::uint32_t, 2>> pairs;
   std::vector<double> rest;
   auto add_constraint = [&](std::uint32_t i, std::uint32_t j, double length) {
@@ -289,11 +364,20 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       for (std::uint32_t k : world_joints.row(b)) add_joint_constraint(k), joint_done[k] = true;
       if (tree_joint[b] >= 0) add_joint_constraint(static_cast<std::size_t>(tree_joint[b])), joint_done[tree_joint[b]] = true;
       const Body& body = model.bodies[b];
-      const std::uint32_t head = particle_of(2 * b), tail = particle_of(2 * b + 1);
+      const std::uint32_t head = particle_of(head_slot(b)), tail = particle_of(tail_slot(b));
+      const std::uint32_t centre = centres ? particle_of(centre_slot(b)) : kNoCentre;
       state.body_limb[b] = checked_index(state.limbs.size());
       state.limbs.head.push_back(head);
       state.limbs.tail.push_back(tail);
+      state.limbs.centre.push_back(centre);
       state.limbs.link_constraint.push_back(add_constraint(head, tail, body.shape.length));
+      if (centres) {
+        add_constraint(head, centre, 0.5 * body.shape.length);
+        add_constraint(centre, tail, 0.5 * body.shape.length);
+      }
+      state.limbs.head_mass.push_back(limb_masses[b].head);
+      state.limbs.centre_mass.push_back(limb_masses[b].centre);
+      state.limbs.tail_mass.push_back(limb_masses[b].tail);
       state.limbs.radius.push_back(body.shape.radius);
       state.limbs.shape.push_back(body.shape.type);
     }
@@ -321,8 +405,10 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.particle_origins.resize(particle_count);
   for (std::size_t p = 0; p < body_particle_count; ++p) {
     const std::uint32_t slot = first_slot_of_particle[p];
+    constexpr ParticleOrigin::Kind kind_of_slot[3] = {ParticleOrigin::Kind::limb_head, ParticleOrigin::Kind::limb_tail,
+                                                      ParticleOrigin::Kind::limb_centre};
     state.particle_origins[p] = slot < pin_slot_base
-        ? ParticleOrigin{slot / 2, slot % 2 ? ParticleOrigin::Kind::limb_tail : ParticleOrigin::Kind::limb_head}
+        ? ParticleOrigin{slot / slots_per_body, kind_of_slot[slot % slots_per_body]}
         : ParticleOrigin{joint_of_pin_slot[slot - pin_slot_base], ParticleOrigin::Kind::world_pin};
   }
 
@@ -348,18 +434,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   }
 
   // Planes and the features that can touch them — only when the scene has something to touch.
-  if (model.ground) {
-    state.planes.push_back({Eigen::Vector3d::UnitZ(), model.ground->height, model.ground->restitution,
-                            model.ground->friction});
-  }
-  if (model.bounds) {
-    const Bounds& box = *model.bounds;
-    for (int axis = 0; axis < 3; ++axis) {
-      const Eigen::Vector3d normal = Eigen::Vector3d::Unit(axis);
-      state.planes.push_back({normal, box.min[axis], box.restitution, box.friction});
-      state.planes.push_back({-normal, -box.max[axis], box.restitution, box.friction});
-    }
-  }
+  // A centre particle has none: the limb's surface is reached by its end features (a cylinder's
+  // rims, a capsule's end spheres), and the centre follows through its constraints.
+  state.planes = scene_planes(model);
   if (!state.planes.empty()) {
     for (Island& island : state.islands) {
       island.feature_begin = checked_index(state.features.size());
@@ -367,12 +444,12 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
         const bool disk = state.limbs.shape[limb] == ShapeType::cylinder;
         const double radius = state.limbs.radius[limb];
         const std::uint32_t head = state.limbs.head[limb], tail = state.limbs.tail[limb];
-        state.features.push_back({head, disk ? tail : head, radius, disk, 0.0});
-        state.features.push_back({tail, disk ? head : tail, radius, disk, 0.0});
+        state.features.push_back({head, disk ? tail : head, radius, disk, 0.0, limb});
+        state.features.push_back({tail, disk ? head : tail, radius, disk, 0.0, limb});
       }
       if (state.ball_island >= 0 && &island == &state.islands[state.ball_island]) {
         const auto p = static_cast<std::uint32_t>(state.ball_particle);
-        state.features.push_back({p, p, state.ball_radius, false, state.ball_restitution});
+        state.features.push_back({p, p, state.ball_radius, false, state.ball_restitution, kNoLimb});
       }
       island.feature_end = checked_index(state.features.size());
     }
@@ -381,9 +458,10 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   // Scratch with its final capacity: step() never allocates.
   state.plane_contacts.reserve(state.features.size() * state.planes.size());
   state.ball_contacts.reserve(has_ball ? state.limbs.size() : 0);
-  state.pending_forces.reserve(64);
+  state.pending_forces.reserve(3 * 64);  // apply_force: up to 64 forces, each over ≤ 3 particles
   state.awake_islands.reserve(state.islands.size());
-  state.contact_particles.reserve(2 * state.plane_contacts.capacity() + 3 * state.ball_contacts.capacity());
+  state.contact_particles.reserve(2 * state.plane_contacts.capacity() + 3 * state.ball_contacts.capacity() +
+                                  (centres ? 3 * state.limbs.size() : 0));
 
   // The thesis's standing humanoid: islands at rest start asleep and wait for a contact.
   for (Island& island : state.islands) {
@@ -403,6 +481,7 @@ std::string particle_name(const Model& model, const ParticleOrigin& origin) {
   switch (origin.kind) {
     case ParticleOrigin::Kind::limb_head: return model.bodies[origin.index].name + ".head";
     case ParticleOrigin::Kind::limb_tail: return model.bodies[origin.index].name + ".tail";
+    case ParticleOrigin::Kind::limb_centre: return model.bodies[origin.index].name + ".centre";
     case ParticleOrigin::Kind::world_pin: return model.joints[origin.index].name + ".pin";
     case ParticleOrigin::Kind::ball: return "ball";
   }

@@ -9,8 +9,21 @@
 namespace limber {
 
 /// Builds the Verlet state of `model` (thesis 3.2.5, 4.2.2):
-/// - each limb becomes two particles, its head and tail (the ends of its axis), each carrying
-///   half its mass, and a distance constraint of the limb's length between them;
+/// - each limb becomes two particles, its head and tail (the ends of its axis), joined by a
+///   distance constraint of the limb's length (its link constraint). Where its mass goes is
+///   settings.verlet.limb_masses (thesis 4.1):
+///   - ends: half at each end, the thesis's program, whatever the limb's point masses; the
+///     particle limb has the right mass and centre (for a uniform limb) but a uniform rod's
+///     transverse inertia m·L²/4 instead of m·L²/12, so it swings like a simple pendulum;
+///   - inertia: a third particle at the limb's centre, joined to the head and the tail by
+///     distance constraints of length L/2, and masses m_tail, m_centre, m_head at z = −L/2, 0,
+///     +L/2 that reproduce the limb's mass, centre of mass along the axis and inertia about a
+///     transverse axis (body_mass_properties, kernel/mass/mass_properties.hpp; the mean of
+///     I_xx and I_yy when they differ): a uniform rod gets m/6, 2m/3, m/6. This is the placement
+///     that honours Body::point_masses. Three collinear particles hold the centre on the axis
+///     only to second order, so step() also projects it onto the midpoint of head and tail after
+///     every sweep (step.hpp). The centre is never a joint anchor and has no contact feature:
+///     contacts push the ends, and the centre follows (collision/contacts.hpp);
 /// - a spherical joint becomes a zero-length distance constraint between the inboard limb's
 ///   anchor particle and the outboard's, or one shared particle when
 ///   settings.verlet.joints == shared_particle; a joint to the world pins a particle (w = 0);
@@ -21,11 +34,15 @@ namespace limber {
 /// - passes the scene does not need are left out: no contact features without a ground or
 ///   bounds, no ball contacts without a ball.
 /// Throws ModelError when the model is invalid or names something the particle method cannot
-/// represent (an anchor that is not an axis end point), naming the joint.
+/// represent: an anchor that is not an axis end point (naming the joint); with limb_masses
+/// inertia, a limb whose centre of mass is off its axis, or whose transverse inertia three
+/// positive masses on its axis cannot give — a cylinder with radius²/4 ≥ length²/6, mass beyond
+/// an end or all at one point (naming the body; "ends" represents every limb).
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options = {});
 
-/// A particle's name for outputs: "<body>.head", "<body>.tail", "<joint>.pin" or "ball".
+/// A particle's name for outputs: "<body>.head", "<body>.tail", "<body>.centre", "<joint>.pin"
+/// or "ball".
 /// `model` is the one the state was compiled from.
 std::string particle_name(const Model& model, const ParticleOrigin& origin);
 

@@ -53,11 +53,28 @@ void integrate(VerletState<Scalar>& state, double dt) {
   state.counters.particles_integrated += integrated;
 }
 
-// The particles this step's contacts move (for the interleaved layouts, which keep the
-// relaxation's positions outside state.particles).
+// Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
+// on their axes.
+template <typename Scalar>
+bool has_limb_centres(const VerletState<Scalar>& state) {
+  return state.limbs.size() > 0 && state.limbs.centre[0] != kNoCentre;
+}
+
+// The particles this step's contacts and limb-centre projections move (for the interleaved
+// layouts, which keep the relaxation's positions outside state.particles).
 template <typename Scalar>
 void collect_contact_particles(VerletState<Scalar>& state) {
   state.contact_particles.clear();
+  if (has_limb_centres(state)) {
+    for (std::uint32_t k : state.awake_islands) {
+      const Island& island = state.islands[k];
+      for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
+        state.contact_particles.push_back(state.limbs.head[limb]);
+        state.contact_particles.push_back(state.limbs.centre[limb]);
+        state.contact_particles.push_back(state.limbs.tail[limb]);
+      }
+    }
+  }
   for (const PlaneContact& contact : state.plane_contacts) {
     state.contact_particles.push_back(state.features[contact.feature].particle);
     state.contact_particles.push_back(state.features[contact.feature].axis_partner);
@@ -67,6 +84,46 @@ void collect_contact_particles(VerletState<Scalar>& state) {
     state.contact_particles.push_back(state.limbs.head[contact.limb]);
     state.contact_particles.push_back(state.limbs.tail[contact.limb]);
   }
+}
+
+// Puts each limb's centre particle back on the midpoint of its head and tail. The distance
+// constraints head–centre and centre–tail hold it there only to second order: three collinear
+// particles give them gradients along the axis alone, so a sideways offset e of the centre
+// violates them by ~e²/L and Gauss-Seidel pulls it back by ~e³/L² a sweep (a 1 m rod lying on
+// the ground sagged 12 mm at 100 sweeps). The linear constraint C = x_c − (x_h + x_t)/2 = 0 has
+// gradients E, −E/2, −E/2 and is solved in one projection, λ = C / (w_c + (w_h + w_t)/4),
+// Δx_c = −w_c·λ, Δx_h = Δx_t = +w·λ/2: momentum and angular momentum are kept (the impulses
+// −λ, λ/2, λ/2 sum to zero and their torque is −C × λ = 0). Run after every sweep, like the
+// contacts. With the unweighted rule every movable particle counts w = 1. Returns the largest
+// displacement, m.
+template <typename Scalar>
+double project_limb_centres(VerletState<Scalar>& state) {
+  auto& particles = state.particles;
+  const bool weighted = state.options.rule == RelaxationRule::weighted;
+  const auto inverse_mass = [&](std::uint32_t p) {
+    const double w = particles.inverse_mass[p];
+    return weighted || w == 0 ? w : 1.0;
+  };
+  double largest = 0;
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
+      const std::uint32_t head = state.limbs.head[limb], centre = state.limbs.centre[limb], tail = state.limbs.tail[limb];
+      const double w_head = inverse_mass(head), w_centre = inverse_mass(centre), w_tail = inverse_mass(tail);
+      const double denominator = w_centre + 0.25 * (w_head + w_tail);
+      if (denominator <= 0) continue;
+      const Eigen::Vector3d x_head = particles.position(head).template cast<double>();
+      const Eigen::Vector3d x_tail = particles.position(tail).template cast<double>();
+      const Eigen::Vector3d x_centre = particles.position(centre).template cast<double>();
+      const Eigen::Vector3d lambda = (x_centre - 0.5 * (x_head + x_tail)) / denominator;
+      const Eigen::Vector3d delta_centre = -w_centre * lambda;
+      particles.set_position(centre, (x_centre + delta_centre).template cast<Scalar>());
+      particles.set_position(head, (x_head + 0.5 * w_head * lambda).template cast<Scalar>());
+      particles.set_position(tail, (x_tail + 0.5 * w_tail * lambda).template cast<Scalar>());
+      largest = std::max({largest, delta_centre.norm(), 0.5 * std::max(w_head, w_tail) * lambda.norm()});
+    }
+  }
+  return largest;
 }
 
 }  // namespace
@@ -81,6 +138,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const FlushDenormals flush_denormals;
   const bool has_ball = state.ball_particle >= 0;
   const bool has_planes = !state.planes.empty();
+  const bool has_centres = has_limb_centres(state);
 
   integrate(state, dt);
   if (has_ball) detect_ball_contacts(state, dt);
@@ -92,15 +150,16 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const auto start = std::chrono::steady_clock::now();
   if (!state.awake_islands.empty()) {
     begin_relaxation(state);
-    const bool has_contacts = !state.plane_contacts.empty() || !state.ball_contacts.empty();
+    const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_centres;
     for (int iteration = 1; iteration <= relaxation.iterations; ++iteration) {
       // The first sweep starts from the unconstrained prediction, far from the solution;
       // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
       double largest = relaxation_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
-      if (interleaved && has_contacts) contact_particles_to_buffer(state);
+      if (interleaved && copies) contact_particles_to_buffer(state);
+      if (has_centres) largest = std::max(largest, project_limb_centres(state));
       if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
       if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
-      if (interleaved && has_contacts) contact_particles_from_buffer(state);
+      if (interleaved && copies) contact_particles_from_buffer(state);
       report.iterations = iteration;
       report.largest_correction = largest;
       report.stop = RelaxationStop::iterations;
@@ -129,9 +188,13 @@ StepReport step(VerletState<Scalar>& state, double dt) {
 template <typename Scalar>
 void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force) {
   const std::uint32_t limb = state.body_limb.at(static_cast<std::size_t>(body));
-  const Eigen::Vector3d half = 0.5 * force;
-  state.pending_forces.emplace_back(state.limbs.head[limb], half);
-  state.pending_forces.emplace_back(state.limbs.tail[limb], half);
+  const LimbBuffer& limbs = state.limbs;
+  const double mass = limbs.head_mass[limb] + limbs.centre_mass[limb] + limbs.tail_mass[limb];
+  state.pending_forces.emplace_back(limbs.head[limb], (limbs.head_mass[limb] / mass) * force);
+  state.pending_forces.emplace_back(limbs.tail[limb], (limbs.tail_mass[limb] / mass) * force);
+  if (limbs.centre[limb] != kNoCentre) {
+    state.pending_forces.emplace_back(limbs.centre[limb], (limbs.centre_mass[limb] / mass) * force);
+  }
   for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
     const Island& island = state.islands[k];
     if (limb >= island.limb_begin && limb < island.limb_end) wake_island(state, k);

@@ -11,9 +11,11 @@ namespace limber {
 ///                 scaled by Δt/Δt_previous when Δt changes (time-corrected Verlet);
 ///  2. collide     the ball against every limb (waking the islands it touches), then features
 ///                 against planes — skipped when the scene has neither;
-///  3. relax       Gauss-Seidel sweeps over joints and links, then contacts, until the
-///                 iteration count, the tolerance or the wall-clock budget stops it (3.2.3);
-///  4. restitution the velocity pass for contacts (eq. 2.33);
+///  3. relax       Gauss-Seidel sweeps over joints and links, then limb centres (LimbMasses::
+///                 inertia: each centre particle back onto its limb's axis), then contacts,
+///                 until the iteration count, the tolerance or the wall-clock budget stops it (3.2.3);
+///  4. restitution the velocity pass for contacts (eq. 2.33); a limb with a centre particle
+///                 answers as the rigid body its three particles make (collision/contacts.hpp);
 ///  5. sleep       still islands fall asleep; divergence is detected.
 /// Allocates nothing and never throws; a bad Δt or a divergence is reported in the result
 /// (also kept in state.last_report). Denormals are flushed to zero while it runs
@@ -27,8 +29,12 @@ StepReport step(VerletState<Scalar>& state) {
   return step(state, state.settings.time_step);
 }
 
-/// Applies `force` (N, world) at the centre of Model body `body` during the next step, split
-/// over the limb's two particles, and wakes its island. No allocation for up to 64 forces a step.
+/// Applies `force` (N, world) at the centre of mass of Model body `body`'s particles during the
+/// next step, and wakes its island. It is split over the limb's particles in proportion to the
+/// limb's mass at each, so each gets the same acceleration F/m and relaxation has nothing to
+/// correct: with LimbMasses::ends half at each end (the force acts at the limb's centre), with
+/// inertia over its three particles (it acts at the limb's centre of mass, the centre for a
+/// uniform limb). No allocation for up to 64 forces a step.
 template <typename Scalar>
 void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force);
 

@@ -10,7 +10,9 @@
 
 #include <Eigen/Core>
 
+#include "kernel/collision/geometry.hpp"
 #include "kernel/model/model.hpp"
+#include "kernel/model/step_status.hpp"
 #include "kernel/relaxation/relaxation_plan.hpp"
 #include "kernel/threading/block_runner.hpp"
 #include "layouts/aligned_array.hpp"
@@ -74,13 +76,6 @@ enum class RelaxationStop : std::uint8_t {
   idle,        ///< nothing awake to relax
 };
 
-/// Outcome of one step. step() never throws; divergence is reported here.
-enum class StepStatus : std::uint8_t {
-  ok,
-  diverged_non_finite,  ///< a position became NaN or infinite
-  diverged_speed,       ///< a particle exceeded Settings::divergence_speed
-  invalid_time_step,    ///< Δt was not a positive finite number; nothing was done
-};
 
 struct StepReport {
   StepStatus status = StepStatus::ok;
@@ -100,11 +95,22 @@ struct Island {
   double still_time = 0;  ///< s spent below the sleep speed threshold
 };
 
-/// Limbs as the particle method sees them (structure of arrays, cold: contact geometry and
-/// metrics). A limb is the segment head → tail with a cylinder or capsule around it.
+/// LimbBuffer::centre of a limb without a centre particle (LimbMasses::ends).
+inline constexpr std::uint32_t kNoCentre = 0xFFFFFFFF;
+/// ContactFeature::limb of the ball's feature.
+inline constexpr std::uint32_t kNoLimb = 0xFFFFFFFF;
+
+/// Limbs as the particle method sees them (structure of arrays, cold: contact geometry,
+/// applied forces and metrics). A limb is the segment head → tail with a cylinder or capsule
+/// around it; with LimbMasses::inertia a third particle sits at its centre, held at the
+/// midpoint by the half-length constraints head–centre and centre–tail (compile.hpp).
 struct LimbBuffer {
   std::vector<std::uint32_t> head, tail;      ///< particle indices
+  std::vector<std::uint32_t> centre;          ///< particle index, or kNoCentre
   std::vector<std::uint32_t> link_constraint; ///< index of its head–tail distance constraint
+  /// The limb's own mass at each particle, kg (a particle shared by a joint also carries the
+  /// other limb's share; centre_mass is 0 without a centre particle).
+  std::vector<double> head_mass, centre_mass, tail_mass;
   std::vector<double> radius;                 ///< m
   std::vector<ShapeType> shape;
   std::size_t size() const { return head.size(); }
@@ -119,14 +125,7 @@ struct ContactFeature {
   double radius = 0;
   bool is_disk = false;
   double restitution = 0;  ///< the feature's own (the ball's); a contact uses the larger of it and the plane's
-};
-
-/// A half-space n·x ≥ offset (ground, a wall of the bounds), solid where n·x < offset.
-struct Plane {
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
-  double offset = 0;
-  double restitution = 0;
-  double friction = 0;
+  std::uint32_t limb = kNoLimb;  ///< the limb it belongs to (LimbBuffer index), kNoLimb for the ball
 };
 
 /// Active contacts of the current step (capacity fixed at compile: no allocation in step()).
@@ -147,10 +146,10 @@ struct BallContact {
   double start_separation = 0;  ///< at the previous positions, m
 };
 
-/// What a particle stands for: a limb's head or tail (index: Model body), the world end of a
-/// joint to the world (index: Model joint), or the ball.
+/// What a particle stands for: a limb's head, tail or centre (index: Model body), the world end
+/// of a joint to the world (index: Model joint), or the ball.
 struct ParticleOrigin {
-  enum class Kind : std::uint8_t { limb_head, limb_tail, world_pin, ball };
+  enum class Kind : std::uint8_t { limb_head, limb_tail, limb_centre, world_pin, ball };
   std::uint32_t index = 0;
   Kind kind = Kind::limb_head;
 };

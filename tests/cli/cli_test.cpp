@@ -91,6 +91,40 @@ TEST(Cli, RunsJacobiAndTheSequentialSweep) {
     EXPECT_EQ(r.code, 0) << r.err;
   }
 }
+TEST(Cli, SpringMethodsRunEveryShippedScene) {
+  for (const std::string& method : {"springs-explicit", "springs-implicit"}) {
+    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+      const Result r = run({"run", scene(file), "--method", method, "--steps", "200"});
+      ASSERT_EQ(r.code, kSuccess) << method << " " << file << ": " << r.err;
+      EXPECT_THAT(r.out, HasSubstr("rigid limbs joined by stiff springs")) << file;
+      EXPECT_THAT(r.out, HasSubstr("status      ok")) << file;
+    }
+  }
+  const Result r = run({"run", "--method", "springs-explicit", "--integrator", "rk4", "--stiffness", "3e4", "--damping", "40", "--steps", "50"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("RK4"));
+  EXPECT_THAT(r.out, HasSubstr("stiffness 30000 N/m, damping 40 N s/m"));
+}
+
+TEST(Cli, SpringsWriteHeadAndTailColumns) {
+  const std::string path = ::testing::TempDir() + "/limber_springs.csv";
+  const Result r = run({"run", scene("chain.json"), "--method", "springs-implicit", "--steps", "5", "--out", path});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  std::ifstream csv(path);
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_THAT(header, HasSubstr("link_0.head_x"));
+  EXPECT_EQ(std::count(header.begin(), header.end(), ','), 3 * 2 * 5);
+}
+
+TEST(Cli, RejectsVerletFlagsWithSprings) { expect_rejected({"run", "--method", "springs-explicit", "--sweep", "sequential"}, "--sweep"); }
+TEST(Cli, RejectsSpringFlagsWithVerlet) { expect_rejected({"run", "--stiffness", "1e5"}, "--stiffness"); }
+TEST(Cli, RejectsFloatSprings) { expect_rejected({"run", "--method", "springs-implicit", "--precision", "float"}, "double"); }
+TEST(Cli, RejectsExplicitIntegratorWithImplicitSprings) {
+  expect_rejected({"run", "--method", "springs-implicit", "--integrator", "rk4"}, "backward-euler");
+}
+TEST(Cli, RejectsNegativeStiffness) { expect_rejected({"run", "--method", "springs-explicit", "--stiffness", "-5"}, "--stiffness: must be > 0"); }
+
 TEST(Cli, RejectsSequentialJacobi) { expect_rejected({"run", "--sweep", "sequential", "--solver", "jacobi"}, "--sweep"); }
 TEST(Cli, RejectsUnknownLayout) { expect_rejected({"run", "--layout", "soaos"}, "soaos"); }
 TEST(Cli, RejectsNegativeThreads) { expect_rejected({"run", "--threads", "-2"}, "--threads"); }

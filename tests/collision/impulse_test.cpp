@@ -403,5 +403,40 @@ TEST(CoulombFriction, FrozenSlidingDirectionCanGainEnergyWhenKCouplesNormalAndTa
   EXPECT_GT(gained, trials / 50);
 }
 
+TEST(CoulombFriction, SequentialImpulsesNeverGainEnergyAtAnyFriction) {
+  // Normal, then friction along the remaining sliding direction: each impulse is along one
+  // direction and at most (1 + e) times what stops motion along it, so energy cannot rise — on
+  // the same random impacts where the coupled model above gains.
+  Random random(25);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Impact impact = random_impact(random);
+    const double before = kinetic_energy(impact);
+    const double restitution = random.uniform(0, 1), friction = trial % 2 ? 1.0 : 0.3;
+    const CollisionImpulse response =
+        sequential_collision_impulse(impact.a.state, impact.b.state, impact.point, impact.normal, restitution, friction);
+    const Vector3d tangential = response.impulse - response.normal_impulse * impact.normal;
+    EXPECT_LE(tangential.norm(), friction * response.normal_impulse * (1 + 1e-12));
+    apply(impact, response.impulse);
+    EXPECT_LE(kinetic_energy(impact), before * (1 + 1e-12));
+  }
+}
+
+TEST(CoulombFriction, SequentialImpulsesStopSlidingOnTheGroundWithEnoughFriction) {
+  // A sphere sliding on the ground: K does not couple n and t, so high friction makes the contact
+  // point stick and the normal velocity is −e times before.
+  ImpulseBody ball;
+  ball.inverse_mass = 0.5;
+  ball.inverse_inertia = Eigen::Matrix3d::Identity() / (0.4 * 2 * 0.01);
+  ball.centre_of_mass = Vector3d(0, 0, 0.1);
+  ball.linear_velocity = Vector3d(3, 1, -2);
+  const Vector3d point(0, 0, 0), normal = Vector3d::UnitZ();
+  const CollisionImpulse response = sequential_collision_impulse(ball, ground(), point, normal, 0.5, 2.0);
+  apply_impulse(ball, point, response.impulse);
+  const Vector3d after = velocity_at(ball, point);
+  EXPECT_NEAR(after.z(), 1.0, 1e-12);
+  EXPECT_LT(after.head<2>().norm(), 1e-12);
+  EXPECT_FALSE(response.sliding);
+}
+
 }  // namespace
 }  // namespace limber

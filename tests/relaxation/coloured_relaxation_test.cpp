@@ -54,8 +54,8 @@ Model mixed_scene() {
   branch.name = "branch";
   branch.position += Vector3(0, 0, -0.05);
   model.bodies.push_back(branch);
-  model.joints.push_back({"branch_joint", JointType::spherical, 2, static_cast<int>(model.bodies.size() - 1),
-                          Vector3(0, 0, -0.05), Vector3(0, 0, 0.05)});
+  model.joints.push_back(spherical_joint("branch_joint", 2, static_cast<int>(model.bodies.size() - 1),
+                          Vector3(0, 0, -0.05), Vector3(0, 0, 0.05)));
   model.settings.relaxation.iterations = 15;
   return model;
 }

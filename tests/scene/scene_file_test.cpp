@@ -154,7 +154,7 @@ TEST(SceneErrors, MassAndDensityTogetherAreRejected) {
 
 TEST(SceneErrors, NeitherMassNorDensityNamesBoth) {
   EXPECT_EQ(pendulum_error(R"("mass": 2,)", ""),
-            "test.json: bodies[0]: missing required field \"mass\" (or \"density\")");
+            "test.json: bodies[0]: missing required field \"mass\" (or \"density\" or \"point_masses\")");
 }
 
 TEST(SceneErrors, UnknownShapeTypeIsRejected) {
@@ -409,6 +409,101 @@ TEST(SceneLoading, OmittedOptionalFieldsKeepTheModelDefaults) {
   EXPECT_EQ(model.settings.sleep.time_to_sleep, defaults.sleep.time_to_sleep);
   EXPECT_FALSE(model.settings.verlet.drag_factor.has_value());
   EXPECT_EQ(model.bodies[0].linear_velocity, Vector3::Zero());
+}
+
+// "upper" of kPendulum with its 2 kg given as two lumps instead.
+constexpr std::string_view kLumps =
+    R"("point_masses": [{"position": [0, 0, 0.1], "mass": 1.5, "radius": 0.02}, {"position": [0, 0, -0.15], "mass": 0.5}],)";
+
+TEST(SceneLoading, PointMassesAreReadAndTheirSumIsTheMass) {
+  const Model model = load_scene_text(with(kPendulum, R"("mass": 2,)", kLumps), "test.json");
+  const Body& upper = model.bodies[0];
+  ASSERT_EQ(upper.point_masses.size(), 2u);
+  EXPECT_EQ(upper.point_masses[0].position, Vector3(0, 0, 0.1));
+  EXPECT_EQ(upper.point_masses[0].mass, 1.5);
+  EXPECT_EQ(upper.point_masses[0].radius, 0.02);
+  EXPECT_EQ(upper.point_masses[1].radius, 0.0);  // optional, a point
+  EXPECT_EQ(upper.mass, 2.0);
+  EXPECT_TRUE(model.bodies[1].point_masses.empty());  // "density": uniform
+}
+
+TEST(SceneErrors, BadPointMassesAreNamedByTheirPath) {
+  const std::string lumps(kLumps);
+  const auto lumps_error = [&](std::string_view from, std::string_view to) {
+    return load_error(with(kPendulum, R"("mass": 2,)", with(lumps, from, to)));
+  };
+  EXPECT_EQ(lumps_error(R"("mass": 0.5)", R"("mass": -1)"), "test.json: bodies[0].point_masses[1].mass: must be > 0, got -1");
+  EXPECT_EQ(lumps_error(R"("radius": 0.02)", R"("radius": -0.02)"),
+            "test.json: bodies[0].point_masses[0].radius: must be >= 0, got -0.02");
+  EXPECT_EQ(lumps_error(R"("position": [0, 0, -0.15], )", ""),
+            "test.json: bodies[0].point_masses[1].position: missing required field");
+  EXPECT_EQ(lumps_error(R"("mass": 0.5})", R"("mass": 0.5, "inertia": 1})"),
+            "test.json: bodies[0].point_masses[1]: unknown field \"inertia\"");
+  EXPECT_EQ(lumps_error(R"([0, 0, -0.15])", R"([0, -0.15])"),
+            "test.json: bodies[0].point_masses[1].position: must be an array of 3 numbers, got an array of 2");
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("point_masses": [],)"),
+            "test.json: bodies[0].point_masses: must list at least one point mass");
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", R"("point_masses": {"mass": 2},)"),
+            "test.json: bodies[0].point_masses: must be an array, got object");
+  EXPECT_EQ(pendulum_error(R"("mass": 2,)", std::string(kLumps) + R"( "mass": 2,)"),
+            "test.json: bodies[0]: give either \"point_masses\" or \"mass\", not both");
+  EXPECT_EQ(pendulum_error(R"("density": 1000,)", std::string(kLumps) + R"( "density": 1000,)"),
+            "test.json: bodies[1]: give either \"point_masses\" or \"density\", not both");
+}
+
+TEST(SceneErrors, VariantsCannotChangeTheMassOfABodyWithPointMasses) {
+  // Its mass is the sum of its lumps; a variant may still change its radius.
+  const std::string scene = with(with(kPendulum, R"("mass": 2,)", kLumps), R"(  "joints": [)", R"(  "variants": {
+    "fat": {"upper": {"radius": 0.05}}, "heavy": {"upper": {"mass": 7}}},
+  "variant": "fat",
+  "joints": [)");
+  EXPECT_EQ(load_error(scene),
+            "test.json: variants.heavy.upper.mass: body \"upper\" gives \"point_masses\", whose sum is its mass; a "
+            "variant may change only its \"radius\"");
+  const std::string fat_only = with(scene, R"(, "heavy": {"upper": {"mass": 7}})", "");
+  const Model fat = load_scene_text(fat_only, "test.json");
+  EXPECT_EQ(fat.bodies[0].shape.radius, 0.05);
+  EXPECT_EQ(fat.bodies[0].mass, 2.0);
+}
+
+TEST(SceneLoading, LimbMassesSettingIsReadAndCheckedByName) {
+  EXPECT_EQ(load_scene_text(kPendulum, "test.json").settings.verlet.limb_masses, LimbMasses::ends);
+  const auto with_limb_masses = [](std::string_view value) {
+    return with(kPendulum, R"("duration": 1)", R"("duration": 1, "verlet": {"limb_masses": )" + std::string(value) + "}");
+  };
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("inertia")"), "test.json").settings.verlet.limb_masses,
+            LimbMasses::inertia);
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("ends")"), "test.json").settings.verlet.limb_masses, LimbMasses::ends);
+  EXPECT_EQ(load_error(with_limb_masses(R"("centre")")),
+            "test.json: settings.verlet.limb_masses: must be \"ends\" or \"inertia\", got \"centre\"");
+  EXPECT_EQ(load_error(with_limb_masses("3")), "test.json: settings.verlet.limb_masses: must be a string, got number");
+}
+
+// ---- The spring method's settings (issue 4)
+
+TEST(SceneSprings, StiffnessAndDampingAreReadPerSceneAndPerJoint) {
+  const Model model = load_scene_text(
+      with(with(kPendulum, R"("duration": 1})", R"("duration": 1, "springs": {"stiffness": 5e4, "damping": 7},
+                                                   "drag": {"linear": [1, 2, 3], "angular": [0, 0, 0.5]}})"),
+           R"("inboard_anchor": "tail", "outboard_anchor": "head"})",
+           R"("inboard_anchor": "tail", "outboard_anchor": "head", "stiffness": 9e5, "damping": 0})"),
+      "test.json");
+  EXPECT_EQ(model.settings.springs.stiffness, 5e4);
+  EXPECT_EQ(model.settings.springs.damping, 7);
+  EXPECT_EQ(model.settings.drag.linear, Vector3(1, 2, 3));
+  EXPECT_EQ(model.settings.drag.angular, Vector3(0, 0, 0.5));
+  EXPECT_FALSE(model.joints[0].stiffness.has_value());
+  EXPECT_EQ(model.joints[1].stiffness, 9e5);
+  EXPECT_EQ(model.joints[1].damping, 0.0);
+}
+
+TEST(SceneSprings, BadSpringValuesAreNamed) {
+  EXPECT_EQ(pendulum_error(R"("duration": 1})", R"("duration": 1, "springs": {"stiffness": -3}})"),
+            "test.json: settings.springs.stiffness: must be > 0, got -3");
+  EXPECT_EQ(pendulum_error(R"("outboard_anchor": "head"},)", R"("outboard_anchor": "head", "damping": -1},)"),
+            "test.json: joints[0].damping: must be >= 0, got -1");
+  EXPECT_EQ(pendulum_error(R"("duration": 1})", R"("duration": 1, "drag": {"angular": [0, -2, 0]}})"),
+            "test.json: settings.drag.angular[1]: must be >= 0, got -2");
 }
 
 }  // namespace

@@ -31,10 +31,9 @@ inline Model make_chain(const std::vector<double>& masses, double link_length, b
     model.bodies.push_back(body);
   }
   const Vector3 head(0, 0, 0.5 * link_length), tail(0, 0, -0.5 * link_length);
-  if (pinned) model.joints.push_back({"pin", JointType::spherical, kWorld, 0, start, head});
+  if (pinned) model.joints.push_back(spherical_joint("pin", kWorld, 0, start, head));
   for (std::size_t k = 1; k < masses.size(); ++k) {
-    model.joints.push_back({"joint_" + std::to_string(k), JointType::spherical, static_cast<int>(k - 1),
-                            static_cast<int>(k), tail, head});
+    model.joints.push_back(spherical_joint("joint_" + std::to_string(k), static_cast<int>(k - 1), static_cast<int>(k), tail, head));
   }
   model.settings.sleep.enabled = false;
   return model;

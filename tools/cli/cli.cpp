@@ -16,6 +16,8 @@
 #include "kernel/metrics/observers.hpp"
 #include "kernel/model/model.hpp"
 #include "kernel/scene/scene_file.hpp"
+#include "kernel/springs/compile.hpp"
+#include "kernel/springs/step.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
 #include "layouts/graph/constraint_colouring.hpp"
@@ -51,17 +53,47 @@ struct RunFlags {
   std::string ordering = "depth-parity";
   int threads = 0;
   bool scalar = false;
+  double stiffness = 0, damping = 0;
+  std::string integrator, linear_solver = "ldlt";
 
   CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
       *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
-      *tolerance_option, *budget_option, *over_relaxation_option, *out_option;
+      *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
+      *integrator_option, *linear_solver_option;
+  std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
+
+  bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
 };
+
+bool given(const CLI::Option* option) { return option->count() > 0; }
+
+double checked(const CLI::Option* option, double value, bool (*accept)(double), const char* expectation) {
+  if (!std::isfinite(value) || !accept(value)) {
+    throw InputError(format("%s: must be %s, got %g", option->get_name().c_str(), expectation, value));
+  }
+  return value;
+}
+bool positive(double v) { return v > 0; }
+bool non_negative(double v) { return v >= 0; }
+bool unit_interval(double v) { return v >= 0 && v <= 1; }
 
 void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("scene", flags.scene, "Scene file (JSON); default: the embedded humanoid (tools/scenes/humanoid.json)");
-  run.add_option("--method", flags.method, "Relaxation rule: weighted (thesis eq. 4.7) or unweighted (eq. 4.6)")
-      ->check(CLI::IsMember({"weighted", "unweighted"}))
+  run.add_option("--method", flags.method,
+                 "weighted or unweighted relaxation (Verlet, thesis eq. 4.7 / 4.6), or springs-explicit / "
+                 "springs-implicit (rigid limbs joined by stiff springs, thesis 4.4.1)")
+      ->check(CLI::IsMember({"weighted", "unweighted", "springs-explicit", "springs-implicit"}))
       ->capture_default_str();
+  flags.stiffness_option = run.add_option("--stiffness", flags.stiffness, "Springs: joint stiffness k for every joint, N/m");
+  flags.damping_option = run.add_option("--damping", flags.damping, "Springs: joint damping c for every joint, N s/m");
+  flags.integrator_option =
+      run.add_option("--integrator", flags.integrator,
+                     "Springs: euler, semi-implicit (default) , rk2 or rk4 with springs-explicit; backward-euler with "
+                     "springs-implicit")
+          ->check(CLI::IsMember({"euler", "semi-implicit", "rk2", "rk4", "backward-euler"}));
+  flags.linear_solver_option =
+      run.add_option("--linear-solver", flags.linear_solver, "springs-implicit: ldlt (sparse, exact) or cg (conjugate gradient)")
+          ->check(CLI::IsMember({"ldlt", "cg"}));
   run.add_option("--precision", flags.precision, "Scalar type of the state: float or double")
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
@@ -107,10 +139,42 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"depth-parity", "breadth-first", "rcm", "shuffled"}))
       ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
+  for (const char* name : {"--iterations", "--tolerance", "--budget-us", "--over-relaxation", "--solver", "--sweep", "--pinned",
+                           "--threads", "--threading", "--layout", "--ordering", "--scalar"}) {
+    flags.verlet_only_options.push_back(run.get_option(name));
+  }
+}
+
+// The SpringOptions the flags ask for; flags of the other method family are errors.
+SpringOptions spring_options(const RunFlags& flags) {
+  for (const CLI::Option* option : flags.verlet_only_options) {
+    if (option->count() > 0) throw InputError(option->get_name() + ": applies to the Verlet methods (weighted, unweighted), not --method " + flags.method);
+  }
+  if (flags.precision == "float") throw InputError("--precision float: the spring methods run in double only");
+  SpringOptions options;
+  const bool implicit = flags.method == "springs-implicit";
+  const std::string integrator = flags.integrator_option->count() ? flags.integrator : implicit ? "backward-euler" : "semi-implicit";
+  if (implicit != (integrator == "backward-euler")) {
+    throw InputError("--integrator " + integrator + ": " +
+                     (implicit ? "springs-implicit integrates with backward-euler" : "springs-explicit takes euler, semi-implicit, rk2 or rk4"));
+  }
+  options.integrator = integrator == "euler"            ? SpringIntegrator::euler
+                       : integrator == "rk2"            ? SpringIntegrator::rk2
+                       : integrator == "rk4"            ? SpringIntegrator::rk4
+                       : integrator == "backward-euler" ? SpringIntegrator::backward_euler
+                                                        : SpringIntegrator::semi_implicit_euler;
+  if (flags.linear_solver_option->count() && !implicit) throw InputError("--linear-solver: applies to springs-implicit only");
+  options.linear_solver = flags.linear_solver == "cg" ? SpringLinearSolver::conjugate_gradient : SpringLinearSolver::ldlt;
+  if (given(flags.stiffness_option)) options.stiffness = checked(flags.stiffness_option, flags.stiffness, positive, "> 0");
+  if (given(flags.damping_option)) options.damping = checked(flags.damping_option, flags.damping, non_negative, ">= 0");
+  return options;
 }
 
 // The VerletOptions the flags ask for; a combination the sequential sweep cannot run is an error.
 VerletOptions verlet_options(const RunFlags& flags) {
+  for (const CLI::Option* option : {flags.stiffness_option, flags.damping_option, flags.integrator_option, flags.linear_solver_option}) {
+    if (option->count() > 0) throw InputError(option->get_name() + ": applies to the spring methods (springs-explicit, springs-implicit), not --method " + flags.method);
+  }
   VerletOptions options;
   options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
   options.solver = flags.solver == "jacobi" ? RelaxationSolver::jacobi : RelaxationSolver::gauss_seidel;
@@ -133,18 +197,6 @@ VerletOptions verlet_options(const RunFlags& flags) {
   }
   return options;
 }
-
-bool given(const CLI::Option* option) { return option->count() > 0; }
-
-double checked(const CLI::Option* option, double value, bool (*accept)(double), const char* expectation) {
-  if (!std::isfinite(value) || !accept(value)) {
-    throw InputError(format("%s: must be %s, got %g", option->get_name().c_str(), expectation, value));
-  }
-  return value;
-}
-bool positive(double v) { return v > 0; }
-bool non_negative(double v) { return v >= 0; }
-bool unit_interval(double v) { return v >= 0 && v <= 1; }
 
 // Applies the flags that change the model, each checked and named in its error.
 void apply_overrides(Model& model, const RunFlags& flags) {
@@ -213,6 +265,8 @@ const char* status_name(StepStatus status) {
 }
 std::string vector_text(const Eigen::Vector3d& v) { return format("(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z()); }
 
+// --- What each method family shows the run loop and the summary ---
+
 template <typename Scalar>
 void write_csv_header(std::ostream& csv, const Model& model, const VerletState<Scalar>& state) {
   csv << "time";
@@ -234,6 +288,41 @@ void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
   }
   csv << '\n';
 }
+
+// The spring methods write each limb's head and tail (the particle methods' names) and the ball.
+void write_csv_header(std::ostream& csv, const Model& model, const SpringState&) {
+  csv << "time";
+  for (const Body& body : model.bodies) {
+    for (const char* end : {".head", ".tail"}) csv << ',' << body.name << end << "_x," << body.name << end << "_y," << body.name << end << "_z";
+  }
+  if (model.ball) csv << ",ball_x,ball_y,ball_z";
+  csv << '\n';
+}
+void write_csv_row(std::ostream& csv, const SpringState& state) {
+  char cell[96];
+  std::snprintf(cell, sizeof cell, "%.9g", state.time);
+  csv << cell;
+  auto write = [&](const Eigen::Vector3d& x) {
+    std::snprintf(cell, sizeof cell, ",%.9g,%.9g,%.9g", x.x(), x.y(), x.z());
+    csv << cell;
+  };
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    if (state.shapes.is_ball[b]) continue;
+    const double half = 0.5 * state.shapes.length[b];
+    write(world_point(state, b, Eigen::Vector3d(0, 0, half)));
+    write(world_point(state, b, Eigen::Vector3d(0, 0, -half)));
+  }
+  if (state.ball >= 0) write(state.bodies.state.position[state.ball]);
+  csv << '\n';
+}
+
+template <typename Scalar>
+bool has_joint_gaps(const VerletState<Scalar>& state) { return !state.joint_constraints.empty(); }
+bool has_joint_gaps(const SpringState& state) { return state.springs.size() > 0; }
+
+template <typename Scalar>
+bool ball_touching(const VerletState<Scalar>& state) { return !state.ball_contacts.empty(); }
+bool ball_touching(const SpringState& state) { return state.ball_touching; }
 
 const char* layout_name(ParticleLayout layout) {
   switch (layout) {
@@ -270,11 +359,104 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
                 flags.scalar ? "scalar" : "SIMD", layout_name(state.plan.layout), threading.c_str());
 }
 
-// Runs the model and prints the summary; returns the exit code.
-template <typename Scalar>
-int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
-  VerletState<Scalar> state = compile<Scalar>(model, verlet_options(flags));
+// What a run measured, for the summary.
+struct RunRecord {
+  Observation start, end;
+  double largest_gap = 0, largest_stretch = 0, wall_seconds = 0;
+  long steps_done = 0;
+  std::array<long, 4> relaxation_stops{};
+  std::vector<std::string> sleep_events;
+  StepStatus status = StepStatus::ok;
+};
 
+// Steps `state` `steps` times (stopping at a divergence), observing after every step.
+template <typename State>
+RunRecord run_steps(State& state, long steps, std::ofstream& csv, KnockMeter& knock) {
+  RunRecord record;
+  record.start = record.end = observe(state);
+  record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
+  bool body_sleeping = record.start.body_sleeping;
+  for (; record.steps_done < steps;) {
+    const auto before = std::chrono::steady_clock::now();
+    const auto report = step(state);
+    record.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
+    ++record.steps_done;
+    if constexpr (requires { report.stop; }) ++record.relaxation_stops[static_cast<int>(report.stop)];
+    record.end = observe(state);
+    knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
+    record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
+    record.largest_stretch = std::max(record.largest_stretch, record.end.max_link_stretch);
+    if (record.end.body_sleeping != body_sleeping && record.sleep_events.size() < 8) {
+      record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
+    }
+    body_sleeping = record.end.body_sleeping;
+    if (csv.is_open()) write_csv_row(csv, state);
+    record.status = report.status;
+    if (report.status != StepStatus::ok) break;
+  }
+  return record;
+}
+
+// The method's own lines: what it is, how the model became its state, how it solved.
+template <typename Scalar>
+void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, const VerletState<Scalar>& state, const RunRecord& record) {
+  out << format("method      %s relaxation (Verlet), %s precision\n", flags.method.c_str(), flags.precision.c_str());
+  out << format("model       %zu limbs, %zu joints%s%s%s; %zu particles, %zu constraints, %zu island%s\n",
+                model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
+                model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size(),
+                state.islands.size() == 1 ? "" : "s");
+  out << solver_line(flags, state);
+  out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
+                model.settings.time_step, state.time, record.wall_seconds,
+                record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
+  out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
+                model.settings.relaxation.iterations, model.settings.relaxation.over_relaxation,
+                model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+  for (int k = 0; k < 4; ++k) {
+    if (record.relaxation_stops[k]) out << format(" %s %ld", stop_name(static_cast<RelaxationStop>(k)), record.relaxation_stops[k]);
+  }
+  out << "\n";
+}
+
+const char* integrator_name(SpringIntegrator integrator) {
+  switch (integrator) {
+    case SpringIntegrator::euler: return "forward Euler";
+    case SpringIntegrator::semi_implicit_euler: return "semi-implicit Euler";
+    case SpringIntegrator::rk2: return "RK2 (midpoint)";
+    case SpringIntegrator::rk4: return "RK4";
+    case SpringIntegrator::backward_euler: return "linearized backward Euler";
+  }
+  return "?";
+}
+
+void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, const SpringState& state, const RunRecord& record) {
+  out << format("method      %s: rigid limbs joined by stiff springs, %s, double precision\n", flags.method.c_str(),
+                integrator_name(state.options.integrator));
+  double k_min = INFINITY, k_max = 0, c_min = INFINITY, c_max = 0;
+  for (std::size_t s = 0; s < state.springs.size(); ++s) {
+    k_min = std::min(k_min, state.springs.stiffness[s]), k_max = std::max(k_max, state.springs.stiffness[s]);
+    c_min = std::min(c_min, state.springs.damping[s]), c_max = std::max(c_max, state.springs.damping[s]);
+  }
+  const std::string range = state.springs.size() == 0 ? std::string("no springs")
+      : k_min == k_max && c_min == c_max ? format("stiffness %g N/m, damping %g N s/m", k_min, c_min)
+                                         : format("stiffness %g..%g N/m, damping %g..%g N s/m", k_min, k_max, c_min, c_max);
+  out << format("model       %zu limbs, %zu joints%s%s%s; %zu rigid bodies, %zu springs (%s), %zu island%s\n",
+                model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
+                model.ball ? ", ball" : "", state.bodies.size(), state.springs.size(), range.c_str(), state.islands.size(),
+                state.islands.size() == 1 ? "" : "s");
+  if (state.options.integrator == SpringIntegrator::backward_euler) {
+    out << format("solver      sparse %s over %zu unknowns\n",
+                  state.options.linear_solver == SpringLinearSolver::ldlt ? "LDLT (AMD ordering)" : "conjugate gradient (Jacobi)",
+                  6 * state.bodies.size());
+  }
+  out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
+                model.settings.time_step, state.time, record.wall_seconds,
+                record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
+}
+
+// Runs the model under the flags' method and prints the summary; returns the exit code.
+template <typename State>
+int simulate(State& state, const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
   const double dt = model.settings.time_step;
   const long steps = given(flags.steps_option) ? flags.steps : std::max(1L, std::lround(model.settings.duration / dt));
   std::ofstream csv;
@@ -284,62 +466,23 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
     write_csv_header(csv, model, state);
     write_csv_row(csv, state);
   }
-
   const Observation start = observe(state);
-  double largest_gap = start.max_joint_gap, largest_stretch = start.max_link_stretch;
-  std::array<long, 4> stops{};
-  std::vector<std::string> sleep_events;
-  bool body_sleeping = start.body_sleeping;
   KnockMeter knock(model.ball ? model.ball->velocity : Eigen::Vector3d::UnitX(), start.body_centre_of_mass);
-  double wall_seconds = 0;
-  long steps_done = 0;
-  StepReport report;
-  Observation end = start;
-  for (; steps_done < steps; ++steps_done) {
-    const auto before = std::chrono::steady_clock::now();
-    report = step(state);
-    wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
-    ++stops[static_cast<int>(report.stop)];
-    end = observe(state);
-    knock.update(end.time, !state.ball_contacts.empty(), end.body_centre_of_mass);
-    largest_gap = std::max(largest_gap, end.max_joint_gap);
-    largest_stretch = std::max(largest_stretch, end.max_link_stretch);
-    if (end.body_sleeping != body_sleeping && sleep_events.size() < 8) {
-      sleep_events.push_back(format("%s at t = %.3f s", end.body_sleeping ? "asleep" : "woke", end.time));
-    }
-    body_sleeping = end.body_sleeping;
-    if (csv.is_open()) write_csv_row(csv, state);
-    if (report.status != StepStatus::ok) {
-      ++steps_done;
-      break;
-    }
-  }
+  const RunRecord record = run_steps(state, steps, csv, knock);
+  const Observation& end = record.end;
 
-  std::size_t joints = state.joint_constraints.size();
   out << "limber run: " << model.name << " (" << source << ")\n";
-  out << format("method      %s relaxation (Verlet), %s precision\n", flags.method.c_str(), flags.precision.c_str());
-  out << format("model       %zu limbs, %zu joints%s%s%s; %zu particles, %zu constraints, %zu island%s\n",
-                model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size(),
-                state.islands.size() == 1 ? "" : "s");
-  out << solver_line(flags, state);
-  out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", steps_done, dt,
-                state.time, wall_seconds, wall_seconds > 0 ? steps_done / wall_seconds : 0.0);
-  out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
-                model.settings.relaxation.iterations, model.settings.relaxation.over_relaxation,
-                model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
-  for (int k = 0; k < 4; ++k) {
-    if (stops[k]) out << format(" %s %ld", stop_name(static_cast<RelaxationStop>(k)), stops[k]);
-  }
-  out << "\n";
-  if (joints > 0) {
+  method_lines(out, model, flags, state, record);
+  if (has_joint_gaps(state)) {
     out << format("joint gap   final max %.3g, rms %.3g; largest in run %.3g (relative to link length)\n",
-                  end.max_joint_gap, end.rms_joint_gap, largest_gap);
+                  end.max_joint_gap, end.rms_joint_gap, record.largest_gap);
   } else {
     out << "joint gap   none (shared-particle joints or no joints)\n";
   }
-  out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
-                largest_stretch);
+  if (!flags.springs()) {
+    out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
+                  record.largest_stretch);
+  }
   const Eigen::Vector3d travel = end.body_centre_of_mass - start.body_centre_of_mass;
   out << format("body        centre of mass %s -> %s m; travelled %.4g m horizontally\n",
                 vector_text(start.body_centre_of_mass).c_str(), vector_text(end.body_centre_of_mass).c_str(),
@@ -353,10 +496,23 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   out << format("momentum    %s -> %s kg m/s\n", vector_text(start.linear_momentum).c_str(),
                 vector_text(end.linear_momentum).c_str());
   out << "sleeping    body " << (start.body_sleeping ? "asleep" : "awake") << " at start";
-  for (const std::string& event : sleep_events) out << "; " << event;
+  for (const std::string& event : record.sleep_events) out << "; " << event;
   out << "; " << (end.body_sleeping ? "asleep" : "awake") << " at end\n";
-  out << "status      " << status_name(report.status) << "\n";
-  return report.status == StepStatus::ok ? kSuccess : kDiverged;
+  out << "status      " << status_name(record.status) << "\n";
+  return record.status == StepStatus::ok ? kSuccess : kDiverged;
+}
+
+int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
+  if (flags.springs()) {
+    SpringState state = compile_springs(model, spring_options(flags));
+    return simulate(state, model, flags, source, out);
+  }
+  if (flags.precision == "float") {
+    VerletState<float> state = compile<float>(model, verlet_options(flags));
+    return simulate(state, model, flags, source, out);
+  }
+  VerletState<double> state = compile<double>(model, verlet_options(flags));
+  return simulate(state, model, flags, source, out);
 }
 
 }  // namespace
@@ -386,8 +542,7 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
                            : load_scene_file(flags.scene, scene_options);
     apply_overrides(model, flags);
     const std::string source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
-    return flags.precision == "float" ? simulate<float>(model, flags, source, out)
-                                      : simulate<double>(model, flags, source, out);
+    return simulate(model, flags, source, out);
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
   } catch (const InputError& error) {

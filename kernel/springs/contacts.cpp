@@ -1,0 +1,152 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/springs/contacts.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/collision/bounding_volumes.hpp"
+#include "kernel/collision/geometry.hpp"
+#include "kernel/collision/impulses.hpp"
+#include "kernel/springs/compile.hpp"
+
+namespace limber {
+namespace {
+
+bool awake(const SpringState& state, std::int32_t body) {
+  return body >= 0 && !state.islands[state.island_of_body[body]].sleeping;
+}
+
+// The limb's axis end points (head: +length/2 along its axis) in world.
+std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const SpringState& state, std::size_t b) {
+  const double half = 0.5 * state.shapes.length[b];
+  return {world_point(state, b, Eigen::Vector3d(0, 0, half)), world_point(state, b, Eigen::Vector3d(0, 0, -half))};
+}
+
+void add_plane_contacts(SpringState& state, std::size_t b, std::size_t plane_index) {
+  const Plane& plane = state.planes[plane_index];
+  const double radius = state.shapes.radius[b];
+  const auto [head, tail] = head_and_tail(state, b);
+  const bool disk = state.shapes.shape[b] == ShapeType::cylinder && !state.shapes.is_ball[b];
+  const Eigen::Vector3d axis = head - tail;
+  const double length = axis.norm();
+  const int ends = length > 0 ? 2 : 1;
+  for (int e = 0; e < ends; ++e) {
+    const Eigen::Vector3d centre = e == 0 ? head : tail;
+    Eigen::Vector3d lowest = centre - radius * plane.normal;
+    if (disk && length > 0) {
+      // The rim point farthest into the plane: along −(n − (n·u)u); a disk lying flat touches
+      // with its whole rim, represented by its centre.
+      const Eigen::Vector3d u = axis / length;
+      const Eigen::Vector3d across = plane.normal - plane.normal.dot(u) * u;
+      const double across_length = across.norm();
+      lowest = across_length > 1e-9 ? Eigen::Vector3d(centre - radius * across / across_length) : centre;
+    }
+    const double depth = plane.offset - plane.normal.dot(lowest);
+    if (depth <= 0) continue;
+    const double restitution = state.shapes.is_ball[b] ? std::max(plane.restitution, state.ball_restitution) : plane.restitution;
+    state.contacts.push_back({static_cast<std::int32_t>(b), -1, lowest + 0.5 * depth * plane.normal, plane.normal, depth,
+                              restitution, plane.friction});
+  }
+}
+
+ImpulseBody impulse_body(const SpringState& state, std::int32_t b) {
+  ImpulseBody body;
+  body.inverse_mass = 0;
+  body.inverse_inertia.setZero();
+  body.centre_of_mass.setZero();
+  body.linear_velocity.setZero();
+  body.angular_velocity.setZero();
+  if (b < 0) return body;
+  const RigidBodyState& y = state.bodies.state;
+  body.inverse_mass = state.bodies.inverse_mass[b];
+  body.inverse_inertia = state.bodies.world_inverse_inertia(y, b);
+  body.centre_of_mass = y.position[b];
+  body.linear_velocity = state.bodies.linear_velocity(y, b);
+  body.angular_velocity = body.inverse_inertia * y.angular_momentum[b];
+  return body;
+}
+
+void store_velocities(SpringState& state, std::int32_t b, const ImpulseBody& body) {
+  if (b < 0) return;
+  RigidBodyState& y = state.bodies.state;
+  y.linear_momentum[b] = state.bodies.mass[b] * body.linear_velocity;
+  y.angular_momentum[b] = state.bodies.world_inertia(y, b) * body.angular_velocity;
+}
+
+}  // namespace
+
+void detect_rigid_contacts(SpringState& state) {
+  state.contacts.clear();
+  state.ball_touching = false;
+  const std::size_t body_count = state.bodies.size();
+  const RigidBodyState& y = state.bodies.state;
+  if (state.ball >= 0) {
+    const std::size_t ball = static_cast<std::size_t>(state.ball);
+    const Eigen::Vector3d centre = y.position[ball];
+    const double ball_radius = state.shapes.radius[ball];
+    for (std::size_t b = 0; b < body_count; ++b) {
+      if (b == ball) continue;
+      // Bounding spheres first (thesis 2.4); the exact closest point only when they overlap.
+      const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
+      const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
+      if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
+      const auto [head, tail] = head_and_tail(state, b);
+      const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
+      if (contact.separation >= 0) continue;
+      const auto island = state.island_of_body[b];
+      if (state.islands[island].sleeping) state.islands[island].sleeping = false, state.islands[island].still_time = 0;
+      state.ball_touching = true;
+      const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
+      state.contacts.push_back({state.ball, static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
+                                state.ball_restitution, 0.0});
+    }
+  }
+  for (std::size_t b = 0; b < body_count; ++b) {
+    if (!awake(state, static_cast<std::int32_t>(b))) continue;
+    for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
+  }
+}
+
+void resolve_rigid_contacts(SpringState& state, double dt) {
+  if (state.contacts.empty()) return;
+  const double resting_speed = 2 * state.settings.gravity.norm() * dt;
+  // Approach speeds before any impulse: they decide bouncing and bound the position correction.
+  for (RigidContact& contact : state.contacts) {
+    const ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
+    const double approach = -(velocity_at(a, contact.point) - velocity_at(b, contact.point)).dot(contact.normal);
+    if (approach < resting_speed) contact.restitution = 0;
+    contact.approach_speed = std::max(approach, 0.0);
+  }
+  for (int pass = 0; pass < state.options.contact_iterations; ++pass) {
+    for (const RigidContact& contact : state.contacts) {
+      ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
+      const CollisionImpulse response = sequential_collision_impulse(a, b, contact.point, contact.normal, contact.restitution, contact.friction);
+      if (response.normal_impulse <= 0) continue;
+      apply_impulse(a, contact.point, response.impulse);
+      apply_impulse(b, contact.point, -response.impulse);
+      store_velocities(state, contact.a, a);
+      store_velocities(state, contact.b, b);
+    }
+  }
+  // Push out what still overlaps, through the effective mass along the normal.
+  RigidBodyState& y = state.bodies.state;
+  for (const RigidContact& contact : state.contacts) {
+    const double correction = std::min(contact.depth, (contact.approach_speed + state.settings.contact_recovery_speed) * dt);
+    if (correction <= 0) continue;
+    const ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
+    const double effective_inverse_mass = contact.normal.dot(collision_matrix(a, b, contact.point) * contact.normal);
+    if (!(effective_inverse_mass > 0)) continue;
+    const Eigen::Vector3d push = correction / effective_inverse_mass * contact.normal;
+    auto move = [&](std::int32_t body, const ImpulseBody& view, const Eigen::Vector3d& amount) {
+      if (body < 0) return;
+      y.position[body] += view.inverse_mass * amount;
+      const Eigen::Vector3d turn = view.inverse_inertia * (contact.point - view.centre_of_mass).cross(amount);
+      y.orientation[body] = (rotation_quaternion(turn) * y.orientation[body]).normalized();
+    };
+    move(contact.a, a, push);
+    move(contact.b, b, -push);
+  }
+}
+
+}  // namespace limber

@@ -1,0 +1,29 @@
+// Contacts of the rigid-body methods (thesis 2.3–2.5): limbs and the ball against the ground
+// and the bounds' walls, and the ball against the limbs, answered with impulses.
+//
+// Detection runs after the bodies moved (the thesis's loop, figure 2.5: move, then collide):
+// - a cylinder's end disk touches a plane at its lowest rim point, a capsule's end cap and the
+//   ball at their lowest sphere point — up to two contacts per limb and plane;
+// - the ball against a limb: bounding spheres first, and the exact sphere–capsule or
+//   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4).
+// Response (kernel/collision/impulses.hpp, sequential_collision_impulse): sequential impulses with
+// restitution (eq. 2.32–2.37, the full inertia tensor) and Coulomb friction, normal then
+// tangent, which never gain energy; a few passes so touching contacts settle;
+// approach speeds below 2|g|Δt bounce with e = 0 so resting contacts stay at rest. Then the
+// remaining overlap is removed by a position change through the same effective mass (the
+// contact point moves out by the depth, shared by inverse mass and inertia), at most the step's
+// own approach plus Settings::contact_recovery_speed·Δt, so an initial overlap is not flung out.
+#pragma once
+
+#include "kernel/springs/spring_state.hpp"
+
+namespace limber {
+
+/// Finds the contacts of the awake bodies at the current state into state.contacts, wakes the
+/// islands the ball touches and sets state.ball_touching.
+void detect_rigid_contacts(SpringState& state);
+
+/// Impulses and position correction for state.contacts; dt is the step's.
+void resolve_rigid_contacts(SpringState& state, double dt);
+
+}  // namespace limber

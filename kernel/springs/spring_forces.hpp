@@ -1,0 +1,35 @@
+// Forces of the stiff-spring method: gravity, drag and the joints' springs (thesis 3.3, 4.4.1).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "kernel/springs/spring_state.hpp"
+
+namespace limber {
+
+/// Spring s's two ends at state y, world frame: d = p_inboard − p_outboard (m), its rate
+/// ḋ (m/s), and each end's lever from its body's centre of mass (m; zero for a world anchor).
+struct SpringEnds {
+  Eigen::Vector3d separation = Eigen::Vector3d::Zero(), separation_rate = Eigen::Vector3d::Zero();
+  Eigen::Vector3d inboard_lever = Eigen::Vector3d::Zero(), outboard_lever = Eigen::Vector3d::Zero();
+};
+
+/// Needs state.velocity and state.angular_velocity filled for y (body_velocities()).
+SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s);
+
+/// Fills state.velocity / state.angular_velocity (v = P/m, ω = I_world⁻¹ L) for state y.
+void body_velocities(SpringState& state, const RigidBodyState& y);
+
+/// Adds, for every awake body at state y: gravity m·g; drag (Settings::drag in the body frame,
+/// and Settings::damping as −damping·m·v and −damping·I·ω); and every spring's force
+/// f = −k·d − c·ḋ on its inboard end and −f on its outboard end, with torques r × f.
+/// Calls body_velocities(state, y) first.
+void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces& forces);
+
+/// Spring s's d = p_inboard − p_outboard at state y, m (no velocities needed).
+Eigen::Vector3d spring_separation(const SpringState& state, const RigidBodyState& y, std::size_t s);
+
+/// Potential energy stored in the springs at the current state, Σ ½ k |d|², J.
+double spring_energy(const SpringState& state);
+
+}  // namespace limber
