@@ -8,11 +8,9 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/knock.hpp"
-#include "kernel/metrics/observers.hpp"
 #include "kernel/springs/compile.hpp"
 #include "kernel/springs/step.hpp"
-#include "tests/support/models.hpp"
+#include "tests/support/knock.hpp"
 
 namespace limber {
 namespace {
@@ -25,22 +23,12 @@ const SpringOptions kIntegrators[] = {
 };
 
 double knock(const SpringOptions& options, const std::string& variant, const std::function<void(Ball&)>& adjust_ball) {
-  Model model = testing::load_shipped_scene("humanoid.json", {.variant = variant, .links = {}});
-  adjust_ball(*model.ball);
-  SpringState state = compile_springs(model, options);
-  KnockMeter meter(model.ball->velocity, observe(state).body_centre_of_mass);
-  while (!meter.finished(state.time)) {
-    EXPECT_EQ(step(state).status, StepStatus::ok);
-    meter.update(state.time, state.ball_touching, observe(state).body_centre_of_mass);
-    if (state.time > model.settings.duration) {
-      ADD_FAILURE() << "the ball never reached the body";
-      break;
-    }
-  }
-  return meter.distance();
+  return testing::humanoid_knock(
+      variant, adjust_ball, [&](const Model& model) { return compile_springs(model, options); },
+      [](const SpringState& state) { return state.ball_touching; });
 }
 
-void set_speed(Ball& ball, double speed) { ball.velocity = speed * ball.velocity.normalized(); }
+void set_speed(Ball& ball, double speed) { testing::set_ball_speed(ball, speed); }
 
 TEST(SpringHumanoid, FasterBallKnocksTheBodyFarther) {  // figure 4.11
   for (const SpringOptions& options : kIntegrators) {

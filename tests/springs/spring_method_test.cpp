@@ -300,3 +300,32 @@ TEST(SpringAgreement, RigidRodOnAStiffSpringSwingsLikeThePhysicalPendulumAndTheI
 
 }  // namespace
 }  // namespace limber
+
+namespace limber {
+namespace {
+
+TEST(SpringDrag, DragActsInTheLimbsOwnFrame) {  // thesis 2.1.5, 2.1.6
+  // A free limb lying along x, no gravity, drag only across its axis: moving along its axis it
+  // keeps its speed; moving across it, its speed decays as exp(−c t / m).
+  for (const bool along : {true, false}) {
+    Model model;
+    model.name = "drag";
+    Body body;
+    body.name = "limb";
+    body.shape = {ShapeType::capsule, 0.5, 0.02};
+    body.mass = 2;
+    body.axis = Vector3::UnitX();
+    body.linear_velocity = along ? Vector3(3, 0, 0) : Vector3(0, 3, 0);
+    model.bodies.push_back(body);
+    model.settings.gravity.setZero();
+    model.settings.sleep.enabled = false;
+    model.settings.drag.linear = Vector3(4, 4, 0);  // N·s/m across the axis (body x, y), none along it (z)
+    SpringState state = compile_springs(model, {.integrator = SpringIntegrator::rk4});
+    for (int s = 0; s < 1000; ++s) step(state, 1e-3);
+    const double speed = state.bodies.state.linear_momentum[0].norm() / 2;
+    EXPECT_NEAR(speed, along ? 3.0 : 3.0 * std::exp(-4.0 * 1.0 / 2.0), 1e-6) << (along ? "along" : "across");
+  }
+}
+
+}  // namespace
+}  // namespace limber

@@ -10,32 +10,20 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/knock.hpp"
-#include "kernel/metrics/observers.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
-#include "tests/support/models.hpp"
+#include "tests/support/knock.hpp"
 
 namespace limber {
 namespace {
 
 double knock(const std::string& variant, const std::function<void(Ball&)>& adjust_ball) {
-  Model model = testing::load_shipped_scene("humanoid.json", {.variant = variant, .links = {}});
-  adjust_ball(*model.ball);
-  auto state = compile<double>(model);
-  KnockMeter meter(model.ball->velocity, observe(state).body_centre_of_mass);
-  while (!meter.finished(state.time)) {
-    EXPECT_EQ(step(state).status, StepStatus::ok);
-    meter.update(state.time, !state.ball_contacts.empty(), observe(state).body_centre_of_mass);
-    if (state.time > model.settings.duration) {
-      ADD_FAILURE() << "the ball never reached the body";
-      break;
-    }
-  }
-  return meter.distance();
+  return testing::humanoid_knock(
+      variant, adjust_ball, [](const Model& model) { return compile<double>(model); },
+      [](const VerletState<double>& state) { return !state.ball_contacts.empty(); });
 }
 
-void set_speed(Ball& ball, double speed) { ball.velocity = speed * ball.velocity.normalized(); }
+void set_speed(Ball& ball, double speed) { testing::set_ball_speed(ball, speed); }
 
 TEST(Humanoid, FasterBallKnocksTheBodyFarther) {  // figure 4.11
   for (const char* body : {"thin", "medium", "wide"}) {
