@@ -112,7 +112,7 @@ CollisionImpulse collision_impulse(const ImpulseBody& a, const ImpulseBody& b, c
 /// the kinetic energy by −(s − s²/2)(d·v)²/(dᵀK d) ≤ 0 for s ∈ [0, 2]: unlike the coupled model
 /// above, it never gains energy, at any μ. The price: when K couples n and t (an off-centre
 /// contact), the friction impulse slightly changes the normal velocity it follows. Used by the
-/// rigid-body methods' contacts (kernel/springs/contacts.hpp). Same conventions and returns as
+/// rigid-body methods' contacts (kernel/collision/rigid_contacts.hpp). Same conventions and returns as
 /// collision_impulse.
 CollisionImpulse sequential_collision_impulse(const ImpulseBody& a, const ImpulseBody& b, const Eigen::Vector3d& point,
                                               const Eigen::Vector3d& normal, double restitution, double friction);

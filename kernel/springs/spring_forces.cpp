@@ -4,13 +4,6 @@
 
 namespace limber {
 
-void body_velocities(SpringState& state, const RigidBodyState& y) {
-  for (std::size_t b = 0; b < y.size(); ++b) {
-    state.velocity[b] = state.bodies.linear_velocity(y, b);
-    state.angular_velocity[b] = state.bodies.angular_velocity(y, b);
-  }
-}
-
 SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s) {
   const SpringBuffer& springs = state.springs;
   SpringEnds ends;

@@ -17,9 +17,6 @@ struct SpringEnds {
 /// Needs state.velocity and state.angular_velocity filled for y (body_velocities()).
 SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s);
 
-/// Fills state.velocity / state.angular_velocity (v = P/m, ω = I_world⁻¹ L) for state y.
-void body_velocities(SpringState& state, const RigidBodyState& y);
-
 /// Adds, for every awake body at state y: gravity m·g; drag (Settings::drag in the body frame,
 /// and Settings::damping as −damping·m·v and −damping·I·ω); and every spring's force
 /// f = −k·d − c·ḋ on its inboard end and −f on its outboard end, with torques r × f.

@@ -15,10 +15,10 @@
 #include <Eigen/SparseCore>
 #include <Eigen/IterativeLinearSolvers>
 
-#include "kernel/collision/geometry.hpp"
 #include "kernel/model/model.hpp"
 #include "kernel/model/step_status.hpp"
 #include "kernel/rigid/rigid_integration.hpp"
+#include "kernel/rigid/rigid_scene.hpp"
 #include "layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
@@ -49,7 +49,6 @@ struct SpringOptions {
   /// Backward Euler: 1 is the linearized step (eq. 3.16–3.22); each further iteration is a
   /// Newton step on the nonlinear equations with the same matrix (implicit_step.hpp).
   int newton_iterations = 2;
-  int contact_iterations = 8;       ///< passes of sequential impulses over the step's contacts
 };
 
 /// The springs, one per Model joint, one array per field. A world anchor has body −1 and its
@@ -62,34 +61,6 @@ struct SpringBuffer {
   std::vector<double> damping;           ///< c, N·s/m
   std::vector<double> reference_length;  ///< what the joint gap is measured against (as the Verlet method's), m
   std::size_t size() const { return stiffness.size(); }
-};
-
-/// The limbs' geometry for contacts, per body (the ball is the last body when there is one).
-struct RigidShapes {
-  std::vector<ShapeType> shape;
-  std::vector<double> length, radius;           ///< m (the ball: length 0, its radius)
-  std::vector<Eigen::Vector3d> centre_offset;   ///< centre of mass in the Model's body frame (shape-centred), m
-  /// Rotation from the rigid body's frame (its principal axes) to the Model's body frame: a
-  /// Model body-frame point p is at x + q·principal_frame⁻¹·(p − centre_offset) in world.
-  std::vector<Eigen::Quaterniond> principal_frame;
-  std::vector<bool> is_ball;
-};
-
-/// Bodies joined by springs, simulated, put to sleep and woken together (thesis 4.5.3).
-struct RigidIsland {
-  std::vector<std::uint32_t> bodies;
-  bool sleeping = false;
-  double still_time = 0;  ///< s below the sleep threshold
-};
-
-/// A contact found this step: body `a` touches body `b` (−1: a plane, immovable), normal from b
-/// to a, depth ≥ 0.
-struct RigidContact {
-  std::int32_t a = 0, b = -1;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
-  double depth = 0;
-  double restitution = 0, friction = 0;
-  double approach_speed = 0;  ///< normal speed towards each other before the impulses, m/s, ≥ 0
 };
 
 struct SpringStepReport {
@@ -113,26 +84,13 @@ struct ImplicitSystem {
   Eigen::ConjugateGradient<Eigen::SparseMatrix<double>, Eigen::Lower> conjugate_gradient;
 };
 
-struct SpringState {
-  RigidBodyBuffer bodies;
-  RigidShapes shapes;
+/// The spring method's state: the rigid scene (kernel/rigid/rigid_scene.hpp) and its springs.
+struct SpringState : RigidScene {
   SpringBuffer springs;
-  std::vector<RigidIsland> islands;
-  std::vector<std::uint32_t> island_of_body;
-  std::vector<Plane> planes;
-  std::int32_t ball = -1;  ///< body index of the ball, or −1
-  double ball_restitution = 0;
-
   SpringOptions options;
-  Settings settings;
-
-  double time = 0;  ///< s
-  std::vector<RigidContact> contacts;  ///< of the last step
-  bool ball_touching = false;          ///< the ball had a contact with a limb in the last step
   RigidIntegratorScratch scratch;
   std::unique_ptr<ImplicitSystem> implicit;  ///< the backward-Euler integrator only (Eigen's solvers do not move)
-  std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
-  std::vector<Eigen::Matrix3d> scratch_world_inertia;       ///< scratch for the implicit step
+  std::vector<Eigen::Matrix3d> scratch_world_inertia;  ///< scratch for the implicit step
   SpringStepReport last_report;
 };
 

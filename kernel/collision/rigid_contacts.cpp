@@ -1,6 +1,6 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/springs/contacts.hpp"
+#include "kernel/collision/rigid_contacts.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,22 +8,22 @@
 #include "kernel/collision/bounding_volumes.hpp"
 #include "kernel/collision/geometry.hpp"
 #include "kernel/collision/impulses.hpp"
-#include "kernel/springs/compile.hpp"
+#include "kernel/rigid/rigid_integration.hpp"
 
 namespace limber {
 namespace {
 
-bool awake(const SpringState& state, std::int32_t body) {
+bool awake(const RigidScene& state, std::int32_t body) {
   return body >= 0 && !state.islands[state.island_of_body[body]].sleeping;
 }
 
 // The limb's axis end points (head: +length/2 along its axis) in world.
-std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const SpringState& state, std::size_t b) {
+std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& state, std::size_t b) {
   const double half = 0.5 * state.shapes.length[b];
   return {world_point(state, b, Eigen::Vector3d(0, 0, half)), world_point(state, b, Eigen::Vector3d(0, 0, -half))};
 }
 
-void add_plane_contacts(SpringState& state, std::size_t b, std::size_t plane_index) {
+void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_index) {
   const Plane& plane = state.planes[plane_index];
   const double radius = state.shapes.radius[b];
   const auto [head, tail] = head_and_tail(state, b);
@@ -50,7 +50,7 @@ void add_plane_contacts(SpringState& state, std::size_t b, std::size_t plane_ind
   }
 }
 
-ImpulseBody impulse_body(const SpringState& state, std::int32_t b) {
+ImpulseBody impulse_body(const RigidScene& state, std::int32_t b) {
   ImpulseBody body;
   body.inverse_mass = 0;
   body.inverse_inertia.setZero();
@@ -67,7 +67,7 @@ ImpulseBody impulse_body(const SpringState& state, std::int32_t b) {
   return body;
 }
 
-void store_velocities(SpringState& state, std::int32_t b, const ImpulseBody& body) {
+void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body) {
   if (b < 0) return;
   RigidBodyState& y = state.bodies.state;
   y.linear_momentum[b] = state.bodies.mass[b] * body.linear_velocity;
@@ -76,7 +76,7 @@ void store_velocities(SpringState& state, std::int32_t b, const ImpulseBody& bod
 
 }  // namespace
 
-void detect_rigid_contacts(SpringState& state) {
+void detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
   const std::size_t body_count = state.bodies.size();
@@ -108,7 +108,7 @@ void detect_rigid_contacts(SpringState& state) {
   }
 }
 
-void resolve_rigid_contacts(SpringState& state, double dt) {
+void resolve_rigid_contacts(RigidScene& state, double dt) {
   if (state.contacts.empty()) return;
   const double resting_speed = 2 * state.settings.gravity.norm() * dt;
   // Approach speeds before any impulse: they decide bouncing and bound the position correction.
@@ -118,7 +118,7 @@ void resolve_rigid_contacts(SpringState& state, double dt) {
     if (approach < resting_speed) contact.restitution = 0;
     contact.approach_speed = std::max(approach, 0.0);
   }
-  for (int pass = 0; pass < state.options.contact_iterations; ++pass) {
+  for (int pass = 0; pass < state.contact_iterations; ++pass) {
     for (const RigidContact& contact : state.contacts) {
       ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
       const CollisionImpulse response = sequential_collision_impulse(a, b, contact.point, contact.normal, contact.restitution, contact.friction);

@@ -1,4 +1,4 @@
-// Contacts of the rigid-body methods (thesis 2.3–2.5): limbs and the ball against the ground
+// Contacts of the rigid-body methods (every method on kernel/rigid/rigid_scene.hpp) (thesis 2.3–2.5): limbs and the ball against the ground
 // and the bounds' walls, and the ball against the limbs, answered with impulses.
 //
 // Detection runs after the bodies moved (the thesis's loop, figure 2.5: move, then collide):
@@ -15,15 +15,15 @@
 // own approach plus Settings::contact_recovery_speed·Δt, so an initial overlap is not flung out.
 #pragma once
 
-#include "kernel/springs/spring_state.hpp"
+#include "kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 
-/// Finds the contacts of the awake bodies at the current state into state.contacts, wakes the
-/// islands the ball touches and sets state.ball_touching.
-void detect_rigid_contacts(SpringState& state);
+/// Finds the contacts of the awake bodies at the current state into scene.contacts, wakes the
+/// islands the ball touches and sets scene.ball_touching.
+void detect_rigid_contacts(RigidScene& scene);
 
-/// Impulses and position correction for state.contacts; dt is the step's.
-void resolve_rigid_contacts(SpringState& state, double dt);
+/// Impulses and position correction for scene.contacts; dt is the step's.
+void resolve_rigid_contacts(RigidScene& scene, double dt);
 
 }  // namespace limber

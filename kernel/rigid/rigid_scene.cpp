@@ -1,0 +1,156 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/rigid/rigid_scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/mass/mass_properties.hpp"
+#include "layouts/graph/disjoint_sets.hpp"
+
+namespace limber {
+namespace {
+
+// The rigid body's frame: the limb's principal axes (so its inertia is diagonal, which the
+// free-rotation flow needs), with moments below 10⁻⁶ of the largest raised to it.
+struct PrincipalFrame {
+  Eigen::Quaterniond rotation;  // principal frame → Model body frame
+  Eigen::Vector3d moments;
+};
+PrincipalFrame principal_frame(const Eigen::Matrix3d& inertia) {
+  const PrincipalAxes principal = principal_axes(inertia);
+  return {Eigen::Quaterniond(principal.axes).normalized(), principal.moments.cwiseMax(1e-6 * principal.moments.maxCoeff())};
+}
+
+}  // namespace
+
+RigidScene compile_rigid_scene(const Model& model) {
+  validate(model);
+  RigidScene scene;
+  scene.settings = model.settings;
+  const std::size_t limb_count = model.bodies.size();
+  const std::size_t body_count = limb_count + (model.ball ? 1 : 0);
+  RigidBodyBuffer& bodies = scene.bodies;
+  bodies.resize(body_count);
+  RigidShapes& shapes = scene.shapes;
+  shapes.shape.resize(body_count), shapes.length.resize(body_count), shapes.radius.resize(body_count);
+  shapes.centre_offset.resize(body_count), shapes.principal_frame.resize(body_count), shapes.is_ball.assign(body_count, false);
+
+  auto set_body = [&](std::size_t b, const MassProperties& mass, const Eigen::Quaterniond& orientation,
+                      const Eigen::Vector3d& centre, const Eigen::Vector3d& velocity, const Eigen::Vector3d& angular_velocity) {
+    const PrincipalFrame frame = principal_frame(mass.inertia);
+    shapes.principal_frame[b] = frame.rotation;
+    bodies.mass[b] = mass.mass;
+    bodies.inverse_mass[b] = 1.0 / mass.mass;
+    bodies.body_inertia[b] = frame.moments.asDiagonal();
+    bodies.body_inverse_inertia[b] = frame.moments.cwiseInverse().asDiagonal();
+    bodies.state.position[b] = centre;
+    bodies.state.orientation[b] = (orientation * frame.rotation).normalized();
+    bodies.state.linear_momentum[b] = mass.mass * velocity;
+    bodies.state.angular_momentum[b] = bodies.world_inertia(bodies.state, b) * angular_velocity;
+  };
+  for (std::size_t b = 0; b < limb_count; ++b) {
+    const Body& body = model.bodies[b];
+    const MassProperties mass = body_mass_properties(body);
+    set_body(b, mass, body.orientation(), body.to_world(mass.centre_of_mass), body.velocity_at(mass.centre_of_mass),
+             body.angular_velocity);
+    shapes.shape[b] = body.shape.type, shapes.length[b] = body.shape.length, shapes.radius[b] = body.shape.radius;
+    shapes.centre_offset[b] = mass.centre_of_mass;
+  }
+  if (model.ball) {
+    const Ball& ball = *model.ball;
+    const auto b = static_cast<std::int32_t>(limb_count);
+    scene.ball = b;
+    scene.ball_restitution = ball.restitution;
+    set_body(b, solid_sphere(ball.mass, ball.radius), Eigen::Quaterniond::Identity(), ball.position, ball.velocity,
+             Eigen::Vector3d::Zero());
+    shapes.shape[b] = ShapeType::capsule, shapes.length[b] = 0, shapes.radius[b] = ball.radius;
+    shapes.centre_offset[b].setZero();
+    shapes.is_ball[b] = true;
+  }
+
+  // Islands in order of their lowest body; the ball is its own.
+  DisjointSets connected(static_cast<std::uint32_t>(body_count));
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard != kWorld) connected.unite(static_cast<std::uint32_t>(joint.inboard), static_cast<std::uint32_t>(joint.outboard));
+  }
+  scene.island_of_body.assign(body_count, 0);
+  std::vector<std::int64_t> island_of_root(body_count, -1);
+  for (std::uint32_t b = 0; b < body_count; ++b) {
+    const std::uint32_t root = connected.find(b);
+    if (island_of_root[root] < 0) {
+      island_of_root[root] = static_cast<std::int64_t>(scene.islands.size());
+      scene.islands.emplace_back();
+    }
+    scene.island_of_body[b] = static_cast<std::uint32_t>(island_of_root[root]);
+    scene.islands[island_of_root[root]].bodies.push_back(b);
+  }
+  for (RigidIsland& island : scene.islands) {
+    bool at_rest = true;
+    for (std::uint32_t b : island.bodies) {
+      at_rest = at_rest && bodies.state.linear_momentum[b].isZero(0) && bodies.state.angular_momentum[b].isZero(0);
+    }
+    island.sleeping = model.settings.sleep.enabled && model.settings.sleep.start_asleep && at_rest;
+  }
+
+  scene.planes = scene_planes(model);
+  // Every limb end against every plane, plus the ball against every limb.
+  scene.contacts.reserve(2 * body_count * scene.planes.size() + limb_count);
+  scene.velocity.assign(body_count, Eigen::Vector3d::Zero());
+  scene.angular_velocity.assign(body_count, Eigen::Vector3d::Zero());
+  return scene;
+}
+
+Eigen::Vector3d body_anchor(const RigidScene& scene, std::size_t body, const Eigen::Vector3d& local_point) {
+  return scene.shapes.principal_frame[body].conjugate() * (local_point - scene.shapes.centre_offset[body]);
+}
+
+Eigen::Vector3d world_point(const RigidScene& scene, std::size_t body, const Eigen::Vector3d& local_point) {
+  return scene.bodies.state.position[body] + scene.bodies.state.orientation[body] * body_anchor(scene, body, local_point);
+}
+
+void body_velocities(RigidScene& scene, const RigidBodyState& y) {
+  for (std::size_t b = 0; b < y.size(); ++b) {
+    scene.velocity[b] = scene.bodies.linear_velocity(y, b);
+    scene.angular_velocity[b] = scene.bodies.angular_velocity(y, b);
+  }
+}
+
+StepStatus update_sleep(RigidScene& scene, double dt) {
+  const Settings& settings = scene.settings;
+  StepStatus status = StepStatus::ok;
+  body_velocities(scene, scene.bodies.state);
+  for (RigidIsland& island : scene.islands) {
+    if (island.sleeping) continue;
+    double fastest = 0;
+    bool finite = true;
+    for (std::uint32_t b : island.bodies) {
+      // The fastest surface point: spin about the limb's axis moves it at most ω·r, the rest at
+      // most |ω⊥|·(L/2 + r).
+      const Eigen::Vector3d axis = scene.bodies.state.orientation[b] * (scene.shapes.principal_frame[b].conjugate() * Eigen::Vector3d::UnitZ());
+      const Eigen::Vector3d& omega = scene.angular_velocity[b];
+      const double axial = omega.dot(axis);
+      const double speed = scene.velocity[b].norm() + std::abs(axial) * scene.shapes.radius[b] +
+                           (omega - axial * axis).norm() * (0.5 * scene.shapes.length[b] + scene.shapes.radius[b]);
+      finite = finite && std::isfinite(speed) && scene.bodies.state.position[b].allFinite();
+      fastest = std::max(fastest, speed);
+    }
+    if (!finite) {
+      status = StepStatus::diverged_non_finite;
+      continue;
+    }
+    if (fastest > settings.divergence_speed && status == StepStatus::ok) status = StepStatus::diverged_speed;
+    if (!settings.sleep.enabled) continue;
+    island.still_time = fastest < settings.sleep.speed_threshold ? island.still_time + dt : 0.0;
+    if (island.still_time >= settings.sleep.time_to_sleep && island.still_time > 0) {
+      island.sleeping = true;
+      for (std::uint32_t b : island.bodies) {
+        scene.bodies.state.linear_momentum[b].setZero();
+        scene.bodies.state.angular_momentum[b].setZero();
+      }
+    }
+  }
+  return status;
+}
+
+}  // namespace limber

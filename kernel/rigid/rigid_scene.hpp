@@ -1,0 +1,94 @@
+// The rigid-body scene every rigid-body method shares (springs now; Lagrange multipliers and
+// Featherstone next): limbs and the ball as rigid bodies with their shapes, islands, the planes
+// they touch, and the contacts of the last step. A method's state derives from it and adds its
+// joints' representation.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "kernel/collision/geometry.hpp"
+#include "kernel/model/model.hpp"
+#include "kernel/model/step_status.hpp"
+#include "layouts/bodies/rigid_body_buffer.hpp"
+
+namespace limber {
+
+/// The limbs' geometry for contacts, per body (the ball is the last body when there is one).
+struct RigidShapes {
+  std::vector<ShapeType> shape;
+  std::vector<double> length, radius;           ///< m (the ball: length 0, its radius)
+  std::vector<Eigen::Vector3d> centre_offset;   ///< centre of mass in the Model's body frame (shape-centred), m
+  /// Rotation from the rigid body's frame (its principal axes) to the Model's body frame: a
+  /// Model body-frame point p is at x + q·principal_frame⁻¹·(p − centre_offset) in world.
+  std::vector<Eigen::Quaterniond> principal_frame;
+  std::vector<bool> is_ball;
+};
+
+/// Bodies joined by joints, simulated, put to sleep and woken together (thesis 4.5.3).
+struct RigidIsland {
+  std::vector<std::uint32_t> bodies;
+  bool sleeping = false;
+  double still_time = 0;  ///< s below the sleep threshold
+};
+
+/// A contact found this step: body `a` touches body `b` (−1: a plane, immovable), normal from b
+/// to a, depth ≥ 0.
+struct RigidContact {
+  std::int32_t a = 0, b = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
+  double depth = 0;
+  double restitution = 0, friction = 0;
+  double approach_speed = 0;  ///< normal speed towards each other before the impulses, m/s, ≥ 0
+};
+
+/// The shared part of a rigid-body method's state.
+struct RigidScene {
+  RigidBodyBuffer bodies;
+  RigidShapes shapes;
+  std::vector<RigidIsland> islands;
+  std::vector<std::uint32_t> island_of_body;
+  std::vector<Plane> planes;
+  std::int32_t ball = -1;  ///< body index of the ball, or −1
+  double ball_restitution = 0;
+  Settings settings;
+  int contact_iterations = 8;  ///< passes of sequential impulses over a step's contacts
+
+  double time = 0;                     ///< s
+  std::vector<RigidContact> contacts;  ///< of the last step
+  bool ball_touching = false;          ///< the ball had a contact with a limb in the last step
+  std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
+};
+
+/// The rigid scene of `model`:
+/// - each limb becomes a rigid body at its centre of mass, with the mass properties of
+///   body_mass_properties() (kernel/mass/): uniform over its shape, or its point masses; its
+///   frame is on its principal axes (diagonal inertia), and principal moments below 10⁻⁶ of the
+///   largest (a limb of zero radius about its axis) are raised to that floor;
+/// - the ball becomes a solid sphere body, the last one;
+/// - bodies joined by joints (not through the world) form islands, which start asleep when the
+///   scene asks (Settings::sleep.start_asleep) and they are at rest; the ball is its own;
+/// - the ground and the bounds' walls become planes.
+/// Throws ModelError when the model is invalid.
+RigidScene compile_rigid_scene(const Model& model);
+
+/// World position of Model body `body`'s body-frame point `local_point` (Model frame: the
+/// shape's centre), m.
+Eigen::Vector3d world_point(const RigidScene& scene, std::size_t body, const Eigen::Vector3d& local_point);
+
+/// A Model body-frame point (shape-centred) in the rigid body's frame, relative to its centre of
+/// mass, m: what the methods keep as a joint's anchor.
+Eigen::Vector3d body_anchor(const RigidScene& scene, std::size_t body, const Eigen::Vector3d& local_point);
+
+/// Fills scene.velocity / scene.angular_velocity (v = P/m, ω = I_world⁻¹ L) for state y.
+void body_velocities(RigidScene& scene, const RigidBodyState& y);
+
+/// After a step of length dt: reports divergence (non-finite, or a surface point faster than
+/// settings.divergence_speed) and puts islands whose bodies' fastest surface points all stayed
+/// below settings.sleep.speed_threshold for settings.sleep.time_to_sleep to sleep (zeroing P, L).
+StepStatus update_sleep(RigidScene& scene, double dt);
+
+}  // namespace limber
