@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "kernel/lagrange/multipliers.hpp"
 #include "kernel/springs/spring_forces.hpp"
 
 namespace limber {
@@ -55,39 +56,64 @@ Observation observe(const VerletState<Scalar>& state) {
   return out;
 }
 
-Observation observe(const SpringState& state) {
+namespace {
+
+// What every rigid-body method reports alike: momentum, kinetic energy ½ m v² + ½ ω·L, gravity's
+// potential energy, the limbs' centre of mass, sleeping. Joint gaps are the method's to add.
+Observation observe_rigid_scene(const RigidScene& scene) {
   Observation out;
-  out.time = state.time;
-  const RigidBodyBuffer& bodies = state.bodies;
+  out.time = scene.time;
+  const RigidBodyBuffer& bodies = scene.bodies;
   const RigidBodyState& y = bodies.state;
-  double gap_squares = 0;
-  for (std::size_t s = 0; s < state.springs.size(); ++s) {
-    const double gap = spring_separation(state, y, s).norm() / state.springs.reference_length[s];
-    out.max_joint_gap = std::max(out.max_joint_gap, gap);
-    gap_squares += gap * gap;
-  }
-  if (state.springs.size() > 0) out.rms_joint_gap = std::sqrt(gap_squares / state.springs.size());
   double body_mass = 0;
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const double mass = bodies.mass[b];
     out.linear_momentum += y.linear_momentum[b];
     out.kinetic_energy += 0.5 * y.linear_momentum[b].squaredNorm() / mass +
                           0.5 * bodies.angular_velocity(y, b).dot(y.angular_momentum[b]);
-    out.potential_energy -= mass * state.settings.gravity.dot(y.position[b]);
-    if (static_cast<std::int32_t>(b) != state.ball) {
+    out.potential_energy -= mass * scene.settings.gravity.dot(y.position[b]);
+    if (static_cast<std::int32_t>(b) != scene.ball) {
       out.body_centre_of_mass += mass * y.position[b];
       body_mass += mass;
     }
   }
-  out.potential_energy += spring_energy(state);
   if (body_mass > 0) out.body_centre_of_mass /= body_mass;
-  out.islands = static_cast<int>(state.islands.size());
+  out.islands = static_cast<int>(scene.islands.size());
   out.body_sleeping = true;
-  for (const RigidIsland& island : state.islands) {
+  for (const RigidIsland& island : scene.islands) {
     out.islands_sleeping += island.sleeping;
-    const bool is_ball = island.bodies.size() == 1 && static_cast<std::int32_t>(island.bodies[0]) == state.ball;
+    const bool is_ball = island.bodies.size() == 1 && static_cast<std::int32_t>(island.bodies[0]) == scene.ball;
     if (!is_ball) out.body_sleeping = out.body_sleeping && island.sleeping;
   }
+  return out;
+}
+
+// Max and RMS of |C_j| / reference_j over joints.
+template <typename Error>
+void add_joint_gaps(Observation& out, std::size_t count, const std::vector<double>& reference, Error&& error) {
+  double squares = 0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const double gap = error(j).norm() / reference[j];
+    out.max_joint_gap = std::max(out.max_joint_gap, gap);
+    squares += gap * gap;
+  }
+  if (count > 0) out.rms_joint_gap = std::sqrt(squares / count);
+}
+
+}  // namespace
+
+Observation observe(const SpringState& state) {
+  Observation out = observe_rigid_scene(state);
+  add_joint_gaps(out, state.springs.size(), state.springs.reference_length,
+                 [&](std::size_t s) { return spring_separation(state, state.bodies.state, s); });
+  out.potential_energy += spring_energy(state);
+  return out;
+}
+
+Observation observe(const LagrangeState& state) {
+  Observation out = observe_rigid_scene(state);
+  add_joint_gaps(out, state.joints.size(), state.joints.reference_length,
+                 [&](std::size_t j) { return joint_error(state, state.bodies.state, j); });
   return out;
 }
 

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include "kernel/lagrange/lagrange_state.hpp"
 #include "kernel/springs/spring_state.hpp"
 #include "kernel/verlet/verlet_state.hpp"
 
@@ -33,6 +34,9 @@ Observation observe(const VerletState<Scalar>& state);
 /// points (relative to the same lengths as the Verlet method's), no stretch (limbs are rigid),
 /// kinetic energy ½ m v² + ½ ω·L, and potential energy including the springs' ½ k |d|².
 Observation observe(const SpringState& state);
+
+/// The same for the Lagrange method: joint gaps |C| between the joints' anchor points.
+Observation observe(const LagrangeState& state);
 
 extern template Observation observe<float>(const VerletState<float>&);
 extern template Observation observe<double>(const VerletState<double>&);

@@ -43,8 +43,8 @@ enum class SpringLinearSolver : std::uint8_t {
 struct SpringOptions {
   SpringIntegrator integrator = SpringIntegrator::semi_implicit_euler;
   SpringLinearSolver linear_solver = SpringLinearSolver::ldlt;
-  std::optional<double> stiffness;  ///< N/m: overrides every joint's and the scene's
-  std::optional<double> damping;    ///< N·s/m: likewise
+  std::optional<double> stiffness{};  ///< N/m: overrides every joint's and the scene's
+  std::optional<double> damping{};    ///< N·s/m: likewise
   double solver_tolerance = 1e-10;  ///< conjugate gradient: relative residual
   /// Backward Euler: 1 is the linearized step (eq. 3.16–3.22); each further iteration is a
   /// Newton step on the nonlinear equations with the same matrix (implicit_step.hpp).

@@ -117,6 +117,20 @@ TEST(Cli, SpringsWriteHeadAndTailColumns) {
   EXPECT_EQ(std::count(header.begin(), header.end(), ','), 3 * 2 * 5);
 }
 
+TEST(Cli, LagrangeRunsEveryShippedScene) {
+  for (const std::string& stabilization : {"baumgarte", "projection"}) {
+    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+      const Result r = run({"run", scene(file), "--method", "lagrange", "--stabilization", stabilization, "--steps", "200"});
+      ASSERT_EQ(r.code, kSuccess) << stabilization << " " << file << ": " << r.err;
+      EXPECT_THAT(r.out, HasSubstr("rigid limbs and joint constraints")) << file;
+      EXPECT_THAT(r.out, HasSubstr("status      ok")) << file;
+    }
+  }
+}
+
+TEST(Cli, RejectsLagrangeFlagsElsewhere) { expect_rejected({"run", "--constraint-solver", "tree"}, "--constraint-solver"); }
+TEST(Cli, RejectsSpringFlagsWithLagrange) { expect_rejected({"run", "--method", "lagrange", "--damping", "3"}, "--damping"); }
+
 TEST(Cli, RejectsVerletFlagsWithSprings) { expect_rejected({"run", "--method", "springs-explicit", "--sweep", "sequential"}, "--sweep"); }
 TEST(Cli, RejectsSpringFlagsWithVerlet) { expect_rejected({"run", "--stiffness", "1e5"}, "--stiffness"); }
 TEST(Cli, RejectsFloatSprings) { expect_rejected({"run", "--method", "springs-implicit", "--precision", "float"}, "double"); }

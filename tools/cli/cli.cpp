@@ -15,6 +15,8 @@
 #include "kernel/metrics/knock.hpp"
 #include "kernel/metrics/observers.hpp"
 #include "kernel/model/model.hpp"
+#include "kernel/lagrange/compile.hpp"
+#include "kernel/lagrange/step.hpp"
 #include "kernel/scene/scene_file.hpp"
 #include "kernel/springs/compile.hpp"
 #include "kernel/springs/step.hpp"
@@ -55,14 +57,17 @@ struct RunFlags {
   bool scalar = false;
   double stiffness = 0, damping = 0;
   std::string integrator, linear_solver = "ldlt";
+  std::string stabilization = "baumgarte", constraint_solver = "auto";
 
   CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
       *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
       *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
-      *integrator_option, *linear_solver_option;
+      *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option;
   std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
 
   bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
+  bool lagrange() const { return method == "lagrange"; }
+  bool rigid() const { return springs() || lagrange(); }  ///< the methods on rigid bodies
 };
 
 bool given(const CLI::Option* option) { return option->count() > 0; }
@@ -80,20 +85,28 @@ bool unit_interval(double v) { return v >= 0 && v <= 1; }
 void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("scene", flags.scene, "Scene file (JSON); default: the embedded humanoid (tools/scenes/humanoid.json)");
   run.add_option("--method", flags.method,
-                 "weighted or unweighted relaxation (Verlet, thesis eq. 4.7 / 4.6), or springs-explicit / "
-                 "springs-implicit (rigid limbs joined by stiff springs, thesis 4.4.1)")
-      ->check(CLI::IsMember({"weighted", "unweighted", "springs-explicit", "springs-implicit"}))
+                 "weighted or unweighted relaxation (Verlet, thesis eq. 4.7 / 4.6), springs-explicit / "
+                 "springs-implicit (rigid limbs joined by stiff springs, thesis 4.4.1), or lagrange (rigid limbs "
+                 "and joint constraints, thesis 3.1.4)")
+      ->check(CLI::IsMember({"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange"}))
       ->capture_default_str();
   flags.stiffness_option = run.add_option("--stiffness", flags.stiffness, "Springs: joint stiffness k for every joint, N/m");
   flags.damping_option = run.add_option("--damping", flags.damping, "Springs: joint damping c for every joint, N s/m");
   flags.integrator_option =
       run.add_option("--integrator", flags.integrator,
-                     "Springs: euler, semi-implicit (default) , rk2 or rk4 with springs-explicit; backward-euler with "
-                     "springs-implicit")
+                     "Rigid methods: euler, semi-implicit (default), rk2 or rk4 with springs-explicit and lagrange; "
+                     "backward-euler with springs-implicit")
           ->check(CLI::IsMember({"euler", "semi-implicit", "rk2", "rk4", "backward-euler"}));
   flags.linear_solver_option =
       run.add_option("--linear-solver", flags.linear_solver, "springs-implicit: ldlt (sparse, exact) or cg (conjugate gradient)")
           ->check(CLI::IsMember({"ldlt", "cg"}));
+  flags.stabilization_option =
+      run.add_option("--stabilization", flags.stabilization, "lagrange: baumgarte (default) or projection (post-stabilization)")
+          ->check(CLI::IsMember({"baumgarte", "projection"}));
+  flags.constraint_solver_option =
+      run.add_option("--constraint-solver", flags.constraint_solver,
+                     "lagrange: auto (default: tree unless a joint closes a loop), tree (Baraff's linear time) or sparse")
+          ->check(CLI::IsMember({"auto", "tree", "sparse"}));
   run.add_option("--precision", flags.precision, "Scalar type of the state: float or double")
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
@@ -145,12 +158,21 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   }
 }
 
-// The SpringOptions the flags ask for; flags of the other method family are errors.
-SpringOptions spring_options(const RunFlags& flags) {
-  for (const CLI::Option* option : flags.verlet_only_options) {
-    if (option->count() > 0) throw InputError(option->get_name() + ": applies to the Verlet methods (weighted, unweighted), not --method " + flags.method);
+// Flags of another method family are errors, naming the flag and the methods it applies to.
+void refuse(const std::vector<const CLI::Option*>& options, const RunFlags& flags, const char* methods) {
+  for (const CLI::Option* option : options) {
+    if (option->count() > 0) throw InputError(option->get_name() + ": applies to " + methods + ", not --method " + flags.method);
   }
-  if (flags.precision == "float") throw InputError("--precision float: the spring methods run in double only");
+}
+void refuse_verlet_flags(const RunFlags& flags) {
+  refuse({flags.verlet_only_options.begin(), flags.verlet_only_options.end()}, flags, "the Verlet methods (weighted, unweighted)");
+  if (flags.precision == "float") throw InputError("--precision float: the rigid-body methods run in double only");
+}
+
+// The SpringOptions the flags ask for.
+SpringOptions spring_options(const RunFlags& flags) {
+  refuse_verlet_flags(flags);
+  refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   SpringOptions options;
   const bool implicit = flags.method == "springs-implicit";
   const std::string integrator = flags.integrator_option->count() ? flags.integrator : implicit ? "backward-euler" : "semi-implicit";
@@ -170,11 +192,29 @@ SpringOptions spring_options(const RunFlags& flags) {
   return options;
 }
 
+// The LagrangeOptions the flags ask for.
+LagrangeOptions lagrange_options(const RunFlags& flags) {
+  refuse_verlet_flags(flags);
+  refuse({flags.stiffness_option, flags.damping_option, flags.linear_solver_option}, flags, "the spring methods");
+  LagrangeOptions options;
+  const std::string integrator = flags.integrator_option->count() ? flags.integrator : "semi-implicit";
+  if (integrator == "backward-euler") throw InputError("--integrator backward-euler: lagrange takes euler, semi-implicit, rk2 or rk4");
+  options.integrator = integrator == "euler" ? RigidIntegrator::euler
+                       : integrator == "rk2" ? RigidIntegrator::rk2
+                       : integrator == "rk4" ? RigidIntegrator::rk4
+                                             : RigidIntegrator::semi_implicit_euler;
+  options.stabilization = flags.stabilization == "projection" ? Stabilization::projection : Stabilization::baumgarte;
+  options.solver = flags.constraint_solver == "tree"     ? MultiplierSolver::tree
+                   : flags.constraint_solver == "sparse" ? MultiplierSolver::sparse
+                                                         : MultiplierSolver::automatic;
+  return options;
+}
+
 // The VerletOptions the flags ask for; a combination the sequential sweep cannot run is an error.
 VerletOptions verlet_options(const RunFlags& flags) {
-  for (const CLI::Option* option : {flags.stiffness_option, flags.damping_option, flags.integrator_option, flags.linear_solver_option}) {
-    if (option->count() > 0) throw InputError(option->get_name() + ": applies to the spring methods (springs-explicit, springs-implicit), not --method " + flags.method);
-  }
+  refuse({flags.stiffness_option, flags.damping_option, flags.integrator_option, flags.linear_solver_option}, flags,
+         "the rigid-body methods (springs-explicit, springs-implicit, lagrange)");
+  refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   VerletOptions options;
   options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
   options.solver = flags.solver == "jacobi" ? RelaxationSolver::jacobi : RelaxationSolver::gauss_seidel;
@@ -290,7 +330,7 @@ void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
 }
 
 // The spring methods write each limb's head and tail (the particle methods' names) and the ball.
-void write_csv_header(std::ostream& csv, const Model& model, const SpringState&) {
+void write_csv_header(std::ostream& csv, const Model& model, const RigidScene&) {
   csv << "time";
   for (const Body& body : model.bodies) {
     for (const char* end : {".head", ".tail"}) csv << ',' << body.name << end << "_x," << body.name << end << "_y," << body.name << end << "_z";
@@ -298,7 +338,7 @@ void write_csv_header(std::ostream& csv, const Model& model, const SpringState&)
   if (model.ball) csv << ",ball_x,ball_y,ball_z";
   csv << '\n';
 }
-void write_csv_row(std::ostream& csv, const SpringState& state) {
+void write_csv_row(std::ostream& csv, const RigidScene& state) {
   char cell[96];
   std::snprintf(cell, sizeof cell, "%.9g", state.time);
   csv << cell;
@@ -319,10 +359,11 @@ void write_csv_row(std::ostream& csv, const SpringState& state) {
 template <typename Scalar>
 bool has_joint_gaps(const VerletState<Scalar>& state) { return !state.joint_constraints.empty(); }
 bool has_joint_gaps(const SpringState& state) { return state.springs.size() > 0; }
+bool has_joint_gaps(const LagrangeState& state) { return state.joints.size() > 0; }
 
 template <typename Scalar>
 bool ball_touching(const VerletState<Scalar>& state) { return !state.ball_contacts.empty(); }
-bool ball_touching(const SpringState& state) { return state.ball_touching; }
+bool ball_touching(const RigidScene& state) { return state.ball_touching; }
 
 const char* layout_name(ParticleLayout layout) {
   switch (layout) {
@@ -454,6 +495,22 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
 }
 
+void method_lines(std::ostream& out, const Model& model, const RunFlags&, const LagrangeState& state, const RunRecord& record) {
+  const char* integrators[] = {"forward Euler", "semi-implicit Euler (velocity-level joints)", "RK2", "RK4"};
+  out << format("method      lagrange: rigid limbs and joint constraints, %s, %s stabilization, double precision\n",
+                integrators[static_cast<int>(state.options.integrator)],
+                state.options.stabilization == Stabilization::projection ? "projection" : "Baumgarte");
+  out << format("model       %zu limbs, %zu joints%s%s%s; %zu rigid bodies, %zu constraint rows, %zu island%s\n",
+                model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
+                model.ball ? ", ball" : "", state.bodies.size(), 3 * state.joints.size(), state.islands.size(),
+                state.islands.size() == 1 ? "" : "s");
+  out << format("solver      %s\n", state.uses_tree ? "Baraff's tree-ordered block LDLT (linear time)"
+                                                      : "sparse LDLT of J M^-1 J^T (the joints close a loop, or asked for)");
+  out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
+                model.settings.time_step, state.time, record.wall_seconds,
+                record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
+}
+
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
 int simulate(State& state, const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
@@ -479,7 +536,7 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
   } else {
     out << "joint gap   none (shared-particle joints or no joints)\n";
   }
-  if (!flags.springs()) {
+  if (!flags.rigid()) {
     out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
                   record.largest_stretch);
   }
@@ -505,6 +562,10 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
 int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
   if (flags.springs()) {
     SpringState state = compile_springs(model, spring_options(flags));
+    return simulate(state, model, flags, source, out);
+  }
+  if (flags.lagrange()) {
+    LagrangeState state = compile_lagrange(model, lagrange_options(flags));
     return simulate(state, model, flags, source, out);
   }
   if (flags.precision == "float") {

@@ -1,0 +1,26 @@
+// step(LagrangeState, dt): one time step of the Lagrange-multiplier method.
+#pragma once
+
+#include "kernel/lagrange/lagrange_state.hpp"
+
+namespace limber {
+
+/// Advances `state` by dt seconds:
+///  1. integrate  the awake bodies with the constraint forces: symplectic Euler solves them at the
+///                velocity level (J·u₁ = −ω_b·C), the other integrators at the acceleration level
+///                at every stage (multipliers.hpp), with Baumgarte terms when asked;
+///  2. collide    contacts with the planes and the ball answered by impulses on single bodies
+///                (kernel/collision/rigid_contacts.hpp);
+///  3. project    (projection stabilization) positions back onto C = 0; then — whenever there
+///                were contacts, and always under projection — velocities onto J·u = 0 through
+///                the mass matrix: a contact impulse reaches the rest of the body through the
+///                joints as an impulse of the constraint system;
+///  4. sleep      still islands fall asleep; divergence is detected.
+/// Never throws; a bad Δt or a divergence is reported in the result (also state.last_report).
+/// The tree solver allocates nothing; the sparse one (graphs with loops) allocates per solve.
+LagrangeStepReport step(LagrangeState& state, double dt);
+
+/// step() with the scene's own time step.
+inline LagrangeStepReport step(LagrangeState& state) { return step(state, state.settings.time_step); }
+
+}  // namespace limber
