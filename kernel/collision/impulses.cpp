@@ -9,6 +9,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "kernel/rigid/anchor_jacobian.hpp"
+
 namespace limber {
 namespace {
 
@@ -16,14 +18,6 @@ using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
 // [r]×: the matrix with [r]× x = r × x.
-Matrix3d cross_matrix(const Vector3d& r) {
-  Matrix3d m;
-  m << 0, -r.z(), r.y(),  //
-      r.z(), 0, -r.x(),   //
-      -r.y(), r.x(), 0;
-  return m;
-}
-
 // A tangential velocity or impulse this small relative to the whole vector is rounding, not a
 // direction (the tangential part is computed as v − (v·n) n, exact only to ~1e-16·|v|).
 constexpr double kNegligible = 1e-12;

@@ -9,26 +9,13 @@
 #include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/disjoint_sets.hpp"
 
+#include "kernel/rigid/anchor_jacobian.hpp"
+
 namespace limber {
 namespace {
 
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;
-using AnchorJacobian = Eigen::Matrix<double, 3, 6>;
-
-Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& r) {
-  Eigen::Matrix3d m;
-  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return m;
-}
-
-// G = [E, −[r]×]: the anchor's velocity from its body's (v, ω).
-AnchorJacobian anchor_jacobian(const Eigen::Vector3d& lever) {
-  AnchorJacobian g;
-  g.leftCols<3>().setIdentity();
-  g.rightCols<3>() = -cross_matrix(lever);
-  return g;
-}
 
 bool asleep(const LagrangeState& state, std::int32_t body) { return state.islands[state.island_of_body[body]].sleeping; }
 
@@ -267,27 +254,6 @@ Eigen::Vector3d joint_error(const LagrangeState& state, const RigidBodyState& y,
   const Eigen::Vector3d inboard = joints.inboard[j] >= 0 ? Eigen::Vector3d(y.position[joints.inboard[j]] + inboard_lever)
                                                          : joints.inboard_anchor[j];
   return inboard - outboard;
-}
-
-void accumulate_applied_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces) {
-  body_velocities(state, y);
-  const Settings& settings = state.settings;
-  const std::size_t body_count = state.bodies.size();
-  const bool drag = !settings.drag.linear.isZero(0) || !settings.drag.angular.isZero(0);
-  // Applied forces: gravity, damping, drag.
-  for (std::size_t b = 0; b < body_count; ++b) {
-    if (asleep(state, static_cast<std::int32_t>(b))) continue;
-    forces.force[b] += state.bodies.mass[b] * settings.gravity;
-    if (settings.damping > 0) {
-      forces.force[b] -= settings.damping * state.bodies.mass[b] * state.velocity[b];
-      forces.torque[b] -= settings.damping * y.angular_momentum[b];
-    }
-    if (drag) {
-      const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
-      forces.force[b] -= rotation * settings.drag.linear.cwiseProduct(rotation.transpose() * state.velocity[b]);
-      forces.torque[b] -= rotation * settings.drag.angular.cwiseProduct(rotation.transpose() * state.angular_velocity[b]);
-    }
-  }
 }
 
 void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces) {

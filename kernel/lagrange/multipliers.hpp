@@ -35,10 +35,6 @@ void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std:
 /// Joint j's C = p_inboard − p_outboard at state y, m.
 Eigen::Vector3d joint_error(const LagrangeState& state, const RigidBodyState& y, std::size_t j);
 
-/// Adds gravity, damping and drag at state y to `forces`, and fills state.velocity and
-/// state.angular_velocity for y.
-void accumulate_applied_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces);
-
 /// Adds gravity, drag and the constraint forces Jᵀλ at state y to `forces` (the accumulate
 /// function of the rigid integrators), with Baumgarte terms when stabilization asks for them.
 void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces);

@@ -116,6 +116,29 @@ void body_velocities(RigidScene& scene, const RigidBodyState& y) {
   }
 }
 
+void accumulate_applied_forces(RigidScene& scene, const RigidBodyState& y, RigidForces& forces) {
+  body_velocities(scene, y);
+  const Settings& settings = scene.settings;
+  const RigidBodyBuffer& bodies = scene.bodies;
+  const bool drag = !settings.drag.linear.isZero(0) || !settings.drag.angular.isZero(0);
+  for (const RigidIsland& island : scene.islands) {
+    if (island.sleeping) continue;
+    for (std::uint32_t b : island.bodies) {
+      forces.force[b] += bodies.mass[b] * settings.gravity;
+      if (settings.damping > 0) {
+        forces.force[b] -= settings.damping * bodies.mass[b] * scene.velocity[b];
+        forces.torque[b] -= settings.damping * y.angular_momentum[b];
+      }
+      if (drag) {
+        // The Model's body frame (z: the limb's axis), not the principal frame.
+        const Eigen::Matrix3d rotation = (y.orientation[b] * scene.shapes.principal_frame[b].conjugate()).toRotationMatrix();
+        forces.force[b] -= rotation * settings.drag.linear.cwiseProduct(rotation.transpose() * scene.velocity[b]);
+        forces.torque[b] -= rotation * settings.drag.angular.cwiseProduct(rotation.transpose() * scene.angular_velocity[b]);
+      }
+    }
+  }
+}
+
 StepStatus update_sleep(RigidScene& scene, double dt) {
   const Settings& settings = scene.settings;
   StepStatus status = StepStatus::ok;

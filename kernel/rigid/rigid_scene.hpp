@@ -13,6 +13,7 @@
 #include "kernel/collision/geometry.hpp"
 #include "kernel/model/model.hpp"
 #include "kernel/model/step_status.hpp"
+#include "kernel/rigid/rigid_integration.hpp"
 #include "layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
@@ -85,6 +86,11 @@ Eigen::Vector3d body_anchor(const RigidScene& scene, std::size_t body, const Eig
 
 /// Fills scene.velocity / scene.angular_velocity (v = P/m, ω = I_world⁻¹ L) for state y.
 void body_velocities(RigidScene& scene, const RigidBodyState& y);
+
+/// Adds the applied forces at state y for every awake body: gravity m·g; Settings::damping as
+/// −damping·m·v and −damping·I·ω; Settings::drag in the limb's own frame (z: its axis; thesis
+/// 2.1.5, 2.1.6). Fills scene.velocity / angular_velocity for y first.
+void accumulate_applied_forces(RigidScene& scene, const RigidBodyState& y, RigidForces& forces);
 
 /// After a step of length dt: reports divergence (non-finite, or a surface point faster than
 /// settings.divergence_speed) and puts islands whose bodies' fastest surface points all stayed

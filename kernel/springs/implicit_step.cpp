@@ -6,25 +6,12 @@
 
 #include "kernel/springs/spring_forces.hpp"
 
+#include "kernel/rigid/anchor_jacobian.hpp"
+
 namespace limber {
 namespace {
 
 using Block = Eigen::Matrix<double, 6, 6>;
-using AnchorJacobian = Eigen::Matrix<double, 3, 6>;
-
-Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& r) {
-  Eigen::Matrix3d m;
-  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
-  return m;
-}
-
-// G = [E, −[r]×]: the anchor's velocity from its body's (v, ω).
-AnchorJacobian anchor_jacobian(const Eigen::Vector3d& lever) {
-  AnchorJacobian g;
-  g.leftCols<3>().setIdentity();
-  g.rightCols<3>() = -cross_matrix(lever);
-  return g;
-}
 
 // Offsets, in the column-major value array, of the first stored entry of each of a block's six
 // columns: rows 6·row_body … (a diagonal block stores only its lower triangle, from the diagonal).

@@ -23,26 +23,7 @@ SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::s
 }
 
 void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces& forces) {
-  body_velocities(state, y);
-  const Settings& settings = state.settings;
-  const RigidBodyBuffer& bodies = state.bodies;
-  const bool drag = !settings.drag.linear.isZero(0) || !settings.drag.angular.isZero(0);
-  for (const RigidIsland& island : state.islands) {
-    if (island.sleeping) continue;
-    for (std::uint32_t b : island.bodies) {
-      forces.force[b] += bodies.mass[b] * settings.gravity;
-      if (settings.damping > 0) {
-        forces.force[b] -= settings.damping * bodies.mass[b] * state.velocity[b];
-        forces.torque[b] -= settings.damping * y.angular_momentum[b];
-      }
-      if (drag) {
-        // The Model's body frame (z: the limb's axis), not the principal frame.
-        const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
-        forces.force[b] -= rotation * settings.drag.linear.cwiseProduct(rotation.transpose() * state.velocity[b]);
-        forces.torque[b] -= rotation * settings.drag.angular.cwiseProduct(rotation.transpose() * state.angular_velocity[b]);
-      }
-    }
-  }
+  accumulate_applied_forces(state, y, forces);
   const SpringBuffer& springs = state.springs;
   for (std::size_t s = 0; s < springs.size(); ++s) {
     const std::int32_t inboard = springs.inboard[s], outboard = springs.outboard[s];

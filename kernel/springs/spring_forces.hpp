@@ -17,10 +17,9 @@ struct SpringEnds {
 /// Needs state.velocity and state.angular_velocity filled for y (body_velocities()).
 SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s);
 
-/// Adds, for every awake body at state y: gravity m·g; drag (Settings::drag in the body frame,
-/// and Settings::damping as −damping·m·v and −damping·I·ω); and every spring's force
-/// f = −k·d − c·ḋ on its inboard end and −f on its outboard end, with torques r × f.
-/// Calls body_velocities(state, y) first.
+/// Adds the applied forces at state y (accumulate_applied_forces, kernel/rigid/rigid_scene.hpp)
+/// and every spring's force f = −k·d − c·ḋ on its inboard end and −f on its outboard end, with
+/// torques r × f.
 void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces& forces);
 
 /// Spring s's d = p_inboard − p_outboard at state y, m (no velocities needed).
