@@ -6,10 +6,9 @@
 
 #include <Eigen/LU>
 
+#include "kernel/rigid/anchor_jacobian.hpp"
 #include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/disjoint_sets.hpp"
-
-#include "kernel/rigid/anchor_jacobian.hpp"
 
 namespace limber {
 namespace {

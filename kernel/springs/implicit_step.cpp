@@ -4,9 +4,8 @@
 
 #include <algorithm>
 
-#include "kernel/springs/spring_forces.hpp"
-
 #include "kernel/rigid/anchor_jacobian.hpp"
+#include "kernel/springs/spring_forces.hpp"
 
 namespace limber {
 namespace {
