@@ -30,6 +30,9 @@ LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& option
   state.accelerations.assign(body_count, Eigen::Matrix<double, 6, 1>::Zero());
   state.joint_rhs.assign(joints.size(), Eigen::Vector3d::Zero());
   state.projection_multipliers.assign(joints.size(), Eigen::Vector3d::Zero());
+  state.inboard_lever.assign(joints.size(), Eigen::Vector3d::Zero());
+  state.outboard_lever.assign(joints.size(), Eigen::Vector3d::Zero());
+  state.world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
   return state;
 }
 

@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
@@ -62,11 +63,13 @@ struct JointBuffer {
 struct TreeSolver {
   std::vector<std::int32_t> order;   ///< node elimination order: every node before its parent
   std::vector<std::int32_t> parent;  ///< per node, −1 for a root; nodes: bodies, then joints
-  /// Per node: the factored diagonal block D, inverted when the node is eliminated, and the block
+  /// Per node: the factored diagonal block D (a joint's inverted when it is eliminated; a body's
+  /// kept as its Cholesky factor in body_factor), and the block
   /// L = H_{parent,node}·D⁻¹ (top-left corners of fixed 6×6 storage: 6 rows/columns for bodies,
   /// 3 for joints). Refilled at every solve; nothing is allocated.
   std::vector<Eigen::Matrix<double, 6, 6>> diagonal_inverse, to_parent;
   std::vector<Eigen::Matrix<double, 6, 1>> work;  ///< the right-hand side, then the solution
+  std::vector<Eigen::LLT<Eigen::Matrix<double, 6, 6>>> body_factor;  ///< Cholesky of each body's D (positive definite)
 };
 
 struct LagrangeStepReport {
@@ -88,6 +91,10 @@ struct LagrangeState : RigidScene {
   std::vector<Eigen::Matrix<double, 6, 1>> body_rhs, accelerations;
   std::vector<Eigen::Vector3d> joint_rhs;
   std::vector<Eigen::Vector3d> projection_multipliers;  ///< the projections' own multipliers (scratch)
+  /// The geometry of the state being solved, computed once per evaluation (update_geometry):
+  /// each joint's world levers and each body's world inertia tensor.
+  std::vector<Eigen::Vector3d> inboard_lever, outboard_lever;
+  std::vector<Eigen::Matrix3d> world_inertia;
   LagrangeStepReport last_report;
 };
 

@@ -3,7 +3,9 @@
 #include "kernel/lagrange/multipliers.hpp"
 
 #include <string>
+#include <tuple>
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include "kernel/rigid/anchor_jacobian.hpp"
@@ -37,7 +39,7 @@ Matrix6 inverse_mass_matrix(const LagrangeState& state, const RigidBodyState& y,
 
 // --- Baraff's tree path ---
 
-void solve_tree(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
+void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<Vector6>& body_rhs,
                 const std::vector<Eigen::Vector3d>& joint_rhs, std::vector<Vector6>& accelerations) {
   TreeSolver& tree = state.tree;
   const auto body_count = static_cast<std::int32_t>(state.bodies.size());
@@ -47,8 +49,8 @@ void solve_tree(LagrangeState& state, const RigidBodyState& y, const std::vector
   auto edge_block = [&](std::int32_t node, std::int32_t parent) {
     const bool node_is_body = node < body_count;
     const std::int32_t body = node_is_body ? node : parent, joint = (node_is_body ? parent : node) - body_count;
-    const auto [inboard_lever, outboard_lever] = levers(state, y, static_cast<std::size_t>(joint));
-    return joints.inboard[joint] == body ? anchor_jacobian(inboard_lever) : AnchorJacobian(-anchor_jacobian(outboard_lever));
+    return joints.inboard[joint] == body ? anchor_jacobian(state.inboard_lever[joint])
+                                         : AnchorJacobian(-anchor_jacobian(state.outboard_lever[joint]));
   };
   // Diagonal blocks (M_b for bodies, 0 for joints) and right-hand sides.
   std::vector<Matrix6>& diagonal = tree.diagonal_inverse;  // D, inverted in place when its node is eliminated
@@ -57,7 +59,7 @@ void solve_tree(LagrangeState& state, const RigidBodyState& y, const std::vector
     tree.work[node].setZero();
     if (static_cast<std::int32_t>(node) < body_count) {
       diagonal[node].topLeftCorner<3, 3>().diagonal().setConstant(state.bodies.mass[node]);
-      diagonal[node].bottomRightCorner<3, 3>() = state.bodies.world_inertia(y, node);
+      diagonal[node].bottomRightCorner<3, 3>() = state.world_inertia[node];
       tree.work[node] = body_rhs[node];
     } else {
       tree.work[node].head<3>() = joint_rhs[node - body_count];
@@ -70,10 +72,11 @@ void solve_tree(LagrangeState& state, const RigidBodyState& y, const std::vector
     Matrix6& inverse = diagonal[node];
     Matrix6& to_parent = tree.to_parent[node];
     if (node < body_count) {
-      inverse = Matrix6(inverse.inverse());
+      Eigen::LLT<Matrix6>& factor = tree.body_factor[node];  // D_b is symmetric positive definite
+      factor.compute(inverse);
       if (parent < 0) continue;
       const AnchorJacobian block = edge_block(node, parent);                       // H_{joint,body}
-      const AnchorJacobian l = block * inverse;                                    // 3×6
+      const AnchorJacobian l = factor.solve(block.transpose()).transpose();        // 3×6: B·D⁻¹, D symmetric
       to_parent.topLeftCorner<3, 6>() = l;
       diagonal[parent].topLeftCorner<3, 3>() -= l * block.transpose();
       tree.work[parent].head<3>() -= l * tree.work[node];
@@ -93,7 +96,7 @@ void solve_tree(LagrangeState& state, const RigidBodyState& y, const std::vector
   for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
     const std::int32_t node = *it, parent = tree.parent[node];
     if (node < body_count) {
-      Vector6 x = diagonal[node] * tree.work[node];
+      Vector6 x = tree.body_factor[node].solve(tree.work[node]);
       if (parent >= 0) x -= tree.to_parent[node].topLeftCorner<3, 6>().transpose() * tree.work[parent].head<3>();
       tree.work[node] = x;
     } else {
@@ -121,9 +124,8 @@ void solve_sparse(LagrangeState& state, const RigidBodyState& y, const std::vect
   // Each joint's Jacobian blocks: (body, block) pairs.
   std::vector<std::vector<std::pair<std::int32_t, AnchorJacobian>>> blocks(joint_count);
   for (std::size_t j = 0; j < joint_count; ++j) {
-    const auto [inboard_lever, outboard_lever] = levers(state, y, j);
-    if (joints.inboard[j] >= 0) blocks[j].emplace_back(joints.inboard[j], anchor_jacobian(inboard_lever));
-    blocks[j].emplace_back(joints.outboard[j], -anchor_jacobian(outboard_lever));
+    if (joints.inboard[j] >= 0) blocks[j].emplace_back(joints.inboard[j], anchor_jacobian(state.inboard_lever[j]));
+    blocks[j].emplace_back(joints.outboard[j], -anchor_jacobian(state.outboard_lever[j]));
   }
   std::vector<std::vector<std::size_t>> joints_of_body(body_count);
   for (std::size_t j = 0; j < joint_count; ++j) {
@@ -235,6 +237,14 @@ void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
   tree.diagonal_inverse.assign(nodes, Matrix6::Zero());
   tree.to_parent.assign(nodes, Matrix6::Zero());
   tree.work.assign(nodes, Vector6::Zero());
+  tree.body_factor.resize(static_cast<std::size_t>(body_count));
+}
+
+void update_geometry(LagrangeState& state, const RigidBodyState& y) {
+  for (std::size_t j = 0; j < state.joints.size(); ++j) {
+    std::tie(state.inboard_lever[j], state.outboard_lever[j]) = levers(state, y, j);
+  }
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) state.world_inertia[b] = state.bodies.world_inertia(y, b);
 }
 
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
@@ -260,11 +270,12 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
   const std::size_t body_count = state.bodies.size();
   if (state.joints.size() == 0) return;
   // The right-hand sides: F with the gyroscopic torque; c = −J̇u (− Baumgarte terms).
+  update_geometry(state, y);
   std::vector<Vector6>& body_rhs = state.body_rhs;
   for (std::size_t b = 0; b < body_count; ++b) {
     const Eigen::Vector3d& omega = state.angular_velocity[b];
     body_rhs[b].head<3>() = forces.force[b];
-    body_rhs[b].tail<3>() = forces.torque[b] - omega.cross(state.bodies.world_inertia(y, b) * omega);
+    body_rhs[b].tail<3>() = forces.torque[b] - omega.cross(state.world_inertia[b] * omega);
   }
   const double frequency = state.options.stabilization == Stabilization::baumgarte
                                ? (state.options.baumgarte_frequency > 0 ? state.options.baumgarte_frequency : 0.25 / state.time_step)
@@ -272,7 +283,7 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
   const JointBuffer& joints = state.joints;
   std::vector<Eigen::Vector3d>& joint_rhs = state.joint_rhs;
   for (std::size_t j = 0; j < joints.size(); ++j) {
-    const auto [inboard_lever, outboard_lever] = levers(state, y, j);
+    const Eigen::Vector3d &inboard_lever = state.inboard_lever[j], &outboard_lever = state.outboard_lever[j];
     const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
     const Eigen::Vector3d& w_o = state.angular_velocity[o];
     Eigen::Vector3d bias = -w_o.cross(w_o.cross(outboard_lever));
@@ -283,12 +294,16 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
       rate += state.velocity[i] + w_i.cross(inboard_lever);
     }
     joint_rhs[j] = -bias;
-    if (frequency > 0) joint_rhs[j] -= 2 * frequency * rate + frequency * frequency * joint_error(state, y, j);
+    if (frequency > 0) {
+      const Eigen::Vector3d outboard = y.position[o] + outboard_lever;
+      const Eigen::Vector3d inboard = i >= 0 ? Eigen::Vector3d(y.position[i] + inboard_lever) : joints.inboard_anchor[j];
+      joint_rhs[j] -= 2 * frequency * rate + frequency * frequency * (inboard - outboard);
+    }
   }
   solve_constrained(state, y, body_rhs, joint_rhs, state.accelerations);
   // The constraint forces Jᵀλ: λ on the inboard body at its anchor, −λ on the outboard.
   for (std::size_t j = 0; j < joints.size(); ++j) {
-    const auto [inboard_lever, outboard_lever] = levers(state, y, j);
+    const Eigen::Vector3d &inboard_lever = state.inboard_lever[j], &outboard_lever = state.outboard_lever[j];
     const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
     if (asleep(state, o)) continue;
     const Eigen::Vector3d& lambda = state.multipliers[j];

@@ -25,7 +25,11 @@ namespace limber {
 /// options.solver is `tree` and a joint closes a loop, naming it.
 void prepare_multiplier_solver(LagrangeState& state, const Model& model);
 
-/// The augmented solve at state y: given per-body right-hand sides (force, torque; 6 per body)
+/// Computes state.inboard_lever, outboard_lever and world_inertia for state y: what the solves
+/// below read. Call it whenever y changed.
+void update_geometry(LagrangeState& state, const RigidBodyState& y);
+
+/// The augmented solve at state y (update_geometry(state, y) must have run): given per-body right-hand sides (force, torque; 6 per body)
 /// and per-joint right-hand sides c (m/s², 3 per joint), finds body accelerations
 /// u̇ = M⁻¹(F + Jᵀλ) and the multipliers λ with J u̇ = c. Sleeping islands get u̇ = 0, λ = 0.
 /// Writes `accelerations` (6 per body) and state.multipliers.

@@ -18,6 +18,7 @@ void project_positions(LagrangeState& state) {
   RigidBodyState& y = state.bodies.state;
   for (auto& rhs : state.body_rhs) rhs.setZero();
   for (int iteration = 0; iteration < state.options.projection_iterations; ++iteration) {
+    update_geometry(state, y);
     for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -joint_error(state, y, j);
     solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
     for (std::size_t b = 0; b < state.bodies.size(); ++b) {
@@ -31,12 +32,13 @@ void project_positions(LagrangeState& state) {
 void project_velocities(LagrangeState& state) {
   RigidBodyState& y = state.bodies.state;
   body_velocities(state, y);
+  update_geometry(state, y);
   for (auto& rhs : state.body_rhs) rhs.setZero();
   for (std::size_t j = 0; j < state.joints.size(); ++j) {
     const JointBuffer& joints = state.joints;
     const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
-    Eigen::Vector3d rate = -(state.velocity[o] + state.angular_velocity[o].cross(y.orientation[o] * joints.outboard_anchor[j]));
-    if (i >= 0) rate += state.velocity[i] + state.angular_velocity[i].cross(y.orientation[i] * joints.inboard_anchor[j]);
+    Eigen::Vector3d rate = -(state.velocity[o] + state.angular_velocity[o].cross(state.outboard_lever[j]));
+    if (i >= 0) rate += state.velocity[i] + state.angular_velocity[i].cross(state.inboard_lever[j]);
     state.joint_rhs[j] = -rate;
   }
   solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
@@ -44,7 +46,7 @@ void project_velocities(LagrangeState& state) {
     const Eigen::Vector3d velocity = state.velocity[b] + state.accelerations[b].head<3>();
     const Eigen::Vector3d omega = state.angular_velocity[b] + state.accelerations[b].tail<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * velocity;
-    y.angular_momentum[b] = state.bodies.world_inertia(y, b) * omega;
+    y.angular_momentum[b] = state.world_inertia[b] * omega;
   }
 }
 
@@ -60,9 +62,10 @@ void velocity_level_step(LagrangeState& state, double dt) {
   RigidForces& forces = state.scratch.forces;
   forces.clear();
   accumulate_applied_forces(state, y, forces);  // also fills v₀, ω₀
+  update_geometry(state, y);
   const std::size_t body_count = state.bodies.size();
   for (std::size_t b = 0; b < body_count; ++b) {
-    const Eigen::Matrix3d inertia = state.bodies.world_inertia(y, b);
+    const Eigen::Matrix3d& inertia = state.world_inertia[b];
     const Eigen::Vector3d& omega = state.angular_velocity[b];
     state.body_rhs[b].head<3>() = state.bodies.mass[b] * state.velocity[b] + dt * forces.force[b];
     state.body_rhs[b].tail<3>() = inertia * omega + dt * (forces.torque[b] - omega.cross(inertia * omega));
@@ -74,7 +77,7 @@ void velocity_level_step(LagrangeState& state, double dt) {
   solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
   for (std::size_t b = 0; b < body_count; ++b) {
     if (state.islands[state.island_of_body[b]].sleeping) continue;
-    const Eigen::Matrix3d inertia = state.bodies.world_inertia(y, b);
+    const Eigen::Matrix3d& inertia = state.world_inertia[b];
     const Eigen::Vector3d& omega = state.angular_velocity[b];
     const Eigen::Vector3d velocity = state.accelerations[b].head<3>(), new_omega = state.accelerations[b].tail<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * velocity;
