@@ -45,7 +45,7 @@ Run run_springs(const Model& model, const SpringOptions& options, double dt, dou
   for (long s = 0; s < steps; ++s) {
     if (step(state, dt).status != StepStatus::ok) return run.stable = false, run;
     for (std::size_t j = 0; j < state.springs.size(); ++j) {
-      const double gap = spring_separation(state, state.bodies.state, j).norm() / state.springs.reference_length[j];
+      const double gap = joint_separation(state.springs, state.bodies.state, j).norm() / state.springs.reference_length[j];
       (state.springs.inboard[j] < 0 ? run.top_gap : run.other_gap) = std::max(gap, state.springs.inboard[j] < 0 ? run.top_gap : run.other_gap);
     }
     run.energy_gain = std::max(run.energy_gain, observe(state).energy() - start);

@@ -43,15 +43,8 @@ struct LagrangeOptions {
   int projection_iterations = 2;  ///< Newton iterations of the position projection
 };
 
-/// The joints, one per Model joint, one array per field: C = p_inboard − p_outboard = 0 (a
-/// spherical joint, 3 rows). A world anchor has body −1 and a world point; a body anchor is in
-/// the rigid body's (principal) frame relative to its centre of mass (m).
-struct JointBuffer {
-  std::vector<std::int32_t> inboard, outboard;
-  std::vector<Eigen::Vector3d> inboard_anchor, outboard_anchor;
-  std::vector<double> reference_length;  ///< what the joint gap is measured against, m
-  std::size_t size() const { return inboard.size(); }
-};
+/// The joints, one per Model joint: C = p_inboard − p_outboard = 0 (a spherical joint, 3 rows).
+using JointBuffer = JointAnchors;
 
 /// Baraff's tree-ordered factorization (Baraff 1996, "Linear-time dynamics using Lagrange
 /// multipliers", section 7): the augmented system

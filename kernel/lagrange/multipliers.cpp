@@ -256,14 +256,6 @@ void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std:
   }
 }
 
-Eigen::Vector3d joint_error(const LagrangeState& state, const RigidBodyState& y, std::size_t j) {
-  const auto [inboard_lever, outboard_lever] = levers(state, y, j);
-  const JointBuffer& joints = state.joints;
-  const Eigen::Vector3d outboard = y.position[joints.outboard[j]] + outboard_lever;
-  const Eigen::Vector3d inboard = joints.inboard[j] >= 0 ? Eigen::Vector3d(y.position[joints.inboard[j]] + inboard_lever)
-                                                         : joints.inboard_anchor[j];
-  return inboard - outboard;
-}
 
 void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces) {
   accumulate_applied_forces(state, y, forces);

@@ -36,9 +36,6 @@ void update_geometry(LagrangeState& state, const RigidBodyState& y);
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Eigen::Matrix<double, 6, 1>>& body_rhs,
                        const std::vector<Eigen::Vector3d>& joint_rhs, std::vector<Eigen::Matrix<double, 6, 1>>& accelerations);
 
-/// Joint j's C = p_inboard − p_outboard at state y, m.
-Eigen::Vector3d joint_error(const LagrangeState& state, const RigidBodyState& y, std::size_t j);
-
 /// Adds gravity, drag and the constraint forces Jᵀλ at state y to `forces` (the accumulate
 /// function of the rigid integrators), with Baumgarte terms when stabilization asks for them.
 void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces);

@@ -19,7 +19,7 @@ void project_positions(LagrangeState& state) {
   for (auto& rhs : state.body_rhs) rhs.setZero();
   for (int iteration = 0; iteration < state.options.projection_iterations; ++iteration) {
     update_geometry(state, y);
-    for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -joint_error(state, y, j);
+    for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -joint_separation(state.joints, y, j);
     solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
     for (std::size_t b = 0; b < state.bodies.size(); ++b) {
       y.position[b] += state.accelerations[b].head<3>();
@@ -73,7 +73,7 @@ void velocity_level_step(LagrangeState& state, double dt) {
   const double frequency = state.options.stabilization == Stabilization::baumgarte
                                ? (state.options.baumgarte_frequency > 0 ? state.options.baumgarte_frequency : 0.25 / dt)
                                : 0.0;
-  for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -frequency * joint_error(state, y, j);
+  for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -frequency * joint_separation(state.joints, y, j);
   solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
   for (std::size_t b = 0; b < body_count; ++b) {
     if (state.islands[state.island_of_body[b]].sleeping) continue;
@@ -114,7 +114,7 @@ LagrangeStepReport step(LagrangeState& state, double dt) {
   std::swap(state.multipliers, state.projection_multipliers);
   report.contacts = static_cast<int>(state.contacts.size());
   for (std::size_t j = 0; j < state.joints.size(); ++j) {
-    report.constraint_error = std::max(report.constraint_error, joint_error(state, state.bodies.state, j).norm());
+    report.constraint_error = std::max(report.constraint_error, joint_separation(state.joints, state.bodies.state, j).norm());
   }
   state.time += dt;
   report.status = update_sleep(state, dt);

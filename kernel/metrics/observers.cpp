@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/lagrange/multipliers.hpp"
 #include "kernel/springs/spring_forces.hpp"
 
 namespace limber {
@@ -88,32 +87,29 @@ Observation observe_rigid_scene(const RigidScene& scene) {
   return out;
 }
 
-// Max and RMS of |C_j| / reference_j over joints.
-template <typename Error>
-void add_joint_gaps(Observation& out, std::size_t count, const std::vector<double>& reference, Error&& error) {
+// Max and RMS of |d_j| / reference_j over the joints.
+void add_joint_gaps(Observation& out, const JointAnchors& joints, const RigidBodyState& y) {
   double squares = 0;
-  for (std::size_t j = 0; j < count; ++j) {
-    const double gap = error(j).norm() / reference[j];
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const double gap = joint_separation(joints, y, j).norm() / joints.reference_length[j];
     out.max_joint_gap = std::max(out.max_joint_gap, gap);
     squares += gap * gap;
   }
-  if (count > 0) out.rms_joint_gap = std::sqrt(squares / count);
+  if (joints.size() > 0) out.rms_joint_gap = std::sqrt(squares / joints.size());
 }
 
 }  // namespace
 
 Observation observe(const SpringState& state) {
   Observation out = observe_rigid_scene(state);
-  add_joint_gaps(out, state.springs.size(), state.springs.reference_length,
-                 [&](std::size_t s) { return spring_separation(state, state.bodies.state, s); });
+  add_joint_gaps(out, state.springs, state.bodies.state);
   out.potential_energy += spring_energy(state);
   return out;
 }
 
 Observation observe(const LagrangeState& state) {
   Observation out = observe_rigid_scene(state);
-  add_joint_gaps(out, state.joints.size(), state.joints.reference_length,
-                 [&](std::size_t j) { return joint_error(state, state.bodies.state, j); });
+  add_joint_gaps(out, state.joints, state.bodies.state);
   return out;
 }
 

@@ -101,6 +101,32 @@ RigidScene compile_rigid_scene(const Model& model) {
   return scene;
 }
 
+JointAnchors joint_anchors(const RigidScene& scene, const Model& model) {
+  JointAnchors joints;
+  for (const Joint& joint : model.joints) {
+    joints.inboard.push_back(joint.inboard);
+    joints.outboard.push_back(joint.outboard);
+    joints.outboard_anchor.push_back(body_anchor(scene, joint.outboard, joint.outboard_anchor));
+    double reference = model.bodies[joint.outboard].shape.length;
+    if (joint.inboard == kWorld) {
+      joints.inboard_anchor.push_back(joint.inboard_anchor);
+    } else {
+      joints.inboard_anchor.push_back(body_anchor(scene, joint.inboard, joint.inboard_anchor));
+      reference = 0.5 * (reference + model.bodies[joint.inboard].shape.length);
+    }
+    joints.reference_length.push_back(reference);
+  }
+  return joints;
+}
+
+Eigen::Vector3d joint_separation(const JointAnchors& joints, const RigidBodyState& y, std::size_t j) {
+  const std::int32_t inboard = joints.inboard[j], outboard = joints.outboard[j];
+  const Eigen::Vector3d outboard_point = y.position[outboard] + y.orientation[outboard] * joints.outboard_anchor[j];
+  const Eigen::Vector3d inboard_point =
+      inboard >= 0 ? Eigen::Vector3d(y.position[inboard] + y.orientation[inboard] * joints.inboard_anchor[j]) : joints.inboard_anchor[j];
+  return inboard_point - outboard_point;
+}
+
 Eigen::Vector3d body_anchor(const RigidScene& scene, std::size_t body, const Eigen::Vector3d& local_point) {
   return scene.shapes.principal_frame[body].conjugate() * (local_point - scene.shapes.centre_offset[body]);
 }

@@ -46,6 +46,20 @@ struct RigidContact {
   double approach_speed = 0;  ///< normal speed towards each other before the impulses, m/s, ≥ 0
 };
 
+/// The Model's joints as anchor pairs on the rigid bodies, one per joint, one array per field:
+/// a joint's separation is d = p_inboard − p_outboard (m). A world anchor has body −1 and its
+/// point in world coordinates; a body anchor is in the rigid body's (principal) frame, relative
+/// to its centre of mass (m). Every rigid-body method starts from these (springs pull d to 0,
+/// Lagrange constrains it to 0).
+struct JointAnchors {
+  std::vector<std::int32_t> inboard, outboard;
+  std::vector<Eigen::Vector3d> inboard_anchor, outboard_anchor;
+  /// What the joint gap is measured against, as in the Verlet method: the mean length of the
+  /// two limbs (the outboard limb's for a joint to the world), m.
+  std::vector<double> reference_length;
+  std::size_t size() const { return inboard.size(); }
+};
+
 /// The shared part of a rigid-body method's state.
 struct RigidScene {
   RigidBodyBuffer bodies;
@@ -75,6 +89,12 @@ struct RigidScene {
 /// - the ground and the bounds' walls become planes.
 /// Throws ModelError when the model is invalid.
 RigidScene compile_rigid_scene(const Model& model);
+
+/// The anchors of `model`'s joints on `scene`'s bodies.
+JointAnchors joint_anchors(const RigidScene& scene, const Model& model);
+
+/// Joint j's separation d = p_inboard − p_outboard at state y, m.
+Eigen::Vector3d joint_separation(const JointAnchors& joints, const RigidBodyState& y, std::size_t j);
 
 /// World position of Model body `body`'s body-frame point `local_point` (Model frame: the
 /// shape's centre), m.

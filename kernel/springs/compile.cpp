@@ -21,19 +21,8 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
 
   // Springs, one per joint, anchors relative to the centres of mass.
   SpringBuffer& springs = state.springs;
+  static_cast<JointAnchors&>(springs) = joint_anchors(state, model);
   for (const Joint& joint : model.joints) {
-    const Body& outboard = model.bodies[joint.outboard];
-    springs.inboard.push_back(joint.inboard);
-    springs.outboard.push_back(joint.outboard);
-    springs.outboard_anchor.push_back(body_anchor(state, joint.outboard, joint.outboard_anchor));
-    double reference = outboard.shape.length;
-    if (joint.inboard == kWorld) {
-      springs.inboard_anchor.push_back(joint.inboard_anchor);
-    } else {
-      springs.inboard_anchor.push_back(body_anchor(state, joint.inboard, joint.inboard_anchor));
-      reference = 0.5 * (reference + model.bodies[joint.inboard].shape.length);
-    }
-    springs.reference_length.push_back(reference);
     springs.stiffness.push_back(options.stiffness.value_or(joint.stiffness.value_or(model.settings.springs.stiffness)));
     springs.damping.push_back(options.damping.value_or(joint.damping.value_or(model.settings.springs.damping)));
   }

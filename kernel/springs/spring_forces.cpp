@@ -39,19 +39,10 @@ void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces&
   }
 }
 
-Eigen::Vector3d spring_separation(const SpringState& state, const RigidBodyState& y, std::size_t s) {
-  const SpringBuffer& springs = state.springs;
-  const std::int32_t inboard = springs.inboard[s], outboard = springs.outboard[s];
-  const Eigen::Vector3d outboard_point = y.position[outboard] + y.orientation[outboard] * springs.outboard_anchor[s];
-  const Eigen::Vector3d inboard_point =
-      inboard >= 0 ? Eigen::Vector3d(y.position[inboard] + y.orientation[inboard] * springs.inboard_anchor[s]) : springs.inboard_anchor[s];
-  return inboard_point - outboard_point;
-}
-
 double spring_energy(const SpringState& state) {
   double energy = 0;
   for (std::size_t s = 0; s < state.springs.size(); ++s) {
-    energy += 0.5 * state.springs.stiffness[s] * spring_separation(state, state.bodies.state, s).squaredNorm();
+    energy += 0.5 * state.springs.stiffness[s] * joint_separation(state.springs, state.bodies.state, s).squaredNorm();
   }
   return energy;
 }

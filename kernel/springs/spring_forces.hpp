@@ -22,9 +22,6 @@ SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::s
 /// torques r × f.
 void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces& forces);
 
-/// Spring s's d = p_inboard − p_outboard at state y, m (no velocities needed).
-Eigen::Vector3d spring_separation(const SpringState& state, const RigidBodyState& y, std::size_t s);
-
 /// Potential energy stored in the springs at the current state, Σ ½ k |d|², J.
 double spring_energy(const SpringState& state);
 

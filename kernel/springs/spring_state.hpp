@@ -51,16 +51,10 @@ struct SpringOptions {
   int newton_iterations = 2;
 };
 
-/// The springs, one per Model joint, one array per field. A world anchor has body −1 and its
-/// anchor in world coordinates; a body anchor is in the rigid body's (principal) frame, relative
-/// to its centre of mass (m).
-struct SpringBuffer {
-  std::vector<std::int32_t> inboard, outboard;
-  std::vector<Eigen::Vector3d> inboard_anchor, outboard_anchor;
-  std::vector<double> stiffness;         ///< k, N/m
-  std::vector<double> damping;           ///< c, N·s/m
-  std::vector<double> reference_length;  ///< what the joint gap is measured against (as the Verlet method's), m
-  std::size_t size() const { return stiffness.size(); }
+/// The springs, one per Model joint: the joint's anchors and, per spring, one array per field.
+struct SpringBuffer : JointAnchors {
+  std::vector<double> stiffness;  ///< k, N/m
+  std::vector<double> damping;    ///< c, N·s/m
 };
 
 struct SpringStepReport {

@@ -146,7 +146,7 @@ TEST(SpringChain, EachJointStretchesByTheWeightItCarries) {
     double carried = 0;
     for (std::size_t j = model.joints.size(); j-- > 0;) {
       carried += model.bodies[j].mass;
-      const double gap = (spring_separation(state, state.bodies.state, j)).norm();
+      const double gap = (joint_separation(state.springs, state.bodies.state, j)).norm();
       EXPECT_NEAR(gap, 9.81 * carried / k, 1e-3 * 9.81 * carried / k) << "joint " << j;
     }
   }
