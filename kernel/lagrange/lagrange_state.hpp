@@ -60,7 +60,7 @@ struct TreeSolver {
   /// kept as its Cholesky factor in body_factor), and the block
   /// L = H_{parent,node}·D⁻¹ (top-left corners of fixed 6×6 storage: 6 rows/columns for bodies,
   /// 3 for joints). Refilled at every solve; nothing is allocated.
-  std::vector<Eigen::Matrix<double, 6, 6>> diagonal_inverse, to_parent;
+  std::vector<Eigen::Matrix<double, 6, 6>> diagonal, to_parent;
   std::vector<Eigen::Matrix<double, 6, 1>> work;  ///< the right-hand side, then the solution
   std::vector<Eigen::LLT<Eigen::Matrix<double, 6, 6>>> body_factor;  ///< Cholesky of each body's D (positive definite)
 };

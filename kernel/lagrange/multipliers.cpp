@@ -53,7 +53,7 @@ void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<V
                                          : AnchorJacobian(-anchor_jacobian(state.outboard_lever[joint]));
   };
   // Diagonal blocks (M_b for bodies, 0 for joints) and right-hand sides.
-  std::vector<Matrix6>& diagonal = tree.diagonal_inverse;  // D, inverted in place when its node is eliminated
+  std::vector<Matrix6>& diagonal = tree.diagonal;  // D; a joint's is inverted in place when it is eliminated
   for (std::size_t node = 0; node < nodes; ++node) {
     diagonal[node].setZero();
     tree.work[node].setZero();
@@ -69,11 +69,11 @@ void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<V
   // D_parent −= L·H_{node,parent} and y_parent −= L·y_node.
   for (const std::int32_t node : tree.order) {
     const std::int32_t parent = tree.parent[node];
-    Matrix6& inverse = diagonal[node];
+    Matrix6& block_d = diagonal[node];
     Matrix6& to_parent = tree.to_parent[node];
     if (node < body_count) {
       Eigen::LLT<Matrix6>& factor = tree.body_factor[node];  // D_b is symmetric positive definite
-      factor.compute(inverse);
+      factor.compute(block_d);
       if (parent < 0) continue;
       const AnchorJacobian block = edge_block(node, parent);                       // H_{joint,body}
       const AnchorJacobian l = factor.solve(block.transpose()).transpose();        // 3×6: B·D⁻¹, D symmetric
@@ -81,9 +81,8 @@ void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<V
       diagonal[parent].topLeftCorner<3, 3>() -= l * block.transpose();
       tree.work[parent].head<3>() -= l * tree.work[node];
     } else {
-      const Eigen::Matrix3d joint_inverse = inverse.topLeftCorner<3, 3>().inverse();
-      inverse.setZero();
-      inverse.topLeftCorner<3, 3>() = joint_inverse;
+      const Eigen::Matrix3d joint_inverse = block_d.topLeftCorner<3, 3>().inverse();  // negative definite
+      block_d.topLeftCorner<3, 3>() = joint_inverse;
       if (parent < 0) continue;
       const AnchorJacobian block = edge_block(node, parent);                       // H_{joint,body}; H_{body,joint} = blockᵀ
       const Eigen::Matrix<double, 6, 3> l = block.transpose() * joint_inverse;     // 6×3
@@ -234,7 +233,7 @@ void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
     }
   }
   tree.order.assign(breadth_first.rbegin(), breadth_first.rend());
-  tree.diagonal_inverse.assign(nodes, Matrix6::Zero());
+  tree.diagonal.assign(nodes, Matrix6::Zero());
   tree.to_parent.assign(nodes, Matrix6::Zero());
   tree.work.assign(nodes, Vector6::Zero());
   tree.body_factor.resize(static_cast<std::size_t>(body_count));
