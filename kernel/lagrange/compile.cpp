@@ -10,16 +10,16 @@ LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& option
   state.options = options;
   state.time_step = model.settings.time_step;
   state.joints = joint_anchors(state, model);
-  const JointBuffer& joints = state.joints;
+  state.constraints = compile_constraints(state, model);
+  const ConstraintSet& constraints = state.constraints;
   prepare_multiplier_solver(state, model);
   const std::size_t body_count = state.bodies.size();
   state.scratch.resize(body_count);
   state.body_rhs.assign(body_count, Eigen::Matrix<double, 6, 1>::Zero());
   state.accelerations.assign(body_count, Eigen::Matrix<double, 6, 1>::Zero());
-  state.joint_rhs.assign(joints.size(), Eigen::Vector3d::Zero());
-  state.projection_multipliers.assign(joints.size(), Eigen::Vector3d::Zero());
-  state.inboard_lever.assign(joints.size(), Eigen::Vector3d::Zero());
-  state.outboard_lever.assign(joints.size(), Eigen::Vector3d::Zero());
+  state.constraint_rhs = state.multipliers;  // zeros, each its constraint's rows
+  state.projection_multipliers = state.multipliers;
+  state.geometry.resize(constraints);
   state.world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
   return state;
 }

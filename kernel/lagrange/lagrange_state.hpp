@@ -14,6 +14,8 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "kernel/lagrange/constraints.hpp"
+#include "kernel/numerics/small_cholesky.hpp"
 #include "kernel/rigid/rigid_integration.hpp"
 #include "kernel/rigid/rigid_scene.hpp"
 
@@ -43,50 +45,50 @@ struct LagrangeOptions {
   int projection_iterations = 2;  ///< Newton iterations of the position projection
 };
 
-/// The joints, one per Model joint: C = p_inboard − p_outboard = 0 (a spherical joint, 3 rows).
-using JointBuffer = JointAnchors;
-
 /// Baraff's tree-ordered factorization (Baraff 1996, "Linear-time dynamics using Lagrange
 /// multipliers", section 7): the augmented system
 ///   H = [M  Jᵀ; J  0],   H·(u̇, −λ) = (F, c),
-/// as a graph whose nodes are the bodies (6×6 blocks M_b) and the joints (3×3 zero blocks),
-/// with an edge of block J_jb = ±G_b wherever joint j acts on body b. Without loops this graph is
-/// a forest; eliminating its nodes children-first (each node's parent after it) makes the block
-/// LDLᵀ factorization fill nothing, so factor and solve are O(bodies + joints).
+/// as a graph whose nodes are the bodies (6×6 blocks M_b) and the constraints (m×m zero blocks,
+/// m = 1…6 rows), with an edge of block J_cb wherever constraint c acts on body b. Without loops
+/// this graph is a forest; eliminating its nodes children-first (each node's parent after it)
+/// makes the block LDLᵀ factorization fill nothing, so factor and solve are O(bodies + joints).
 struct TreeSolver {
   std::vector<std::int32_t> order;   ///< node elimination order: every node before its parent
-  std::vector<std::int32_t> parent;  ///< per node, −1 for a root; nodes: bodies, then joints
-  /// Per node: the factored diagonal block D (a joint's inverted when it is eliminated; a body's
-  /// kept as its Cholesky factor in body_factor), and the block
+  std::vector<std::int32_t> parent;  ///< per node, −1 for a root; nodes: bodies, then constraints
+  /// Per node: the factored diagonal block D (a constraint's inverted when it is eliminated; a
+  /// body's kept as its Cholesky factor in body_factor), and the block
   /// L = H_{parent,node}·D⁻¹ (top-left corners of fixed 6×6 storage: 6 rows/columns for bodies,
-  /// 3 for joints). Refilled at every solve; nothing is allocated.
+  /// m for constraints). Refilled at every solve; nothing is allocated.
   std::vector<Eigen::Matrix<double, 6, 6>> diagonal, to_parent;
   std::vector<Eigen::Matrix<double, 6, 1>> work;  ///< the right-hand side, then the solution
-  std::vector<Eigen::LLT<Eigen::Matrix<double, 6, 6>>> body_factor;  ///< Cholesky of each body's D (positive definite)
+  std::vector<SmallCholesky<6>> body_factor;  ///< Cholesky of each body's D (positive definite)
 };
 
 struct LagrangeStepReport {
   StepStatus status = StepStatus::ok;
   int contacts = 0;
-  double constraint_error = 0;  ///< largest |C| after the step, m
+  double constraint_error = 0;  ///< largest |C| of a joint's point and slide rows after the step, m
+  double angular_error = 0;     ///< largest |u·v| of a joint's angular rows after the step (≈ rad)
 };
 
 struct LagrangeState : RigidScene {
-  JointBuffer joints;
+  JointAnchors joints;        ///< the Model's joints' anchors
+  ConstraintSet constraints;  ///< the joints' rows, then the gears'
   LagrangeOptions options;
   bool uses_tree = true;  ///< the solver chosen at compile (tree, or sparse for graphs with loops)
   RigidIntegratorScratch scratch;
   TreeSolver tree;
-  /// Multipliers of the last evaluation: the force on the inboard body at its anchor, N (3 per joint).
-  std::vector<Eigen::Vector3d> multipliers;
+  /// Multipliers of the last evaluation, per constraint (its rows). A joint's point rows are the
+  /// force on the inboard body at its anchor, N; angular rows are torques, N·m.
+  std::vector<ConstraintVector> multipliers;
   double time_step = 0;  ///< Δt of the step under way (Baumgarte's default frequency needs it)
   // Scratch for the solves, sized at compile.
   std::vector<Eigen::Matrix<double, 6, 1>> body_rhs, accelerations;
-  std::vector<Eigen::Vector3d> joint_rhs;
-  std::vector<Eigen::Vector3d> projection_multipliers;  ///< the projections' own multipliers (scratch)
+  std::vector<ConstraintVector> constraint_rhs;
+  std::vector<ConstraintVector> projection_multipliers;  ///< the projections' own multipliers (scratch)
   /// The geometry of the state being solved, computed once per evaluation (update_geometry):
-  /// each joint's world levers and each body's world inertia tensor.
-  std::vector<Eigen::Vector3d> inboard_lever, outboard_lever;
+  /// the constraints' levers and Jacobian blocks and each body's world inertia tensor.
+  ConstraintGeometry geometry;
   std::vector<Eigen::Matrix3d> world_inertia;
   LagrangeStepReport last_report;
 };

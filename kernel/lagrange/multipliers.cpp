@@ -3,6 +3,7 @@
 #include "kernel/lagrange/multipliers.hpp"
 
 #include <string>
+#include <type_traits>
 #include <tuple>
 
 #include <Eigen/Cholesky>
@@ -20,15 +21,6 @@ using Matrix6 = Eigen::Matrix<double, 6, 6>;
 
 bool asleep(const LagrangeState& state, std::int32_t body) { return state.islands[state.island_of_body[body]].sleeping; }
 
-// The world levers of joint j's two anchors at y (zero for a world anchor).
-std::pair<Eigen::Vector3d, Eigen::Vector3d> levers(const LagrangeState& state, const RigidBodyState& y, std::size_t j) {
-  const JointBuffer& joints = state.joints;
-  const Eigen::Vector3d outboard = y.orientation[joints.outboard[j]] * joints.outboard_anchor[j];
-  const Eigen::Vector3d inboard = joints.inboard[j] >= 0 ? Eigen::Vector3d(y.orientation[joints.inboard[j]] * joints.inboard_anchor[j])
-                                                         : Eigen::Vector3d::Zero();
-  return {inboard, outboard};
-}
-
 // M⁻¹ for body b at y: diag(1/m, I_world⁻¹).
 Matrix6 inverse_mass_matrix(const LagrangeState& state, const RigidBodyState& y, std::size_t b) {
   Matrix6 m = Matrix6::Zero();
@@ -37,23 +29,42 @@ Matrix6 inverse_mass_matrix(const LagrangeState& state, const RigidBodyState& y,
   return m;
 }
 
+// Calls function(std::integral_constant<int, rows>{}) for rows in 1…6, so each constraint's
+// blocks get fixed-size (unrolled, vectorized) arithmetic.
+template <typename Function>
+void with_rows(int rows, Function&& function) {
+  switch (rows) {
+    case 1: return function(std::integral_constant<int, 1>{});
+    case 2: return function(std::integral_constant<int, 2>{});
+    case 3: return function(std::integral_constant<int, 3>{});
+    case 4: return function(std::integral_constant<int, 4>{});
+    case 5: return function(std::integral_constant<int, 5>{});
+    default: return function(std::integral_constant<int, 6>{});
+  }
+}
+
+// A square block of at most 6×6, stored without heap allocation.
+using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+
 // --- Baraff's tree path ---
 
-void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<Vector6>& body_rhs,
-                const std::vector<Eigen::Vector3d>& joint_rhs, std::vector<Vector6>& accelerations) {
+void solve_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, const std::vector<ConstraintVector>& constraint_rhs,
+                std::vector<Vector6>& accelerations) {
   TreeSolver& tree = state.tree;
   const auto body_count = static_cast<std::int32_t>(state.bodies.size());
-  const JointBuffer& joints = state.joints;
+  const ConstraintSet& constraints = state.constraints;
   const std::size_t nodes = tree.parent.size();
-  // The joint–body block B = J_jb = ±G_b (3×6) of the edge between `node` and its parent.
-  auto edge_block = [&](std::int32_t node, std::int32_t parent) {
-    const bool node_is_body = node < body_count;
-    const std::int32_t body = node_is_body ? node : parent, joint = (node_is_body ? parent : node) - body_count;
-    return joints.inboard[joint] == body ? anchor_jacobian(state.inboard_lever[joint])
-                                         : AnchorJacobian(-anchor_jacobian(state.outboard_lever[joint]));
+  const auto rows_of = [&](std::int32_t node) {
+    return node < body_count ? 6 : constraints.row_offset[node - body_count + 1] - constraints.row_offset[node - body_count];
   };
-  // Diagonal blocks (M_b for bodies, 0 for joints) and right-hand sides.
-  std::vector<Matrix6>& diagonal = tree.diagonal;  // D; a joint's is inverted in place when it is eliminated
+  // The constraint–body block H_{constraint,body} = J_cb (rows × 6) of the edge between `node` and its parent.
+  auto edge_block = [&](std::int32_t node, std::int32_t parent) -> const ConstraintBlock& {
+    const bool node_is_body = node < body_count;
+    const std::int32_t body = node_is_body ? node : parent, c = (node_is_body ? parent : node) - body_count;
+    return constraints.inboard[c] == body ? state.geometry.inboard_jacobian[c] : state.geometry.outboard_jacobian[c];
+  };
+  // Diagonal blocks (M_b for bodies, 0 for constraints) and right-hand sides.
+  std::vector<Matrix6>& diagonal = tree.diagonal;  // D; a constraint's is inverted in place when it is eliminated
   for (std::size_t node = 0; node < nodes; ++node) {
     diagonal[node].setZero();
     tree.work[node].setZero();
@@ -62,99 +73,129 @@ void solve_tree(LagrangeState& state, const RigidBodyState&, const std::vector<V
       diagonal[node].bottomRightCorner<3, 3>() = state.world_inertia[node];
       tree.work[node] = body_rhs[node];
     } else {
-      tree.work[node].head<3>() = joint_rhs[node - body_count];
+      const ConstraintVector& rhs = constraint_rhs[node - body_count];
+      tree.work[node].head(rhs.size()) = rhs;
     }
   }
   // Factor and forward-substitute, children first: L = H_{parent,node}·D⁻¹, then
-  // D_parent −= L·H_{node,parent} and y_parent −= L·y_node.
+  // D_parent −= L·H_{node,parent} and y_parent −= L·y_node. Blocks are fixed-size per row count.
   for (const std::int32_t node : tree.order) {
     const std::int32_t parent = tree.parent[node];
     Matrix6& block_d = diagonal[node];
     Matrix6& to_parent = tree.to_parent[node];
     if (node < body_count) {
-      Eigen::LLT<Matrix6>& factor = tree.body_factor[node];  // D_b is symmetric positive definite
+      SmallCholesky<6>& factor = tree.body_factor[node];  // D_b is symmetric positive definite
       factor.compute(block_d);
       if (parent < 0) continue;
-      const AnchorJacobian block = edge_block(node, parent);                       // H_{joint,body}
-      const AnchorJacobian l = factor.solve(block.transpose()).transpose();        // 3×6: B·D⁻¹, D symmetric
-      to_parent.topLeftCorner<3, 6>() = l;
-      diagonal[parent].topLeftCorner<3, 3>() -= l * block.transpose();
-      tree.work[parent].head<3>() -= l * tree.work[node];
+      const ConstraintBlock& edge = edge_block(node, parent);  // H_{constraint,body}
+      with_rows(rows_of(parent), [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        const Eigen::Matrix<double, m, 6> block = edge.template topRows<m>();
+        const Eigen::Matrix<double, m, 6> l = factor.solve(Eigen::Matrix<double, 6, m>(block.transpose())).transpose();  // B·D⁻¹, D symmetric
+        to_parent.template topRows<m>() = l;
+        diagonal[parent].template topLeftCorner<m, m>().noalias() -= l * block.transpose();
+        tree.work[parent].template head<m>().noalias() -= l * tree.work[node];
+      });
     } else {
-      const Eigen::Matrix3d joint_inverse = block_d.topLeftCorner<3, 3>().inverse();  // negative definite
-      block_d.topLeftCorner<3, 3>() = joint_inverse;
-      if (parent < 0) continue;
-      const AnchorJacobian block = edge_block(node, parent);                       // H_{joint,body}; H_{body,joint} = blockᵀ
-      const Eigen::Matrix<double, 6, 3> l = block.transpose() * joint_inverse;     // 6×3
-      to_parent.topLeftCorner<6, 3>() = l;
-      diagonal[parent] -= l * block;
-      tree.work[parent] -= l * tree.work[node].head<3>();
+      with_rows(rows_of(node), [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        // D is negative definite (the Schur complement −J M⁻¹ Jᵀ of its children): Eigen's
+        // closed form inverts up to 4×4, and −D has a Cholesky factor for larger blocks.
+        using Square = Eigen::Matrix<double, m, m>;
+        Square inverse;
+        if constexpr (m <= 4) {
+          inverse = block_d.template topLeftCorner<m, m>().inverse();
+        } else {
+          inverse = -Eigen::LLT<Square>(-block_d.template topLeftCorner<m, m>()).solve(Square::Identity());
+        }
+        block_d.template topLeftCorner<m, m>() = inverse;
+        if (parent < 0) return;
+        const Eigen::Matrix<double, m, 6> block = edge_block(node, parent).template topRows<m>();  // H_{constraint,body}
+        const Eigen::Matrix<double, 6, m> l = block.transpose() * inverse;
+        to_parent.template leftCols<m>() = l;
+        diagonal[parent].noalias() -= l * block;
+        tree.work[parent].noalias() -= l * tree.work[node].template head<m>();
+      });
     }
   }
   // Back-substitute, parents first: x_node = D⁻¹·y_node − Lᵀ·x_parent.
   for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it) {
     const std::int32_t node = *it, parent = tree.parent[node];
     if (node < body_count) {
-      Vector6 x = tree.body_factor[node].solve(tree.work[node]);
-      if (parent >= 0) x -= tree.to_parent[node].topLeftCorner<3, 6>().transpose() * tree.work[parent].head<3>();
+      Vector6 x = tree.body_factor[node].solve(Vector6(tree.work[node]));
+      if (parent >= 0) {
+        with_rows(rows_of(parent), [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          x.noalias() -= tree.to_parent[node].template topRows<m>().transpose() * tree.work[parent].template head<m>();
+        });
+      }
       tree.work[node] = x;
     } else {
-      Eigen::Vector3d x = diagonal[node].topLeftCorner<3, 3>() * tree.work[node].head<3>();
-      if (parent >= 0) x -= tree.to_parent[node].topLeftCorner<6, 3>().transpose() * tree.work[parent];
-      tree.work[node].head<3>() = x;
+      with_rows(rows_of(node), [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        Eigen::Matrix<double, m, 1> x = diagonal[node].template topLeftCorner<m, m>() * tree.work[node].template head<m>();
+        if (parent >= 0) x.noalias() -= tree.to_parent[node].template leftCols<m>().transpose() * tree.work[parent];
+        tree.work[node].template head<m>() = x;
+      });
     }
   }
   for (std::int32_t b = 0; b < body_count; ++b) accelerations[b] = tree.work[b];
-  for (std::size_t j = 0; j < joints.size(); ++j) state.multipliers[j] = -tree.work[body_count + j].head<3>();
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    state.multipliers[c] = -tree.work[body_count + c].head(rows_of(body_count + static_cast<std::int32_t>(c)));
+  }
 }
 
 // --- The general sparse path: (J M⁻¹ Jᵀ) λ = c − J M⁻¹ F ---
 
 void solve_sparse(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
-                  const std::vector<Eigen::Vector3d>& joint_rhs, std::vector<Vector6>& accelerations) {
-  const std::size_t body_count = state.bodies.size(), joint_count = state.joints.size();
-  const JointBuffer& joints = state.joints;
+                  const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
+  const std::size_t body_count = state.bodies.size();
+  const ConstraintSet& constraints = state.constraints;
+  const ConstraintGeometry& geometry = state.geometry;
   std::vector<Matrix6> inverse_mass(body_count);
   std::vector<Vector6> free_acceleration(body_count);
   for (std::size_t b = 0; b < body_count; ++b) {
     inverse_mass[b] = inverse_mass_matrix(state, y, b);
     free_acceleration[b] = inverse_mass[b] * body_rhs[b];
   }
-  // Each joint's Jacobian blocks: (body, block) pairs.
-  std::vector<std::vector<std::pair<std::int32_t, AnchorJacobian>>> blocks(joint_count);
-  for (std::size_t j = 0; j < joint_count; ++j) {
-    if (joints.inboard[j] >= 0) blocks[j].emplace_back(joints.inboard[j], anchor_jacobian(state.inboard_lever[j]));
-    blocks[j].emplace_back(joints.outboard[j], -anchor_jacobian(state.outboard_lever[j]));
+  // Each constraint's Jacobian blocks: (body, block) pairs.
+  const auto blocks = [&](std::size_t c) {
+    std::vector<std::pair<std::int32_t, const ConstraintBlock*>> pairs;
+    if (constraints.inboard[c] >= 0) pairs.emplace_back(constraints.inboard[c], &geometry.inboard_jacobian[c]);
+    pairs.emplace_back(constraints.outboard[c], &geometry.outboard_jacobian[c]);
+    return pairs;
+  };
+  std::vector<std::vector<std::size_t>> constraints_of_body(body_count);
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    for (const auto& [b, block] : blocks(c)) constraints_of_body[b].push_back(c);
   }
-  std::vector<std::vector<std::size_t>> joints_of_body(body_count);
-  for (std::size_t j = 0; j < joint_count; ++j) {
-    for (const auto& [b, block] : blocks[j]) joints_of_body[b].push_back(j);
-  }
+  const auto total_rows = static_cast<Eigen::Index>(constraints.total_rows());
   std::vector<Eigen::Triplet<double>> entries;
-  Eigen::VectorXd rhs(3 * joint_count);
-  for (std::size_t j = 0; j < joint_count; ++j) {
-    Eigen::Vector3d c = joint_rhs[j];
-    for (const auto& [b, block] : blocks[j]) c -= block * free_acceleration[b];
-    rhs.segment<3>(3 * j) = c;
-    for (const auto& [b, block] : blocks[j]) {
-      for (const std::size_t k : joints_of_body[b]) {
-        for (const auto& [b2, block2] : blocks[k]) {
+  Eigen::VectorXd rhs(total_rows);
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    const std::int32_t offset = constraints.row_offset[c];
+    ConstraintVector right = constraint_rhs[c];
+    for (const auto& [b, block] : blocks(c)) right.noalias() -= *block * free_acceleration[b];
+    rhs.segment(offset, right.size()) = right;
+    for (const auto& [b, block] : blocks(c)) {
+      for (const std::size_t k : constraints_of_body[b]) {
+        for (const auto& [b2, block2] : blocks(k)) {
           if (b2 != b) continue;
-          const Eigen::Matrix3d a = block * inverse_mass[b] * block2.transpose();
-          for (int r = 0; r < 3; ++r)
-            for (int c2 = 0; c2 < 3; ++c2) entries.emplace_back(3 * j + r, 3 * k + c2, a(r, c2));
+          const SmallMatrix a = *block * inverse_mass[b] * block2->transpose();
+          for (Eigen::Index r = 0; r < a.rows(); ++r)
+            for (Eigen::Index col = 0; col < a.cols(); ++col) entries.emplace_back(offset + r, constraints.row_offset[k] + col, a(r, col));
         }
       }
     }
   }
-  Eigen::SparseMatrix<double> matrix(3 * joint_count, 3 * joint_count);
+  Eigen::SparseMatrix<double> matrix(total_rows, total_rows);
   matrix.setFromTriplets(entries.begin(), entries.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(matrix);
-  const Eigen::VectorXd lambda = joint_count ? Eigen::VectorXd(ldlt.solve(rhs)) : Eigen::VectorXd();
+  const Eigen::VectorXd lambda = total_rows ? Eigen::VectorXd(ldlt.solve(rhs)) : Eigen::VectorXd();
   std::vector<Vector6> constraint_force(body_count, Vector6::Zero());
-  for (std::size_t j = 0; j < joint_count; ++j) {
-    state.multipliers[j] = lambda.segment<3>(3 * j);
-    for (const auto& [b, block] : blocks[j]) constraint_force[b] += block.transpose() * state.multipliers[j];
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    state.multipliers[c] = lambda.segment(constraints.row_offset[c], constraints.rows[c].rows());
+    for (const auto& [b, block] : blocks(c)) constraint_force[b].noalias() += block->transpose() * state.multipliers[c];
   }
   for (std::size_t b = 0; b < body_count; ++b) accelerations[b] = inverse_mass[b] * (body_rhs[b] + constraint_force[b]);
 }
@@ -163,10 +204,10 @@ void solve_sparse(LagrangeState& state, const RigidBodyState& y, const std::vect
 
 void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
   const auto body_count = static_cast<std::int32_t>(state.bodies.size());
-  const JointBuffer& joints = state.joints;
+  const ConstraintSet& joints = state.constraints;  // joints and gears alike
   const std::size_t nodes = static_cast<std::size_t>(body_count) + joints.size();
-  // A joint closes a loop when its two bodies are already connected (a world joint never does:
-  // each world anchor is its own fixed frame).
+  // A constraint closes a loop when its two bodies are already connected (a world joint never
+  // does: each world anchor is its own fixed frame).
   DisjointSets connected(static_cast<std::uint32_t>(body_count));
   std::int64_t loop_joint = -1;
   for (std::size_t j = 0; j < joints.size(); ++j) {
@@ -189,11 +230,15 @@ void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
     else root = static_cast<std::int64_t>(j);
   }
   if (loop_joint >= 0 && state.options.solver == MultiplierSolver::tree) {
-    throw ModelError("joints[" + std::to_string(loop_joint) + "] '" + model.joints[loop_joint].name +
-                     "': closes a loop, which the tree solver cannot order; use the sparse (or automatic) solver");
+    const auto index = static_cast<std::size_t>(loop_joint);
+    const bool gear = index >= joints.joint_count;
+    const std::size_t model_index = gear ? index - joints.joint_count : index;
+    throw ModelError(std::string(gear ? "gears[" : "joints[") + std::to_string(model_index) + "] '" +
+                     (gear ? model.gears[model_index].name : model.joints[model_index].name) + "': closes a loop, which the tree solver cannot order; use the sparse (or automatic) solver");
   }
   state.uses_tree = loop_joint < 0 && state.options.solver != MultiplierSolver::sparse;
-  state.multipliers.assign(joints.size(), Eigen::Vector3d::Zero());
+  state.multipliers.resize(joints.size());
+  for (std::size_t c = 0; c < joints.size(); ++c) state.multipliers[c].setZero(joints.rows[c].rows());
   if (!state.uses_tree) return;
 
   // Breadth-first from each component's root over body–joint edges; parents first in that order,
@@ -240,26 +285,45 @@ void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
 }
 
 void update_geometry(LagrangeState& state, const RigidBodyState& y) {
-  for (std::size_t j = 0; j < state.joints.size(); ++j) {
-    std::tie(state.inboard_lever[j], state.outboard_lever[j]) = levers(state, y, j);
-  }
+  update_constraint_geometry(state.constraints, state.joints, y, state.geometry);
   for (std::size_t b = 0; b < state.bodies.size(); ++b) state.world_inertia[b] = state.bodies.world_inertia(y, b);
 }
 
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
-                       const std::vector<Eigen::Vector3d>& joint_rhs, std::vector<Vector6>& accelerations) {
-  if (state.uses_tree) solve_tree(state, y, body_rhs, joint_rhs, accelerations);
-  else solve_sparse(state, y, body_rhs, joint_rhs, accelerations);
+                       const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
+  if (state.uses_tree) solve_tree(state, body_rhs, constraint_rhs, accelerations);
+  else solve_sparse(state, y, body_rhs, constraint_rhs, accelerations);
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (asleep(state, static_cast<std::int32_t>(b))) accelerations[b].setZero();
   }
 }
 
+double baumgarte_frequency(const LagrangeState& state, double dt) {
+  if (state.options.stabilization != Stabilization::baumgarte) return 0;
+  return state.options.baumgarte_frequency > 0 ? state.options.baumgarte_frequency : 0.25 / dt;
+}
+
+void add_constraint_forces(LagrangeState& state, RigidForces& forces, double scale) {
+  const ConstraintSet& constraints = state.constraints;
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    const std::int32_t i = constraints.inboard[c], o = constraints.outboard[c];
+    if (asleep(state, o)) continue;
+    const ConstraintVector& lambda = state.multipliers[c];
+    const Vector6 outboard = scale * (state.geometry.outboard_jacobian[c].transpose() * lambda);
+    forces.force[o] += outboard.head<3>();
+    forces.torque[o] += outboard.tail<3>();
+    if (i < 0) continue;
+    const Vector6 inboard = scale * (state.geometry.inboard_jacobian[c].transpose() * lambda);
+    forces.force[i] += inboard.head<3>();
+    forces.torque[i] += inboard.tail<3>();
+  }
+}
 
 void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y, RigidForces& forces) {
   accumulate_applied_forces(state, y, forces);
   const std::size_t body_count = state.bodies.size();
-  if (state.joints.size() == 0) return;
+  const ConstraintSet& constraints = state.constraints;
+  if (constraints.size() == 0) return;
   // The right-hand sides: F with the gyroscopic torque; c = −J̇u (− Baumgarte terms).
   update_geometry(state, y);
   std::vector<Vector6>& body_rhs = state.body_rhs;
@@ -268,43 +332,17 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
     body_rhs[b].head<3>() = forces.force[b];
     body_rhs[b].tail<3>() = forces.torque[b] - omega.cross(state.world_inertia[b] * omega);
   }
-  const double frequency = state.options.stabilization == Stabilization::baumgarte
-                               ? (state.options.baumgarte_frequency > 0 ? state.options.baumgarte_frequency : 0.25 / state.time_step)
-                               : 0.0;
-  const JointBuffer& joints = state.joints;
-  std::vector<Eigen::Vector3d>& joint_rhs = state.joint_rhs;
-  for (std::size_t j = 0; j < joints.size(); ++j) {
-    const Eigen::Vector3d &inboard_lever = state.inboard_lever[j], &outboard_lever = state.outboard_lever[j];
-    const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
-    const Eigen::Vector3d& w_o = state.angular_velocity[o];
-    Eigen::Vector3d bias = -w_o.cross(w_o.cross(outboard_lever));
-    Eigen::Vector3d rate = -(state.velocity[o] + w_o.cross(outboard_lever));
-    if (i >= 0) {
-      const Eigen::Vector3d& w_i = state.angular_velocity[i];
-      bias += w_i.cross(w_i.cross(inboard_lever));
-      rate += state.velocity[i] + w_i.cross(inboard_lever);
-    }
-    joint_rhs[j] = -bias;
+  const double frequency = baumgarte_frequency(state, state.time_step);
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    state.constraint_rhs[c] =
+        -velocity_product(constraints, state.joints, state.geometry, y, state.velocity, state.angular_velocity, c);
     if (frequency > 0) {
-      const Eigen::Vector3d outboard = y.position[o] + outboard_lever;
-      const Eigen::Vector3d inboard = i >= 0 ? Eigen::Vector3d(y.position[i] + inboard_lever) : joints.inboard_anchor[j];
-      joint_rhs[j] -= 2 * frequency * rate + frequency * frequency * (inboard - outboard);
+      state.constraint_rhs[c] -= 2 * frequency * constraint_rate(constraints, state.geometry, state.velocity, state.angular_velocity, c) +
+                                 frequency * frequency * constraint_error(constraints, state.joints, y, c);
     }
   }
-  solve_constrained(state, y, body_rhs, joint_rhs, state.accelerations);
-  // The constraint forces Jᵀλ: λ on the inboard body at its anchor, −λ on the outboard.
-  for (std::size_t j = 0; j < joints.size(); ++j) {
-    const Eigen::Vector3d &inboard_lever = state.inboard_lever[j], &outboard_lever = state.outboard_lever[j];
-    const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
-    if (asleep(state, o)) continue;
-    const Eigen::Vector3d& lambda = state.multipliers[j];
-    if (i >= 0) {
-      forces.force[i] += lambda;
-      forces.torque[i] += inboard_lever.cross(lambda);
-    }
-    forces.force[o] -= lambda;
-    forces.torque[o] -= outboard_lever.cross(lambda);
-  }
+  solve_constrained(state, y, body_rhs, state.constraint_rhs, state.accelerations);
+  add_constraint_forces(state, forces, 1.0);
 }
 
 }  // namespace limber

@@ -19,8 +19,10 @@ void project_positions(LagrangeState& state) {
   for (auto& rhs : state.body_rhs) rhs.setZero();
   for (int iteration = 0; iteration < state.options.projection_iterations; ++iteration) {
     update_geometry(state, y);
-    for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -joint_separation(state.joints, y, j);
-    solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
+    for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+      state.constraint_rhs[c] = -constraint_error(state.constraints, state.joints, y, c);
+    }
+    solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
     for (std::size_t b = 0; b < state.bodies.size(); ++b) {
       y.position[b] += state.accelerations[b].head<3>();
       y.orientation[b] = (rotation_quaternion(state.accelerations[b].tail<3>()) * y.orientation[b]).normalized();
@@ -34,14 +36,10 @@ void project_velocities(LagrangeState& state) {
   body_velocities(state, y);
   update_geometry(state, y);
   for (auto& rhs : state.body_rhs) rhs.setZero();
-  for (std::size_t j = 0; j < state.joints.size(); ++j) {
-    const JointBuffer& joints = state.joints;
-    const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
-    Eigen::Vector3d rate = -(state.velocity[o] + state.angular_velocity[o].cross(state.outboard_lever[j]));
-    if (i >= 0) rate += state.velocity[i] + state.angular_velocity[i].cross(state.inboard_lever[j]);
-    state.joint_rhs[j] = -rate;
+  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+    state.constraint_rhs[c] = -constraint_rate(state.constraints, state.geometry, state.velocity, state.angular_velocity, c);
   }
-  solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
+  solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     const Eigen::Vector3d velocity = state.velocity[b] + state.accelerations[b].head<3>();
     const Eigen::Vector3d omega = state.angular_velocity[b] + state.accelerations[b].tail<3>();
@@ -70,11 +68,11 @@ void velocity_level_step(LagrangeState& state, double dt) {
     state.body_rhs[b].head<3>() = state.bodies.mass[b] * state.velocity[b] + dt * forces.force[b];
     state.body_rhs[b].tail<3>() = inertia * omega + dt * (forces.torque[b] - omega.cross(inertia * omega));
   }
-  const double frequency = state.options.stabilization == Stabilization::baumgarte
-                               ? (state.options.baumgarte_frequency > 0 ? state.options.baumgarte_frequency : 0.25 / dt)
-                               : 0.0;
-  for (std::size_t j = 0; j < state.joints.size(); ++j) state.joint_rhs[j] = -frequency * joint_separation(state.joints, y, j);
-  solve_constrained(state, y, state.body_rhs, state.joint_rhs, state.accelerations);
+  const double frequency = baumgarte_frequency(state, dt);
+  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
+    state.constraint_rhs[c] = -frequency * constraint_error(state.constraints, state.joints, y, c);
+  }
+  solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
   for (std::size_t b = 0; b < body_count; ++b) {
     if (state.islands[state.island_of_body[b]].sleeping) continue;
     const Eigen::Matrix3d& inertia = state.world_inertia[b];
@@ -109,12 +107,16 @@ LagrangeStepReport step(LagrangeState& state, double dt) {
   const bool projection = state.options.stabilization == Stabilization::projection;
   detect_rigid_contacts(state);
   resolve_rigid_contacts(state, dt);
-  if (projection && state.joints.size() > 0) project_positions(state);
-  if ((projection || !state.contacts.empty()) && state.joints.size() > 0) project_velocities(state);
+  const bool constrained = state.constraints.size() > 0;
+  if (projection && constrained) project_positions(state);
+  if ((projection || !state.contacts.empty()) && constrained) project_velocities(state);
   std::swap(state.multipliers, state.projection_multipliers);
   report.contacts = static_cast<int>(state.contacts.size());
-  for (std::size_t j = 0; j < state.joints.size(); ++j) {
-    report.constraint_error = std::max(report.constraint_error, joint_separation(state.joints, state.bodies.state, j).norm());
+  for (std::size_t c = 0; c < state.constraints.joint_count; ++c) {
+    const ConstraintVector error = constraint_error(state.constraints, state.joints, state.bodies.state, c);
+    const ConstraintRows& rows = state.constraints.rows[c];
+    report.constraint_error = std::max(report.constraint_error, position_error(rows, error));
+    report.angular_error = std::max(report.angular_error, angular_error(rows, error));
   }
   state.time += dt;
   report.status = update_sleep(state, dt);

@@ -87,13 +87,14 @@ Observation observe_rigid_scene(const RigidScene& scene) {
   return out;
 }
 
-// Max and RMS of |d_j| / reference_j over the joints.
-void add_joint_gaps(Observation& out, const JointAnchors& joints, const RigidBodyState& y) {
+// Max and RMS of gap_j / reference_j over the joints, gap_j given by `gap`.
+template <typename Gap>
+void add_joint_gaps(Observation& out, const JointAnchors& joints, Gap&& gap) {
   double squares = 0;
   for (std::size_t j = 0; j < joints.size(); ++j) {
-    const double gap = joint_separation(joints, y, j).norm() / joints.reference_length[j];
-    out.max_joint_gap = std::max(out.max_joint_gap, gap);
-    squares += gap * gap;
+    const double relative = gap(j) / joints.reference_length[j];
+    out.max_joint_gap = std::max(out.max_joint_gap, relative);
+    squares += relative * relative;
   }
   if (joints.size() > 0) out.rms_joint_gap = std::sqrt(squares / joints.size());
 }
@@ -102,14 +103,17 @@ void add_joint_gaps(Observation& out, const JointAnchors& joints, const RigidBod
 
 Observation observe(const SpringState& state) {
   Observation out = observe_rigid_scene(state);
-  add_joint_gaps(out, state.springs, state.bodies.state);
+  add_joint_gaps(out, state.springs, [&](std::size_t j) { return joint_separation(state.springs, state.bodies.state, j).norm(); });
   out.potential_energy += spring_energy(state);
   return out;
 }
 
 Observation observe(const LagrangeState& state) {
   Observation out = observe_rigid_scene(state);
-  add_joint_gaps(out, state.joints, state.bodies.state);
+  // The gap is what a joint's position rows leave open (a prismatic joint slides along its axis).
+  add_joint_gaps(out, state.joints, [&](std::size_t j) {
+    return position_error(state.constraints.rows[j], constraint_error(state.constraints, state.joints, state.bodies.state, j));
+  });
   return out;
 }
 

@@ -3,6 +3,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "kernel/model/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -24,6 +25,17 @@ double volume(const Shape& shape) {
       return cylinder + 4.0 / 3.0 * std::numbers::pi * r * r * r;
   }
   return cylinder;
+}
+
+std::string_view joint_type_name(JointType type) {
+  switch (type) {
+    case JointType::spherical: return "spherical";
+    case JointType::revolute: return "revolute";
+    case JointType::prismatic: return "prismatic";
+    case JointType::universal: return "universal";
+    case JointType::fixed: return "fixed";
+  }
+  return "unknown";
 }
 
 Eigen::Quaterniond Body::orientation() const {
@@ -105,6 +117,28 @@ void validate_joint(const Joint& joint, std::size_t body_count, std::size_t inde
   require_finite(joint.outboard_anchor, path("outboard_anchor"));
   if (joint.stiffness) require_positive(*joint.stiffness, path("stiffness"));
   if (joint.damping) require_non_negative(*joint.damping, path("damping"));
+  if (joint.type == JointType::spherical || joint.type == JointType::fixed) return;
+  require_unit(joint.axis, path("axis"));
+  if (joint.type != JointType::universal) return;
+  require_unit(joint.second_axis, path("second_axis"));
+  if (std::abs(joint.axis.dot(joint.second_axis)) > 1e-6) {
+    fail(path("second_axis"), "must be perpendicular to axis (their dot product is " +
+                                  format_number(joint.axis.dot(joint.second_axis)) + ")");
+  }
+}
+
+void validate_gear(const Gear& gear, std::size_t body_count, std::size_t index) {
+  const auto path = field_path("gears", index);
+  require_name(gear.name, path("name"), /*is_body=*/false);
+  require_body_index(gear.first, body_count, path("first"));
+  require_body_index(gear.second, body_count, path("second"));
+  if (gear.first == gear.second) {
+    fail(path("second"), "must differ from first, both are body index " + std::to_string(gear.first));
+  }
+  require_unit(gear.first_axis, path("first_axis"));
+  require_unit(gear.second_axis, path("second_axis"));
+  require_finite(gear.ratio, path("ratio"));
+  if (gear.ratio == 0) fail(path("ratio"), "must not be 0 (the second gear would be held still)");
 }
 
 void validate_settings(const Settings& settings) {
@@ -140,6 +174,8 @@ void validate(const Model& model) {
   require_unique_names(model.bodies, [](const Body& body) -> std::string_view { return body.name; }, "bodies");
   for (std::size_t i = 0; i < model.joints.size(); ++i) validate_joint(model.joints[i], model.bodies.size(), i);
   require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
+  for (std::size_t i = 0; i < model.gears.size(); ++i) validate_gear(model.gears[i], model.bodies.size(), i);
+  require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
 
   if (const auto& ground = model.ground) {
     require_finite(ground->height, "ground.height");
@@ -162,6 +198,23 @@ void validate(const Model& model) {
   }
 
   validate_settings(model.settings);
+}
+
+void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,
+                         std::string_view method) {
+  std::string names;
+  for (const JointType type : supported) names += (names.empty() ? "" : ", ") + std::string(joint_type_name(type));
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    if (std::find(supported.begin(), supported.end(), joint.type) != supported.end()) continue;
+    throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + std::string(method) +
+                     " method does not support " + std::string(joint_type_name(joint.type)) + " joints (it supports " +
+                     names + "; lagrange supports every type)");
+  }
+  if (!gears_supported && !model.gears.empty()) {
+    throw ModelError("gears[0] '" + model.gears[0].name + "': the " + std::string(method) +
+                     " method does not support gears (velocity constraints); lagrange does");
+  }
 }
 
 }  // namespace limber

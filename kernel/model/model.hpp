@@ -8,6 +8,7 @@
 // the scene boundary (tools/scenes/*.json are already in SI), never here.
 #pragma once
 
+#include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -77,13 +78,32 @@ struct Body {
   Vector3 tail() const { return position - 0.5 * shape.length * axis; }
 };
 
-enum class JointType { spherical };
+/// What a joint lets its outboard body do relative to its inboard body (rows: the constraint
+/// equations it adds in maximal coordinates; DOF: the coordinates it adds in reduced ones).
+enum class JointType {
+  spherical,  ///< turn freely about the anchor (3 rows, 3 DOF): a ball joint
+  revolute,   ///< turn about `axis` through the anchor (5 rows, 1 DOF): a hinge
+  prismatic,  ///< slide along `axis`, no turning (5 rows, 1 DOF)
+  universal,  ///< turn about `axis` (fixed in the inboard body) and `second_axis` (fixed in the
+              ///< outboard body), which stay perpendicular (4 rows, 2 DOF): a Cardan joint
+  fixed,      ///< no relative motion (6 rows, 0 DOF): welds two limbs
+};
+
+/// The scene-file name of a joint type ("spherical", "revolute", ...).
+std::string_view joint_type_name(JointType type);
 
 /// Index that stands for the world (a fixed frame) in Joint::inboard.
 inline constexpr int kWorld = -1;
 
 /// A joint between an inboard and an outboard body, at an anchor fixed in each body's frame.
 /// With inboard == kWorld, inboard_anchor is a world point, m.
+///
+/// The bodies' poses in the Model are the joint's zero: a revolute or universal joint's angles,
+/// a prismatic joint's slide and a fixed joint's relative rotation are measured from them, and
+/// the axes are given in world coordinates *at those poses* (each method carries them into the
+/// bodies' frames when it compiles). A prismatic joint's anchors may start apart along its axis
+/// (that offset is the slide's zero); any other gap at the initial poses is an error the methods
+/// close.
 struct Joint {
   std::string name;
   JointType type = JointType::spherical;
@@ -91,6 +111,12 @@ struct Joint {
   int outboard = 0;                           ///< body index
   Vector3 inboard_anchor = Vector3::Zero();   ///< m, inboard body frame (world if inboard == kWorld)
   Vector3 outboard_anchor = Vector3::Zero();  ///< m, outboard body frame
+  /// Unit, world frame at the initial poses: the hinge axis (revolute), the slide axis
+  /// (prismatic), the axis fixed in the inboard body (universal). Unused by spherical and fixed.
+  Vector3 axis = Vector3::UnitX();
+  /// Unit, world frame at the initial poses: universal only, the axis fixed in the outboard body,
+  /// perpendicular to `axis`.
+  Vector3 second_axis = Vector3::UnitY();
   /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset: Settings::springs.
   std::optional<double> stiffness;  ///< N/m, > 0
   std::optional<double> damping;    ///< N·s/m, ≥ 0
@@ -105,6 +131,20 @@ inline Joint spherical_joint(std::string name, int inboard, int outboard, const 
   joint.inboard_anchor = inboard_anchor, joint.outboard_anchor = outboard_anchor;
   return joint;
 }
+
+/// A velocity constraint between two bodies that turn on axles (thesis 3.5's example of what
+/// maximal coordinates can express and reduced ones cannot: two meshed gears): their angular
+/// velocities about their axes keep a fixed ratio,
+///   ω_second · n_second = ratio · (ω_first · n_first),
+/// n the axes, fixed in each body. Two meshed gears of pitch radii r₁, r₂ have equal rim speeds
+/// and turn opposite ways: ratio = −r₁/r₂. Only the Lagrange method supports it.
+struct Gear {
+  std::string name;
+  int first = 0, second = 0;                ///< body indices, distinct
+  Vector3 first_axis = Vector3::UnitX();    ///< n_first: unit, world frame at the initial poses
+  Vector3 second_axis = Vector3::UnitX();   ///< n_second: unit, world frame at the initial poses
+  double ratio = -1;                        ///< finite, ≠ 0
+};
 
 /// The plane z = height, solid below. Coulomb friction and restitution against everything.
 struct Ground {
@@ -216,6 +256,7 @@ struct Model {
   std::string name;
   std::vector<Body> bodies;
   std::vector<Joint> joints;
+  std::vector<Gear> gears;
   std::optional<Ground> ground;
   std::optional<Bounds> bounds;
   std::optional<Ball> ball;
@@ -231,5 +272,11 @@ struct Model {
 /// unit axes, joints naming existing and distinct bodies, unique names, ...).
 /// Throws ModelError naming the first bad field.
 void validate(const Model& model);
+
+/// Throws ModelError naming the first joint whose type is not in `supported`, or the first gear
+/// when `gears_supported` is false: "joints[3] 'knee': the <method> method does not support
+/// revolute joints (it supports spherical; lagrange supports every type)".
+void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,
+                         std::string_view method);
 
 }  // namespace limber

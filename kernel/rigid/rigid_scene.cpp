@@ -74,6 +74,9 @@ RigidScene compile_rigid_scene(const Model& model) {
   for (const Joint& joint : model.joints) {
     if (joint.inboard != kWorld) connected.unite(static_cast<std::uint32_t>(joint.inboard), static_cast<std::uint32_t>(joint.outboard));
   }
+  for (const Gear& gear : model.gears) {  // meshed gears move, sleep and wake together
+    connected.unite(static_cast<std::uint32_t>(gear.first), static_cast<std::uint32_t>(gear.second));
+  }
   scene.island_of_body.assign(body_count, 0);
   std::vector<std::int64_t> island_of_root(body_count, -1);
   for (std::uint32_t b = 0; b < body_count; ++b) {

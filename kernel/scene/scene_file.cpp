@@ -527,28 +527,45 @@ Vector3 read_anchor(const Json& value, const std::string& path, const Shape* sha
   return read_vector(value, path);
 }
 
+/// The index of the body that field `key` names, or kWorld for "world" where that is allowed.
+int read_body_name(const Object& object, const std::string& key, const std::unordered_map<std::string, int>& body_index,
+                   bool world_allowed) {
+  const std::string name = object.string(key);
+  if (name == "world") {
+    if (!world_allowed) fail(object.path(key), "must name a body, not \"world\"");
+    return kWorld;
+  }
+  const auto found = body_index.find(name);
+  if (found == body_index.end()) fail(object.path(key), "no body named " + in_quotes(name));
+  return found->second;
+}
+
 Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
                  const std::unordered_map<std::string, int>& body_index) {
-  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor", "stiffness", "damping"});
+  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor", "axis", "second_axis",
+                     "stiffness", "damping"});
   Joint joint;
   joint.name = object.string("name");
   require_name(joint.name, object.path("name"), /*is_body=*/false);
   const std::string type = object.string("type");
-  if (type != "spherical")
-    fail(object.path("type"), "must be \"spherical\", got " + in_quotes(type));
+  constexpr JointType kTypes[] = {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::universal,
+                                  JointType::fixed};
+  const auto known = std::find_if(std::begin(kTypes), std::end(kTypes), [&](JointType t) { return joint_type_name(t) == type; });
+  if (known == std::end(kTypes)) {
+    fail(object.path("type"),
+         "must be \"spherical\", \"revolute\", \"prismatic\", \"universal\" or \"fixed\", got " + in_quotes(type));
+  }
+  joint.type = *known;
+  // Axes: required exactly where the type uses them, refused elsewhere (a stray axis is a mistake).
+  const bool uses_axis = joint.type != JointType::spherical && joint.type != JointType::fixed;
+  const bool uses_second_axis = joint.type == JointType::universal;
+  if (!uses_axis && object.find("axis")) fail(object.path("axis"), "is not used by a " + type + " joint");
+  if (!uses_second_axis && object.find("second_axis")) fail(object.path("second_axis"), "is used by universal joints only");
+  if (uses_axis) joint.axis = object.direction("axis");
+  if (uses_second_axis) joint.second_axis = object.direction("second_axis");
 
-  const auto body_named = [&](const std::string& key) {
-    const std::string name = object.string(key);
-    if (name == "world") {
-      if (key == "outboard") fail(object.path(key), "must name a body, not \"world\"");
-      return kWorld;
-    }
-    const auto found = body_index.find(name);
-    if (found == body_index.end()) fail(object.path(key), "no body named " + in_quotes(name));
-    return found->second;
-  };
-  joint.inboard = body_named("inboard");
-  joint.outboard = body_named("outboard");
+  joint.inboard = read_body_name(object, "inboard", body_index, /*world_allowed=*/true);
+  joint.outboard = read_body_name(object, "outboard", body_index, /*world_allowed=*/false);
   if (joint.inboard == joint.outboard) {
     fail(object.path("outboard"),
          "must differ from inboard, both are " + in_quotes(bodies[joint.outboard].body.name));
@@ -571,10 +588,27 @@ Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
   return joint;
 }
 
+Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index) {
+  object.allow_only({"name", "first", "second", "first_axis", "second_axis", "ratio"});
+  Gear gear;
+  gear.name = object.string("name");
+  require_name(gear.name, object.path("name"), /*is_body=*/false);
+  gear.first = read_body_name(object, "first", body_index, /*world_allowed=*/false);
+  gear.second = read_body_name(object, "second", body_index, /*world_allowed=*/false);
+  if (gear.first == gear.second) {
+    fail(object.path("second"), "must differ from first, both are " + in_quotes(bodies[gear.first].body.name));
+  }
+  gear.first_axis = object.direction("first_axis");
+  gear.second_axis = object.direction("second_axis");
+  gear.ratio = object.number("ratio");
+  if (gear.ratio == 0) fail(object.path("ratio"), "must not be 0 (the second gear would be held still)");
+  return gear;
+}
+
 Model read_model(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
-                   "bodies", "joints", "chain", "variants", "variant"});
+                   "bodies", "joints", "gears", "chain", "variants", "variant"});
   const int version = root.integer("limber_scene");
   if (version != 1) {
     fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
@@ -620,7 +654,7 @@ Model read_model(const Json& json, const SceneOptions& options) {
   // Names become indices only for what refers to bodies by name (variants, explicit joints); a
   // generated million-link chain needs no map.
   std::unordered_map<std::string, int> body_index;
-  if (root.find("variants") || root.find("joints")) {
+  if (root.find("variants") || root.find("joints") || root.find("gears")) {
     body_index.reserve(bodies.size());
     for (std::size_t i = 0; i < bodies.size(); ++i) body_index.emplace(bodies[i].body.name, static_cast<int>(i));
   }
@@ -651,6 +685,13 @@ Model read_model(const Json& json, const SceneOptions& options) {
     require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
   }
   model.joints.insert(model.joints.end(), chain_joints.begin(), chain_joints.end());
+  if (const Json* gears_json = root.find("gears")) {
+    if (!gears_json->is_array()) wrong_type(*gears_json, "gears", "an array");
+    for (std::size_t i = 0; i < gears_json->size(); ++i) {
+      model.gears.push_back(read_gear(Object((*gears_json)[i], indexed("gears", i)), bodies, body_index));
+    }
+    require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
+  }
   for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));
   return model;
 }

@@ -17,6 +17,7 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   }
   SpringState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
+  require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "stiff-spring");
   state.options = options;
 
   // Springs, one per joint, anchors relative to the centres of mass.

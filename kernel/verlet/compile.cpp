@@ -148,6 +148,7 @@ void renumber_particles(VerletState<Scalar>& state) {
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   validate(model);
+  require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "verlet");
   const std::size_t body_count = model.bodies.size();
   const std::size_t joint_count = model.joints.size();
   const bool shared = model.settings.verlet.joints == ParticleJoints::shared_particle;

@@ -119,12 +119,18 @@ TEST(Cli, SpringsWriteHeadAndTailColumns) {
 
 TEST(Cli, LagrangeRunsEveryShippedScene) {
   for (const std::string& stabilization : {"baumgarte", "projection"}) {
-    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json", "gears.json"}) {
       const Result r = run({"run", scene(file), "--method", "lagrange", "--stabilization", stabilization, "--steps", "200"});
       ASSERT_EQ(r.code, kSuccess) << stabilization << " " << file << ": " << r.err;
       EXPECT_THAT(r.out, HasSubstr("rigid limbs and joint constraints")) << file;
       EXPECT_THAT(r.out, HasSubstr("status      ok")) << file;
     }
+  }
+}
+
+TEST(Cli, OnlyLagrangeRunsGearsAndHinges) {
+  for (const std::string& method : {"weighted", "springs-implicit"}) {
+    expect_rejected({"run", scene("gears.json"), "--method", method}, "joints[0] 'large_axle': the ");
   }
 }
 

@@ -92,7 +92,7 @@ TEST(LagrangeMultipliers, ConstrainedAccelerationsKeepTheJointsClosed) {
   // Finite difference of Ċ over a tiny step of the exact ODE (RK4).
   const double h = 1e-6;
   auto gap_rate = [&](const LagrangeState& s, std::size_t j) {
-    const JointBuffer& joints = s.joints;
+    const JointAnchors& joints = s.joints;
     const RigidBodyState& y = s.bodies.state;
     const std::int32_t i = joints.inboard[j], o = joints.outboard[j];
     const Eigen::Vector3d r_o = y.orientation[o] * joints.outboard_anchor[j];

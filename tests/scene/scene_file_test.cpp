@@ -506,5 +506,49 @@ TEST(SceneSprings, BadSpringValuesAreNamed) {
             "test.json: settings.drag.angular[1]: must be >= 0, got -2");
 }
 
+TEST(SceneJoints, JointTypesAndAxesAreRead) {
+  const Model model = load_scene_text(
+      with(with(kPendulum, R"("name": "elbow", "type": "spherical")", R"("name": "elbow", "type": "universal")"),
+           R"("inboard_anchor": "tail", "outboard_anchor": "head"})",
+           R"("inboard_anchor": "tail", "outboard_anchor": "head", "axis": [2, 0, 0], "second_axis": [0, 1, 0]})"),
+      "test.json");
+  EXPECT_EQ(model.joints[0].type, JointType::spherical);
+  EXPECT_EQ(model.joints[1].type, JointType::universal);
+  EXPECT_EQ(model.joints[1].axis, Vector3::UnitX());  // normalized
+  EXPECT_EQ(model.joints[1].second_axis, Vector3::UnitY());
+}
+
+TEST(SceneJoints, BadJointTypesAndAxesAreNamed) {
+  EXPECT_EQ(pendulum_error(R"("name": "pin", "type": "spherical")", R"("name": "pin", "type": "hinge")"),
+            "test.json: joints[0].type: must be \"spherical\", \"revolute\", \"prismatic\", \"universal\" or \"fixed\", got \"hinge\"");
+  EXPECT_EQ(pendulum_error(R"("name": "pin", "type": "spherical")", R"("name": "pin", "type": "revolute")"),
+            "test.json: joints[0].axis: missing required field");
+  EXPECT_EQ(pendulum_error(R"("outboard_anchor": "head"},)", R"("outboard_anchor": "head", "axis": [1, 0, 0]},)"),
+            "test.json: joints[0].axis: is not used by a spherical joint");
+  EXPECT_THAT(pendulum_error(R"("name": "pin", "type": "spherical")", R"("name": "pin", "type": "prismatic", "axis": [0, 0, 0])"),
+              HasSubstr("joints[0].axis:"));
+  EXPECT_THAT(
+      pendulum_error(R"("name": "pin", "type": "spherical")",
+                     R"("name": "pin", "type": "universal", "axis": [1, 0, 0], "second_axis": [1, 1, 0])"),
+      HasSubstr("test.json: joints[0].second_axis: must be perpendicular to axis"));
+}
+
+TEST(SceneJoints, GearsAreReadAndCheckedByName) {
+  const Model model = load_scene_file(kScenes + "gears.json");
+  ASSERT_EQ(model.gears.size(), 1u);
+  EXPECT_EQ(model.gears[0].first, model.find_body("large"));
+  EXPECT_EQ(model.gears[0].second, model.find_body("small"));
+  EXPECT_EQ(model.gears[0].ratio, -2);
+  const std::string gear = R"(], "gears": [{"name": "mesh", "first": "upper", "second": "lower", "first_axis": [0, 1, 0],
+                                           "second_axis": [0, 1, 0], "ratio": 3}]})";
+  const auto gear_error = [&](std::string_view from, std::string_view to) {
+    return load_error(with(with(kPendulum, "]\n}", gear), from, to));
+  };
+  EXPECT_EQ(gear_error(R"("second": "lower")", R"("second": "upper")"), "test.json: gears[0].second: must differ from first, both are \"upper\"");
+  EXPECT_EQ(gear_error(R"("ratio": 3)", R"("ratio": 0)"), "test.json: gears[0].ratio: must not be 0 (the second gear would be held still)");
+  EXPECT_EQ(gear_error(R"("first": "upper")", R"("first": "world")"), "test.json: gears[0].first: must name a body, not \"world\"");
+  EXPECT_EQ(gear_error(R"("ratio": 3)", R"("ratio": 3, "radius": 1)"), "test.json: gears[0]: unknown field \"radius\"");
+}
+
 }  // namespace
 }  // namespace limber

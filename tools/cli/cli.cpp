@@ -500,12 +500,13 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
   out << format("method      lagrange: rigid limbs and joint constraints, %s, %s stabilization, double precision\n",
                 integrators[static_cast<int>(state.options.integrator)],
                 state.options.stabilization == Stabilization::projection ? "projection" : "Baumgarte");
-  out << format("model       %zu limbs, %zu joints%s%s%s; %zu rigid bodies, %zu constraint rows, %zu island%s\n",
-                model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.bodies.size(), 3 * state.joints.size(), state.islands.size(),
-                state.islands.size() == 1 ? "" : "s");
+  const std::string gears = model.gears.empty() ? "" : format(", %zu gear%s", model.gears.size(), model.gears.size() == 1 ? "" : "s");
+  out << format("model       %zu limbs, %zu joints%s%s%s%s; %zu rigid bodies, %zu constraint rows, %zu island%s\n",
+                model.bodies.size(), model.joints.size(), gears.c_str(), model.ground ? ", ground" : "",
+                model.bounds ? ", bounds" : "", model.ball ? ", ball" : "", state.bodies.size(), state.constraints.total_rows(),
+                state.islands.size(), state.islands.size() == 1 ? "" : "s");
   out << format("solver      %s\n", state.uses_tree ? "Baraff's tree-ordered block LDLT (linear time)"
-                                                      : "sparse LDLT of J M^-1 J^T (the joints close a loop, or asked for)");
+                                                      : "sparse LDLT of J M^-1 J^T (the constraints close a loop, or asked for)");
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
                 model.settings.time_step, state.time, record.wall_seconds,
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);

@@ -1,0 +1,64 @@
+// Cholesky factorization A = L·Lᵀ of a small symmetric positive definite matrix of fixed size N,
+// with solves for fixed-size right-hand sides, written out so the compiler unrolls them.
+//
+// Why not Eigen::LLT: for N = 6 its fixed-size solve with a matrix right-hand side takes the
+// general blocked triangular-solve path (packing included). In the Lagrange tree solve, where each
+// body's 6×6 block is factored and solved against a joint's 6×3 block, Eigen's LLT factor and
+// solves were a third of a chain step (perf, lagrange_bench).
+#pragma once
+
+#include <cmath>
+
+#include <Eigen/Core>
+
+namespace limber {
+
+template <int N>
+class SmallCholesky {
+ public:
+  using Matrix = Eigen::Matrix<double, N, N>;
+
+  /// Factors `a` (only its lower triangle is read). Returns false when a pivot is not positive
+  /// (a not positive definite); the factor is then unusable.
+  bool compute(const Matrix& a) {
+    for (int j = 0; j < N; ++j) {
+      double pivot = a(j, j);
+      for (int k = 0; k < j; ++k) pivot -= lower_(j, k) * lower_(j, k);
+      if (!(pivot > 0)) return false;
+      const double diagonal = std::sqrt(pivot);
+      lower_(j, j) = diagonal;
+      inverse_diagonal_[j] = 1 / diagonal;
+      for (int i = j + 1; i < N; ++i) {
+        double value = a(i, j);
+        for (int k = 0; k < j; ++k) value -= lower_(i, k) * lower_(j, k);
+        lower_(i, j) = value * inverse_diagonal_[j];
+      }
+    }
+    return true;
+  }
+
+  /// Overwrites x (N × M) with A⁻¹·x: forward substitution with L, then back with Lᵀ.
+  template <int M>
+  void solve_in_place(Eigen::Matrix<double, N, M>& x) const {
+    for (int i = 0; i < N; ++i) {
+      for (int k = 0; k < i; ++k) x.row(i) -= lower_(i, k) * x.row(k);
+      x.row(i) *= inverse_diagonal_[i];
+    }
+    for (int i = N - 1; i >= 0; --i) {
+      for (int k = i + 1; k < N; ++k) x.row(i) -= lower_(k, i) * x.row(k);
+      x.row(i) *= inverse_diagonal_[i];
+    }
+  }
+
+  template <int M>
+  Eigen::Matrix<double, N, M> solve(Eigen::Matrix<double, N, M> x) const {
+    solve_in_place(x);
+    return x;
+  }
+
+ private:
+  Matrix lower_ = Matrix::Zero();  ///< L in the lower triangle
+  Eigen::Matrix<double, N, 1> inverse_diagonal_ = Eigen::Matrix<double, N, 1>::Zero();
+};
+
+}  // namespace limber
