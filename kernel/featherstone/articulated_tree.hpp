@@ -1,0 +1,100 @@
+// A kinematic tree in reduced (joint) coordinates, the input of Featherstone's algorithms
+// (Featherstone, "Rigid Body Dynamics Algorithms", 2008, chapter 4: the kinematic-tree model
+// with the joints of Table 4.1). Independent of limber's Model: a compile step can build one
+// from a Model, tests and benchmarks build them directly.
+//
+// Bodies are numbered 0..N−1 with every parent before its children; parent −1 is the fixed world
+// base. Body i hangs from its parent by one joint: the tree transform X_tree takes the parent's
+// body frame to the joint frame, the joint transform X_J(q) takes the joint frame to body i's
+// frame (at q = 0 the two coincide), so ⁱX_λ = X_J(q_i) X_tree.
+//
+// Generalized coordinates: q (size position_count, "nq") and v (size velocity_count, "nv"),
+// each joint owning a contiguous slice at its offsets. The joint-space acceleration is v̇ (size
+// nv), and joint forces τ (size nv) are dual to v (τ·v is power, W).
+//   joint      q (nq)                                   v (nv)                          motion subspace S
+//   revolute   1: angle about the axis, rad              1: rad/s                        (a, 0)
+//   prismatic  1: displacement along the axis, m         1: m/s                          (0, a)
+//   spherical  4: unit quaternion (w, x, y, z), the      3: ω, the child's angular       [1₃ ; 0]
+//                 child frame's orientation in the          velocity relative to its
+//                 joint frame (p_joint = R p_child)         parent, child coordinates
+//   fixed      0                                         0                               (none)
+//   floating   7: p (3), the child origin in the joint   6: (ω, v) the child's spatial    1₆
+//                 frame, m; then a unit quaternion          velocity relative to its
+//                 (w, x, y, z) as for spherical             parent, child coordinates: ω
+//                                                           rad/s, v the velocity of the
+//                                                           child origin, m/s
+// Position derivatives: revolute/prismatic q̇ = v; spherical q̇ = ½ q ⊗ (0, ω); floating
+// ṗ = R(q) v and the quaternion as spherical. Every S is constant in the child frame, so the
+// joint's bias acceleration c_J = Ṡ q̇ is zero (chapter 4).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kernel/featherstone/spatial.hpp"
+
+namespace limber {
+
+/// The joints of Table 4.1 that limber uses; see the table above for their coordinates.
+enum class ArticulatedJoint : std::uint8_t { revolute, prismatic, spherical, fixed, floating };
+
+/// Position and velocity coordinates of a joint type: (1, 1), (1, 1), (4, 3), (0, 0), (7, 6).
+int joint_position_count(ArticulatedJoint type);
+int joint_velocity_count(ArticulatedJoint type);
+const char* articulated_joint_name(ArticulatedJoint type);
+
+/// One body and the joint that connects it to its parent.
+struct ArticulatedBody {
+  std::string name;                                     ///< optional, used in error messages
+  int parent = -1;                                      ///< index of the parent body; −1: the world
+  ArticulatedJoint joint = ArticulatedJoint::revolute;
+  Eigen::Vector3d joint_axis = Eigen::Vector3d::UnitZ();  ///< unit, joint-frame coordinates (revolute, prismatic)
+  PluckerTransform tree_transform;                      ///< X_tree: parent body frame → joint frame
+  SpatialInertia inertia;                               ///< in the body's own frame (eq. 2.63)
+};
+
+/// A validated tree with the offsets of each joint's coordinates. Adding bodies keeps it valid;
+/// nothing else changes it.
+class ArticulatedTree {
+ public:
+  ArticulatedTree() = default;
+  /// Validates (validate_articulated_bodies) and indexes `bodies`. Throws ModelError.
+  explicit ArticulatedTree(std::vector<ArticulatedBody> bodies);
+
+  /// Appends `body` after validating it; returns its index. Throws ModelError naming the body.
+  int add_body(ArticulatedBody body);
+
+  const std::vector<ArticulatedBody>& bodies() const { return bodies_; }
+  const ArticulatedBody& body(int index) const { return bodies_[static_cast<std::size_t>(index)]; }
+  int body_count() const { return static_cast<int>(bodies_.size()); }
+  int position_count() const { return position_count_; }  ///< nq
+  int velocity_count() const { return velocity_count_; }  ///< nv
+  /// Where body i's joint coordinates start in q and in v (and τ, v̇).
+  int position_offset(int body) const { return position_offset_[static_cast<std::size_t>(body)]; }
+  int velocity_offset(int body) const { return velocity_offset_[static_cast<std::size_t>(body)]; }
+
+  /// q for the zero configuration: angles and displacements 0, quaternions (1, 0, 0, 0).
+  Eigen::VectorXd neutral_positions() const;
+
+ private:
+  std::vector<ArticulatedBody> bodies_;
+  std::vector<int> position_offset_, velocity_offset_;
+  int position_count_ = 0, velocity_count_ = 0;
+};
+
+/// Checks body `index` as the next body of a tree that already has `index` bodies: the parent
+/// comes before it (−1 ≤ parent < index); the joint axis is finite and unit (revolute,
+/// prismatic; within 1e-9); X_tree is finite with a proper rotation (‖EᵀE − 1‖ ≤ 1e-9,
+/// det E > 0); the mass is finite and > 0; the centre of mass is finite; the inertia about the
+/// centre of mass is symmetric and positive definite, with principal moments that satisfy the
+/// triangle inequality (a real mass distribution). Throws ModelError (kernel/model/model.hpp), one line:
+/// "bodies[3] (\"forearm\").mass: must be > 0, got -1".
+void validate_articulated_body(const ArticulatedBody& body, int index);
+
+/// validate_articulated_body for each body in order; throws at the first bad one.
+void validate_articulated_bodies(const std::vector<ArticulatedBody>& bodies);
+
+}  // namespace limber

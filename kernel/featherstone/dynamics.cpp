@@ -1,0 +1,344 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/featherstone/dynamics.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+namespace limber {
+namespace {
+
+// k, the joint's degrees of freedom, as a compile-time constant: visit(std::integral_constant<int, k>).
+template <typename Visitor>
+void with_degrees_of_freedom(ArticulatedJoint type, Visitor&& visit) {
+  switch (type) {
+    case ArticulatedJoint::revolute:
+    case ArticulatedJoint::prismatic: visit(std::integral_constant<int, 1>{}); return;
+    case ArticulatedJoint::spherical: visit(std::integral_constant<int, 3>{}); return;
+    case ArticulatedJoint::floating: visit(std::integral_constant<int, 6>{}); return;
+    case ArticulatedJoint::fixed: visit(std::integral_constant<int, 0>{}); return;
+  }
+}
+
+// S_i (6 × k, Table 4.1), child coordinates: revolute (a, 0), prismatic (0, a), spherical
+// [1₃; 0], floating 1₆.
+template <int k>
+Eigen::Matrix<double, 6, k> motion_subspace(const ArticulatedBody& body) {
+  Eigen::Matrix<double, 6, k> s = Eigen::Matrix<double, 6, k>::Zero();
+  if constexpr (k == 1) {
+    if (body.joint == ArticulatedJoint::revolute) {
+      s.template head<3>() = body.joint_axis;
+    } else {
+      s.template tail<3>() = body.joint_axis;
+    }
+  } else if constexpr (k == 3) {
+    s.template topRows<3>().setIdentity();
+  } else if constexpr (k == 6) {
+    s.setIdentity();
+  }
+  return s;
+}
+
+// v_J = S q̇ for body i's slice of v (`joint_velocities` points at it).
+SpatialVector joint_velocity(const ArticulatedBody& body, const double* joint_velocities) {
+  SpatialVector out = SpatialVector::Zero();
+  switch (body.joint) {
+    case ArticulatedJoint::revolute: out.head<3>() = body.joint_axis * joint_velocities[0]; break;
+    case ArticulatedJoint::prismatic: out.tail<3>() = body.joint_axis * joint_velocities[0]; break;
+    case ArticulatedJoint::spherical: out.head<3>() = Eigen::Vector3d::Map(joint_velocities); break;
+    case ArticulatedJoint::floating: out = SpatialVector::Map(joint_velocities); break;
+    case ArticulatedJoint::fixed: break;
+  }
+  return out;
+}
+
+// Sᵀ f into `out` (k values).
+void project_force(const ArticulatedBody& body, const SpatialVector& f, double* out) {
+  switch (body.joint) {
+    case ArticulatedJoint::revolute: out[0] = body.joint_axis.dot(f.head<3>()); break;
+    case ArticulatedJoint::prismatic: out[0] = body.joint_axis.dot(f.tail<3>()); break;
+    case ArticulatedJoint::spherical: Eigen::Vector3d::Map(out) = f.head<3>(); break;
+    case ArticulatedJoint::floating: SpatialVector::Map(out) = f; break;
+    case ArticulatedJoint::fixed: break;
+  }
+}
+
+void require_size(Eigen::Index actual, int expected, const char* what) {
+  if (actual != expected) {
+    throw std::invalid_argument(std::string(what) + ": expected size " + std::to_string(expected) + ", got " +
+                                std::to_string(actual));
+  }
+}
+
+// First pass of ABA and RNEA: ⁱX_λ, v_i = ⁱX_λ v_λ + v_J and c_i = v_i × v_J (Tables 5.1, 7.1).
+void propagate_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                          const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& w) {
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    w.parent_to_body[index] = joint_transform(body, q.data() + tree.position_offset(i)) * body.tree_transform;
+    const SpatialVector joint_motion = joint_velocity(body, v.data() + tree.velocity_offset(i));
+    if (body.parent >= 0) {
+      w.velocity[index] = w.parent_to_body[index].apply_motion(w.velocity[static_cast<std::size_t>(body.parent)]) + joint_motion;
+    } else {
+      w.velocity[index] = joint_motion;
+    }
+    w.bias_acceleration[index] = cross_motion(w.velocity[index], joint_motion);
+  }
+}
+
+SpatialVector base_acceleration(const Eigen::Vector3d& gravity) {
+  SpatialVector a0;
+  a0 << 0, 0, 0, -gravity;
+  return a0;
+}
+
+}  // namespace
+
+void DynamicsWorkspace::resize(const ArticulatedTree& tree) {
+  const auto n = static_cast<std::size_t>(tree.body_count());
+  parent_to_body.assign(n, PluckerTransform{});
+  world_to_body.assign(n, PluckerTransform{});
+  velocity.assign(n, SpatialVector::Zero());
+  bias_acceleration.assign(n, SpatialVector::Zero());
+  acceleration.assign(n, SpatialVector::Zero());
+  bias_force.assign(n, SpatialVector::Zero());
+  articulated_inertia.assign(n, SpatialMatrix::Zero());
+  projected_inertia.setZero(6, tree.velocity_count());
+  joint_inertia_inverse.setZero(6, tree.velocity_count());
+  joint_bias.setZero(tree.velocity_count());
+}
+
+bool DynamicsWorkspace::fits(const ArticulatedTree& tree) const {
+  return velocity.size() == static_cast<std::size_t>(tree.body_count()) && joint_bias.size() == tree.velocity_count();
+}
+
+PluckerTransform joint_transform(const ArticulatedBody& body, const double* joint_positions) {
+  PluckerTransform x;
+  switch (body.joint) {
+    case ArticulatedJoint::revolute: {
+      // E = R(a, θ)ᵀ = 1 − sin θ [a]× + (1 − cos θ) [a]×²  (Rodrigues; Featherstone's rotx/y/z).
+      const double angle = joint_positions[0];
+      const Eigen::Matrix3d ax = skew(body.joint_axis);
+      x.rotation = Eigen::Matrix3d::Identity() - std::sin(angle) * ax + (1 - std::cos(angle)) * (ax * ax);
+      break;
+    }
+    case ArticulatedJoint::prismatic: x.translation = body.joint_axis * joint_positions[0]; break;
+    case ArticulatedJoint::spherical: {
+      const Eigen::Quaterniond orientation(joint_positions[0], joint_positions[1], joint_positions[2], joint_positions[3]);
+      x.rotation = orientation.normalized().toRotationMatrix().transpose();
+      break;
+    }
+    case ArticulatedJoint::floating: {
+      const Eigen::Quaterniond orientation(joint_positions[3], joint_positions[4], joint_positions[5], joint_positions[6]);
+      x.rotation = orientation.normalized().toRotationMatrix().transpose();
+      x.translation = Eigen::Vector3d::Map(joint_positions);
+      break;
+    }
+    case ArticulatedJoint::fixed: break;
+  }
+  return x;
+}
+
+namespace {
+// ⁱX_0 = ⁱX_λ ^λX_0 from parent_to_body, outward.
+void compose_world_transforms(const ArticulatedTree& tree, DynamicsWorkspace& w) {
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    const int parent = tree.body(i).parent;
+    w.world_to_body[index] = parent >= 0 ? w.parent_to_body[index] * w.world_to_body[static_cast<std::size_t>(parent)] : w.parent_to_body[index];
+  }
+}
+}  // namespace
+
+void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace) {
+  require_size(q.size(), tree.position_count(), "body_poses: q");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  for (int i = 0; i < tree.body_count(); ++i) {
+    workspace.parent_to_body[static_cast<std::size_t>(i)] =
+        joint_transform(tree.body(i), q.data() + tree.position_offset(i)) * tree.body(i).tree_transform;
+  }
+  compose_world_transforms(tree, workspace);
+}
+
+void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
+  require_size(q.size(), tree.position_count(), "forward_kinematics: q");
+  require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  propagate_velocities(tree, q, v, workspace);
+  compose_world_transforms(tree, workspace);
+}
+
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  require_size(q.size(), tree.position_count(), "forward_dynamics: q");
+  require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
+  require_size(joint_forces.size(), tree.velocity_count(), "forward_dynamics: joint forces");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  joint_accelerations.resize(tree.velocity_count());
+  DynamicsWorkspace& w = workspace;
+  const int n = tree.body_count();
+
+  // Pass 1 (outward): velocities, bias accelerations; I^A_i = I_i, p^A_i = v_i ×* I_i v_i.
+  propagate_velocities(tree, q, v, w);
+  for (int i = 0; i < n; ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    const SpatialInertia& inertia = tree.body(i).inertia;
+    w.articulated_inertia[index] = inertia.matrix();
+    w.bias_force[index] = cross_force(w.velocity[index], inertia * w.velocity[index]);
+  }
+
+  // Pass 2 (inward): U_i = I^A_i S_i, D_i = S_iᵀ U_i, u_i = τ_i − S_iᵀ p^A_i; the body's
+  // articulated inertia I^a = I^A − U D⁻¹ Uᵀ and bias force p^a = p^A + I^a c + U D⁻¹ u, as
+  // seen through its joint, are added to the parent's.
+  for (int i = n - 1; i >= 0; --i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    const int offset = tree.velocity_offset(i);
+    const SpatialMatrix& ia = w.articulated_inertia[index];
+    const SpatialVector& pa = w.bias_force[index];
+    SpatialMatrix ia_through_joint;
+    SpatialVector pa_through_joint;
+    with_degrees_of_freedom(body.joint, [&](auto dofs) {
+      constexpr int k = decltype(dofs)::value;
+      if constexpr (k == 0) {
+        ia_through_joint = ia;
+        pa_through_joint = pa + ia * w.bias_acceleration[index];
+      } else {
+        const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
+        const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
+        const Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
+        Eigen::Matrix<double, k, k> d_inverse;
+        if constexpr (k == 1) {
+          d_inverse(0, 0) = 1 / d(0, 0);
+        } else {
+          d_inverse = Eigen::LLT<Eigen::Matrix<double, k, k>>(d).solve(Eigen::Matrix<double, k, k>::Identity());
+        }
+        const Eigen::Matrix<double, k, 1> u = joint_forces.template segment<k>(offset) - s.transpose() * pa;
+        w.projected_inertia.template middleCols<k>(offset) = u_matrix;
+        w.joint_inertia_inverse.template block<k, k>(0, offset) = d_inverse;
+        w.joint_bias.template segment<k>(offset) = u;
+        if (body.parent < 0) return;
+        const Eigen::Matrix<double, 6, k> u_d_inverse = u_matrix * d_inverse;
+        ia_through_joint.noalias() = ia - u_d_inverse * u_matrix.transpose();
+        pa_through_joint.noalias() = pa + ia_through_joint * w.bias_acceleration[index] + u_d_inverse * u;
+      }
+    });
+    if (body.parent < 0) continue;
+    const auto parent = static_cast<std::size_t>(body.parent);
+    w.articulated_inertia[parent] += w.parent_to_body[index].transpose_apply_inertia(ia_through_joint);
+    w.bias_force[parent] += w.parent_to_body[index].transpose_apply_force(pa_through_joint);
+  }
+
+  // Pass 3 (outward): a' = ⁱX_λ a_λ + c_i, v̇_i = D_i⁻¹ (u_i − U_iᵀ a'), a_i = a' + S_i v̇_i.
+  const SpatialVector a0 = base_acceleration(gravity);
+  for (int i = 0; i < n; ++i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    const int offset = tree.velocity_offset(i);
+    const SpatialVector& parent_acceleration = body.parent >= 0 ? w.acceleration[static_cast<std::size_t>(body.parent)] : a0;
+    const SpatialVector a = w.parent_to_body[index].apply_motion(parent_acceleration) + w.bias_acceleration[index];
+    with_degrees_of_freedom(body.joint, [&](auto dofs) {
+      constexpr int k = decltype(dofs)::value;
+      if constexpr (k == 0) {
+        w.acceleration[index] = a;
+      } else {
+        const Eigen::Matrix<double, k, 1> joint_acceleration =
+            w.joint_inertia_inverse.template block<k, k>(0, offset) *
+            (w.joint_bias.template segment<k>(offset) - w.projected_inertia.template middleCols<k>(offset).transpose() * a);
+        joint_accelerations.template segment<k>(offset) = joint_acceleration;
+        w.acceleration[index] = a + motion_subspace<k>(body) * joint_acceleration;
+      }
+    });
+  }
+}
+
+void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_accelerations,
+                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_forces) {
+  require_size(q.size(), tree.position_count(), "inverse_dynamics: q");
+  require_size(v.size(), tree.velocity_count(), "inverse_dynamics: v");
+  require_size(joint_accelerations.size(), tree.velocity_count(), "inverse_dynamics: joint accelerations");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  joint_forces.resize(tree.velocity_count());
+  DynamicsWorkspace& w = workspace;
+  const int n = tree.body_count();
+
+  // Outward: a_i = ⁱX_λ a_λ + S_i v̇_i + c_i; f_i = I_i a_i + v_i ×* I_i v_i (the net force the
+  // body needs, by the Newton–Euler equation).
+  propagate_velocities(tree, q, v, w);
+  const SpatialVector a0 = base_acceleration(gravity);
+  for (int i = 0; i < n; ++i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    const SpatialVector& parent_acceleration = body.parent >= 0 ? w.acceleration[static_cast<std::size_t>(body.parent)] : a0;
+    w.acceleration[index] = w.parent_to_body[index].apply_motion(parent_acceleration) +
+                            joint_velocity(body, joint_accelerations.data() + tree.velocity_offset(i)) + w.bias_acceleration[index];
+    w.bias_force[index] = body.inertia * w.acceleration[index] + cross_force(w.velocity[index], body.inertia * w.velocity[index]);
+  }
+  // Inward: τ_i = S_iᵀ f_i; the joint transmits f_i to the parent, f_λ += λX_i* f_i.
+  for (int i = n - 1; i >= 0; --i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    project_force(body, w.bias_force[index], joint_forces.data() + tree.velocity_offset(i));
+    if (body.parent >= 0) {
+      w.bias_force[static_cast<std::size_t>(body.parent)] += w.parent_to_body[index].transpose_apply_force(w.bias_force[index]);
+    }
+  }
+}
+
+void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
+                 Eigen::MatrixXd& joint_space_inertia) {
+  require_size(q.size(), tree.position_count(), "mass_matrix: q");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  const int nv = tree.velocity_count();
+  joint_space_inertia.setZero(nv, nv);
+  DynamicsWorkspace& w = workspace;
+  const int n = tree.body_count();
+
+  // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ.
+  for (int i = 0; i < n; ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    w.parent_to_body[index] = joint_transform(tree.body(i), q.data() + tree.position_offset(i)) * tree.body(i).tree_transform;
+    w.articulated_inertia[index] = tree.body(i).inertia.matrix();
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    const int parent = tree.body(i).parent;
+    if (parent < 0) continue;
+    const auto index = static_cast<std::size_t>(i);
+    w.articulated_inertia[static_cast<std::size_t>(parent)] += w.parent_to_body[index].transpose_apply_inertia(w.articulated_inertia[index]);
+  }
+  // For each joint's column of unit motions: F = I^c_i S_i, H_ii = S_iᵀ F; then F is carried
+  // inward to each ancestor j, H_ji = S_jᵀ F (= H_ijᵀ).
+  for (int i = n - 1; i >= 0; --i) {
+    const ArticulatedBody& body = tree.body(i);
+    const int k = joint_velocity_count(body.joint);
+    const int column = tree.velocity_offset(i);
+    for (int c = 0; c < k; ++c) {
+      double unit[6] = {0, 0, 0, 0, 0, 0};
+      unit[c] = 1;
+      double* h_column = joint_space_inertia.col(column + c).data();
+      SpatialVector f = w.articulated_inertia[static_cast<std::size_t>(i)] * joint_velocity(body, unit);
+      project_force(body, f, h_column + column);
+      for (int j = i; tree.body(j).parent >= 0;) {
+        f = w.parent_to_body[static_cast<std::size_t>(j)].transpose_apply_force(f);
+        j = tree.body(j).parent;
+        project_force(tree.body(j), f, h_column + tree.velocity_offset(j));
+      }
+    }
+  }
+  // Ancestors come first, so the loop filled the diagonal blocks and the upper triangle; the
+  // lower triangle is its mirror.
+  for (int column = 0; column < nv; ++column) {
+    for (int row = column + 1; row < nv; ++row) joint_space_inertia(row, column) = joint_space_inertia(column, row);
+  }
+}
+
+}  // namespace limber

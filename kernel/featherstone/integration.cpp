@@ -1,0 +1,173 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/featherstone/integration.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Geometry>
+
+namespace limber {
+namespace {
+
+// exp(δ/2) as a unit quaternion: the rotation by the rotation vector δ.
+Eigen::Quaterniond rotation_exponential(const Eigen::Vector3d& rotation) {
+  const double angle = rotation.norm();
+  // sin(|δ|/2)/|δ|, by its series below 1e-4 rad (error < 1e-18).
+  const double scale = angle < 1e-4 ? 0.5 - angle * angle / 48 : std::sin(0.5 * angle) / angle;
+  return {std::cos(0.5 * angle), scale * rotation.x(), scale * rotation.y(), scale * rotation.z()};
+}
+
+// J_r⁻¹(θ) ω = ω + ½ θ × ω + β θ × (θ × ω), β = 1/|θ|² − (1 + cos|θ|) / (2|θ| sin|θ|): the rate
+// of θ in R = R₀ exp(θ) when the body-frame angular velocity is ω (the inverse of SO(3)'s right
+// Jacobian; Solà, Deray & Atchuthan 2018, "A micro Lie theory for state estimation in robotics").
+Eigen::Vector3d inverse_right_jacobian_times(const Eigen::Vector3d& theta, const Eigen::Vector3d& omega) {
+  const double angle = theta.norm();
+  const double beta = angle < 1e-3 ? 1.0 / 12 + angle * angle / 720
+                                   : 1 / (angle * angle) - (1 + std::cos(angle)) / (2 * angle * std::sin(angle));
+  const Eigen::Vector3d theta_cross_omega = theta.cross(omega);
+  return omega + 0.5 * theta_cross_omega + beta * theta.cross(theta_cross_omega);
+}
+
+// Θ̇ at the stage q₀ ⊕ Θ with velocity v (see integration.hpp), into `rate`.
+void displacement_rate(const ArticulatedTree& tree, const Eigen::VectorXd& displacement, const Eigen::VectorXd& v,
+                       Eigen::VectorXd& rate) {
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const int offset = tree.velocity_offset(i);
+    switch (tree.body(i).joint) {
+      case ArticulatedJoint::revolute:
+      case ArticulatedJoint::prismatic: rate[offset] = v[offset]; break;
+      case ArticulatedJoint::spherical:
+        rate.segment<3>(offset) = inverse_right_jacobian_times(displacement.segment<3>(offset), v.segment<3>(offset));
+        break;
+      case ArticulatedJoint::floating: {
+        const Eigen::Vector3d theta = displacement.segment<3>(offset);
+        rate.segment<3>(offset) = inverse_right_jacobian_times(theta, v.segment<3>(offset));
+        rate.segment<3>(offset + 3) = rotation_exponential(theta) * v.segment<3>(offset + 3);
+        break;
+      }
+      case ArticulatedJoint::fixed: break;
+    }
+  }
+}
+
+}  // namespace
+
+void FeatherstoneIntegratorWorkspace::resize(const ArticulatedTree& tree) {
+  dynamics.resize(tree);
+  const int nq = tree.position_count(), nv = tree.velocity_count();
+  start_positions.setZero(nq), stage_positions.setZero(nq);
+  start_velocities.setZero(nv), stage_velocities.setZero(nv), stage_rate.setZero(nv);
+  stage_displacement.setZero(nv), accelerations.setZero(nv);
+  acceleration_sum.setZero(nv), displacement_rate_sum.setZero(nv);
+}
+
+bool FeatherstoneIntegratorWorkspace::fits(const ArticulatedTree& tree) const {
+  return dynamics.fits(tree) && start_positions.size() == tree.position_count() && stage_rate.size() == tree.velocity_count();
+}
+
+void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out) {
+  if (q.size() != tree.position_count() || out.size() != tree.position_count() || displacement.size() != tree.velocity_count()) {
+    throw std::invalid_argument("displace_positions: expected q and out of size " + std::to_string(tree.position_count()) +
+                                " and a displacement of size " + std::to_string(tree.velocity_count()));
+  }
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const int p = tree.position_offset(i), d = tree.velocity_offset(i);
+    switch (tree.body(i).joint) {
+      case ArticulatedJoint::revolute:
+      case ArticulatedJoint::prismatic: out[p] = q[p] + displacement[d]; break;
+      case ArticulatedJoint::spherical: {
+        const Eigen::Quaterniond start(q[p], q[p + 1], q[p + 2], q[p + 3]);
+        const Eigen::Quaterniond end = (start * rotation_exponential(displacement.segment<3>(d))).normalized();
+        out[p] = end.w(), out[p + 1] = end.x(), out[p + 2] = end.y(), out[p + 3] = end.z();
+        break;
+      }
+      case ArticulatedJoint::floating: {
+        const Eigen::Quaterniond start = Eigen::Quaterniond(q[p + 3], q[p + 4], q[p + 5], q[p + 6]).normalized();
+        const Eigen::Vector3d position = q.segment<3>(p) + start * displacement.segment<3>(d + 3);
+        const Eigen::Quaterniond end = (start * rotation_exponential(displacement.segment<3>(d))).normalized();
+        out.segment<3>(p) = position;
+        out[p + 3] = end.w(), out[p + 4] = end.x(), out[p + 5] = end.y(), out[p + 6] = end.z();
+        break;
+      }
+      case ArticulatedJoint::fixed: break;
+    }
+  }
+}
+
+void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
+               const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+               FeatherstoneIntegrator integrator, FeatherstoneIntegratorWorkspace& workspace) {
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  FeatherstoneIntegratorWorkspace& w = workspace;
+  switch (integrator) {
+    case FeatherstoneIntegrator::semi_implicit_euler:
+      forward_dynamics(tree, q, v, joint_forces, gravity, w.dynamics, w.accelerations);
+      v += h * w.accelerations;
+      w.stage_displacement = h * v;
+      displace_positions(tree, q, w.stage_displacement, q);
+      return;
+    case FeatherstoneIntegrator::rk4: {
+      // Stage s at (q₀ ⊕ Θ_s, v₀ + c_s h a_{s−1}); weights b = (1, 2, 2, 1)/6, nodes c = (0, ½, ½, 1).
+      constexpr double kWeights[4] = {1.0 / 6, 2.0 / 6, 2.0 / 6, 1.0 / 6};
+      constexpr double kNextNodes[3] = {0.5, 0.5, 1.0};
+      w.start_positions = q, w.start_velocities = v;
+      w.stage_positions = q, w.stage_velocities = v;
+      w.stage_displacement.setZero();
+      w.acceleration_sum.setZero(), w.displacement_rate_sum.setZero();
+      for (int s = 0; s < 4; ++s) {
+        forward_dynamics(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w.dynamics, w.accelerations);
+        displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate);
+        w.acceleration_sum += kWeights[s] * w.accelerations;
+        w.displacement_rate_sum += kWeights[s] * w.stage_rate;
+        if (s == 3) break;
+        w.stage_displacement = (kNextNodes[s] * h) * w.stage_rate;
+        w.stage_velocities = w.start_velocities + (kNextNodes[s] * h) * w.accelerations;
+        displace_positions(tree, w.start_positions, w.stage_displacement, w.stage_positions);
+      }
+      v = w.start_velocities + h * w.acceleration_sum;
+      w.stage_displacement = h * w.displacement_rate_sum;
+      displace_positions(tree, w.start_positions, w.stage_displacement, q);
+      return;
+    }
+  }
+}
+
+double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
+  forward_kinematics(tree, q, v, workspace);
+  double energy = 0;
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const SpatialVector& velocity = workspace.velocity[static_cast<std::size_t>(i)];
+    energy += 0.5 * velocity.dot(tree.body(i).inertia * velocity);
+  }
+  return energy;
+}
+
+double potential_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Vector3d& gravity,
+                        DynamicsWorkspace& workspace) {
+  body_poses(tree, q, workspace);
+  double energy = 0;
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const PluckerTransform& body_from_world = workspace.world_to_body[static_cast<std::size_t>(i)];
+    const SpatialInertia& inertia = tree.body(i).inertia;
+    const Eigen::Vector3d centre = body_from_world.translation + body_from_world.rotation.transpose() * inertia.centre_of_mass();
+    energy -= inertia.mass * gravity.dot(centre);
+  }
+  return energy;
+}
+
+SpatialVector spatial_momentum(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
+  forward_kinematics(tree, q, v, workspace);
+  SpatialVector momentum = SpatialVector::Zero();
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    momentum += workspace.world_to_body[index].transpose_apply_force(tree.body(i).inertia * workspace.velocity[index]);
+  }
+  return momentum;
+}
+
+}  // namespace limber

@@ -1,0 +1,73 @@
+// Time integration of a kinematic tree's state (q, v), and the observers the tests use (energy,
+// momentum).
+//
+// Positions live on a manifold: a spherical or floating joint's orientation is a unit
+// quaternion, which must be advanced by rotations, never by adding to its coefficients. Both
+// integrators therefore move q by `displace_positions`, q ⊕ δ, with δ a tangent vector of size
+// nv laid out like v:
+//   revolute, prismatic   q + δ
+//   spherical             q ⊗ exp(δ/2): δ is a rotation vector (axis · angle, rad) in the child
+//                         frame, exp(δ/2) = (cos(|δ|/2), sin(|δ|/2) δ/|δ|)
+//   floating              (θ, d): p + R(q) d, then the quaternion as spherical by θ; d is a
+//                         translation in the child frame at q, m
+// so q ⊕ h·v is one step with the velocity v held constant in the child frame (body-frame ω,
+// as in q ← q ⊗ exp(h ω/2)). Quaternions are renormalized after every step.
+//
+// RK4 is combined in the tangent space at the step's start q₀ (Munthe-Kaas 1998, "Runge–Kutta
+// methods on Lie groups"): each stage s sits at q₀ ⊕ Θ_s and contributes the rate of Θ, not of
+// the quaternion: Θ̇ = J_r⁻¹(θ) ω for a rotation (J_r the right Jacobian of SO(3)) and
+// ḋ = exp(θ) v for a floating joint's translation; q₁ = q₀ ⊕ h·Σ b_s Θ̇_s. This keeps the
+// classical method's order 4 on the rotations.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+#include "kernel/featherstone/articulated_tree.hpp"
+#include "kernel/featherstone/dynamics.hpp"
+
+namespace limber {
+
+enum class FeatherstoneIntegrator : std::uint8_t {
+  semi_implicit_euler,  ///< v ← v + h v̇(q, v); q ← q ⊕ h v (with the new v). Order 1.
+  rk4,                  ///< classical Runge–Kutta, stages combined in the tangent space. Order 4.
+};
+
+/// Scratch for `integrate`, sized by resize(tree) or by the first call.
+struct FeatherstoneIntegratorWorkspace {
+  DynamicsWorkspace dynamics;
+  Eigen::VectorXd start_positions, stage_positions;                // nq
+  Eigen::VectorXd start_velocities, stage_velocities, stage_rate;  // nv
+  Eigen::VectorXd stage_displacement, accelerations;              // nv
+  Eigen::VectorXd acceleration_sum, displacement_rate_sum;        // nv
+
+  void resize(const ArticulatedTree& tree);
+  bool fits(const ArticulatedTree& tree) const;
+};
+
+/// out = q ⊕ displacement (see above). q, out: nq (out may be q itself); displacement: nv.
+void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out);
+
+/// Advances (q, v) by h seconds under constant joint forces τ (nv) and gravity g (world frame,
+/// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized.
+void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
+               const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+               FeatherstoneIntegrator integrator, FeatherstoneIntegratorWorkspace& workspace);
+
+/// T = Σ ½ v_iᵀ I_i v_i over the bodies, J.
+double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
+
+/// V = −Σ m_i g·c_i, c_i the world position of body i's centre of mass; J (zero at the world
+/// origin).
+double potential_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, const Eigen::Vector3d& gravity,
+                        DynamicsWorkspace& workspace);
+
+/// The tree's total spatial momentum Σ ⁰X_i* I_i v_i: (angular momentum about the world origin,
+/// linear momentum), world frame; kg·m²/s and kg·m/s.
+SpatialVector spatial_momentum(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                               const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
+
+}  // namespace limber
