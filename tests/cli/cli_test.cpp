@@ -92,8 +92,8 @@ TEST(Cli, RunsJacobiAndTheSequentialSweep) {
   }
 }
 TEST(Cli, SpringMethodsRunEveryShippedScene) {
-  for (const std::string& method : {"springs-explicit", "springs-implicit"}) {
-    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+  for (const char* method : {"springs-explicit", "springs-implicit"}) {
+    for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
       const Result r = run({"run", scene(file), "--method", method, "--steps", "200"});
       ASSERT_EQ(r.code, kSuccess) << method << " " << file << ": " << r.err;
       EXPECT_THAT(r.out, HasSubstr("rigid limbs joined by stiff springs")) << file;
@@ -118,8 +118,8 @@ TEST(Cli, SpringsWriteHeadAndTailColumns) {
 }
 
 TEST(Cli, LagrangeRunsEveryShippedScene) {
-  for (const std::string& stabilization : {"baumgarte", "projection"}) {
-    for (const std::string& file : {"humanoid.json", "chain.json", "stick_in_box.json", "gears.json"}) {
+  for (const char* stabilization : {"baumgarte", "projection"}) {
+    for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json", "gears.json"}) {
       const Result r = run({"run", scene(file), "--method", "lagrange", "--stabilization", stabilization, "--steps", "200"});
       ASSERT_EQ(r.code, kSuccess) << stabilization << " " << file << ": " << r.err;
       EXPECT_THAT(r.out, HasSubstr("rigid limbs and joint constraints")) << file;
@@ -129,7 +129,7 @@ TEST(Cli, LagrangeRunsEveryShippedScene) {
 }
 
 TEST(Cli, OnlyLagrangeRunsGearsAndHinges) {
-  for (const std::string& method : {"weighted", "springs-implicit"}) {
+  for (const char* method : {"weighted", "springs-implicit"}) {
     expect_rejected({"run", scene("gears.json"), "--method", method}, "joints[0] 'large_axle': the ");
   }
 }

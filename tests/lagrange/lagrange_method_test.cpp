@@ -1,6 +1,9 @@
 // The Lagrange-multiplier method (thesis 3.1.4, 3.4, 4.2.1): the multipliers are the joint
 // forces, Baraff's tree solve equals the general sparse one, the joints stay closed, and energy
 // and momentum are kept to the integrator's accuracy.
+
+// GCC 12 false positive inside Eigen's AVX-512 reductions (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <cmath>
 #include <random>
 
