@@ -1,6 +1,6 @@
 // step() allocates nothing after its first call (DESIGN.md) — the Verlet method's and the
-// explicit spring method's (the implicit one allocates inside Eigen's sparse factorization,
-// kernel/springs/step.hpp): counted by replacing the global allocation functions in this test
+// explicit spring method's and the Lagrange tree solve's (the implicit springs and Lagrange's
+// sparse path allocate inside Eigen's sparse factorization, kernel/springs/step.hpp): counted by replacing the global allocation functions in this test
 // program only.
 #include <atomic>
 #include <cstdlib>
@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "kernel/lagrange/compile.hpp"
+#include "kernel/lagrange/step.hpp"
 #include "kernel/springs/compile.hpp"
 #include "kernel/springs/step.hpp"
 #include "kernel/verlet/compile.hpp"
@@ -96,6 +98,25 @@ TEST(Allocation, ExplicitSpringStepAllocatesNothingAfterItsFirstCall) {
       const long before = allocations.load();
       for (int s = 0; s < 600; ++s) step(state);
       EXPECT_EQ(allocations.load() - before, 0) << file << ", integrator " << static_cast<int>(integrator);
+    }
+  }
+}
+
+TEST(Allocation, LagrangeTreeStepAllocatesNothingAfterItsFirstCall) {
+  // Baraff's tree solve with every stabilization and integrator, contacts and projections
+  // included; the sparse path (loops, gears) allocates inside Eigen's factorization.
+  for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+    const Model model = testing::load_shipped_scene(file);
+    for (Stabilization stabilization : {Stabilization::baumgarte, Stabilization::projection}) {
+      for (RigidIntegrator integrator : {RigidIntegrator::semi_implicit_euler, RigidIntegrator::rk4}) {
+        LagrangeState state = compile_lagrange(model, {.integrator = integrator, .stabilization = stabilization});
+        ASSERT_TRUE(state.uses_tree);
+        step(state, model.settings.time_step);
+        const long before = allocations.load();
+        for (int s = 0; s < 600; ++s) step(state, model.settings.time_step);
+        EXPECT_EQ(allocations.load() - before, 0) << file << ", integrator " << static_cast<int>(integrator)
+                                                  << ", stabilization " << static_cast<int>(stabilization);
+      }
     }
   }
 }
