@@ -6,10 +6,8 @@
 // The allocation functions are replaced in this program to count them (forward dynamics and
 // stepping must allocate nothing once sized).
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
-#include <new>
 #include <random>
 #include <string>
 
@@ -24,29 +22,8 @@
 #include "kernel/featherstone/spatial.hpp"
 #include "kernel/model/model.hpp"
 #include "tests/featherstone/random_trees.hpp"
+#include "tests/support/allocation_counter.hpp"
 
-namespace {
-std::atomic<long> allocations{0};
-}  // namespace
-
-// GCC 12 warns that the std::free below may meet memory from another allocator: it cannot see
-// that these replacements are the program's only allocation functions.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t size) {
-  ++allocations;
-  if (void* p = std::malloc(size ? size : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new(std::size_t size, std::align_val_t alignment) {
-  ++allocations;
-  const std::size_t a = static_cast<std::size_t>(alignment);
-  if (void* p = std::aligned_alloc(a, (size + a - 1) / a * a)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete(void* p, std::align_val_t) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t, std::align_val_t) noexcept { std::free(p); }
 
 namespace limber {
 namespace {
@@ -338,14 +315,14 @@ TEST(Dynamics, ForwardDynamicsAndSteppingAllocateNothingOnceSized) {
   forward_dynamics(tree, q, v, tau, kGravity, workspace, accelerations);  // sizes
   inverse_dynamics(tree, q, v, accelerations, kGravity, workspace, forces);
   integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::rk4, stepper);
-  const long before = allocations.load();
+  const long before = testing::allocation_count();
   for (int step = 0; step < 10; ++step) {
     forward_dynamics(tree, q, v, tau, kGravity, workspace, accelerations);
     inverse_dynamics(tree, q, v, accelerations, kGravity, workspace, forces);
     integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::rk4, stepper);
     integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::semi_implicit_euler, stepper);
   }
-  EXPECT_EQ(allocations.load() - before, 0);
+  EXPECT_EQ(testing::allocation_count() - before, 0);
 }
 
 // --- Conservation under integration ---------------------------------------------------------------
