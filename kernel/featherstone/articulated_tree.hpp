@@ -30,6 +30,7 @@
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -96,5 +97,37 @@ void validate_articulated_body(const ArticulatedBody& body, int index);
 
 /// validate_articulated_body for each body in order; throws at the first bad one.
 void validate_articulated_bodies(const std::vector<ArticulatedBody>& bodies);
+
+/// Calls visit(std::integral_constant<int, k>{}) with k the joint's degrees of freedom (0, 1, 3
+/// or 6), so per-joint arithmetic can use fixed-size blocks.
+template <typename Visitor>
+void with_degrees_of_freedom(ArticulatedJoint type, Visitor&& visit) {
+  switch (type) {
+    case ArticulatedJoint::revolute:
+    case ArticulatedJoint::prismatic: visit(std::integral_constant<int, 1>{}); return;
+    case ArticulatedJoint::spherical: visit(std::integral_constant<int, 3>{}); return;
+    case ArticulatedJoint::floating: visit(std::integral_constant<int, 6>{}); return;
+    case ArticulatedJoint::fixed: visit(std::integral_constant<int, 0>{}); return;
+  }
+}
+
+/// The joint's motion subspace S (6 × k, Table 4.1), child coordinates: revolute (a, 0),
+/// prismatic (0, a), spherical [1₃; 0], floating 1₆.
+template <int k>
+Eigen::Matrix<double, 6, k> motion_subspace(const ArticulatedBody& body) {
+  Eigen::Matrix<double, 6, k> s = Eigen::Matrix<double, 6, k>::Zero();
+  if constexpr (k == 1) {
+    if (body.joint == ArticulatedJoint::revolute) {
+      s.template head<3>() = body.joint_axis;
+    } else {
+      s.template tail<3>() = body.joint_axis;
+    }
+  } else if constexpr (k == 3) {
+    s.template topRows<3>().setIdentity();
+  } else if constexpr (k == 6) {
+    s.setIdentity();
+  }
+  return s;
+}
 
 }  // namespace limber

@@ -15,37 +15,6 @@
 namespace limber {
 namespace {
 
-// k, the joint's degrees of freedom, as a compile-time constant: visit(std::integral_constant<int, k>).
-template <typename Visitor>
-void with_degrees_of_freedom(ArticulatedJoint type, Visitor&& visit) {
-  switch (type) {
-    case ArticulatedJoint::revolute:
-    case ArticulatedJoint::prismatic: visit(std::integral_constant<int, 1>{}); return;
-    case ArticulatedJoint::spherical: visit(std::integral_constant<int, 3>{}); return;
-    case ArticulatedJoint::floating: visit(std::integral_constant<int, 6>{}); return;
-    case ArticulatedJoint::fixed: visit(std::integral_constant<int, 0>{}); return;
-  }
-}
-
-// S_i (6 × k, Table 4.1), child coordinates: revolute (a, 0), prismatic (0, a), spherical
-// [1₃; 0], floating 1₆.
-template <int k>
-Eigen::Matrix<double, 6, k> motion_subspace(const ArticulatedBody& body) {
-  Eigen::Matrix<double, 6, k> s = Eigen::Matrix<double, 6, k>::Zero();
-  if constexpr (k == 1) {
-    if (body.joint == ArticulatedJoint::revolute) {
-      s.template head<3>() = body.joint_axis;
-    } else {
-      s.template tail<3>() = body.joint_axis;
-    }
-  } else if constexpr (k == 3) {
-    s.template topRows<3>().setIdentity();
-  } else if constexpr (k == 6) {
-    s.setIdentity();
-  }
-  return s;
-}
-
 // v_J = S q̇ for body i's slice of v (`joint_velocities` points at it).
 SpatialVector joint_velocity(const ArticulatedBody& body, const double* joint_velocities) {
   SpatialVector out = SpatialVector::Zero();

@@ -117,6 +117,20 @@ Observation observe(const LagrangeState& state) {
   return out;
 }
 
+Observation observe(const FeatherstoneState& state) {
+  Observation out = observe_rigid_scene(state);
+  const RigidBodyState& y = state.bodies.state;
+  add_joint_gaps(out, state.joints, [&](std::size_t j) {
+    Eigen::Vector3d separation = joint_separation(state.joints, y, j);
+    if (!state.slide_axis[j].isZero(0)) {
+      const Eigen::Vector3d axis = y.orientation[state.joints.outboard[j]] * state.slide_axis[j];
+      separation -= separation.dot(axis) * axis;
+    }
+    return separation.norm();
+  });
+  return out;
+}
+
 template Observation observe<float>(const VerletState<float>&);
 template Observation observe<double>(const VerletState<double>&);
 

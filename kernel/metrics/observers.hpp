@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include "kernel/featherstone/featherstone_state.hpp"
 #include "kernel/lagrange/lagrange_state.hpp"
 #include "kernel/springs/spring_state.hpp"
 #include "kernel/verlet/verlet_state.hpp"
@@ -37,6 +38,11 @@ Observation observe(const SpringState& state);
 
 /// The same for the Lagrange method: joint gaps |C| between the joints' anchor points.
 Observation observe(const LagrangeState& state);
+
+/// The same for the Featherstone method, from the rigid bodies it refreshes from (q, v): joint
+/// gaps between the joints' world anchor points (a prismatic joint's along its slide not
+/// counted), which reduced coordinates keep at 0 to rounding.
+Observation observe(const FeatherstoneState& state);
 
 extern template Observation observe<float>(const VerletState<float>&);
 extern template Observation observe<double>(const VerletState<double>&);

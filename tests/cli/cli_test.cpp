@@ -190,5 +190,29 @@ TEST(Cli, HelpExitsCleanly) {
   EXPECT_THAT(r.err, Not(HasSubstr("limber:")));
 }
 
+TEST(Cli, FeatherstoneRunsTheShippedScenesAndRefusesWhatReducedCoordinatesCannotExpress) {
+  for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
+    const Result r = run({"run", scene(file), "--method", "featherstone", "--steps", "240"});
+    ASSERT_EQ(r.code, kSuccess) << file << ": " << r.err;
+    EXPECT_THAT(r.out, HasSubstr("method      featherstone: rigid limbs in reduced coordinates")) << file;
+    EXPECT_THAT(r.out, HasSubstr("RK4")) << file;
+    EXPECT_THAT(r.out, HasSubstr("status      ok")) << file;
+  }
+  const Result humanoid = run({"run", "--method", "featherstone", "--integrator", "semi-implicit", "--steps", "10"});
+  ASSERT_EQ(humanoid.code, kSuccess) << humanoid.err;
+  EXPECT_THAT(humanoid.out, HasSubstr("semi-implicit Euler"));
+  EXPECT_THAT(humanoid.out, HasSubstr("tree        10 bodies, 36 degrees of freedom (nv; nq 46), 2 floating roots: head, ball"));
+  EXPECT_THAT(humanoid.out, HasSubstr("joint gap"));
+  expect_rejected({"run", scene("gears.json"), "--method", "featherstone"}, "gears[0] 'mesh': the featherstone method does not support gears");
+  for (const char* integrator : {"euler", "rk2", "backward-euler"}) {
+    expect_rejected({"run", "--method", "featherstone", "--integrator", integrator},
+                    std::string("--integrator ") + integrator + ": featherstone takes semi-implicit or rk4");
+  }
+  expect_rejected({"run", "--method", "featherstone", "--iterations", "5"}, "--iterations: applies to the Verlet methods");
+  expect_rejected({"run", "--method", "featherstone", "--stiffness", "5"}, "--stiffness: applies to the spring methods");
+  expect_rejected({"run", "--method", "featherstone", "--stabilization", "projection"}, "--stabilization: applies to lagrange");
+  expect_rejected({"run", "--method", "featherstone", "--precision", "float"}, "double only");
+}
+
 }  // namespace
 }  // namespace limber::cli

@@ -12,6 +12,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "kernel/featherstone/compile.hpp"
+#include "kernel/featherstone/step.hpp"
 #include "kernel/metrics/knock.hpp"
 #include "kernel/metrics/observers.hpp"
 #include "kernel/model/model.hpp"
@@ -67,7 +69,8 @@ struct RunFlags {
 
   bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
   bool lagrange() const { return method == "lagrange"; }
-  bool rigid() const { return springs() || lagrange(); }  ///< the methods on rigid bodies
+  bool featherstone() const { return method == "featherstone"; }
+  bool rigid() const { return springs() || lagrange() || featherstone(); }  ///< the methods on rigid bodies
 };
 
 bool given(const CLI::Option* option) { return option->count() > 0; }
@@ -86,16 +89,17 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("scene", flags.scene, "Scene file (JSON); default: the embedded humanoid (tools/scenes/humanoid.json)");
   run.add_option("--method", flags.method,
                  "weighted or unweighted relaxation (Verlet, thesis eq. 4.7 / 4.6), springs-explicit / "
-                 "springs-implicit (rigid limbs joined by stiff springs, thesis 4.4.1), or lagrange (rigid limbs "
-                 "and joint constraints, thesis 3.1.4)")
-      ->check(CLI::IsMember({"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange"}))
+                 "springs-implicit (rigid limbs joined by stiff springs, thesis 4.4.1), lagrange (rigid limbs "
+                 "and joint constraints, thesis 3.1.4), or featherstone (rigid limbs in reduced coordinates, the "
+                 "articulated-body algorithm)")
+      ->check(CLI::IsMember({"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"}))
       ->capture_default_str();
   flags.stiffness_option = run.add_option("--stiffness", flags.stiffness, "Springs: joint stiffness k for every joint, N/m");
   flags.damping_option = run.add_option("--damping", flags.damping, "Springs: joint damping c for every joint, N s/m");
   flags.integrator_option =
       run.add_option("--integrator", flags.integrator,
                      "Rigid methods: euler, semi-implicit (default), rk2 or rk4 with springs-explicit and lagrange; "
-                     "backward-euler with springs-implicit")
+                     "backward-euler with springs-implicit; rk4 (default) or semi-implicit with featherstone")
           ->check(CLI::IsMember({"euler", "semi-implicit", "rk2", "rk4", "backward-euler"}));
   flags.linear_solver_option =
       run.add_option("--linear-solver", flags.linear_solver, "springs-implicit: ldlt (sparse, exact) or cg (conjugate gradient)")
@@ -210,10 +214,24 @@ LagrangeOptions lagrange_options(const RunFlags& flags) {
   return options;
 }
 
+// The FeatherstoneOptions the flags ask for.
+FeatherstoneOptions featherstone_options(const RunFlags& flags) {
+  refuse_verlet_flags(flags);
+  refuse({flags.stiffness_option, flags.damping_option, flags.linear_solver_option}, flags, "the spring methods");
+  refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
+  FeatherstoneOptions options;
+  const std::string integrator = flags.integrator_option->count() ? flags.integrator : "rk4";  // featherstone_state.hpp says why
+  if (integrator != "semi-implicit" && integrator != "rk4") {
+    throw InputError("--integrator " + integrator + ": featherstone takes semi-implicit or rk4");
+  }
+  options.integrator = integrator == "rk4" ? FeatherstoneIntegrator::rk4 : FeatherstoneIntegrator::semi_implicit_euler;
+  return options;
+}
+
 // The VerletOptions the flags ask for; a combination the sequential sweep cannot run is an error.
 VerletOptions verlet_options(const RunFlags& flags) {
   refuse({flags.stiffness_option, flags.damping_option, flags.integrator_option, flags.linear_solver_option}, flags,
-         "the rigid-body methods (springs-explicit, springs-implicit, lagrange)");
+         "the rigid-body methods (springs-explicit, springs-implicit, lagrange, featherstone)");
   refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   VerletOptions options;
   options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
@@ -360,6 +378,7 @@ template <typename Scalar>
 bool has_joint_gaps(const VerletState<Scalar>& state) { return !state.joint_constraints.empty(); }
 bool has_joint_gaps(const SpringState& state) { return state.springs.size() > 0; }
 bool has_joint_gaps(const LagrangeState& state) { return state.joints.size() > 0; }
+bool has_joint_gaps(const FeatherstoneState& state) { return state.joints.size() > 0; }
 
 template <typename Scalar>
 bool ball_touching(const VerletState<Scalar>& state) { return !state.ball_contacts.empty(); }
@@ -512,6 +531,24 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
 }
 
+void method_lines(std::ostream& out, const Model& model, const RunFlags&, const FeatherstoneState& state, const RunRecord& record) {
+  out << format("method      featherstone: rigid limbs in reduced coordinates (articulated-body algorithm), %s, double precision\n",
+                state.options.integrator == FeatherstoneIntegrator::rk4 ? "RK4" : "semi-implicit Euler");
+  out << format("model       %zu limbs, %zu joints%s%s%s; %zu island%s\n", model.bodies.size(), model.joints.size(),
+                model.ground ? ", ground" : "", model.bounds ? ", bounds" : "", model.ball ? ", ball" : "", state.islands.size(),
+                state.islands.size() == 1 ? "" : "s");
+  std::string roots;
+  for (std::int32_t i : state.floating_roots) roots += (roots.empty() ? "" : ", ") + state.tree.body(i).name;
+  out << format("tree        %d bodies, %d degrees of freedom (nv; nq %d), %zu floating root%s%s%s\n", state.tree.body_count(),
+                state.tree.velocity_count(), state.tree.position_count(), state.floating_roots.size(),
+                state.floating_roots.size() == 1 ? "" : "s", roots.empty() ? "" : ": ", roots.c_str());
+  out << format("contacts    impulses through the joint-space inertia (articulated-body response), %d passes, then a position push-out\n",
+                state.contact_iterations);
+  out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
+                model.settings.time_step, state.time, record.wall_seconds,
+                record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
+}
+
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
 int simulate(State& state, const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
@@ -567,6 +604,10 @@ int simulate(const Model& model, const RunFlags& flags, const std::string& sourc
   }
   if (flags.lagrange()) {
     LagrangeState state = compile_lagrange(model, lagrange_options(flags));
+    return simulate(state, model, flags, source, out);
+  }
+  if (flags.featherstone()) {
+    FeatherstoneState state = compile_featherstone(model, featherstone_options(flags));
     return simulate(state, model, flags, source, out);
   }
   if (flags.precision == "float") {

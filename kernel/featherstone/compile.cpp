@@ -1,0 +1,241 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/featherstone/compile.hpp"
+
+#include <string>
+#include <vector>
+
+#include "kernel/featherstone/step.hpp"
+#include "layouts/graph/disjoint_sets.hpp"
+
+namespace limber {
+namespace {
+
+ArticulatedJoint articulated_joint(JointType type) {
+  switch (type) {
+    case JointType::revolute: return ArticulatedJoint::revolute;
+    case JointType::prismatic: return ArticulatedJoint::prismatic;
+    case JointType::fixed: return ArticulatedJoint::fixed;
+    case JointType::spherical:
+    case JointType::universal: break;  // universal is refused before
+  }
+  return ArticulatedJoint::spherical;
+}
+
+// Refuses the first joint, in joint order, whose two sides are already connected (the world is
+// one node, so a second joint to the world in one island closes a loop through it).
+void refuse_kinematic_loops(const Model& model) {
+  const auto world = static_cast<std::uint32_t>(model.bodies.size());
+  DisjointSets connected(model.bodies.size() + 1);
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    const std::uint32_t inboard = joint.inboard == kWorld ? world : static_cast<std::uint32_t>(joint.inboard);
+    const auto outboard = static_cast<std::uint32_t>(joint.outboard);
+    if (connected.find(inboard) == connected.find(outboard)) {
+      throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name +
+                       "': closes a kinematic loop, which reduced coordinates cannot express; use --method lagrange");
+    }
+    connected.unite(inboard, outboard);
+  }
+}
+
+// A tree body before it is built: its rigid-scene body, its parent (tree index, −1: the world)
+// and the Model joint to it (−1: a floating root).
+struct TreeNode {
+  std::int32_t body = 0, parent = -1, joint = -1;
+};
+
+// The tree order: island by island, breadth first from each island's root.
+std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& model, std::vector<std::int32_t>& island_begin) {
+  const std::size_t limb_count = model.bodies.size();
+  std::vector<std::vector<std::int32_t>> incident(limb_count);  // joints between two bodies, per body, in joint order
+  std::vector<std::int32_t> world_joint(limb_count, -1);
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    if (joint.inboard == kWorld) {
+      world_joint[joint.outboard] = static_cast<std::int32_t>(j);  // at most one per island (no loops)
+    } else {
+      incident[joint.inboard].push_back(static_cast<std::int32_t>(j));
+      incident[joint.outboard].push_back(static_cast<std::int32_t>(j));
+    }
+  }
+  std::vector<TreeNode> nodes;
+  nodes.reserve(state.bodies.size());
+  for (const RigidIsland& island : state.islands) {
+    island_begin.push_back(static_cast<std::int32_t>(nodes.size()));
+    TreeNode root{static_cast<std::int32_t>(island.bodies.front()), -1, -1};
+    for (std::uint32_t b : island.bodies) {
+      if (b < limb_count && world_joint[b] >= 0) root = {static_cast<std::int32_t>(b), -1, world_joint[b]};
+    }
+    const std::size_t first = nodes.size();
+    nodes.push_back(root);
+    for (std::size_t next = first; next < nodes.size(); ++next) {
+      const TreeNode node = nodes[next];
+      if (static_cast<std::size_t>(node.body) >= limb_count) continue;  // the ball
+      for (std::int32_t j : incident[node.body]) {
+        if (j == node.joint) continue;
+        const Joint& joint = model.joints[j];
+        const std::int32_t child = joint.inboard == node.body ? joint.outboard : joint.inboard;
+        nodes.push_back({child, static_cast<std::int32_t>(next), j});
+      }
+    }
+  }
+  island_begin.push_back(static_cast<std::int32_t>(nodes.size()));
+  return nodes;
+}
+
+}  // namespace
+
+FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOptions& options) {
+  FeatherstoneState state;
+  static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
+  require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::fixed},
+                      /*gears_supported=*/false, "featherstone");
+  refuse_kinematic_loops(model);
+  state.options = options;
+  const std::size_t limb_count = model.bodies.size();
+  const std::size_t body_count = state.bodies.size();
+  const std::vector<TreeNode> nodes = tree_order(state, model, state.island_begin);
+  const RigidBodyState& y = state.bodies.state;
+
+  // The Model body frame's world pose at the start (rotation, origin) for each rigid-scene body.
+  std::vector<Eigen::Matrix3d> model_rotation(body_count);
+  std::vector<Eigen::Vector3d> model_origin(body_count);
+  for (std::size_t b = 0; b < body_count; ++b) {
+    if (b < limb_count) {
+      model_rotation[b] = model.bodies[b].orientation().toRotationMatrix();
+      model_origin[b] = model.bodies[b].position;
+    } else {
+      model_rotation[b].setIdentity();
+      model_origin[b] = model.ball->position;
+    }
+  }
+
+  // Tree bodies: frames, inertias, joints, X_tree (featherstone_state.hpp, "Frames").
+  const std::size_t tree_size = nodes.size();
+  std::vector<Eigen::Matrix3d> rotation(tree_size);  // tree body frame → world, at the start
+  std::vector<Eigen::Vector3d> origin(tree_size);    // tree body frame's origin in world, at the start, m
+  state.scene_body.resize(tree_size), state.model_joint.resize(tree_size);
+  state.centre_of_mass.resize(tree_size), state.principal_frame.resize(tree_size);
+  state.tree_body.assign(body_count, -1);
+  for (std::size_t i = 0; i < tree_size; ++i) {
+    const TreeNode& node = nodes[i];
+    const std::int32_t b = node.body;
+    state.scene_body[i] = b, state.tree_body[b] = static_cast<std::int32_t>(i), state.model_joint[i] = node.joint;
+    // The frame's origin in the Model body frame: the child's anchor of its joint (the Model's
+    // outboard anchor unless the tree turned the joint round), or the centre of mass. The joint
+    // sits there: where a non-prismatic joint's two anchors do not coincide at the initial poses,
+    // the child's anchor is taken as the joint's location and the gap is kept as it started (the
+    // other methods close it; the joint-gap observer reports it).
+    Eigen::Vector3d anchor = state.shapes.centre_offset[b];
+    if (node.joint >= 0) {
+      const Joint& joint = model.joints[node.joint];
+      anchor = joint.outboard == b ? joint.outboard_anchor : joint.inboard_anchor;
+    }
+    rotation[i] = model_rotation[b];
+    origin[i] = model_origin[b] + model_rotation[b] * anchor;
+    state.centre_of_mass[i] = state.shapes.centre_offset[b] - anchor;
+    state.principal_frame[i] = state.shapes.principal_frame[b];
+
+    ArticulatedBody body;
+    body.name = static_cast<std::size_t>(b) < limb_count ? model.bodies[b].name : std::string("ball");
+    body.parent = node.parent;
+    // The rigid body's inertia (principal moments, floored as the rigid scene floors them) in the
+    // tree body's axes, about the centre of mass.
+    const Eigen::Matrix3d principal = state.principal_frame[i].toRotationMatrix();
+    Eigen::Matrix3d inertia = principal * state.bodies.body_inertia[b] * principal.transpose();
+    inertia = 0.5 * (inertia + inertia.transpose()).eval();
+    body.inertia = SpatialInertia::from_mass_properties(state.bodies.mass[b], state.centre_of_mass[i], inertia);
+    if (node.joint < 0) {
+      body.joint = ArticulatedJoint::floating;  // X_tree = 1: q holds the world pose
+      state.floating_roots.push_back(static_cast<std::int32_t>(i));
+    } else {
+      const Joint& joint = model.joints[node.joint];
+      body.joint = articulated_joint(joint.type);
+      body.joint_axis = (rotation[i].transpose() * joint.axis).normalized();  // child frame = joint frame at q = 0
+      // X_tree: the child's frame at its initial pose, seen from the parent's frame (or the world).
+      if (node.parent < 0) {
+        body.tree_transform = PluckerTransform::from_pose(rotation[i], origin[i]);
+      } else {
+        const Eigen::Matrix3d& parent_rotation = rotation[node.parent];
+        body.tree_transform = PluckerTransform::from_pose(parent_rotation.transpose() * rotation[i],
+                                                          parent_rotation.transpose() * (origin[i] - origin[node.parent]));
+      }
+    }
+    state.tree.add_body(std::move(body));
+  }
+
+  // q: the joints' zero, the floating roots at their world poses.
+  const ArticulatedTree& tree = state.tree;
+  state.q = tree.neutral_positions();
+  state.v.setZero(tree.velocity_count());
+  for (std::int32_t i : state.floating_roots) {
+    const int p = tree.position_offset(i);
+    const Eigen::Quaterniond orientation(rotation[i]);
+    state.q.segment<3>(p) = origin[i];
+    state.q.segment<4>(p + 3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
+  }
+
+  // v: each body's spatial velocity relative to its parent, at its frame's origin, in its frame,
+  // projected on the joint's motion subspace S: q̇ = Sᵀ v_rel (S's columns are orthonormal).
+  auto velocity_at = [&](std::int32_t b, const Eigen::Vector3d& point) -> Eigen::Vector3d {
+    return state.bodies.linear_velocity(y, b) + state.bodies.angular_velocity(y, b).cross(point - y.position[b]);
+  };
+  for (std::size_t i = 0; i < tree_size; ++i) {
+    const std::int32_t b = state.scene_body[i];
+    Eigen::Vector3d angular = state.bodies.angular_velocity(y, b), linear = velocity_at(b, origin[i]);
+    if (nodes[i].parent >= 0) {
+      const std::int32_t parent = state.scene_body[nodes[i].parent];
+      angular -= state.bodies.angular_velocity(y, parent);
+      linear -= velocity_at(parent, origin[i]);
+    }
+    const Eigen::Vector3d angular_in_child = rotation[i].transpose() * angular, linear_in_child = rotation[i].transpose() * linear;
+    const ArticulatedBody& body = tree.body(static_cast<int>(i));
+    const int offset = tree.velocity_offset(static_cast<int>(i));
+    switch (body.joint) {
+      case ArticulatedJoint::revolute: state.v[offset] = body.joint_axis.dot(angular_in_child); break;
+      case ArticulatedJoint::prismatic: state.v[offset] = body.joint_axis.dot(linear_in_child); break;
+      case ArticulatedJoint::spherical: state.v.segment<3>(offset) = angular_in_child; break;
+      case ArticulatedJoint::floating: state.v.segment<3>(offset) = angular_in_child, state.v.segment<3>(offset + 3) = linear_in_child; break;
+      case ArticulatedJoint::fixed: break;
+    }
+  }
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) continue;
+    const auto [first, last] = island_velocities(state, k);
+    state.v.segment(first, last - first).setZero();
+  }
+
+  // The joint-gap observer's anchors and slide axes.
+  state.joints = joint_anchors(state, model);
+  state.slide_axis.assign(model.joints.size(), Eigen::Vector3d::Zero());
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    if (joint.type != JointType::prismatic) continue;
+    state.slide_axis[j] = state.shapes.principal_frame[joint.outboard].conjugate() * (model_rotation[joint.outboard].transpose() * joint.axis);
+  }
+
+  // Scratch, sized once.
+  const int nv = tree.velocity_count();
+  state.kinematics.resize(tree);
+  state.integration.resize(tree);
+  state.joint_forces.setZero(nv);
+  state.saved_positions = state.q;
+  state.drag_force.assign(tree_size, SpatialVector::Zero());
+  JointSpaceContactScratch& contact = state.contact;
+  contact.articulated.resize(tree);
+  contact.zero_velocities.setZero(nv), contact.zero_forces.setZero(nv), contact.unused_accelerations.setZero(nv);
+  contact.spatial_impulse.assign(tree_size, SpatialVector::Zero());
+  contact.body_change.assign(tree_size, SpatialVector::Zero());
+  contact.body_displacement.assign(tree_size, SpatialVector::Zero());
+  contact.body_momentum.assign(tree_size, SpatialVector::Zero());
+  contact.generalized_momentum.setZero(nv);
+  contact.joint_bias.setZero(nv), contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
+  contact.contact_matrix.reserve(state.contacts.capacity());
+  contact.push.reserve(state.contacts.capacity());
+
+  refresh_rigid_bodies(state);
+  return state;
+}
+
+}  // namespace limber

@@ -1,0 +1,119 @@
+// The mutable state of the Featherstone method (reduced coordinates): the Model's bodies as one
+// kinematic tree (kernel/featherstone/articulated_tree.hpp) whose joints cannot open, stepped by
+// the articulated-body algorithm. Built by compile_featherstone() (compile.hpp); stepped by
+// step() (step.hpp).
+//
+// Beside the joint state (q, v) it keeps the maximal-coordinate rigid bodies of the shared rigid
+// scene (kernel/rigid/rigid_scene.hpp), refreshed from (q, v) after every step: positions,
+// orientations and momenta. Contact detection, sleeping, the observers and the command line's
+// summary then run on the same code as for the other rigid-body methods.
+//
+// Frames. Tree body i is rigid-scene body `scene_body[i]` (a Model body, or the ball). Its frame
+// has the axes of the Model's body frame (z: the limb's axis; the ball: the world's at the start)
+// and its origin at
+// - the anchor of the joint to its parent, on this body (the joint frame coincides with it at
+//   q = 0, and the Model's initial poses are every joint's zero), or
+// - the centre of mass, for a floating root (a 6-DOF joint to the world).
+// The rigid body's frame is on the principal axes at the centre of mass; `centre_of_mass[i]` and
+// `principal_frame[i]` give that frame in tree body i's frame.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "kernel/featherstone/articulated_tree.hpp"
+#include "kernel/featherstone/dynamics.hpp"
+#include "kernel/featherstone/integration.hpp"
+#include "kernel/featherstone/spatial.hpp"
+#include "kernel/rigid/rigid_scene.hpp"
+
+namespace limber {
+
+struct FeatherstoneOptions {
+  /// The core's integrators (integration.hpp). RK4 by default: the semi-implicit Euler step
+  /// (v ← v + h·v̇(q, v), then q) takes the velocity-product terms of v̇ — the gyroscopic
+  /// torque, and a floating body's body-frame velocity turning as −ω × v — explicitly, so a
+  /// body or joint turning at Ω (rad/s, in its own frame) gains |v| by a factor
+  /// √(1 + (hΩ)²) every step. That is unstable at any Δt: a thin limb spinning about its axis,
+  /// or the humanoid's short neck spinning between two spherical joints after the ball's impact
+  /// (Ω ≈ 100 rad/s), diverges within a few dozen steps at Δt = 1/240 s (measured on every
+  /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
+  /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
+  FeatherstoneIntegrator integrator = FeatherstoneIntegrator::rk4;
+};
+
+struct FeatherstoneStepReport {
+  StepStatus status = StepStatus::ok;
+  int contacts = 0;
+};
+
+/// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
+/// compile so a step allocates nothing.
+struct JointSpaceContactScratch {
+  /// Articulated-body inertias at the contact configuration (ABA's U_i, D_i⁻¹ with v = 0, g = 0).
+  DynamicsWorkspace articulated;
+  Eigen::VectorXd zero_velocities, zero_forces, unused_accelerations;  ///< nv
+  std::vector<SpatialVector> spatial_impulse;  ///< per tree body: the impulse on it, then ABA's p (body coordinates)
+  std::vector<SpatialVector> body_change;      ///< per tree body: the change of its spatial velocity (or displacement)
+  Eigen::VectorXd joint_bias;                  ///< nv: ABA's u_i = −S_iᵀ p_i of the impulse
+  Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
+  Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
+  std::vector<SpatialVector> body_displacement;  ///< per tree body: the push-out's spatial displacement
+  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K, world impulse at p → relative velocity at p
+  std::vector<double> push;                      ///< per contact: accumulated push-out "impulse", kg·m
+  std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
+  Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
+};
+
+struct FeatherstoneState : RigidScene {
+  ArticulatedTree tree;
+  Eigen::VectorXd q;  ///< nq: joint positions (articulated_tree.hpp's layout)
+  Eigen::VectorXd v;  ///< nv: joint velocities
+  FeatherstoneOptions options;
+
+  // Tree body i ↔ rigid-scene body b.
+  std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last)
+  std::vector<std::int32_t> tree_body;   ///< per rigid-scene body: its tree body
+  /// Per tree body: the Model joint that connects it to its parent, −1 for a floating root.
+  std::vector<std::int32_t> model_joint;
+  /// Per tree body: its rigid body's centre of mass in the tree body's frame, m.
+  std::vector<Eigen::Vector3d> centre_of_mass;
+  /// Per tree body: rotation from the rigid body's (principal) frame to the tree body's frame.
+  std::vector<Eigen::Quaterniond> principal_frame;
+  /// Tree bodies of island k are [island_begin[k], island_begin[k + 1]) (islands of the rigid
+  /// scene, in its order; each is one subtree).
+  std::vector<std::int32_t> island_begin;
+  std::vector<std::int32_t> floating_roots;  ///< tree bodies hanging from the world by a 6-DOF joint
+
+  /// The Model's joints as anchor pairs on the rigid bodies, for the joint-gap observer (which
+  /// must read ~0: reduced coordinates cannot open a joint).
+  JointAnchors joints;
+  /// Per Model joint: the slide axis of a prismatic joint in its outboard rigid body's frame
+  /// (zero for other types); the gap ignores separation along it.
+  std::vector<Eigen::Vector3d> slide_axis;
+
+  /// forward_kinematics of the current (q, v): world_to_body and the bodies' spatial velocities.
+  DynamicsWorkspace kinematics;
+  FeatherstoneIntegratorWorkspace integration;
+  JointSpaceContactScratch contact;
+  Eigen::VectorXd joint_forces;  ///< nv: Settings::drag as joint forces, held over a step
+  Eigen::VectorXd saved_positions;  ///< nq: q of sleeping islands, restored after integrating
+  std::vector<SpatialVector> drag_force;  ///< per tree body (scratch)
+  FeatherstoneStepReport last_report;
+};
+
+/// Where island k's tree bodies' coordinates lie: [first, last) in v (velocities) or q (positions).
+inline std::pair<int, int> island_velocities(const FeatherstoneState& state, std::size_t k) {
+  const int begin = state.island_begin[k], end = state.island_begin[k + 1];
+  return {state.tree.velocity_offset(begin), end < state.tree.body_count() ? state.tree.velocity_offset(end) : state.tree.velocity_count()};
+}
+inline std::pair<int, int> island_positions(const FeatherstoneState& state, std::size_t k) {
+  const int begin = state.island_begin[k], end = state.island_begin[k + 1];
+  return {state.tree.position_offset(begin), end < state.tree.body_count() ? state.tree.position_offset(end) : state.tree.position_count()};
+}
+
+}  // namespace limber

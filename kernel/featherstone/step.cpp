@@ -1,0 +1,123 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/featherstone/step.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernel/collision/rigid_contacts.hpp"
+#include "kernel/featherstone/joint_space_contacts.hpp"
+#include "kernel/numerics/flush_denormals.hpp"
+
+namespace limber {
+namespace {
+
+// Settings::drag (thesis 2.1.5, 2.1.6; in the limb's own frame, z its axis) at the step's start,
+// as joint forces τ = Σ J_iᵀ f_i (held over the step, so RK4 is first order in the drag).
+void drag_joint_forces(FeatherstoneState& state) {
+  const DragSettings& drag = state.settings.drag;
+  const RigidBodyState& y = state.bodies.state;
+  for (int i = 0; i < state.tree.body_count(); ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    const std::int32_t b = state.scene_body[index];
+    if (state.islands[state.island_of_body[b]].sleeping) continue;
+    const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
+    const Eigen::Vector3d force = -rotation * drag.linear.cwiseProduct(rotation.transpose() * state.bodies.linear_velocity(y, b));
+    const Eigen::Vector3d torque = -rotation * drag.angular.cwiseProduct(rotation.transpose() * state.bodies.angular_velocity(y, b));
+    // (τ + (x − r) × F, F) about the body's origin r, in its coordinates.
+    const PluckerTransform& world_to_body = state.kinematics.world_to_body[index];
+    state.drag_force[index].head<3>() = world_to_body.rotation * (torque + (y.position[b] - world_to_body.translation).cross(force));
+    state.drag_force[index].tail<3>() = world_to_body.rotation * force;
+  }
+  joint_forces_of_body_forces(state, state.drag_force, state.joint_forces);
+}
+
+// How many substeps keep every body's turn under kLargestTurn a substep: the explicit
+// integrators follow a body-frame vector turning at Ω only while hΩ is small (RK4: stable below
+// 2.8, dissipating (hΩ)⁶/144 of it per step), and friction at a thin limb's rim can spin it about
+// its axis at v/r — hundreds of rad/s. Ω is the fastest body's or joint's angular speed at the
+// step's start; at most kMostSubsteps.
+constexpr double kLargestTurn = 0.5;  // rad
+constexpr int kMostSubsteps = 32;
+int turn_substeps(const FeatherstoneState& state, double dt) {
+  double fastest = 0;
+  for (const SpatialVector& velocity : state.kinematics.velocity) fastest = std::max(fastest, velocity.head<3>().norm());
+  for (int i = 0; i < state.tree.body_count(); ++i) {
+    const ArticulatedJoint joint = state.tree.body(i).joint;
+    if (joint == ArticulatedJoint::spherical || joint == ArticulatedJoint::floating) {
+      fastest = std::max(fastest, state.v.segment<3>(state.tree.velocity_offset(i)).norm());
+    }
+  }
+  if (!(fastest * dt > kLargestTurn)) return 1;  // also when not finite: update_sleep reports it
+  return static_cast<int>(std::min(std::ceil(fastest * dt / kLargestTurn), double(kMostSubsteps)));
+}
+
+// Integrates the awake islands; sleeping ones keep q and v = 0.
+void integrate_awake_islands(FeatherstoneState& state, double dt) {
+  bool any_awake = false, any_asleep = false;
+  for (const RigidIsland& island : state.islands) (island.sleeping ? any_asleep : any_awake) = true;
+  if (!any_awake) return;
+  if (any_asleep) state.saved_positions = state.q;
+  if (!state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0)) drag_joint_forces(state);
+  const int substeps = turn_substeps(state, dt);
+  for (int k = 0; k < substeps; ++k) {
+    integrate(state.tree, state.q, state.v, state.joint_forces, state.settings.gravity, dt / substeps, state.options.integrator,
+              state.integration);
+  }
+  if (any_asleep) {
+    for (std::size_t k = 0; k < state.islands.size(); ++k) {
+      if (!state.islands[k].sleeping) continue;
+      const auto [first_position, last_position] = island_positions(state, k);
+      state.q.segment(first_position, last_position - first_position) = state.saved_positions.segment(first_position, last_position - first_position);
+      const auto [first_velocity, last_velocity] = island_velocities(state, k);
+      state.v.segment(first_velocity, last_velocity - first_velocity).setZero();
+    }
+  }
+  if (state.settings.damping > 0) state.v *= std::exp(-state.settings.damping * dt);
+}
+
+}  // namespace
+
+void refresh_rigid_bodies(FeatherstoneState& state) {
+  forward_kinematics(state.tree, state.q, state.v, state.kinematics);
+  RigidBodyState& y = state.bodies.state;
+  for (int i = 0; i < state.tree.body_count(); ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    const std::int32_t b = state.scene_body[index];
+    const PluckerTransform& world_to_body = state.kinematics.world_to_body[index];
+    const Eigen::Matrix3d rotation = world_to_body.rotation.transpose();  // body → world
+    const Eigen::Vector3d& centre = state.centre_of_mass[index];
+    y.orientation[b] = (Eigen::Quaterniond(rotation) * state.principal_frame[index]).normalized();
+    y.position[b] = world_to_body.translation + rotation * centre;
+    // v_i = (ω, v_O) in the body's frame: the centre of mass moves at v_O + ω × c.
+    const SpatialVector& velocity = state.kinematics.velocity[index];
+    const Eigen::Vector3d omega = rotation * velocity.head<3>();
+    y.linear_momentum[b] = state.bodies.mass[b] * (rotation * (velocity.tail<3>() + velocity.head<3>().cross(centre)));
+    y.angular_momentum[b] = state.bodies.world_inertia(y, b) * omega;
+  }
+}
+
+FeatherstoneStepReport step(FeatherstoneState& state, double dt) {
+  FeatherstoneStepReport report;
+  if (!(dt > 0) || !std::isfinite(dt)) {
+    report.status = StepStatus::invalid_time_step;
+    return state.last_report = report;
+  }
+  const FlushDenormals flush;
+  integrate_awake_islands(state, dt);
+  refresh_rigid_bodies(state);
+  detect_rigid_contacts(state);
+  resolve_joint_space_contacts(state, dt);
+  report.contacts = static_cast<int>(state.contacts.size());
+  state.time += dt;
+  report.status = update_sleep(state, dt);
+  // Islands put to sleep had their rigid momenta zeroed; so are their joint velocities.
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) continue;
+    const auto [first, last] = island_velocities(state, k);
+    state.v.segment(first, last - first).setZero();
+  }
+  return state.last_report = report;
+}
+
+}  // namespace limber

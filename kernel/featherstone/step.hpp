@@ -1,0 +1,36 @@
+// step(FeatherstoneState, dt): one time step of the Featherstone method (reduced coordinates).
+#pragma once
+
+#include "kernel/featherstone/featherstone_state.hpp"
+
+namespace limber {
+
+/// Advances `state` by dt seconds:
+///  1. integrate  the awake islands' (q, v) with the articulated-body algorithm (Featherstone
+///                2008, Table 7.1) by options.integrator (integration.hpp): RK4 or semi-implicit
+///                Euler, gravity Settings::gravity, Settings::drag as joint forces held over the
+///                step (Jᵀ of each body's drag at the step's start). In substeps when a body or
+///                joint turns fast: as many as keep its turn below 0.5 rad a substep (at most 32;
+///                friction at a thin limb's rim spins it about its axis at v/r, which the explicit
+///                integrators follow only while hΩ is small). Sleeping islands keep their q and
+///                v = 0 (the core's algorithms run over the whole tree, so their dynamics are
+///                computed and dropped, not skipped);
+///  2. damp       v ← v·exp(−damping·dt) (Settings::damping: speed decays as exp(−damping·t),
+///                whatever Δt, as in the other methods);
+///  3. refresh    the rigid bodies from (q, v) (refresh_rigid_bodies);
+///  4. collide    contacts with the planes and the ball found on the rigid bodies
+///                (kernel/collision/rigid_contacts.hpp), answered by impulses through the
+///                joint-space inertia and a position push-out (joint_space_contacts.hpp);
+///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
+/// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
+/// divergence is reported in the result (also state.last_report). Allocates nothing.
+FeatherstoneStepReport step(FeatherstoneState& state, double dt);
+
+/// step() with the scene's own time step.
+inline FeatherstoneStepReport step(FeatherstoneState& state) { return step(state, state.settings.time_step); }
+
+/// Recomputes the rigid bodies (positions, orientations, momenta) and state.kinematics (poses
+/// and spatial velocities of the tree bodies) from (q, v) by forward kinematics.
+void refresh_rigid_bodies(FeatherstoneState& state);
+
+}  // namespace limber
