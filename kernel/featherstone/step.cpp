@@ -99,7 +99,7 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
 
 FeatherstoneStepReport step(FeatherstoneState& state, double dt) {
   FeatherstoneStepReport report;
-  if (!(dt > 0) || !std::isfinite(dt)) {
+  if (!valid_time_step(dt)) {
     report.status = StepStatus::invalid_time_step;
     return state.last_report = report;
   }

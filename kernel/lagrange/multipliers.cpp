@@ -4,12 +4,10 @@
 
 #include <string>
 #include <type_traits>
-#include <tuple>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-#include "kernel/rigid/anchor_jacobian.hpp"
 #include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/disjoint_sets.hpp"
 

@@ -90,7 +90,7 @@ void velocity_level_step(LagrangeState& state, double dt) {
 
 LagrangeStepReport step(LagrangeState& state, double dt) {
   LagrangeStepReport report;
-  if (!(dt > 0) || !std::isfinite(dt)) {
+  if (!valid_time_step(dt)) {
     report.status = StepStatus::invalid_time_step;
     return state.last_report = report;
   }

@@ -27,7 +27,7 @@ RigidIntegrator explicit_integrator(SpringIntegrator integrator) {
 
 SpringStepReport step(SpringState& state, double dt) {
   SpringStepReport report;
-  if (!(dt > 0) || !std::isfinite(dt)) {
+  if (!valid_time_step(dt)) {
     report.status = StepStatus::invalid_time_step;
     return state.last_report = report;
   }

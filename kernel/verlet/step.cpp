@@ -131,7 +131,7 @@ double project_limb_centres(VerletState<Scalar>& state) {
 template <typename Scalar>
 StepReport step(VerletState<Scalar>& state, double dt) {
   StepReport report;
-  if (!(dt > 0) || !std::isfinite(dt)) {
+  if (!valid_time_step(dt)) {
     report.status = StepStatus::invalid_time_step;
     return state.last_report = report;
   }
