@@ -15,7 +15,7 @@
 #include <Eigen/SparseCore>
 
 #include "kernel/lagrange/constraints.hpp"
-#include "kernel/numerics/small_cholesky.hpp"
+#include "kernel/numerics/tree_elimination.hpp"
 #include "kernel/rigid/rigid_integration.hpp"
 #include "kernel/rigid/rigid_scene.hpp"
 
@@ -45,24 +45,6 @@ struct LagrangeOptions {
   int projection_iterations = 2;  ///< Newton iterations of the position projection
 };
 
-/// Baraff's tree-ordered factorization (Baraff 1996, "Linear-time dynamics using Lagrange
-/// multipliers", section 7): the augmented system
-///   H = [M  Jᵀ; J  0],   H·(u̇, −λ) = (F, c),
-/// as a graph whose nodes are the bodies (6×6 blocks M_b) and the constraints (m×m zero blocks,
-/// m = 1…6 rows), with an edge of block J_cb wherever constraint c acts on body b. Without loops
-/// this graph is a forest; eliminating its nodes children-first (each node's parent after it)
-/// makes the block LDLᵀ factorization fill nothing, so factor and solve are O(bodies + joints).
-struct TreeSolver {
-  std::vector<std::int32_t> order;   ///< node elimination order: every node before its parent
-  std::vector<std::int32_t> parent;  ///< per node, −1 for a root; nodes: bodies, then constraints
-  /// Per node: the factored diagonal block D (a constraint's inverted when it is eliminated; a
-  /// body's kept as its Cholesky factor in body_factor), and the block
-  /// L = H_{parent,node}·D⁻¹ (top-left corners of fixed 6×6 storage: 6 rows/columns for bodies,
-  /// m for constraints). Refilled at every solve; nothing is allocated.
-  std::vector<Eigen::Matrix<double, 6, 6>> diagonal, to_parent;
-  std::vector<Eigen::Matrix<double, 6, 1>> work;  ///< the right-hand side, then the solution
-  std::vector<SmallCholesky<6>> body_factor;  ///< Cholesky of each body's D (positive definite)
-};
 
 struct LagrangeStepReport {
   StepStatus status = StepStatus::ok;
@@ -77,7 +59,9 @@ struct LagrangeState : RigidScene {
   LagrangeOptions options;
   bool uses_tree = true;  ///< the solver chosen at compile (tree, or sparse for graphs with loops)
   RigidIntegratorScratch scratch;
-  TreeSolver tree;
+  /// Baraff's elimination of [M Jᵀ; J 0] over bodies (6×6 blocks) and constraints, when they
+  /// form a tree (kernel/numerics/tree_elimination.hpp).
+  TreeElimination<double, 6> tree;
   /// Multipliers of the last evaluation, per constraint (its rows). A joint's point rows are the
   /// force on the inboard body at its anchor, N; angular rows are torques, N·m.
   std::vector<ConstraintVector> multipliers;

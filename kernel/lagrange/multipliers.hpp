@@ -5,7 +5,7 @@
 // its two bodies). With u̇ = M⁻¹(F + Jᵀλ) the joints stay closed when
 //   J M⁻¹ Jᵀ λ = −(J M⁻¹ F + J̇u) − 2ω_b·Ċ − ω_b²·C          (thesis 3.1.4; Baumgarte terms optional)
 // F holds the applied forces and, on the rotational rows, the gyroscopic torque −ω × Iω. Solved
-// either by Baraff's tree-ordered factorization of [M Jᵀ; J 0] (lagrange_state.hpp, TreeSolver;
+// either by Baraff's tree-ordered factorization of [M Jᵀ; J 0] (kernel/numerics/tree_elimination.hpp;
 // linear time) or, for graphs with loops, by Eigen's sparse LDLᵀ of J M⁻¹ Jᵀ.
 #pragma once
 

@@ -13,23 +13,23 @@
 
 namespace limber {
 
-template <int N>
+template <int N, typename Scalar = double>
 class SmallCholesky {
  public:
-  using Matrix = Eigen::Matrix<double, N, N>;
+  using Matrix = Eigen::Matrix<Scalar, N, N>;
 
   /// Factors `a` (only its lower triangle is read). Returns false when a pivot is not positive
   /// (a not positive definite); the factor is then unusable.
   bool compute(const Matrix& a) {
     for (int j = 0; j < N; ++j) {
-      double pivot = a(j, j);
+      Scalar pivot = a(j, j);
       for (int k = 0; k < j; ++k) pivot -= lower_(j, k) * lower_(j, k);
       if (!(pivot > 0)) return false;
-      const double diagonal = std::sqrt(pivot);
+      const Scalar diagonal = std::sqrt(pivot);
       lower_(j, j) = diagonal;
       inverse_diagonal_[j] = 1 / diagonal;
       for (int i = j + 1; i < N; ++i) {
-        double value = a(i, j);
+        Scalar value = a(i, j);
         for (int k = 0; k < j; ++k) value -= lower_(i, k) * lower_(j, k);
         lower_(i, j) = value * inverse_diagonal_[j];
       }
@@ -39,7 +39,7 @@ class SmallCholesky {
 
   /// Overwrites x (N × M) with A⁻¹·x: forward substitution with L, then back with Lᵀ.
   template <int M>
-  void solve_in_place(Eigen::Matrix<double, N, M>& x) const {
+  void solve_in_place(Eigen::Matrix<Scalar, N, M>& x) const {
     for (int i = 0; i < N; ++i) {
       for (int k = 0; k < i; ++k) x.row(i) -= lower_(i, k) * x.row(k);
       x.row(i) *= inverse_diagonal_[i];
@@ -51,14 +51,14 @@ class SmallCholesky {
   }
 
   template <int M>
-  Eigen::Matrix<double, N, M> solve(Eigen::Matrix<double, N, M> x) const {
+  Eigen::Matrix<Scalar, N, M> solve(Eigen::Matrix<Scalar, N, M> x) const {
     solve_in_place(x);
     return x;
   }
 
  private:
   Matrix lower_ = Matrix::Zero();  ///< L in the lower triangle
-  Eigen::Matrix<double, N, 1> inverse_diagonal_ = Eigen::Matrix<double, N, 1>::Zero();
+  Eigen::Matrix<Scalar, N, 1> inverse_diagonal_ = Eigen::Matrix<Scalar, N, 1>::Zero();
 };
 
 }  // namespace limber

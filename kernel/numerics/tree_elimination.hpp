@@ -1,0 +1,194 @@
+// Baraff's linear-time solve of a constrained system whose bodies and constraints form a tree:
+// D. Baraff, "Linear-time dynamics using Lagrange multipliers", SIGGRAPH 1996 (§5–7).
+//
+// The system, one block row per node (bodies first, then constraints):
+//   [ M   Jᵀ ] [x]   [f]
+//   [ J  −A  ] [μ] = [c]
+// M is block diagonal (each body's symmetric positive definite block of BodySize × BodySize),
+// J holds each constraint's blocks on its one or two bodies (rows × BodySize, rows ≤ BodySize),
+// and A is block diagonal, each constraint's compliance (0 for a rigid constraint; positive
+// semidefinite). Seen as a graph whose nodes are bodies and constraints, with an edge wherever a
+// J block is non-zero, the matrix is a tree when the constraints close no loop; eliminating it
+// leaves first (children before their parent) then creates no fill, so factor and solve cost
+// O(nodes), each node's work on fixed-size blocks.
+//
+// The two users, one elimination:
+// - the Lagrange method (kernel/lagrange/multipliers.cpp): rigid bodies (BodySize 6: mass and
+//   world inertia), joints of 1–6 rows, A = 0; x the accelerations, μ = −λ the joint forces;
+// - the Verlet family's direct projection (kernel/relaxation/direct_projection.hpp): particles
+//   (BodySize 3, M = m·I), distance constraints of one row and zero-length joints of three, A
+//   the compliance α̃ = α/Δt² (XPBD); x the position change, μ = −Δλ.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include "kernel/numerics/small_cholesky.hpp"
+
+namespace limber {
+
+/// Calls function(std::integral_constant<int, rows>{}) for rows in 1…MaxRows, so a constraint's
+/// blocks get fixed-size (unrolled, vectorized) arithmetic.
+template <int MaxRows, typename Function>
+void with_rows(int rows, Function&& function) {
+  static_assert(MaxRows >= 1 && MaxRows <= 6);
+  if constexpr (MaxRows >= 2) if (rows == 1) return function(std::integral_constant<int, 1>{});
+  if constexpr (MaxRows >= 3) if (rows == 2) return function(std::integral_constant<int, 2>{});
+  if constexpr (MaxRows >= 4) if (rows == 3) return function(std::integral_constant<int, 3>{});
+  if constexpr (MaxRows >= 5) if (rows == 4) return function(std::integral_constant<int, 4>{});
+  if constexpr (MaxRows >= 6) if (rows == 5) return function(std::integral_constant<int, 5>{});
+  return function(std::integral_constant<int, MaxRows>{});
+}
+
+/// The elimination order of a body–constraint graph (order_tree()).
+struct TreeOrdering {
+  /// Nodes: bodies 0…body_count−1, then constraint c as node body_count + c.
+  std::vector<std::int32_t> parent;  ///< per node, −1 for a root (and for loop-closing constraints)
+  std::vector<std::int32_t> order;   ///< tree nodes, every node before its parent
+  /// Each connected component's nodes are order[begin, end); `body` is one of its bodies.
+  struct Component {
+    std::uint32_t begin = 0, end = 0;
+    std::int32_t body = 0;
+  };
+  std::vector<Component> components;
+  /// Constraints left out of the tree because they close a loop (between bodies already joined,
+  /// or a second constraint to the world in one component), in the order they were found:
+  /// first those between bodies by index, then the world ones.
+  std::vector<std::uint32_t> loop_constraints;
+};
+
+/// Orders the tree of `body_count` bodies and the constraints c joining inboard[c] and
+/// outboard[c] (inboard[c] < 0: to the world, which is not a node) for elimination. A constraint
+/// to the world has no body below it to be eliminated into, so it must be its component's root:
+/// each component is rooted at its first constraint to the world, else at its lowest body, and
+/// ordered breadth-first from there (reversed, so children come first). Loop-closing
+/// constraints are reported, not ordered. O(nodes).
+TreeOrdering order_tree(std::size_t body_count, std::span<const std::int32_t> inboard, std::span<const std::int32_t> outboard);
+
+/// Factor-and-solve storage and arithmetic for a TreeOrdering. Allocates only in assign().
+template <typename Scalar, int BodySize>
+class TreeElimination {
+ public:
+  using BodyMatrix = Eigen::Matrix<Scalar, BodySize, BodySize>;
+  using BodyVector = Eigen::Matrix<Scalar, BodySize, 1>;
+
+  /// Takes the ordering and each constraint's row count (1…BodySize).
+  void assign(TreeOrdering ordering, std::size_t body_count, std::vector<std::uint8_t> constraint_rows) {
+    ordering_ = std::move(ordering);
+    body_count_ = static_cast<std::int32_t>(body_count);
+    rows_ = std::move(constraint_rows);
+    const std::size_t nodes = ordering_.parent.size();
+    diagonal_.assign(nodes, BodyMatrix::Zero());
+    to_parent_.assign(nodes, BodyMatrix::Zero());
+    work_.assign(nodes, BodyVector::Zero());
+    body_factor_.resize(body_count);
+  }
+
+  const TreeOrdering& ordering() const { return ordering_; }
+  std::size_t node_count() const { return ordering_.parent.size(); }
+  std::int32_t body_count() const { return body_count_; }
+  int rows(std::size_t constraint) const { return rows_[constraint]; }
+
+  /// Inputs, set before eliminate() for every node of the components solved: a body's block of M
+  /// (its lower triangle is read), a constraint's −A in the top-left rows × rows corner (zero for
+  /// rigid); and work(node) = the right-hand side (f for a body, c in a constraint's top rows).
+  /// Outputs, after it: work(body) = x, work(constraint) top rows = μ.
+  BodyMatrix& diagonal(std::size_t node) { return diagonal_[node]; }
+  BodyVector& work(std::size_t node) { return work_[node]; }
+  const BodyVector& work(std::size_t node) const { return work_[node]; }
+
+  /// Factors and solves the nodes order[begin, end) (whole components). edge(constraint, body)
+  /// returns the constraint's J block on that body, of which the top rows(constraint) rows are
+  /// read. Returns false when a body's block is not positive definite (the solution is then
+  /// meaningless).
+  template <typename Edge>
+  bool eliminate(std::uint32_t begin, std::uint32_t end, Edge&& edge) {
+    const auto& order = ordering_.order;
+    const auto& parent_of = ordering_.parent;
+    bool definite = true;
+    // Factor and forward-substitute, children first: L = H_{parent,node}·D⁻¹, then
+    // D_parent −= L·H_{node,parent} and y_parent −= L·y_node.
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const std::int32_t node = order[k], parent = parent_of[node];
+      BodyMatrix& block_d = diagonal_[node];
+      BodyMatrix& to_parent = to_parent_[node];
+      if (node < body_count_) {
+        SmallCholesky<BodySize, Scalar>& factor = body_factor_[node];
+        definite = factor.compute(block_d) && definite;
+        if (parent < 0) continue;
+        const auto& block_edge = edge(static_cast<std::size_t>(parent - body_count_), node);
+        with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          const Eigen::Matrix<Scalar, m, BodySize> block = block_edge.template topRows<m>();  // H_{constraint,body}
+          // B·D⁻¹ = (D⁻¹·Bᵀ)ᵀ, D symmetric.
+          const Eigen::Matrix<Scalar, m, BodySize> l = factor.solve(Eigen::Matrix<Scalar, BodySize, m>(block.transpose())).transpose();
+          to_parent.template topRows<m>() = l;
+          diagonal_[parent].template topLeftCorner<m, m>().noalias() -= l * block.transpose();
+          work_[parent].template head<m>().noalias() -= l * work_[node];
+        });
+      } else {
+        const auto constraint = static_cast<std::size_t>(node - body_count_);
+        with_rows<BodySize>(rows_[constraint], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          // D is negative definite (−A minus the Schur complement J M⁻¹ Jᵀ of its children):
+          // Eigen's closed form inverts up to 4×4, and −D has a Cholesky factor beyond.
+          using Square = Eigen::Matrix<Scalar, m, m>;
+          Square inverse;
+          if constexpr (m <= 4) {
+            inverse = block_d.template topLeftCorner<m, m>().inverse();
+          } else {
+            inverse = -Eigen::LLT<Square>(-block_d.template topLeftCorner<m, m>()).solve(Square::Identity());
+          }
+          block_d.template topLeftCorner<m, m>() = inverse;
+          if (parent < 0) return;
+          const Eigen::Matrix<Scalar, m, BodySize> block = edge(constraint, parent).template topRows<m>();
+          const Eigen::Matrix<Scalar, BodySize, m> l = block.transpose() * inverse;
+          to_parent.template leftCols<m>() = l;
+          diagonal_[parent].noalias() -= l * block;
+          work_[parent].noalias() -= l * work_[node].template head<m>();
+        });
+      }
+    }
+    // Back-substitute, parents first: x_node = D⁻¹·y_node − Lᵀ·x_parent.
+    for (std::uint32_t k = end; k-- > begin;) {
+      const std::int32_t node = order[k], parent = parent_of[node];
+      if (node < body_count_) {
+        BodyVector x = work_[node];
+        body_factor_[node].solve_in_place(x);
+        if (parent >= 0) {
+          with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+            constexpr int m = decltype(rows)::value;
+            x.noalias() -= to_parent_[node].template topRows<m>().transpose() * work_[parent].template head<m>();
+          });
+        }
+        work_[node] = x;
+      } else {
+        with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          Eigen::Matrix<Scalar, m, 1> x = diagonal_[node].template topLeftCorner<m, m>() * work_[node].template head<m>();
+          if (parent >= 0) x.noalias() -= to_parent_[node].template leftCols<m>().transpose() * work_[parent];
+          work_[node].template head<m>() = x;
+        });
+      }
+    }
+    return definite;
+  }
+
+ private:
+  TreeOrdering ordering_;
+  std::int32_t body_count_ = 0;
+  std::vector<std::uint8_t> rows_;
+  /// Per node: D (a constraint's inverted in place when it is eliminated; a body's factor kept
+  /// in body_factor_) and L = H_{parent,node}·D⁻¹ (top rows for a body, left columns for a constraint).
+  std::vector<BodyMatrix> diagonal_, to_parent_;
+  std::vector<BodyVector> work_;
+  std::vector<SmallCholesky<BodySize, Scalar>> body_factor_;
+};
+
+}  // namespace limber
