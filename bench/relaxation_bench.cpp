@@ -131,7 +131,7 @@ VerletState<Scalar> prepared(const Workload& workload, const VerletOptions& opti
 template <typename Scalar>
 void sweep_benchmark(benchmark::State& run, const Workload& workload, const VerletOptions& options) {
   VerletState<Scalar> state = prepared<Scalar>(workload, options);
-  begin_relaxation(state);
+  begin_relaxation(state, 1.0 / 60);
   for (auto _ : run) benchmark::DoNotOptimize(relaxation_sweep(state, 1.0));
   end_relaxation(state);
   const double constraints = static_cast<double>(state.constraints.size());

@@ -27,7 +27,7 @@ packages=(
   libeigen3-dev libtbb-dev libxsimd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
-  libmujoco-dev
+  libmujoco-dev libbullet-dev
 )
 
 if [ "${LIMBER_SKIP_INSTALL:-0}" != 1 ]; then

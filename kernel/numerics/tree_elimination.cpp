@@ -13,7 +13,7 @@ TreeOrdering order_tree(std::size_t body_count, std::span<const std::int32_t> in
   // A constraint between bodies closes a loop when they are already connected.
   DisjointSets connected(body_count);
   for (std::size_t c = 0; c < constraint_count; ++c) {
-    if (inboard[c] < 0) continue;
+    if (inboard[c] < 0 || outboard[c] < 0) continue;
     const auto a = static_cast<std::uint32_t>(inboard[c]), b = static_cast<std::uint32_t>(outboard[c]);
     if (connected.find(a) == connected.find(b)) {
       in_tree[c] = false;
@@ -26,7 +26,7 @@ TreeOrdering order_tree(std::size_t body_count, std::span<const std::int32_t> in
   // root; a second closes a loop through the world.
   std::vector<std::int64_t> world_root(body_count, -1);
   for (std::size_t c = 0; c < constraint_count; ++c) {
-    if (inboard[c] >= 0) continue;
+    if (inboard[c] >= 0 || outboard[c] < 0) continue;
     std::int64_t& root = world_root[connected.find(static_cast<std::uint32_t>(outboard[c]))];
     if (root >= 0) {
       in_tree[c] = false;
@@ -39,7 +39,7 @@ TreeOrdering order_tree(std::size_t body_count, std::span<const std::int32_t> in
   std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
   edges.reserve(4 * constraint_count);
   for (std::size_t c = 0; c < constraint_count; ++c) {
-    if (!in_tree[c]) continue;
+    if (!in_tree[c] || outboard[c] < 0) continue;
     const auto constraint_node = static_cast<std::uint32_t>(body_count + c);
     for (const std::int32_t b : {inboard[c], outboard[c]}) {
       if (b < 0) continue;

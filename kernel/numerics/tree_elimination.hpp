@@ -64,7 +64,8 @@ struct TreeOrdering {
 };
 
 /// Orders the tree of `body_count` bodies and the constraints c joining inboard[c] and
-/// outboard[c] (inboard[c] < 0: to the world, which is not a node) for elimination. A constraint
+/// outboard[c] (inboard[c] < 0: to the world, which is not a node; outboard[c] < 0 as well: a
+/// constraint that joins no body, left out) for elimination. A constraint
 /// to the world has no body below it to be eliminated into, so it must be its component's root:
 /// each component is rooted at its first constraint to the world, else at its lowest body, and
 /// ordered breadth-first from there (reversed, so children come first). Loop-closing
@@ -87,7 +88,7 @@ class TreeElimination {
     diagonal_.assign(nodes, BodyMatrix::Zero());
     to_parent_.assign(nodes, BodyMatrix::Zero());
     work_.assign(nodes, BodyVector::Zero());
-    body_factor_.resize(body_count);
+    if constexpr (!kInvertBodies) body_factor_.resize(body_count);
   }
 
   const TreeOrdering& ordering() const { return ordering_; }
@@ -119,15 +120,26 @@ class TreeElimination {
       BodyMatrix& block_d = diagonal_[node];
       BodyMatrix& to_parent = to_parent_[node];
       if (node < body_count_) {
-        SmallCholesky<BodySize, Scalar>& factor = body_factor_[node];
-        definite = factor.compute(block_d) && definite;
+        // Up to 4×4, Eigen's closed-form inverse (kept in place of D) is cheaper than a
+        // Cholesky factor's square roots and triangular solves; beyond, the factor.
+        if constexpr (kInvertBodies) {
+          definite = block_d.determinant() > Scalar(0) && definite;
+          block_d = BodyMatrix(block_d.inverse());
+        } else {
+          definite = body_factor_[node].compute(block_d) && definite;
+        }
         if (parent < 0) continue;
         const auto& block_edge = edge(static_cast<std::size_t>(parent - body_count_), node);
         with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
           const Eigen::Matrix<Scalar, m, BodySize> block = block_edge.template topRows<m>();  // H_{constraint,body}
           // B·D⁻¹ = (D⁻¹·Bᵀ)ᵀ, D symmetric.
-          const Eigen::Matrix<Scalar, m, BodySize> l = factor.solve(Eigen::Matrix<Scalar, BodySize, m>(block.transpose())).transpose();
+          Eigen::Matrix<Scalar, m, BodySize> l;
+          if constexpr (kInvertBodies) {
+            l.noalias() = block * block_d;
+          } else {
+            l = body_factor_[node].solve(Eigen::Matrix<Scalar, BodySize, m>(block.transpose())).transpose();
+          }
           to_parent.template topRows<m>() = l;
           diagonal_[parent].template topLeftCorner<m, m>().noalias() -= l * block.transpose();
           work_[parent].template head<m>().noalias() -= l * work_[node];
@@ -159,8 +171,13 @@ class TreeElimination {
     for (std::uint32_t k = end; k-- > begin;) {
       const std::int32_t node = order[k], parent = parent_of[node];
       if (node < body_count_) {
-        BodyVector x = work_[node];
-        body_factor_[node].solve_in_place(x);
+        BodyVector x;
+        if constexpr (kInvertBodies) {
+          x.noalias() = diagonal_[node] * work_[node];
+        } else {
+          x = work_[node];
+          body_factor_[node].solve_in_place(x);
+        }
         if (parent >= 0) {
           with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
             constexpr int m = decltype(rows)::value;
@@ -181,11 +198,13 @@ class TreeElimination {
   }
 
  private:
+  static constexpr bool kInvertBodies = BodySize <= 4;
   TreeOrdering ordering_;
   std::int32_t body_count_ = 0;
   std::vector<std::uint8_t> rows_;
-  /// Per node: D (a constraint's inverted in place when it is eliminated; a body's factor kept
-  /// in body_factor_) and L = H_{parent,node}·D⁻¹ (top rows for a body, left columns for a constraint).
+  /// Per node: D (inverted in place when it is eliminated, except a body's of more than 4 rows,
+  /// whose Cholesky factor body_factor_ keeps) and L = H_{parent,node}·D⁻¹ (top rows for a body,
+  /// left columns for a constraint).
   std::vector<BodyMatrix> diagonal_, to_parent_;
   std::vector<BodyVector> work_;
   std::vector<SmallCholesky<BodySize, Scalar>> body_factor_;

@@ -5,13 +5,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <stdexcept>
 #include <thread>
 #include <type_traits>
 
 #include "kernel/relaxation/batch_projection.hpp"
+#include "kernel/relaxation/direct_projection.hpp"
 #include "kernel/relaxation/distance_projection.hpp"
 #include "kernel/relaxation/gauss_seidel.hpp"
+#include "layouts/graph/compressed_rows.hpp"
 #include "layouts/graph/constraint_colouring.hpp"
 
 namespace limber {
@@ -236,12 +241,89 @@ ParticleLayout automatic_layout(VerletState<Scalar>& state) {
   return 2 * both >= static_cast<std::ptrdiff_t>(consecutive.size()) ? ParticleLayout::soa : ParticleLayout::aos;
 }
 
+// Long-range attachments: the rest length of the shortest constraint path from each particle
+// to a pinned particle (Dijkstra from all pins at once), the pin it leads to.
+template <typename Scalar>
+void prepare_long_range_attachments(VerletState<Scalar>& state) {
+  const auto& particles = state.particles;
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  RelaxationPlan<Scalar>& plan = state.plan;
+  std::vector<std::pair<std::uint32_t, std::pair<std::uint32_t, double>>> edges;
+  for (std::uint32_t c = 0; c < constraints.size(); ++c) {
+    const double length = constraints.rest_length[c];
+    edges.push_back({constraints.particle_i[c], {constraints.particle_j[c], length}});
+    edges.push_back({constraints.particle_j[c], {constraints.particle_i[c], length}});
+  }
+  const auto neighbours = group_by_row(particles.size(), edges);
+  std::vector<double> distance(particles.size(), std::numeric_limits<double>::infinity());
+  plan.attachment_pin.assign(particles.size(), particles.null_particle());
+  using Entry = std::pair<double, std::uint32_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<>> queue;
+  for (std::uint32_t p = 0; p < particles.size(); ++p) {
+    if (particles.inverse_mass[p] != Scalar(0)) continue;
+    distance[p] = 0, plan.attachment_pin[p] = p;
+    queue.emplace(0.0, p);
+  }
+  while (!queue.empty()) {
+    const auto [d, p] = queue.top();
+    queue.pop();
+    if (d > distance[p]) continue;
+    for (const auto& [other, length] : neighbours.row(p)) {
+      if (d + length >= distance[other]) continue;
+      distance[other] = d + length, plan.attachment_pin[other] = plan.attachment_pin[p];
+      queue.emplace(distance[other], other);
+    }
+  }
+  plan.attachment_length.assign(particles.size(), Scalar(0));
+  for (std::uint32_t p = 0; p < particles.size(); ++p) {
+    if (particles.inverse_mass[p] == Scalar(0)) plan.attachment_pin[p] = particles.null_particle();  // pins hang from nothing
+    if (plan.attachment_pin[p] != particles.null_particle()) plan.attachment_length[p] = static_cast<Scalar>(distance[p]);
+  }
+}
+
 }  // namespace
+
+template <typename Scalar>
+double project_long_range_attachments(VerletState<Scalar>& state) {
+  auto& particles = state.particles;
+  const RelaxationPlan<Scalar>& plan = state.plan;
+  const std::uint32_t none = particles.null_particle();
+  double largest = 0;
+  for (const std::uint32_t k : state.awake_islands) {
+    for (std::uint32_t p = state.islands[k].particle_begin; p < state.islands[k].particle_end; ++p) {
+      const std::uint32_t pin = plan.attachment_pin[p];
+      if (pin == none) continue;
+      const Eigen::Matrix<Scalar, 3, 1> offset = particles.position(p) - particles.position(pin);
+      const Scalar length = offset.norm(), allowed = plan.attachment_length[p];
+      if (length <= allowed) continue;  // unilateral: a tether, not a rod
+      particles.set_position(p, particles.position(pin) + offset * (allowed / length));
+      largest = std::max(largest, static_cast<double>(length - allowed));
+    }
+  }
+  return largest;
+}
 
 template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state) {
   const VerletOptions& options = state.options;
   if (options.threads < 0) throw std::invalid_argument("options: threads must be 0 (automatic) or at least 1");
+  if (options.compliance != 0 && options.solver != RelaxationSolver::direct) {
+    throw std::invalid_argument("options: compliance needs the direct solver (Gauss-Seidel and Jacobi sweeps treat every constraint as rigid)");
+  }
+  if (options.long_range_attachments) {
+    if (options.layout == ParticleLayout::aos || options.layout == ParticleLayout::aosoa) {
+      throw std::invalid_argument("options: long-range attachments work on the SoA layout");
+    }
+    prepare_long_range_attachments(state);
+  }
+  if (options.solver == RelaxationSolver::direct) {
+    if (options.layout == ParticleLayout::aos || options.layout == ParticleLayout::aosoa || options.order == SweepOrder::sequential) {
+      throw std::invalid_argument("options: the direct solver works on the SoA layout and has no sweep order");
+    }
+    state.plan.layout = ParticleLayout::soa;
+    prepare_direct_projection(state);
+    return;
+  }
   if (options.max_colours < 1 || options.max_colours > kMaxColours) {
     throw std::invalid_argument("options: max_colours must be in [1, 64]");
   }
@@ -279,7 +361,7 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   plan.parallel_minimum_slots = options.parallel_minimum_slots > 0 ? options.parallel_minimum_slots : kDefaultParallelMinimumSlots;
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
   plan.layout = options.layout;
-  if (options.layout == ParticleLayout::automatic) plan.layout = automatic_layout(state);
+  if (options.layout == ParticleLayout::automatic) plan.layout = options.long_range_attachments ? ParticleLayout::soa : automatic_layout(state);
   plan.built_for = ~std::uint64_t{0};
   with_interleaved(state, [&](auto& store) {
     store.resize_for(state.particles);
@@ -288,10 +370,11 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
 }
 
 template <typename Scalar>
-void begin_relaxation(VerletState<Scalar>& state) {
+void begin_relaxation(VerletState<Scalar>& state, double dt) {
   RelaxationPlan<Scalar>& plan = state.plan;
   plan.awake_constraints = 0;
   for (std::uint32_t k : state.awake_islands) plan.awake_constraints += state.islands[k].constraint_end - state.islands[k].constraint_begin;
+  if (state.options.solver == RelaxationSolver::direct) return begin_direct_projection(state, dt);
   if (state.options.order == SweepOrder::sequential) return;
   if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
   with_interleaved(state, [&](auto& store) {
@@ -309,6 +392,7 @@ void begin_relaxation(VerletState<Scalar>& state) {
 
 template <typename Scalar>
 double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
+  if (state.options.solver == RelaxationSolver::direct) return direct_projection_step(state);
   state.counters.constraint_projections += state.plan.awake_constraints;
   if (state.options.order == SweepOrder::sequential) return gauss_seidel_sweep(state, over_relaxation);
   const auto omega = static_cast<Scalar>(over_relaxation);
@@ -318,7 +402,7 @@ double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
 
 template <typename Scalar>
 void end_relaxation(VerletState<Scalar>& state) {
-  if (state.options.order == SweepOrder::sequential) return;
+  if (state.options.order == SweepOrder::sequential || state.options.solver == RelaxationSolver::direct) return;
   state.plan.runner->end();
   with_interleaved(state, [&](auto& store) {
     for (std::uint32_t k : state.awake_islands) {
@@ -343,11 +427,12 @@ void contact_particles_from_buffer(VerletState<Scalar>& state) {
 
 #define LIMBER_INSTANTIATE(Scalar)                                                  \
   template void prepare_relaxation_plan<Scalar>(VerletState<Scalar>&);              \
-  template void begin_relaxation<Scalar>(VerletState<Scalar>&);                     \
+  template void begin_relaxation<Scalar>(VerletState<Scalar>&, double);             \
   template double relaxation_sweep<Scalar>(VerletState<Scalar>&, double);           \
   template void end_relaxation<Scalar>(VerletState<Scalar>&);                       \
   template void contact_particles_to_buffer<Scalar>(VerletState<Scalar>&);          \
-  template void contact_particles_from_buffer<Scalar>(VerletState<Scalar>&);
+  template void contact_particles_from_buffer<Scalar>(VerletState<Scalar>&);        \
+  template double project_long_range_attachments<Scalar>(VerletState<Scalar>&);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -1,6 +1,7 @@
 // Relaxation of the distance constraints, as step() runs it (thesis 3.2.2, 4.3): one sweep at a
 // time, Gauss-Seidel (coloured or sequential) or Jacobi, over whichever layout, lane width and
-// thread count the VerletOptions chose. Every combination gives the same bits for any thread
+// thread count the VerletOptions chose — or, for the direct solver, one Newton step of its
+// global projection (direct_projection.hpp). Every combination gives the same bits for any thread
 // count; the SIMD and scalar paths, and the three layouts, give the same bits as each other.
 //
 // Coloured Gauss-Seidel: colour after colour (constraint_colouring.hpp); inside a colour the
@@ -25,14 +26,15 @@ namespace limber {
 template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state);
 
-/// Starts relaxation for one step: rebuilds the batches if islands slept or woke since the
-/// last step (O(awake constraints), no re-colouring, no allocation), copies the awake particles
-/// into the interleaved layout if one is used, and starts the helper threads.
+/// Starts relaxation for a step of dt seconds: rebuilds the batches if islands slept or woke
+/// since the last step (O(awake constraints), no re-colouring, no allocation), copies the awake
+/// particles into the interleaved layout if one is used, and starts the helper threads; for the
+/// direct solver, applies its warm start.
 template <typename Scalar>
-void begin_relaxation(VerletState<Scalar>& state);
+void begin_relaxation(VerletState<Scalar>& state, double dt);
 
-/// One sweep with relaxation factor ω (1: plain projections). Returns the largest particle
-/// displacement it made, m.
+/// One sweep with relaxation factor ω (1: plain projections), or one Newton step of the direct
+/// solver (which ignores ω). Returns the largest particle displacement it made, m.
 template <typename Scalar>
 double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation);
 
@@ -40,6 +42,13 @@ double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation);
 /// interleaved layout.
 template <typename Scalar>
 void end_relaxation(VerletState<Scalar>& state);
+
+/// Long-range attachments (VerletOptions::long_range_attachments; Kim, Chentanez, Müller,
+/// "Long range attachments", 2012): every particle of the awake islands farther from its pin
+/// than the rest length of the path between them is moved back onto that sphere (the pin does
+/// not move). Returns the largest displacement, m.
+template <typename Scalar>
+double project_long_range_attachments(VerletState<Scalar>& state);
 
 /// With an interleaved layout, the contact passes work on state.particles: these copy the
 /// positions of state.contact_particles out of the layout before them and back after.

@@ -1,6 +1,7 @@
-// What a coloured relaxation sweep needs besides the particles: the awake constraints in
-// colour batches, Jacobi's accumulators, the interleaved particle copy for the AoS/AoSoA
-// layouts, and the threads. Rebuilt (not re-coloured) when islands sleep or wake.
+// What relaxation needs besides the particles. A coloured sweep: the awake constraints in colour
+// batches, Jacobi's accumulators, the interleaved particle copy for the AoS/AoSoA layouts, and
+// the threads (rebuilt, not re-coloured, when islands sleep or wake). The direct solver: its
+// elimination tree and multipliers (DirectProjection).
 #pragma once
 
 #include <cstdint>
@@ -8,9 +9,11 @@
 #include <utility>
 #include <vector>
 
+#include "kernel/numerics/tree_elimination.hpp"
 #include "kernel/threading/block_runner.hpp"
 #include "layouts/aligned_array.hpp"
 #include "layouts/constraints/constraint_batches.hpp"
+#include "layouts/graph/compressed_rows.hpp"
 #include "layouts/particles/interleaved_particles.hpp"
 
 namespace limber {
@@ -34,6 +37,28 @@ class RunnerHandle {
   std::unique_ptr<BlockRunner> runner_;
 };
 
+/// The direct solver's structure and multipliers (kernel/relaxation/direct_projection.hpp).
+/// Built at compile; nothing is allocated while stepping.
+template <typename Scalar>
+struct DirectProjection {
+  /// Bodies of the elimination are the movable particles (pinned ones are the world); its
+  /// constraints are state.constraints, same indices. Distance constraints have one row,
+  /// zero-length joints three.
+  TreeElimination<Scalar, 3> elimination;
+  std::vector<std::int32_t> body_of_particle;     ///< −1 for a pinned particle
+  std::vector<std::uint32_t> particle_of_body;
+  std::vector<Scalar> body_mass;  ///< 1/w (weighted rule) or 1 (unweighted), kg
+  /// Per island: its components (indices into elimination.ordering().components), and its
+  /// loop-closing constraints, which Gauss-Seidel projects after each Newton step.
+  CompressedRows<std::uint32_t> island_components, island_loop_constraints;
+  /// Per constraint: its accumulated multiplier this step (Δλ summed; kg·m, a position-level
+  /// impulse; rows as above), the unit direction n of a distance constraint at the current
+  /// linearization, and its compliance α̃ = α/Δt² (m/N over s², i.e. 1/kg).
+  std::vector<Eigen::Matrix<Scalar, 3, 1>> multiplier, direction;
+  std::vector<Scalar> scaled_compliance;
+  double multiplier_time_step = 0;  ///< Δt the multipliers were computed with (warm start rescales by (Δt/this)²)
+};
+
 template <typename Scalar>
 struct RelaxationPlan {
   ConstraintBatches<Scalar> batches;
@@ -54,6 +79,12 @@ struct RelaxationPlan {
   std::uint64_t awake_constraints = 0;
   /// state.awake_generation the batches were built for (rebuilt when it changes).
   std::uint64_t built_for = ~std::uint64_t{0};
+  /// The direct solver's (RelaxationSolver::direct only).
+  DirectProjection<Scalar> direct;
+  /// Long-range attachments (VerletOptions::long_range_attachments): per particle, the pinned
+  /// particle it hangs from (the null particle: none) and the rest length of the path, m.
+  std::vector<std::uint32_t> attachment_pin;
+  std::vector<Scalar> attachment_length;
 };
 
 }  // namespace limber

@@ -149,12 +149,15 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const RelaxationSettings& relaxation = state.settings.relaxation;
   const auto start = std::chrono::steady_clock::now();
   if (!state.awake_islands.empty()) {
-    begin_relaxation(state);
+    begin_relaxation(state, dt);
     const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_centres;
-    for (int iteration = 1; iteration <= relaxation.iterations; ++iteration) {
+    const bool direct = state.options.solver == RelaxationSolver::direct;
+    const int iterations = direct ? state.options.newton_iterations : relaxation.iterations;
+    for (int iteration = 1; iteration <= iterations; ++iteration) {
       // The first sweep starts from the unconstrained prediction, far from the solution;
       // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
       double largest = relaxation_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
+      if (state.options.long_range_attachments) largest = std::max(largest, project_long_range_attachments(state));
       if (interleaved && copies) contact_particles_to_buffer(state);
       if (has_centres) largest = std::max(largest, project_limb_centres(state));
       if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
@@ -167,7 +170,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
         report.stop = RelaxationStop::tolerance;
         break;
       }
-      if (relaxation.budget_us > 0 && iteration < relaxation.iterations) {
+      if (relaxation.budget_us > 0 && iteration < iterations) {
         const std::chrono::duration<double, std::micro> elapsed = std::chrono::steady_clock::now() - start;
         if (elapsed.count() >= relaxation.budget_us) {
           report.stop = RelaxationStop::budget;

@@ -11,9 +11,11 @@ namespace limber {
 ///                 scaled by Δt/Δt_previous when Δt changes (time-corrected Verlet);
 ///  2. collide     the ball against every limb (waking the islands it touches), then features
 ///                 against planes — skipped when the scene has neither;
-///  3. relax       Gauss-Seidel sweeps over joints and links, then limb centres (LimbMasses::
-///                 inertia: each centre particle back onto its limb's axis), then contacts,
-///                 until the iteration count, the tolerance or the wall-clock budget stops it (3.2.3);
+///  3. relax       Gauss-Seidel or Jacobi sweeps over joints and links (or Newton steps of the
+///                 direct solver, VerletOptions::newton_iterations of them), then long-range
+///                 attachments if asked for, limb centres (LimbMasses::inertia: each centre
+///                 particle back onto its limb's axis), then contacts, until the iteration
+///                 count, the tolerance or the wall-clock budget stops it (3.2.3);
 ///  4. restitution the velocity pass for contacts (eq. 2.33); a limb with a centre particle
 ///                 answers as the rigid body its three particles make (collision/contacts.hpp);
 ///  5. sleep       still islands fall asleep; divergence is detected.

@@ -33,6 +33,8 @@ enum class RelaxationRule {
 enum class RelaxationSolver : std::uint8_t {
   gauss_seidel,  ///< each projection sees the positions the previous ones left (thesis 3.2.2)
   jacobi,        ///< every projection reads the same positions; corrections are averaged per particle
+  direct,        ///< Newton steps of an exact global projection, linear time on trees
+                 ///< (kernel/relaxation/direct_projection.hpp)
 };
 
 /// The order of a Gauss-Seidel sweep.
@@ -66,6 +68,16 @@ struct VerletOptions {
   /// SIMD, threads, layouts").
   std::uint32_t parallel_minimum_slots = 0;
   std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
+  /// RelaxationSolver::direct: Newton steps per time step (≥ 1; replaces
+  /// settings.relaxation.iterations), whether they start from the previous step's multipliers,
+  /// and the compliance α of every distance constraint, m/N (0: rigid; XPBD, Macklin et al.
+  /// 2016 — the other solvers treat every constraint as rigid and refuse α > 0).
+  int newton_iterations = 2;
+  bool warm_start = false;
+  double compliance = 0;
+  /// Long-range attachments (Kim, Chentanez, Müller 2012): after every sweep, each particle
+  /// joined to a pinned one is pulled back within the rest length of the path between them.
+  bool long_range_attachments = false;
 };
 
 /// Why relaxation stopped in a step (thesis 3.2.3 lists the three).

@@ -57,6 +57,9 @@ struct RunFlags {
   std::string ordering = "depth-parity";
   int threads = 0;
   bool scalar = false;
+  int newton_iterations = 2;
+  double compliance = 0;
+  bool warm_start = false, long_range_attachments = false;
   double stiffness = 0, damping = 0;
   std::string integrator, linear_solver = "ldlt";
   std::string stabilization = "baumgarte", constraint_solver = "auto";
@@ -64,7 +67,8 @@ struct RunFlags {
   CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
       *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
       *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
-      *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option;
+      *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option, *newton_iterations_option,
+      *compliance_option, *warm_start_option;
   std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
 
   bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
@@ -132,9 +136,20 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.over_relaxation_option =
       run.add_option("--over-relaxation", flags.over_relaxation, "Successive over-relaxation factor, in (0, 2)");
   flags.out_option = run.add_option("--out", flags.out_path, "Write the trajectory (time, particle positions) as CSV");
-  run.add_option("--solver", flags.solver, "Relaxation sweep: gauss-seidel or jacobi")
-      ->check(CLI::IsMember({"gauss-seidel", "jacobi"}))
+  run.add_option("--solver", flags.solver,
+                 "Relaxation: gauss-seidel or jacobi sweeps, or direct (Newton steps of an exact global projection)")
+      ->check(CLI::IsMember({"gauss-seidel", "jacobi", "direct"}))
       ->capture_default_str();
+  flags.newton_iterations_option =
+      run.add_option("--newton-iterations", flags.newton_iterations, "--solver direct: Newton steps per time step (replaces --iterations)")
+          ->check(CLI::PositiveNumber)
+          ->capture_default_str();
+  flags.compliance_option = run.add_option("--compliance", flags.compliance, "--solver direct: compliance of every constraint, m/N")
+                                ->check(CLI::NonNegativeNumber);
+  flags.warm_start_option =
+      run.add_flag("--warm-start", flags.warm_start, "--solver direct: start from the previous step's multipliers");
+  run.add_flag("--long-range-attachments", flags.long_range_attachments,
+               "Also hold every particle within the rest length of its path to the pin (Kim et al. 2012)");
   run.add_option("--sweep", flags.sweep,
                  "Gauss-Seidel order: coloured (SIMD, threads) or sequential (the thesis's loop, scalar)")
       ->check(CLI::IsMember({"coloured", "sequential"}))
@@ -157,7 +172,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
   for (const char* name : {"--iterations", "--tolerance", "--budget-us", "--over-relaxation", "--solver", "--sweep", "--pinned",
-                           "--threads", "--threading", "--layout", "--ordering", "--scalar"}) {
+                           "--threads", "--threading", "--layout", "--ordering", "--scalar", "--newton-iterations",
+                           "--compliance", "--warm-start", "--long-range-attachments"}) {
     flags.verlet_only_options.push_back(run.get_option(name));
   }
 }
@@ -235,7 +251,23 @@ VerletOptions verlet_options(const RunFlags& flags) {
   refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   VerletOptions options;
   options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
-  options.solver = flags.solver == "jacobi" ? RelaxationSolver::jacobi : RelaxationSolver::gauss_seidel;
+  options.solver = flags.solver == "jacobi"   ? RelaxationSolver::jacobi
+                   : flags.solver == "direct" ? RelaxationSolver::direct
+                                              : RelaxationSolver::gauss_seidel;
+  options.long_range_attachments = flags.long_range_attachments;
+  if (options.solver == RelaxationSolver::direct) {
+    for (const CLI::Option* option : {flags.iterations_option, flags.over_relaxation_option}) {
+      if (given(option)) throw InputError(option->get_name() + ": applies to the gauss-seidel and jacobi sweeps; --solver direct takes --newton-iterations");
+    }
+    if (flags.sweep == "sequential") throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver direct");
+    options.newton_iterations = flags.newton_iterations;
+    options.compliance = flags.compliance;
+    options.warm_start = flags.warm_start;
+  } else {
+    for (const CLI::Option* option : {flags.newton_iterations_option, flags.compliance_option, flags.warm_start_option}) {
+      if (given(option)) throw InputError(option->get_name() + ": applies to --solver direct");
+    }
+  }
   options.order = flags.sweep == "sequential" ? SweepOrder::sequential : SweepOrder::coloured;
   options.direction = flags.pinned == "last" ? SweepDirection::pinned_last : SweepDirection::pinned_first;
   options.threads = flags.threads;
@@ -394,9 +426,18 @@ const char* layout_name(ParticleLayout layout) {
   return "auto";
 }
 
-// "solver" line: the sweep, the colour count and batch sizes, the overflow, lanes, layout, threads.
+// "solver" line: the sweep, the colour count and batch sizes, the overflow, lanes, layout, threads;
+// or the direct solver's Newton steps and trees.
 template <typename Scalar>
 std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state) {
+  if (state.options.solver == RelaxationSolver::direct) {
+    const DirectProjection<Scalar>& direct = state.plan.direct;
+    const std::size_t trees = direct.elimination.ordering().components.size();
+    return format("solver      direct: Newton steps of Baraff's tree elimination (linear time) over %zu tree%s%s; "
+                  "%zu loop-closing constraints by Gauss-Seidel; 1 thread\n",
+                  trees, trees == 1 ? "" : "s", state.options.warm_start ? ", warm-started" : "",
+                  direct.elimination.ordering().loop_constraints.size());
+  }
   std::vector<std::size_t> sizes(state.colour_count, 0);
   std::size_t overflow = 0;
   for (std::size_t c = 0; c < state.constraints.size(); ++c) {
@@ -469,9 +510,14 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
                 model.settings.time_step, state.time, record.wall_seconds,
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
-  out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
-                model.settings.relaxation.iterations, model.settings.relaxation.over_relaxation,
-                model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+  if (state.options.solver == RelaxationSolver::direct) {
+    out << format("relaxation  up to %d Newton steps a step (tolerance %g m, budget %g us); stopped by:", state.options.newton_iterations,
+                  model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+  } else {
+    out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
+                  model.settings.relaxation.iterations, model.settings.relaxation.over_relaxation,
+                  model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+  }
   for (int k = 0; k < 4; ++k) {
     if (record.relaxation_stops[k]) out << format(" %s %ld", stop_name(static_cast<RelaxationStop>(k)), record.relaxation_stops[k]);
   }

@@ -1,0 +1,207 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "kernel/relaxation/direct_projection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "kernel/relaxation/distance_projection.hpp"
+
+namespace limber {
+namespace {
+
+template <typename Scalar>
+using Vector3s = Eigen::Matrix<Scalar, 3, 1>;
+
+// The weight a particle's correction gets: its inverse mass (weighted rule, eq. 4.7), or 1 for
+// every movable particle (unweighted rule, eq. 4.6).
+template <typename Scalar>
+Scalar correction_weight(const VerletState<Scalar>& state, std::uint32_t particle) {
+  const Scalar w = state.particles.inverse_mass[particle];
+  return state.options.rule == RelaxationRule::weighted || w == Scalar(0) ? w : Scalar(1);
+}
+
+// A constraint of one row (distance) or three (zero-length joint).
+template <typename Scalar>
+bool is_point_constraint(const VerletState<Scalar>& state, std::size_t c) {
+  return state.constraints.rest_length[c] == Scalar(0);
+}
+
+// Moves the constraint's two particles by W·Jᵀ·impulse (impulse in its rows; `direction` is n
+// of a distance constraint).
+template <typename Scalar>
+void apply_impulse(VerletState<Scalar>& state, std::size_t c, const Vector3s<Scalar>& impulse, const Vector3s<Scalar>& direction) {
+  const std::uint32_t i = state.constraints.particle_i[c], j = state.constraints.particle_j[c];
+  const Vector3s<Scalar> along = is_point_constraint(state, c) ? impulse : Vector3s<Scalar>(direction * impulse.x());
+  auto& particles = state.particles;
+  particles.set_position(i, particles.position(i) + correction_weight(state, i) * along);
+  particles.set_position(j, particles.position(j) - correction_weight(state, j) * along);
+}
+
+// n = (x_i − x_j)/|x_i − x_j| and C = |x_i − x_j| − d for a distance constraint, C = x_i − x_j for
+// a zero-length joint (first row, or all three).
+template <typename Scalar>
+Vector3s<Scalar> constraint_value(const VerletState<Scalar>& state, std::size_t c, Vector3s<Scalar>& direction) {
+  const auto& particles = state.particles;
+  const Vector3s<Scalar> separation = particles.position(state.constraints.particle_i[c]) - particles.position(state.constraints.particle_j[c]);
+  if (is_point_constraint(state, c)) return separation;
+  const Scalar length = separation.norm();
+  // Coincident ends have no direction: keep the last one (any unit vector gives a valid row).
+  if (length > Scalar(0)) direction = separation / length;
+  return Vector3s<Scalar>(length - state.constraints.rest_length[c], 0, 0);
+}
+
+template <typename Scalar>
+std::uint32_t island_of_particle(const VerletState<Scalar>& state, std::uint32_t particle) {
+  const auto it = std::upper_bound(state.islands.begin(), state.islands.end(), particle,
+                                   [](std::uint32_t p, const Island& island) { return p < island.particle_end; });
+  return static_cast<std::uint32_t>(it - state.islands.begin());
+}
+
+}  // namespace
+
+template <typename Scalar>
+void prepare_direct_projection(VerletState<Scalar>& state) {
+  const VerletOptions& options = state.options;
+  if (options.newton_iterations < 1) throw std::invalid_argument("options: newton_iterations must be at least 1");
+  if (!(options.compliance >= 0)) throw std::invalid_argument("options: compliance must be a non-negative number of m/N");
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  const auto& particles = state.particles;
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  direct.body_of_particle.assign(particles.size(), -1);
+  direct.particle_of_body.clear();
+  direct.body_mass.clear();
+  for (std::uint32_t p = 0; p < particles.size(); ++p) {
+    if (particles.inverse_mass[p] == Scalar(0)) continue;
+    direct.body_of_particle[p] = static_cast<std::int32_t>(direct.particle_of_body.size());
+    direct.particle_of_body.push_back(p);
+    direct.body_mass.push_back(Scalar(1) / correction_weight(state, p));
+  }
+  // A constraint at a pinned particle is a constraint to the world (inboard −1).
+  std::vector<std::int32_t> inboard(constraints.size()), outboard(constraints.size());
+  std::vector<std::uint8_t> rows(constraints.size());
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    std::int32_t a = direct.body_of_particle[constraints.particle_i[c]], b = direct.body_of_particle[constraints.particle_j[c]];
+    if (b < 0) std::swap(a, b);
+    inboard[c] = a, outboard[c] = b;
+    rows[c] = is_point_constraint(state, c) ? 3 : 1;
+  }
+  TreeOrdering ordering = order_tree(direct.particle_of_body.size(), inboard, outboard);
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> island_components, island_loops;
+  for (std::size_t k = 0; k < ordering.components.size(); ++k) {
+    const std::uint32_t particle = direct.particle_of_body[static_cast<std::size_t>(ordering.components[k].body)];
+    island_components.emplace_back(island_of_particle(state, particle), static_cast<std::uint32_t>(k));
+  }
+  for (const std::uint32_t c : ordering.loop_constraints) {
+    island_loops.emplace_back(island_of_particle(state, constraints.particle_i[c]), c);
+  }
+  // Loop-closing constraints in storage order, like a sequential sweep.
+  std::sort(island_loops.begin(), island_loops.end());
+  direct.island_components = group_by_row(state.islands.size(), island_components);
+  direct.island_loop_constraints = group_by_row(state.islands.size(), island_loops);
+  direct.elimination.assign(std::move(ordering), direct.particle_of_body.size(), std::move(rows));
+  direct.multiplier.assign(constraints.size(), Vector3s<Scalar>::Zero());
+  direct.direction.assign(constraints.size(), Vector3s<Scalar>::UnitX());
+  direct.scaled_compliance.assign(constraints.size(), Scalar(0));
+  direct.multiplier_time_step = 0;
+}
+
+template <typename Scalar>
+void begin_direct_projection(VerletState<Scalar>& state, double dt) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  const auto& components = direct.elimination.ordering().components;
+  const auto& order = direct.elimination.ordering().order;
+  const auto body_count = direct.elimination.body_count();
+  const auto compliance = static_cast<Scalar>(state.options.compliance / (dt * dt));
+  const bool warm = state.options.warm_start && direct.multiplier_time_step > 0;
+  const auto rescale = static_cast<Scalar>(warm ? (dt / direct.multiplier_time_step) * (dt / direct.multiplier_time_step) : 0.0);
+  const auto visit = [&](std::size_t c) {
+    direct.scaled_compliance[c] = compliance;
+    Vector3s<Scalar>& lambda = direct.multiplier[c];
+    lambda *= rescale;
+    if (!warm) return;
+    constraint_value(state, c, direct.direction[c]);
+    apply_impulse(state, c, lambda, direct.direction[c]);
+  };
+  for (const std::uint32_t island : state.awake_islands) {
+    for (const std::uint32_t k : direct.island_components.row(island)) {
+      for (std::uint32_t n = components[k].begin; n < components[k].end; ++n) {
+        if (order[n] >= body_count) visit(static_cast<std::size_t>(order[n] - body_count));
+      }
+    }
+    for (const std::uint32_t c : direct.island_loop_constraints.row(island)) direct.multiplier[c].setZero();
+  }
+  direct.multiplier_time_step = dt;
+}
+
+template <typename Scalar>
+double direct_projection_step(VerletState<Scalar>& state) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  TreeElimination<Scalar, 3>& elimination = direct.elimination;
+  const auto& components = elimination.ordering().components;
+  const auto& order = elimination.ordering().order;
+  const auto body_count = elimination.body_count();
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  using Matrix3 = Eigen::Matrix<Scalar, 3, 3>;
+  // J's block of constraint c on a body: ±I for a zero-length joint, ±nᵀ (first row) for a
+  // distance constraint; + at particle i.
+  const auto edge = [&](std::size_t c, std::int32_t body) -> Matrix3 {
+    const Scalar sign = direct.body_of_particle[constraints.particle_i[c]] == body ? Scalar(1) : Scalar(-1);
+    if (is_point_constraint(state, c)) return sign * Matrix3::Identity();
+    Matrix3 block = Matrix3::Zero();
+    block.row(0) = sign * direct.direction[c].transpose();
+    return block;
+  };
+  double largest = 0;
+  std::uint64_t projected = 0;
+  for (const std::uint32_t island : state.awake_islands) {
+    for (const std::uint32_t k : direct.island_components.row(island)) {
+      const auto [begin, end, root_body] = components[k];
+      // M = 1/w per particle; the right-hand side −C − α̃·λ per constraint, α̃ on its diagonal.
+      for (std::uint32_t n = begin; n < end; ++n) {
+        const std::int32_t node = order[n];
+        if (node < body_count) {
+          elimination.diagonal(node) = direct.body_mass[static_cast<std::size_t>(node)] * Matrix3::Identity();
+          elimination.work(node).setZero();
+          continue;
+        }
+        const auto c = static_cast<std::size_t>(node - body_count);
+        const Scalar compliance = direct.scaled_compliance[c];
+        elimination.diagonal(node) = -compliance * Matrix3::Identity();
+        elimination.work(node) = -constraint_value(state, c, direct.direction[c]) - compliance * direct.multiplier[c];
+        ++projected;
+      }
+      elimination.eliminate(begin, end, edge);
+      for (std::uint32_t n = begin; n < end; ++n) {
+        const std::int32_t node = order[n];
+        if (node < body_count) {
+          const std::uint32_t p = direct.particle_of_body[static_cast<std::size_t>(node)];
+          const Vector3s<Scalar>& delta = elimination.work(node);
+          state.particles.set_position(p, state.particles.position(p) + delta);
+          largest = std::max(largest, static_cast<double>(delta.norm()));
+        } else {
+          const auto c = static_cast<std::size_t>(node - body_count);
+          const int rows = elimination.rows(c);
+          direct.multiplier[c].head(rows) -= elimination.work(node).head(rows);  // Δλ = −μ
+        }
+      }
+    }
+    for (const std::uint32_t c : direct.island_loop_constraints.row(island)) {
+      largest = std::max(largest, static_cast<double>(project_distance_constraint(state.particles, constraints, c, state.options.rule)));
+      ++projected;
+    }
+  }
+  state.counters.constraint_projections += projected;
+  return largest;
+}
+
+#define LIMBER_INSTANTIATE(Scalar)                                              \
+  template void prepare_direct_projection<Scalar>(VerletState<Scalar>&);        \
+  template void begin_direct_projection<Scalar>(VerletState<Scalar>&, double);  \
+  template double direct_projection_step<Scalar>(VerletState<Scalar>&);
+LIMBER_INSTANTIATE(float)
+LIMBER_INSTANTIATE(double)
+#undef LIMBER_INSTANTIATE
+
+}  // namespace limber

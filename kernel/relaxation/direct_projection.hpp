@@ -1,0 +1,48 @@
+// The direct solver of the Verlet family: an exact global projection of the distance constraints
+// instead of relaxation sweeps (RelaxationSolver::direct).
+//
+// Each Newton step linearizes every constraint at the current positions x and solves
+//   (J W Jᵀ + α̃) Δλ = −C(x) − α̃·λ,    Δx = W Jᵀ Δλ,    λ += Δλ
+// exactly (XPBD's update, Macklin, Müller, Chentanez 2016, eq. 18, solved for all constraints at
+// once as in Deul, Kugelstadt, Weiler, Bender, "Direct position-based solver for stiff rods",
+// 2018). W holds the inverse masses, so the correction is the thesis's weighting (eq. 4.7) made
+// exact: the mass-weighted closest point, to first order, rather than the result of a sweep
+// order; α̃ = α/Δt² is the compliance (0: rigid). A distance constraint has one row,
+// C = |x_i − x_j| − d; a zero-length joint three, C = x_i − x_j (linear: one step closes it).
+//
+// The system is solved by Baraff's elimination over the particle–constraint tree
+// (kernel/numerics/tree_elimination.hpp, shared with the Lagrange method), O(n) per step: a
+// chain's matrix is block tridiagonal. Constraints that close a loop are left out of the tree
+// and projected one by one (Gauss-Seidel) after each Newton step.
+//
+// Warm start (VerletOptions::warm_start): the previous step's multipliers, rescaled to this Δt,
+// are applied before the first Newton step — the tension of a hanging chain persists from step
+// to step like gravity, so the first linearization starts near the solution.
+#pragma once
+
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// Orders each island's particle–constraint graph for elimination (called by compile() when the
+/// solver is direct). Throws std::invalid_argument when newton_iterations < 1 or compliance < 0.
+template <typename Scalar>
+void prepare_direct_projection(VerletState<Scalar>& state);
+
+/// Starts a step's projection: applies the warm start (or clears the multipliers). dt in s.
+template <typename Scalar>
+void begin_direct_projection(VerletState<Scalar>& state, double dt);
+
+/// One Newton step over the awake islands, then the loop-closing constraints. Returns the
+/// largest particle displacement it made, m.
+template <typename Scalar>
+double direct_projection_step(VerletState<Scalar>& state);
+
+extern template void prepare_direct_projection<float>(VerletState<float>&);
+extern template void prepare_direct_projection<double>(VerletState<double>&);
+extern template void begin_direct_projection<float>(VerletState<float>&, double);
+extern template void begin_direct_projection<double>(VerletState<double>&, double);
+extern template double direct_projection_step<float>(VerletState<float>&);
+extern template double direct_projection_step<double>(VerletState<double>&);
+
+}  // namespace limber
