@@ -157,7 +157,7 @@ double direct_projection_step(VerletState<Scalar>& state) {
   std::uint64_t projected = 0;
   for (const std::uint32_t island : state.awake_islands) {
     for (const std::uint32_t k : direct.island_components.row(island)) {
-      const auto [begin, end, root_body] = components[k];
+      const std::uint32_t begin = components[k].begin, end = components[k].end;
       // M = 1/w per particle; the right-hand side −C − α̃·λ per constraint, α̃ on its diagonal.
       for (std::uint32_t n = begin; n < end; ++n) {
         const std::int32_t node = order[n];

@@ -1,4 +1,4 @@
-// step() allocates nothing after its first call (DESIGN.md): the Verlet method's, the explicit
+// step() allocates nothing after its first call (DESIGN.md): the Verlet method's (every solver), the explicit
 // spring method's and the Lagrange tree solve's. (The implicit springs and Lagrange's sparse path
 // allocate inside Eigen's sparse factorization, kernel/springs/step.hpp.) Counted by
 // tests/support/allocation_counter.cpp, which replaces this program's allocation functions.
@@ -55,6 +55,19 @@ TEST(Allocation, EveryRelaxationPathAllocatesNothing) {
           << "solver " << int(solver) << " layout " << int(layout);
     }
   }
+}
+
+TEST(Allocation, TheDirectSolverAllocatesNothing) {
+  // Its Newton steps over the humanoid (contacts, sleep and wake) and the chain, warm-started
+  // and with long-range attachments.
+  const Model humanoid = testing::load_shipped_scene("humanoid.json");
+  const Model chain = testing::load_shipped_scene("chain.json");
+  VerletOptions options;
+  options.solver = RelaxationSolver::direct;
+  options.newton_iterations = 3;
+  EXPECT_EQ(allocations_while_stepping<float>(humanoid, 600, false, options), 0);
+  options.warm_start = true, options.long_range_attachments = true;
+  EXPECT_EQ(allocations_while_stepping<double>(chain, 600, true, options), 0);
 }
 
 TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail
