@@ -18,7 +18,6 @@
 #include "kernel/scene/generators.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
-#include "tests/support/models.hpp"
 
 namespace limber {
 namespace {
@@ -391,28 +390,6 @@ TYPED_TEST(DirectProjection, LongRangeAttachmentsKeepAChainWithinItsLength) {
   }
   EXPECT_GT(overshoot[false], 0.01) << "without attachments the stretched chain must overshoot its length";
   EXPECT_LE(overshoot[true], this->kFloat ? 1e-6 : 1e-14);
-}
-
-TYPED_TEST(DirectProjection, SameBitsForOneAndTwoThreads) {
-  TreeSpec spec;
-  spec.links = 40, spec.branching = 3, spec.link_length = kLinkLength;
-  spec.joints = ParticleJoints::zero_length_constraint;
-  const Model model = make_tree_model(spec);
-  const auto run = [&](int threads) {
-    VerletOptions options = direct_options(3);
-    options.threads = threads, options.parallel_minimum_slots = 1, options.warm_start = true;
-    VerletState<TypeParam> state = compile<TypeParam>(model, options);
-    for (int s = 0; s < 100; ++s) EXPECT_EQ(step(state).status, StepStatus::ok);
-    return state;
-  };
-  const auto one = run(1), two = run(2);
-  EXPECT_TRUE(bitwise_equal(one.particles, two.particles));
-  const VerletState<TypeParam> start = compile<TypeParam>(model, direct_options());
-  double moved = 0;
-  for (std::size_t p = 0; p < start.particles.size(); ++p) {
-    moved = std::max(moved, double((one.particles.position(p) - start.particles.position(p)).norm()));
-  }
-  EXPECT_GT(moved, 0.1 * kLinkLength) << "the tree must have swung, or equal bits mean nothing";
 }
 
 TEST(DirectProjectionOptions, BadNewtonIterationsAndComplianceAreRejectedByName) {
