@@ -1,0 +1,132 @@
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
+#include "kernel/study/run_metrics.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace limber::study {
+
+double energy_scale(const Model& model) {
+  double length = 0;
+  for (const Body& body : model.bodies) length += body.shape.length;
+  const double mass = model.body_mass(), gravity = model.settings.gravity.norm();
+  return gravity > 0 ? mass * gravity * length : mass * 1.0;
+}
+
+ErrorMeter::ErrorMeter(const Observation& start, double energy_scale) : start_energy_(start.energy()) {
+  errors_.energy_scale = energy_scale;
+  errors_.max_joint_gap = start.max_joint_gap;
+  errors_.max_link_stretch = start.max_link_stretch;
+}
+
+void ErrorMeter::add(const Observation& observation) {
+  ++errors_.steps;
+  errors_.max_joint_gap = std::max(errors_.max_joint_gap, observation.max_joint_gap);
+  errors_.max_link_stretch = std::max(errors_.max_link_stretch, observation.max_link_stretch);
+  squared_rms_sum_ += observation.rms_joint_gap * observation.rms_joint_gap;
+  errors_.rms_joint_gap = std::sqrt(squared_rms_sum_ / errors_.steps);
+  const double change = observation.energy() - start_energy_;
+  // NaN compares false: carry it through explicitly so a non-finite run cannot look exact.
+  if (!std::isfinite(change)) {
+    errors_.energy_drift = errors_.energy_gain = std::numeric_limits<double>::infinity();
+    return;
+  }
+  errors_.energy_drift = std::max(errors_.energy_drift, std::abs(change));
+  errors_.energy_gain = std::max(errors_.energy_gain, change);
+}
+
+RunErrors ErrorMeter::result() const { return errors_; }
+
+double trajectory_error(const Trajectory& run, const Trajectory& reference) {
+  if (std::abs(run.sample_interval - reference.sample_interval) > 1e-9) {
+    throw std::invalid_argument("trajectory_error: sample intervals differ");
+  }
+  if (run.samples.size() < reference.samples.size()) return std::numeric_limits<double>::infinity();
+  double largest = 0;
+  for (std::size_t k = 0; k < reference.samples.size(); ++k) {
+    const auto& a = run.samples[k];
+    const auto& b = reference.samples[k];
+    if (a.size() != b.size()) throw std::invalid_argument("trajectory_error: the trajectories have different point counts");
+    double squares = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) squares += (a[i] - b[i]).squaredNorm();
+    const double rms = a.empty() ? 0 : std::sqrt(squares / a.size());
+    if (!std::isfinite(rms)) return std::numeric_limits<double>::infinity();
+    largest = std::max(largest, rms);
+  }
+  return largest;
+}
+
+ObservedRun observe_run(Simulation& simulation, double duration, double sample_interval,
+                        const std::function<bool(const RunErrors&)>& stop_when) {
+  const double dt = simulation.time_step();
+  const long steps = std::lround(duration / dt);
+  long steps_per_sample = 0;
+  if (sample_interval > 0) {
+    const double ratio = sample_interval / dt;
+    steps_per_sample = std::lround(ratio);
+    if (steps_per_sample < 1 || std::abs(ratio - steps_per_sample) > 1e-6) {
+      throw std::invalid_argument("observe_run: the sample interval is not a whole number of time steps");
+    }
+  }
+  ObservedRun run;
+  run.trajectory.sample_interval = sample_interval;
+  std::vector<Eigen::Vector3d> points;
+  auto sample = [&] {
+    simulation.limb_points(points);
+    run.trajectory.samples.push_back(points);
+  };
+  if (steps_per_sample) sample();
+  ErrorMeter meter(simulation.observe(), energy_scale(simulation.model()));
+  for (long s = 1; s <= steps; ++s) {
+    const StepStatus status = simulation.step();
+    if (status != StepStatus::ok) {
+      run.errors = meter.result();
+      run.errors.status = status;
+      return run;
+    }
+    meter.add(simulation.observe());
+    if (steps_per_sample && s % steps_per_sample == 0) sample();
+    if (stop_when && stop_when(meter.result())) break;
+  }
+  run.errors = meter.result();
+  return run;
+}
+
+double wall_time_per_simulated_second(const Model& scene, const Method& method, double duration, int repeats) {
+  std::vector<double> times;
+  const long steps = std::lround(duration / method.time_step);
+  for (int r = 0; r < std::max(1, repeats); ++r) {
+    Simulation simulation(scene, method);
+    long done = 0;
+    const auto start = std::chrono::steady_clock::now();
+    while (done < steps && simulation.step() == StepStatus::ok) ++done;
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    times.push_back(seconds / (std::max<long>(done, 1) * method.time_step));
+  }
+  std::nth_element(times.begin(), times.begin() + times.size() / 2, times.end());
+  return times[times.size() / 2];
+}
+
+Stability classify(const RunErrors& errors, const StabilityBounds& bounds) {
+  if (errors.status != StepStatus::ok || !std::isfinite(errors.energy_gain) || !std::isfinite(errors.max_joint_gap) ||
+      !std::isfinite(errors.max_link_stretch)) {
+    return Stability::non_finite;
+  }
+  if (errors.relative_energy_gain() > bounds.energy_gain) return Stability::energy_growth;
+  if (std::max(errors.max_joint_gap, errors.max_link_stretch) > bounds.joint_gap) return Stability::joint_gap;
+  return Stability::stable;
+}
+
+const char* name(Stability stability) {
+  switch (stability) {
+    case Stability::stable: return "stable";
+    case Stability::non_finite: return "non-finite";
+    case Stability::energy_growth: return "energy growth";
+    case Stability::joint_gap: return "joint gap";
+  }
+  return "?";
+}
+
+}  // namespace limber::study

@@ -1,0 +1,108 @@
+// What a run costs and how wrong it is: the measures of the run-time-against-error studies and
+// the stability classification of the stress runs (issue 8). Every method is measured by the
+// same code from the same Observation (kernel/metrics/observers.hpp) and the same limb points
+// (Simulation::limb_points), so the numbers compare across methods.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kernel/study/simulation.hpp"
+
+namespace limber::study {
+
+/// The scale energy errors are measured against, J: the bodies' weight times the sum of their
+/// limbs' lengths, m·|g|·ΣL — the potential energy a chain exchanges when it swings from
+/// horizontal to hanging, within a factor of 2. Never 0 for a valid model with gravity; with
+/// zero gravity, the bodies' mass × (1 m/s)² instead.
+double energy_scale(const Model& model);
+
+/// Errors of one run, largest or averaged over every step.
+struct RunErrors {
+  /// Joint gaps and link stretch, relative (Observation's definitions): the largest over the
+  /// run, and the root mean square over steps of each step's RMS gap over joints.
+  double max_joint_gap = 0, rms_joint_gap = 0, max_link_stretch = 0;
+  /// max |E(t) − E(0)| and max (E(t) − E(0)) over the run, J (kinetic + gravitational; the
+  /// particle methods' kinetic energy uses v = (x − x*)/Δt, so it is only first-order accurate).
+  double energy_drift = 0, energy_gain = 0;
+  double energy_scale = 1;  ///< J, energy_scale(model)
+  /// Pointwise trajectory error against a reference, m: the largest over common sample times of
+  /// the RMS distance between the two runs' limb points (trajectory_error()). NaN: not measured.
+  double trajectory_error = std::numeric_limits<double>::quiet_NaN();
+  long steps = 0;                    ///< steps taken (fewer than asked when the run stopped)
+  StepStatus status = StepStatus::ok;  ///< the step that stopped the run, or ok
+
+  double relative_energy_drift() const { return energy_drift / energy_scale; }
+  double relative_energy_gain() const { return energy_gain / energy_scale; }
+};
+
+/// Accumulates RunErrors from one observation per step.
+class ErrorMeter {
+ public:
+  /// `start`: the observation before the first step.
+  ErrorMeter(const Observation& start, double energy_scale);
+  void add(const Observation& observation);
+  RunErrors result() const;
+
+ private:
+  RunErrors errors_;
+  double start_energy_ = 0, squared_rms_sum_ = 0;
+};
+
+/// Limb points (Simulation::limb_points) sampled every `sample_interval` seconds from t = 0.
+struct Trajectory {
+  double sample_interval = 0;                         ///< s
+  std::vector<std::vector<Eigen::Vector3d>> samples;  ///< samples[k]: the points at t = k·interval
+};
+
+/// The largest, over the sample times both trajectories have, of the RMS distance between their
+/// points, m. A run that stopped early (fewer samples than `reference`) or produced a
+/// non-finite point is infinitely wrong. Throws std::invalid_argument when the sample
+/// intervals differ by more than 10⁻⁹ s or the point counts differ.
+double trajectory_error(const Trajectory& run, const Trajectory& reference);
+
+/// One run of `duration` seconds, observed after every step.
+struct ObservedRun {
+  RunErrors errors;
+  Trajectory trajectory;  ///< empty unless a sample interval was given
+};
+
+/// Steps `simulation` for `duration` s (rounded to whole steps), observing after every step;
+/// stops at a diverged step. With `sample_interval` > 0 (which must be a whole number of time
+/// steps, to 10⁻⁶ of a step, or std::invalid_argument is thrown) it records the trajectory.
+/// `stop_when` (optional) ends the run early when it returns true for the errors so far — the
+/// stress runs stop at the first sign of divergence.
+ObservedRun observe_run(Simulation& simulation, double duration, double sample_interval = 0,
+                        const std::function<bool(const RunErrors&)>& stop_when = {});
+
+/// Median over `repeats` fresh runs of the wall time per simulated second (s/s) of stepping
+/// `method` on `scene` for `duration` s, compile excluded and nothing observed — the cost of
+/// the method alone. A run that diverges stops there; its time is per simulated second done.
+double wall_time_per_simulated_second(const Model& scene, const Method& method, double duration, int repeats);
+
+/// How a stress run ended (README, "Stability").
+enum class Stability : std::uint8_t {
+  stable,
+  non_finite,     ///< NaN or infinite state, or a speed beyond Settings::divergence_speed
+  energy_growth,  ///< gained more energy than StabilityBounds::energy_gain allows
+  joint_gap,      ///< a joint gap or link stretch beyond StabilityBounds::joint_gap
+};
+
+/// What counts as diverged. Gains are relative to energy_scale(): a conservative or dissipative
+/// method gains nothing but rounding (and the particle methods' first-order kinetic energy, a
+/// few percent at large steps); a method blowing up gains orders of magnitude. Gaps are relative
+/// to link length: beyond half a link a joint has come apart.
+struct StabilityBounds {
+  double energy_gain = 0.5;
+  double joint_gap = 0.5;
+};
+
+Stability classify(const RunErrors& errors, const StabilityBounds& bounds = {});
+const char* name(Stability stability);
+
+}  // namespace limber::study

@@ -1,0 +1,79 @@
+// One Model under any of limber's methods, behind one interface: what the run-time-against-error
+// studies, the stability stress runs and the peer comparisons step and observe (issue 8).
+//
+// A Method names a family (weighted or unweighted Verlet relaxation, stiff springs, Lagrange
+// multipliers, Featherstone) and that family's settings; configure() writes them into a copy of
+// the Model, and Simulation compiles it and steps it. Nothing here changes the physics of a
+// method: a Simulation steps exactly what `limber run` with the same flags steps.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kernel/featherstone/featherstone_state.hpp"
+#include "kernel/lagrange/lagrange_state.hpp"
+#include "kernel/metrics/observers.hpp"
+#include "kernel/model/model.hpp"
+#include "kernel/model/step_status.hpp"
+#include "kernel/springs/spring_state.hpp"
+#include "kernel/verlet/verlet_state.hpp"
+
+namespace limber::study {
+
+enum class Family : std::uint8_t { verlet, springs, lagrange, featherstone };
+
+/// A method and its settings. Only the fields of `family` are read.
+struct Method {
+  std::string series{};   ///< the method as plots name it, e.g. "verlet gauss-seidel"
+  std::string setting{};  ///< this point of the series, e.g. "20 sweeps"
+  Family family = Family::verlet;
+  double time_step = 1.0 / 240;  ///< s
+
+  // Verlet (thesis 3.2, 4.2): the rule and solver, sweeps (settings.relaxation.iterations) or
+  // Newton steps (verlet.newton_iterations), over-relaxation, and the particle model.
+  VerletOptions verlet{};
+  int sweeps = 100;
+  double over_relaxation = 1;
+  double relaxation_tolerance = 0;            ///< m; 0: run every sweep / Newton step
+  std::optional<LimbMasses> limb_masses{};    ///< unset: the scene's
+  std::optional<ParticleJoints> joints{};     ///< unset: the scene's
+
+  SpringOptions springs{};            ///< stiffness unset: the scene's
+  LagrangeOptions lagrange{};
+  FeatherstoneOptions featherstone{};
+};
+
+/// `scene` with `method`'s time step and Verlet settings written into its Settings.
+Model configure(const Model& scene, const Method& method);
+
+/// A compiled Model stepping under one method (double precision).
+class Simulation {
+ public:
+  /// Compiles configure(scene, method). Throws ModelError when the model is invalid for the
+  /// method (as the method's own compile does).
+  Simulation(const Model& scene, const Method& method);
+
+  /// One step of the method's time step.
+  StepStatus step();
+  Observation observe() const;
+  double time() const;
+  double time_step() const { return time_step_; }
+  const Model& model() const { return model_; }
+
+  /// Every limb's head and tail, world, m: 2 points per Model body that is a limb (Model order,
+  /// head first; the ball is left out). The particle methods' head and tail particles, the rigid
+  /// methods' body points at ±length/2 on the axis — the same points of the same body model,
+  /// so trajectories of different methods can be compared point by point. `points` is resized.
+  void limb_points(std::vector<Eigen::Vector3d>& points) const;
+
+ private:
+  Model model_;
+  double time_step_ = 0;
+  std::variant<VerletState<double>, SpringState, LagrangeState, FeatherstoneState> state_;
+};
+
+}  // namespace limber::study
