@@ -25,7 +25,7 @@
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
 #ifdef LIMBER_HAVE_BULLET
-#include "bench/peers/bullet_chain.hpp"
+#include "bench/peers/peer_chain.hpp"
 #endif
 
 namespace limber {

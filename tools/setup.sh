@@ -27,7 +27,8 @@ packages=(
   libeigen3-dev libtbb-dev libxsimd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   nlohmann-json3-dev libcli11-dev
-  libmujoco-dev libbullet-dev
+  libmujoco-dev libbullet-dev libode-dev
+  python3-matplotlib  # tools/plot_*.py, which draw bench/figures/
 )
 
 if [ "${LIMBER_SKIP_INSTALL:-0}" != 1 ]; then

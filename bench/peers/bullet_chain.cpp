@@ -1,5 +1,5 @@
-// Bullet's btMultiBody on the heavy-end chain: see bullet_chain.hpp.
-#include "bench/peers/bullet_chain.hpp"
+// Bullet's btMultiBody on the heavy-end chain: see peer_chain.hpp.
+#include "bench/peers/peer_chain.hpp"
 
 #include <algorithm>
 #include <array>
@@ -168,6 +168,7 @@ PeerChainResult run_bullet_multibody_chain(int links, double time_step, int step
     chain.step(time_step);
     stepping += std::chrono::steady_clock::now() - start;
     ++steps_taken;
+    result.steps_taken = steps_taken;
     chain.update_link_transforms();
     result.finite = chain.state_is_finite();
     result.max_joint_gap = std::max(result.max_joint_gap, chain.largest_joint_gap());
