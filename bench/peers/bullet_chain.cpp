@@ -1,5 +1,6 @@
 // Bullet's btMultiBody on the heavy-end chain: see peer_chain.hpp.
 #include "bench/peers/peer_chain.hpp"
+#include "bench/peers/bullet_geometry.hpp"
 
 #include <algorithm>
 #include <array>
@@ -17,40 +18,8 @@
 namespace limber::peers {
 namespace {
 
-constexpr double link_length = 0.1;            // m
-constexpr double link_radius = 0.01;           // m
-constexpr double link_mass = 1.0;              // kg
-constexpr double last_link_mass = 2.0;         // kg, the heavy end
-constexpr double gravity = 9.81;               // m/s², along −z
+using namespace heavy_end_chain;
 constexpr double raised_velocity_clamp = 1e4;  // rad/s; an accurate solution peaks near 200 rad/s
-
-// Principal moments about the link's centre, link frame (x along the link), kg m²: a solid
-// cylinder of the link's radius and length. (A capsule whose caps lie within the 0.1 m would have
-// a 12% smaller transverse moment; the workload does not fix which, so the simpler shape is used.)
-btVector3 cylinder_inertia(double mass) {
-  const double axial = mass * link_radius * link_radius / 2;
-  const double transverse = mass * (3 * link_radius * link_radius + link_length * link_length) / 12;
-  return btVector3(btScalar(axial), btScalar(transverse), btScalar(transverse));
-}
-
-// From a link's centre to its outboard end, link frame; its inboard end (the pivot) is at minus this.
-btVector3 half_link() { return btVector3(btScalar(link_length / 2), 0, 0); }
-
-using WorldPoint = std::array<double, 3>;  // m
-
-// In double, so that measuring a joint gap adds no rounding of its own to Bullet's.
-WorldPoint to_world(const btTransform& frame, const btVector3& local) {
-  WorldPoint point;
-  for (int row = 0; row < 3; ++row) {
-    point[row] = frame.getOrigin()[row];
-    for (int column = 0; column < 3; ++column) point[row] += double(frame.getBasis()[row][column]) * local[column];
-  }
-  return point;
-}
-
-double distance(const WorldPoint& a, const WorldPoint& b) {
-  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-}
 
 // The chain in its own Bullet world: a fixed base at the origin (the world pin) and links 0..N−1,
 // link i hanging from link i − 1 (link 0 from the base) by a spherical joint. The world keeps raw
@@ -158,25 +127,7 @@ PeerChainResult run_bullet_multibody_chain(int links, double time_step, int step
   if (links < 1 || steps < 0 || !(time_step > SIMD_EPSILON))
     throw std::invalid_argument("run_bullet_multibody_chain: needs links >= 1, steps >= 0, time_step > SIMD_EPSILON");
   MultiBodyChain chain(links, raise_velocity_clamp);
-  PeerChainResult result;
-  result.initial_kinetic_plus_potential = chain.kinetic_plus_potential();
-
-  std::chrono::steady_clock::duration stepping{};
-  int steps_taken = 0;
-  while (steps_taken < steps && result.finite) {
-    const auto start = std::chrono::steady_clock::now();
-    chain.step(time_step);
-    stepping += std::chrono::steady_clock::now() - start;
-    ++steps_taken;
-    result.steps_taken = steps_taken;
-    chain.update_link_transforms();
-    result.finite = chain.state_is_finite();
-    result.max_joint_gap = std::max(result.max_joint_gap, chain.largest_joint_gap());
-  }
-
-  result.final_kinetic_plus_potential = chain.kinetic_plus_potential();
-  if (steps_taken > 0) result.seconds_per_step = std::chrono::duration<double>(stepping).count() / steps_taken;
-  return result;
+  return measure_chain(chain, time_step, steps, [&](PeerChainResult&) { chain.update_link_transforms(); });
 }
 
 bool bullet_uses_double_precision() { return sizeof(btScalar) == sizeof(double); }

@@ -18,45 +18,15 @@
 #include <BulletDynamics/Dynamics/btRigidBody.h>
 
 #include "bench/peers/peer_chain.hpp"
+#include "bench/peers/bullet_geometry.hpp"
 
 namespace limber::peers {
 namespace {
 
-constexpr double link_length = 0.1;     // m
-constexpr double link_radius = 0.01;    // m
-constexpr double link_mass = 1.0;       // kg
-constexpr double last_link_mass = 2.0;  // kg, the heavy end
-constexpr double gravity = 9.81;        // m/s², along −z
+using namespace heavy_end_chain;
 // btTransformUtil::integrateTransform (LinearMath/btTransformUtil.h, ANGULAR_MOTION_THRESHOLD):
 // the largest angle a body's orientation turns in one step, rad.
 constexpr double largest_turn_per_step = std::numbers::pi / 4;
-
-// Principal moments about the link's centre, link frame (x along the link), kg m²: a solid
-// cylinder, as every peer uses (peer_chain.hpp).
-btVector3 cylinder_inertia(double mass) {
-  const double axial = mass * link_radius * link_radius / 2;
-  const double transverse = mass * (3 * link_radius * link_radius + link_length * link_length) / 12;
-  return btVector3(btScalar(axial), btScalar(transverse), btScalar(transverse));
-}
-
-// From a link's centre to its outboard end, link frame; its inboard end is at minus this.
-btVector3 half_link() { return btVector3(btScalar(link_length / 2), 0, 0); }
-
-using WorldPoint = std::array<double, 3>;  // m
-
-// In double, so that measuring a joint gap adds no rounding of its own to Bullet's.
-WorldPoint to_world(const btTransform& frame, const btVector3& local) {
-  WorldPoint point;
-  for (int row = 0; row < 3; ++row) {
-    point[row] = frame.getOrigin()[row];
-    for (int column = 0; column < 3; ++column) point[row] += double(frame.getBasis()[row][column]) * local[column];
-  }
-  return point;
-}
-
-double distance(const WorldPoint& a, const WorldPoint& b) {
-  return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
-}
 
 // The chain in its own Bullet world: links 0..N−1 along +x, link 0's inboard end held at the
 // origin by a one-body point-to-point constraint (its other side is Bullet's fixed body), link i's
@@ -171,24 +141,10 @@ PeerChainResult run_bullet_rigid_chain(int links, double time_step, int steps, i
     throw std::invalid_argument(
         "run_bullet_rigid_chain: needs links >= 1, steps >= 0, solver_iterations >= 1, finite time_step > SIMD_EPSILON");
   RigidChain chain(links, solver_iterations);
-  PeerChainResult result;
-  result.initial_kinetic_plus_potential = chain.kinetic_plus_potential();
-
-  std::chrono::steady_clock::duration stepping{};
-  while (result.steps_taken < steps && result.finite) {
-    const auto start = std::chrono::steady_clock::now();
-    chain.step(time_step);
-    stepping += std::chrono::steady_clock::now() - start;
-    ++result.steps_taken;
-    result.finite = chain.state_is_finite();
-    result.max_joint_gap = std::max(result.max_joint_gap, chain.largest_joint_gap());
+  return measure_chain(chain, time_step, steps, [&](PeerChainResult& result) {
     // The step just taken turned each orientation by ω·Δt with the ω read here (the solver's), capped.
     if (chain.fastest_turn() * time_step > largest_turn_per_step) ++result.steps_with_clamped_rotation;
-  }
-
-  result.final_kinetic_plus_potential = chain.kinetic_plus_potential();
-  if (result.steps_taken > 0) result.seconds_per_step = std::chrono::duration<double>(stepping).count() / result.steps_taken;
-  return result;
+  });
 }
 
 }  // namespace limber::peers

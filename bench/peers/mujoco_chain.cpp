@@ -16,11 +16,7 @@
 namespace limber::peers {
 namespace {
 
-constexpr double link_length = 0.1;     // m
-constexpr double link_radius = 0.01;    // m
-constexpr double link_mass = 1.0;       // kg
-constexpr double last_link_mass = 2.0;  // kg, the heavy end
-constexpr double gravity = 9.81;        // m/s², along −z
+using namespace heavy_end_chain;
 // Links per MJCF file. MuJoCo 2.2.2's XML parser (tinyxml2) stops at 100 nested elements
 // (XML_ELEMENT_DEPTH_EXCEEDED; measured: 96 nested bodies load, 97 do not); an <include>d file
 // is parsed on its own and merged afterwards, so each file only has to stay below that depth.

@@ -13,11 +13,7 @@
 namespace limber::peers {
 namespace {
 
-constexpr double link_length = 0.1;     // m
-constexpr double link_radius = 0.01;    // m
-constexpr double link_mass = 1.0;       // kg
-constexpr double last_link_mass = 2.0;  // kg, the heavy end
-constexpr double gravity = 9.81;        // m/s², along −z
+using namespace heavy_end_chain;
 
 // dInitODE2 once per process, before the first world; ODE is never closed (its data is static).
 void initialize_ode_once() {
@@ -122,23 +118,11 @@ PeerChainResult run_ode_chain(int links, double time_step, int steps, OdeStepper
   if (links < 1 || steps < 0 || quick_step_iterations < 1 || !(time_step > 0) || !std::isfinite(time_step))
     throw std::invalid_argument("run_ode_chain: needs links >= 1, steps >= 0, quick_step_iterations >= 1, finite time_step > 0");
   initialize_ode_once();
+  // QuickStep shuffles its constraint order with ODE's global random generator: reseed it so every
+  // run (and every repetition of one) sees the same order and gives the same numbers.
+  dRandSetSeed(0);
   OdeChain chain(links, stepper, quick_step_iterations);
-  PeerChainResult result;
-  result.initial_kinetic_plus_potential = chain.kinetic_plus_potential();
-
-  std::chrono::steady_clock::duration stepping{};
-  while (result.steps_taken < steps && result.finite) {
-    const auto start = std::chrono::steady_clock::now();
-    chain.step(time_step);
-    stepping += std::chrono::steady_clock::now() - start;
-    ++result.steps_taken;
-    result.finite = chain.state_is_finite();
-    result.max_joint_gap = std::max(result.max_joint_gap, chain.largest_joint_gap());
-  }
-
-  result.final_kinetic_plus_potential = chain.kinetic_plus_potential();
-  if (result.steps_taken > 0) result.seconds_per_step = std::chrono::duration<double>(stepping).count() / result.steps_taken;
-  return result;
+  return measure_chain(chain, time_step, steps, [](PeerChainResult&) {});
 }
 
 bool ode_uses_double_precision() { return std::is_same_v<dReal, double>; }

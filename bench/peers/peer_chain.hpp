@@ -14,7 +14,19 @@
 // or a time step the engine cannot take, and times only the engine's own step call.
 #pragma once
 
+#include <algorithm>
+#include <chrono>
+
 namespace limber::peers {
+
+/// The workload's numbers, shared by every peer.
+namespace heavy_end_chain {
+constexpr double link_length = 0.1;     ///< m
+constexpr double link_radius = 0.01;    ///< m
+constexpr double link_mass = 1.0;       ///< kg
+constexpr double last_link_mass = 2.0;  ///< kg, the heavy end
+constexpr double gravity = 9.81;        ///< m/s², along −z
+}  // namespace heavy_end_chain
 
 struct PeerChainResult {
   /// Wall time inside the engine's step call only, total / steps taken, s.
@@ -88,5 +100,30 @@ enum class MujocoIntegrator {
 /// beyond 1e10, and only counts a warning: such a run is reported with finite = false. Cost:
 /// MuJoCo factors the joint-space inertia as a dense matrix along a chain, O(links³) per step.
 PeerChainResult run_mujoco_chain(int links, double time_step, int steps, MujocoIntegrator integrator);
+
+// For the peer implementations -------------------------------------------------------------------
+
+/// Steps `chain` `steps` times of `time_step` s, or until its state is not finite, timing only
+/// chain.step(time_step). `Chain` has step(double), state_is_finite(), largest_joint_gap() (m)
+/// and kinetic_plus_potential() (J). `after_step(result)` runs after each timed step, before the
+/// state is measured (to refresh derived transforms, or count a clamp).
+template <typename Chain, typename AfterStep>
+PeerChainResult measure_chain(Chain& chain, double time_step, int steps, AfterStep after_step) {
+  PeerChainResult result;
+  result.initial_kinetic_plus_potential = chain.kinetic_plus_potential();
+  std::chrono::steady_clock::duration stepping{};
+  while (result.steps_taken < steps && result.finite) {
+    const auto start = std::chrono::steady_clock::now();
+    chain.step(time_step);
+    stepping += std::chrono::steady_clock::now() - start;
+    ++result.steps_taken;
+    after_step(result);
+    result.finite = chain.state_is_finite();
+    result.max_joint_gap = std::max(result.max_joint_gap, chain.largest_joint_gap());
+  }
+  result.final_kinetic_plus_potential = chain.kinetic_plus_potential();
+  if (result.steps_taken > 0) result.seconds_per_step = std::chrono::duration<double>(stepping).count() / result.steps_taken;
+  return result;
+}
 
 }  // namespace limber::peers
