@@ -25,7 +25,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 #include <cmath>
 #include <cstdio>
-#include <cstring>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <stdexcept>
