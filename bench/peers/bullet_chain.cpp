@@ -3,8 +3,6 @@
 #include "bench/peers/bullet_geometry.hpp"
 
 #include <algorithm>
-#include <array>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 

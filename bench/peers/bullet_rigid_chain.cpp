@@ -1,7 +1,5 @@
 // Bullet's rigid bodies and point-to-point constraints on the heavy-end chain: see peer_chain.hpp.
 #include <algorithm>
-#include <array>
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <numbers>

@@ -1,6 +1,5 @@
 // ODE's rigid bodies and ball joints on the heavy-end chain: see peer_chain.hpp.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>

@@ -1,6 +1,9 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 #include "kernel/study/simulation.hpp"
 
+#include <stdexcept>
+#include <type_traits>
+
 #include "kernel/featherstone/compile.hpp"
 #include "kernel/featherstone/step.hpp"
 #include "kernel/lagrange/compile.hpp"
