@@ -23,17 +23,26 @@ template <typename Scalar>
 Eigen::Vector3d position_at(const ParticleBuffer<Scalar>& particles, std::uint32_t p, double t) {
   return (1 - t) * position_of(particles, p, true) + t * position_of(particles, p);
 }
+// A particle's velocity: v = (x − x_previous)/Δt under pbd; the state's own v under rattle (during
+// relaxation x − x_previous = v·Δt there too, so detection sees the same speed either way).
 template <typename Scalar>
-Eigen::Vector3d velocity_of(const ParticleBuffer<Scalar>& particles, std::uint32_t p, double dt) {
+Eigen::Vector3d velocity_of(const VerletState<Scalar>& state, std::uint32_t p, double dt) {
+  const auto& particles = state.particles;
+  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
   return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
 }
 template <typename Scalar>
 void move(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta) {
   particles.set_position(p, particles.position(p) + delta.cast<Scalar>());
 }
-// A velocity change is a change of the previous position: v = (x − x_previous)/Δt.
+// A velocity change: of the previous position under pbd (v = (x − x_previous)/Δt), of v under rattle.
 template <typename Scalar>
-void change_velocity(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta_v, double dt) {
+void change_velocity(VerletState<Scalar>& state, std::uint32_t p, const Eigen::Vector3d& delta_v, double dt) {
+  auto& particles = state.particles;
+  if (uses_rattle(state)) {
+    particles.set_velocity(p, particles.velocity(p) + delta_v.cast<Scalar>());
+    return;
+  }
   particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
 }
 
@@ -75,9 +84,9 @@ double plane_inverse_mass(const VerletState<Scalar>& state, const ContactFeature
 template <typename Scalar>
 double plane_normal_speed(const VerletState<Scalar>& state, const ContactFeature& feature,
                           const PlaneFeatureConstraint& constraint, double dt) {
-  double speed = constraint.gradient_point.dot(velocity_of(state.particles, feature.particle, dt));
+  double speed = constraint.gradient_point.dot(velocity_of(state, feature.particle, dt));
   if (feature.axis_partner != feature.particle) {
-    speed += constraint.gradient_partner.dot(velocity_of(state.particles, feature.axis_partner, dt));
+    speed += constraint.gradient_partner.dot(velocity_of(state, feature.axis_partner, dt));
   }
   return speed;
 }
@@ -110,11 +119,10 @@ double ball_separation(const VerletState<Scalar>& state, const BallContact& cont
 // Relative normal velocity of the ball against the contact's limb point, m/s.
 template <typename Scalar>
 double ball_normal_speed(const VerletState<Scalar>& state, const BallContact& contact, double dt) {
-  const auto& particles = state.particles;
-  const Eigen::Vector3d limb_velocity = (1 - contact.axial) * velocity_of(particles, state.limbs.head[contact.limb], dt) +
-                                        contact.axial * velocity_of(particles, state.limbs.tail[contact.limb], dt);
+  const Eigen::Vector3d limb_velocity = (1 - contact.axial) * velocity_of(state, state.limbs.head[contact.limb], dt) +
+                                        contact.axial * velocity_of(state, state.limbs.tail[contact.limb], dt);
   const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  return contact.normal.dot(velocity_of(particles, ball, dt) - limb_velocity);
+  return contact.normal.dot(velocity_of(state, ball, dt) - limb_velocity);
 }
 
 // Generalized inverse mass of a ball–limb contact (the denominator of thesis eq. 2.33 for a
@@ -209,7 +217,7 @@ template <typename Scalar>
 void apply_rigid_limb_impulse(VerletState<Scalar>& state, const RigidLimbResponse& response, double impulse, double dt) {
   for (const std::uint32_t p : response.particles) {
     const Eigen::Vector3d r = position_of(state.particles, p) - response.origin;
-    change_velocity(state.particles, p, impulse * (response.linear + response.angular.cross(r)), dt);
+    change_velocity(state, p, impulse * (response.linear + response.angular.cross(r)), dt);
   }
 }
 
@@ -375,10 +383,10 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
     const double inverse_mass = plane_inverse_mass(state, feature, constraint);
     if (constraint.separation > kTouchingSlop || inverse_mass <= 0) continue;  // lifted off, or fixed
     const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / inverse_mass;  // N·s
-    change_velocity(particles, feature.particle,
+    change_velocity(state, feature.particle,
                     particles.inverse_mass[feature.particle] * impulse * constraint.gradient_point, dt);
     if (feature.axis_partner != feature.particle) {
-      change_velocity(particles, feature.axis_partner,
+      change_velocity(state, feature.axis_partner,
                       particles.inverse_mass[feature.axis_partner] * impulse * constraint.gradient_partner, dt);
     }
   }
@@ -393,7 +401,7 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
       const double inverse_mass = state.particles.inverse_mass[ball] + response.inverse_mass;
       if (inverse_mass <= 0) continue;
       const double impulse = (target - normal_speed) / inverse_mass;  // N·s, thesis eq. 2.33
-      change_velocity(particles, ball, state.particles.inverse_mass[ball] * impulse * contact.normal, dt);
+      change_velocity(state, ball, state.particles.inverse_mass[ball] * impulse * contact.normal, dt);
       apply_rigid_limb_impulse(state, response, impulse, dt);
       continue;
     }
@@ -402,7 +410,7 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
     // Thesis eq. 2.33: J = Δv_n / (Σ generalized inverse masses), shared like the projection.
     const Eigen::Vector3d impulse = ((target - normal_speed) / inverse_mass) * contact.normal;  // N·s
     share_ball_limb_impulse(state, contact.limb, contact.axial, impulse,
-                            [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(particles, p, dv, dt); });
+                            [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(state, p, dv, dt); });
   }
 }
 

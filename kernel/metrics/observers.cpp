@@ -30,12 +30,11 @@ Observation observe(const VerletState<Scalar>& state) {
   }
 
   const Eigen::Vector3d gravity = state.gravity.template cast<double>();
-  const double dt = state.previous_time_step;
   double body_mass = 0;
   for (std::uint32_t p = 0; p < particles.size(); ++p) {
     const double mass = state.particle_mass[p];
     const Eigen::Vector3d x = position(p);
-    const Eigen::Vector3d velocity = (x - particles.previous(p).template cast<double>()) / dt;
+    const Eigen::Vector3d velocity = particle_velocity(state, p);
     out.linear_momentum += mass * velocity;
     out.kinetic_energy += 0.5 * mass * velocity.squaredNorm();
     out.potential_energy -= mass * gravity.dot(x);

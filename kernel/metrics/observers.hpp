@@ -20,7 +20,7 @@ struct Observation {
   double max_link_stretch = 0;
   Eigen::Vector3d body_centre_of_mass = Eigen::Vector3d::Zero();  ///< of the limbs (not the ball), m
   Eigen::Vector3d linear_momentum = Eigen::Vector3d::Zero();      ///< everything, kg·m/s
-  double kinetic_energy = 0;    ///< J, with v = (x − x*)/Δt of the last step
+  double kinetic_energy = 0;    ///< J; particles: v = (x − x*)/Δt of the last step (pbd) or the state's v (rattle)
   double potential_energy = 0;  ///< J, −Σ m g·x (zero at the origin)
   int islands = 0, islands_sleeping = 0;
   bool body_sleeping = false;   ///< every limb island asleep

@@ -99,6 +99,13 @@ void require_at_least(long value, long low, const Path& path) {
   }
 }
 
+template <typename Path>
+void require_at_most(long value, long high, const Path& path) {
+  if (value > high) {
+    fail(path, "must be <= " + std::to_string(high) + ", got " + std::to_string(value));
+  }
+}
+
 /// A direction the loader will normalize: finite and not (numerically) zero.
 template <typename Path>
 void require_non_zero(const Vector3& value, const Path& path) {

@@ -153,6 +153,8 @@ void validate_settings(const Settings& settings) {
   require_non_negative(settings.relaxation.budget_us, "settings.relaxation.budget_us");
   require_in_range(settings.relaxation.over_relaxation, 0, 2, "settings.relaxation.over_relaxation",
                    /*low_open=*/true, /*high_open=*/true);
+  require_at_least(settings.relaxation.substeps, 1, "settings.relaxation.substeps");
+  require_at_most(settings.relaxation.substeps, kMaxSubsteps, "settings.relaxation.substeps");
   require_positive(settings.springs.stiffness, "settings.springs.stiffness");
   require_non_negative(settings.springs.damping, "settings.springs.damping");
   for (int axis = 0; axis < 3; ++axis) {

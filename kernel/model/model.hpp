@@ -8,6 +8,7 @@
 // the scene boundary (tools/scenes/*.json are already in SI), never here.
 #pragma once
 
+#include <cstdint>
 #include <initializer_list>
 #include <optional>
 #include <stdexcept>
@@ -170,11 +171,30 @@ struct Ball {
   Vector3 velocity = Vector3::Zero();   ///< initial, m/s
 };
 
+/// Along which gradient a distance constraint's projection moves its particles
+/// (kernel/relaxation/README.md derives both).
+enum class ProjectionRule : std::uint8_t {
+  /// The gradient at the end of the step: the nearest point on the constraint manifold. The
+  /// thesis's and Jakobsen's rule (position-based dynamics), state (x, x*). First order in Δt,
+  /// and it damps fast rotation.
+  pbd,
+  /// The gradient at the start of the (sub)step (SHAKE, Ryckaert, Ciccotti & Berendsen 1977),
+  /// then a velocity stage that projects velocities onto the constraints' tangent space (RATTLE,
+  /// Andersen 1983); state (x, v). Second order and symplectic (Leimkuhler & Skeel 1994). The
+  /// same inverse-mass weights, the same sweeps.
+  rattle,
+};
+
+/// Most substeps a step may be split into (a guard against hostile input, not a physical limit).
+inline constexpr int kMaxSubsteps = 10000;
+
 /// When relaxation stops (thesis 3.2.3): after `iterations` sweeps, or earlier when the largest
 /// correction of a sweep falls below `tolerance`, or when `budget_us` of wall-clock time has
-/// passed (the hard real-time stop; not deterministic).
+/// passed (the hard real-time stop; not deterministic). Each step of Δt runs as `substeps` steps
+/// of Δt/substeps (Macklin et al. 2019, "Small steps in physics simulation"), each with its own
+/// sweeps (and, for rattle, as many velocity sweeps).
 struct RelaxationSettings {
-  int iterations = 100;    ///< ≥ 1; the thesis's program used 100
+  int iterations = 100;    ///< ≥ 1 sweeps per substep; the thesis's program used 100
   double tolerance = 0;    ///< m; 0 disables
   double budget_us = 0;    ///< µs per step; 0 disables
   /// Successive over-relaxation factor ω in (0, 2) for distance constraints: each projection
@@ -184,6 +204,8 @@ struct RelaxationSettings {
   /// The projections are nonlinear, so the linear theory's (0, 2) is not all safe: on chain.json
   /// ω ≤ 1.8 never gained energy, ω = 1.9 did below 10 sweeps (README, "Relaxation").
   double over_relaxation = 1;
+  ProjectionRule projection = ProjectionRule::pbd;
+  int substeps = 1;        ///< in [1, kMaxSubsteps]
 };
 
 /// Bodies at rest are not simulated (thesis 4.5.3): an island sleeps after its particles have
@@ -206,6 +228,8 @@ enum class LimbMasses {
   ends,     ///< half at each end: the thesis's program; a uniform rod's inertia is 3× too large
   inertia,  ///< three particles (tail, centre, head) whose masses reproduce the limb's mass, centre
             ///< of mass along the axis and inertia about a transverse axis (uniform rod: m/6, 2m/3, m/6)
+  lumps,    ///< the body's point masses, each shared between head and tail by the lever rule
+            ///< (exact for lumps at the ends; every lump must lie on the axis, between the ends)
 };
 
 struct VerletSettings {

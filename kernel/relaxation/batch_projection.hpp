@@ -5,11 +5,21 @@
 // operation, with the shares read from the batch: with -ffp-contract=off (CMakeLists.txt) and
 // IEEE sqrt and division in every lane, the scalar path (ScalarLanes) and the SIMD path
 // (SimdLanes) give the same bits, so the SIMD sweep can be tested bit for bit against scalar code.
+//
+// Four kernels share the loads and stores (kernel/relaxation/README.md derives them):
+// - project_blocks: the pbd projection along the current gradient (thesis eq. 4.7);
+// - project_blocks_from_start: the rattle rule's position projection, SHAKE's, along the
+//   gradient n₀ stored at the substep's start, with its pbd fallback;
+// - project_velocity_blocks: the rattle rule's velocity projection onto the tangent space;
+// - store_gradients: writes the unit gradients the two rattle kernels read.
+// The Jacobi variants accumulate the same corrections instead of applying them.
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <type_traits>
 
 #include <xsimd/xsimd.hpp>
@@ -42,6 +52,11 @@ struct ScalarLanes {
   static value max(value a, value b) { return std::max(a, b); }
   static value if_positive(value test, value v) { return test > Scalar(0) ? v : Scalar(0); }
   static Scalar reduce_max(value v) { return v; }
+  using mask = bool;
+  static value select(mask m, value a, value b) { return m ? a : b; }
+  static bool any(mask m) { return m; }
+  static std::size_t count(mask m) { return m ? 1 : 0; }
+  static void store(value v, Scalar* p) { *p = v; }
 };
 
 /// xsimd batches of the build's widest instruction set (16 floats / 8 doubles on AVX-512).
@@ -82,6 +97,15 @@ struct SimdLanes {
     v.store_aligned(lanes);
     return *std::max_element(lanes, lanes + size);
   }
+  using mask = typename value::batch_bool_type;
+  static value select(mask m, value a, value b) { return xsimd::select(m, a, b); }
+  static bool any(mask m) { return xsimd::any(m); }
+  static std::size_t count(mask m) {  // xsimd 8.1 has no popcount of a mask
+    bool lanes[size];
+    m.store_unaligned(lanes);
+    return static_cast<std::size_t>(std::count(lanes, lanes + size, true));
+  }
+  static void store(value v, Scalar* p) { v.store_aligned(p); }
 };
 
 /// Three coordinates of one particle per lane (w: the record's fourth field, kept so that an
@@ -319,6 +343,158 @@ void accumulate_blocks(const ConstraintBatches<Scalar>& batches, std::size_t beg
     LanePositions<Lanes> sum_j = sums.template load<Lanes>(j, j_consecutive);
     sum_i.x = sum_i.x - move_i * dx, sum_i.y = sum_i.y - move_i * dy, sum_i.z = sum_i.z - move_i * dz;
     sum_j.x = sum_j.x + move_j * dx, sum_j.y = sum_j.y + move_j * dy, sum_j.z = sum_j.z + move_j * dz;
+    sums.template store<Lanes>(i, i_consecutive, sum_i), sums.template store<Lanes>(j, j_consecutive, sum_j);
+  }
+}
+
+// ---- The rattle rule (ProjectionRule::rattle) ----
+
+/// A rattle position projection uses its start gradient n₀ while cos∠(n, n₀) = n·n₀ stays above
+/// this, n the current gradient; at or below it, the slot falls back to the pbd projection for
+/// the rest of the substep. SHAKE's update divides by n·n₀: as the angle nears 90° the line
+/// x + μ·n₀ stops meeting the constraint sphere and the iteration diverges (a link turning more
+/// than a radian per substep). 0.5 (60°) keeps the divisor ≥ 1/2, so one projection moves at
+/// most twice the pbd one; a substep where a link turns that far is too long to be accurate
+/// anyway, and the step report counts the fallbacks.
+inline constexpr double kStartGradientMinimumCosine = 0.5;
+
+/// The batches' gradient fields (ConstraintBatches::gradient_*), writable, and the counter of
+/// slots that fell back to the pbd projection (summed: the same total for any thread count).
+template <typename Scalar>
+struct GradientField {
+  Scalar *x = nullptr, *y = nullptr, *z = nullptr;
+  std::atomic<std::uint64_t>* fallbacks = nullptr;
+};
+
+/// Writes the unit gradient n = (x_i − x_j)/|x_i − x_j| of slots [begin, end) at `positions`
+/// (the previous positions: the substep's start; or the current ones) into `gradients`; 0 for a
+/// zero-length joint (rest length 0: linear, its three rows need no stored direction) and for
+/// coincident ends.
+template <typename Lanes, typename Positions, typename Scalar>
+void store_gradients(const ConstraintBatches<Scalar>& batches, GradientField<Scalar> gradients, std::size_t begin,
+                     std::size_t end, Positions positions) {
+  using V = typename Lanes::value;
+  const V zero = Lanes::broadcast(Scalar(0)), one = Lanes::broadcast(Scalar(1));
+  for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
+    const LanePositions<Lanes> a = positions.template load<Lanes>(&batches.particle_i[slot], consecutive & 1);
+    const LanePositions<Lanes> b = positions.template load<Lanes>(&batches.particle_j[slot], consecutive & 2);
+    const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+    const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
+    const typename Lanes::mask valid = (Lanes::load(&batches.rest_length[slot]) > zero) & (length > zero);
+    const V inverse = Lanes::select(valid, one / Lanes::select(valid, length, one), zero);
+    Lanes::store(dx * inverse, gradients.x + slot), Lanes::store(dy * inverse, gradients.y + slot);
+    Lanes::store(dz * inverse, gradients.z + slot);
+  }
+}
+
+/// The rattle rule's position correction of one block: u with Δx_i = −s_i·u, Δx_j = +s_j·u.
+/// SHAKE (Ryckaert et al. 1977) moves along the start gradient n₀ by the Newton step of
+/// C(μ) = |d + μ(w_i + w_j)n₀| − L, whose slope is (w_i + w_j)·n·n₀:
+///   u = ω·C/(n·n₀)·n₀ = ω·C·|d|/(d·n₀)·n₀;
+/// the pbd fallback moves along the current gradient, u = ω·C/|d|·d. A slot whose n·n₀ is at or
+/// below kStartGradientMinimumCosine falls back, and its n₀ is zeroed so it stays pbd for the
+/// rest of the substep (zero-length joints, stored with n₀ = 0, are pbd by construction: their
+/// constraint is linear, so both rules move them alike). Returns the largest |u|·max(s_i, s_j).
+template <typename Lanes, typename Scalar>
+struct StartGradientCorrection {
+  using V = typename Lanes::value;
+  V x, y, z, magnitude;
+
+  StartGradientCorrection(const ConstraintBatches<Scalar>& batches, GradientField<Scalar> gradients, std::size_t slot,
+                          const LanePositions<Lanes>& a, const LanePositions<Lanes>& b, V omega) {
+    const V zero = Lanes::broadcast(Scalar(0)), one = Lanes::broadcast(Scalar(1));
+    const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+    const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
+    const V error = omega * (length - Lanes::load(&batches.rest_length[slot]));
+    const V gx = Lanes::load(gradients.x + slot), gy = Lanes::load(gradients.y + slot), gz = Lanes::load(gradients.z + slot);
+    const V along = dx * gx + dy * gy + dz * gz;  // |d|·(n·n₀)
+    const typename Lanes::mask from_start = along > Lanes::broadcast(Scalar(kStartGradientMinimumCosine)) * length;
+    // One division for both scales: q = ω·C/(|d|·a), a = d·n₀ (SHAKE) or 1 (fallback), so that
+    // ω·C·|d|/(d·n₀) = q·|d|² and ω·C/|d| = q. Coincident ends (and padding slots) have no
+    // current direction: the fallback moves nowhere.
+    const V quotient = Lanes::if_positive(length, error / (length * Lanes::select(from_start, along, one)));
+    const V start_scale = quotient * length * length, pbd_scale = quotient;
+    x = Lanes::select(from_start, start_scale * gx, pbd_scale * dx);
+    y = Lanes::select(from_start, start_scale * gy, pbd_scale * dy);
+    z = Lanes::select(from_start, start_scale * gz, pbd_scale * dz);
+    magnitude = Lanes::if_positive(length, Lanes::abs(Lanes::select(from_start, start_scale, error)));
+    const typename Lanes::mask fallback = (!from_start) & (gx * gx + gy * gy + gz * gz > zero);
+    if (Lanes::any(fallback)) {
+      Lanes::store(Lanes::select(fallback, zero, gx), gradients.x + slot);
+      Lanes::store(Lanes::select(fallback, zero, gy), gradients.y + slot);
+      Lanes::store(Lanes::select(fallback, zero, gz), gradients.z + slot);
+      gradients.fallbacks->fetch_add(Lanes::count(fallback), std::memory_order_relaxed);
+    }
+  }
+};
+
+/// The rattle rule's velocity correction of one block (the velocity stage of RATTLE, Andersen
+/// 1983): u with Δv_i = −s_i·u, Δv_j = +s_j·u removes the relative velocity along the stored
+/// end-of-substep gradient n, u = (n·(v_i − v_j))·n, so that d/dt |x_i − x_j| = 0; where no
+/// gradient is stored (n = 0: a zero-length joint, or coincident ends) all three rows,
+/// u = v_i − v_j. The weights are the position stage's, so momentum is kept. magnitude: |u|, m/s.
+template <typename Lanes, typename Scalar>
+struct VelocityCorrection {
+  using V = typename Lanes::value;
+  V x, y, z, magnitude;
+
+  VelocityCorrection(const ConstraintBatches<Scalar>& batches, std::size_t slot, const LanePositions<Lanes>& a,
+                     const LanePositions<Lanes>& b) {
+    const V rx = a.x - b.x, ry = a.y - b.y, rz = a.z - b.z;
+    const V gx = Lanes::load(&batches.gradient_x[slot]), gy = Lanes::load(&batches.gradient_y[slot]),
+            gz = Lanes::load(&batches.gradient_z[slot]);
+    const V normal = gx * rx + gy * ry + gz * rz;
+    const typename Lanes::mask point = !(gx * gx + gy * gy + gz * gz > Lanes::broadcast(Scalar(0)));
+    x = Lanes::select(point, rx, normal * gx), y = Lanes::select(point, ry, normal * gy), z = Lanes::select(point, rz, normal * gz);
+    magnitude = Lanes::sqrt(x * x + y * y + z * z);
+  }
+};
+
+/// Gauss-Seidel over slots [begin, end) (whole blocks of one colour) with a correction kernel
+/// (StartGradientCorrection on positions, VelocityCorrection on velocities); `make(slot, a, b)`
+/// builds it. Returns the largest particle displacement (m) or velocity change (m/s).
+template <typename Lanes, typename Positions, typename Scalar, typename Make>
+Scalar project_blocks_with(const ConstraintBatches<Scalar>& batches, std::size_t begin, std::size_t end,
+                           Positions positions, Make&& make) {
+  using V = typename Lanes::value;
+  V largest = Lanes::broadcast(Scalar(0));
+  for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
+    const auto* i = &batches.particle_i[slot];
+    const auto* j = &batches.particle_j[slot];
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
+    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
+    LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
+    LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
+    const auto u = make(slot, a, b);
+    const V s_i = Lanes::load(&batches.share_i[slot]), s_j = Lanes::broadcast(Scalar(1)) - s_i;  // one field less to stream
+    a.x = a.x - s_i * u.x, a.y = a.y - s_i * u.y, a.z = a.z - s_i * u.z;
+    b.x = b.x + s_j * u.x, b.y = b.y + s_j * u.y, b.z = b.z + s_j * u.z;
+    positions.template store<Lanes>(i, i_consecutive, a), positions.template store<Lanes>(j, j_consecutive, b);
+    largest = Lanes::max(largest, u.magnitude * Lanes::max(s_i, s_j));
+  }
+  return Lanes::reduce_max(largest);
+}
+
+/// Jacobi with a correction kernel: adds the corrections of slots [begin, end), computed from
+/// the unchanged positions (or velocities), to the per-particle sums (as accumulate_blocks).
+template <typename Lanes, typename Positions, typename Scalar, typename Make>
+void accumulate_blocks_with(const ConstraintBatches<Scalar>& batches, std::size_t begin, std::size_t end,
+                            Positions positions, CorrectionSums<Scalar> sums, Make&& make) {
+  using V = typename Lanes::value;
+  for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
+    const auto* i = &batches.particle_i[slot];
+    const auto* j = &batches.particle_j[slot];
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
+    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
+    const LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
+    const LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
+    const auto u = make(slot, a, b);
+    const V s_i = Lanes::load(&batches.share_i[slot]), s_j = Lanes::broadcast(Scalar(1)) - s_i;
+    LanePositions<Lanes> sum_i = sums.template load<Lanes>(i, i_consecutive);
+    LanePositions<Lanes> sum_j = sums.template load<Lanes>(j, j_consecutive);
+    sum_i.x = sum_i.x - s_i * u.x, sum_i.y = sum_i.y - s_i * u.y, sum_i.z = sum_i.z - s_i * u.z;
+    sum_j.x = sum_j.x + s_j * u.x, sum_j.y = sum_j.y + s_j * u.y, sum_j.z = sum_j.z + s_j * u.z;
     sums.template store<Lanes>(i, i_consecutive, sum_i), sums.template store<Lanes>(j, j_consecutive, sum_j);
   }
 }

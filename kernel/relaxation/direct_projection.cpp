@@ -59,6 +59,22 @@ std::uint32_t island_of_particle(const VerletState<Scalar>& state, std::uint32_t
   return static_cast<std::uint32_t>(it - state.islands.begin());
 }
 
+// The direction a distance constraint's rows use in this Newton step: its start gradient under
+// the rattle rule (SHAKE's linearization, fixed for the substep) while the current direction n
+// stays within kStartGradientMinimumCosine of it, else — the pbd fallback, counted once a
+// substep — n itself.
+template <typename Scalar>
+const Vector3s<Scalar>& linearization(VerletState<Scalar>& state, std::size_t c) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  if (!uses_rattle(state)) return direct.direction[c];
+  Vector3s<Scalar>& start = state.plan.constraint_gradient[c];
+  if (start.squaredNorm() > Scalar(0) && !(direct.direction[c].dot(start) > Scalar(kStartGradientMinimumCosine))) {
+    start.setZero();
+    state.plan.fallbacks.value.fetch_add(1, std::memory_order_relaxed);
+  }
+  return start.squaredNorm() > Scalar(0) ? start : direct.direction[c];
+}
+
 }  // namespace
 
 template <typename Scalar>
@@ -113,7 +129,9 @@ void begin_direct_projection(VerletState<Scalar>& state, double dt) {
   const auto& components = direct.elimination.ordering().components;
   const auto& order = direct.elimination.ordering().order;
   const auto body_count = direct.elimination.body_count();
-  const auto compliance = static_cast<Scalar>(state.options.compliance / (dt * dt));
+  // α̃ = α/Δt² (XPBD). Under the rattle rule the position stage carries a force with velocity
+  // Verlet's weight Δt²/2, so its compliance is 2α/Δt²: the same static stretch C = α·F.
+  const auto compliance = static_cast<Scalar>((uses_rattle(state) ? 2 : 1) * state.options.compliance / (dt * dt));
   const bool warm = state.options.warm_start && direct.multiplier_time_step > 0;
   const auto rescale = static_cast<Scalar>(warm ? (dt / direct.multiplier_time_step) * (dt / direct.multiplier_time_step) : 0.0);
   const auto visit = [&](std::size_t c) {
@@ -122,7 +140,7 @@ void begin_direct_projection(VerletState<Scalar>& state, double dt) {
     lambda *= rescale;
     if (!warm) return;
     constraint_value(state, c, direct.direction[c]);
-    apply_impulse(state, c, lambda, direct.direction[c]);
+    apply_impulse(state, c, lambda, is_point_constraint(state, c) ? direct.direction[c] : linearization(state, c));
   };
   for (const std::uint32_t island : state.awake_islands) {
     for (const std::uint32_t k : direct.island_components.row(island)) {
@@ -135,8 +153,16 @@ void begin_direct_projection(VerletState<Scalar>& state, double dt) {
   direct.multiplier_time_step = dt;
 }
 
-template <typename Scalar>
-double direct_projection_step(VerletState<Scalar>& state) {
+namespace {
+
+// Solves one system [M Jᵀ; J −α̃] over the awake islands' trees and hands each body's solution to
+// `body(p, Δ)` (the particle's correction) and each constraint's to `row(c, −Δλ)`. `prepare(c)`
+// gives a constraint's right-hand side and refreshes the direction `direction(c)` its rows use;
+// `compliance(c)` is its α̃. Then `loop(c)` runs on the loop-closing constraints. Returns the
+// largest |Δ|.
+template <typename Scalar, typename Prepare, typename Direction, typename Compliance, typename Body, typename Row, typename Loop>
+double eliminate_awake(VerletState<Scalar>& state, Prepare&& prepare, Direction&& direction, Compliance&& compliance,
+                       Body&& body, Row&& row, Loop&& loop) {
   DirectProjection<Scalar>& direct = state.plan.direct;
   TreeElimination<Scalar, 3>& elimination = direct.elimination;
   const auto& components = elimination.ordering().components;
@@ -146,11 +172,11 @@ double direct_projection_step(VerletState<Scalar>& state) {
   using Matrix3 = Eigen::Matrix<Scalar, 3, 3>;
   // J's block of constraint c on a body: ±I for a zero-length joint, ±nᵀ (first row) for a
   // distance constraint; + at particle i.
-  const auto edge = [&](std::size_t c, std::int32_t body) -> Matrix3 {
-    const Scalar sign = direct.body_of_particle[constraints.particle_i[c]] == body ? Scalar(1) : Scalar(-1);
+  const auto edge = [&](std::size_t c, std::int32_t node) -> Matrix3 {
+    const Scalar sign = direct.body_of_particle[constraints.particle_i[c]] == node ? Scalar(1) : Scalar(-1);
     if (is_point_constraint(state, c)) return sign * Matrix3::Identity();
     Matrix3 block = Matrix3::Zero();
-    block.row(0) = sign * direct.direction[c].transpose();
+    block.row(0) = sign * direction(c).transpose();
     return block;
   };
   double largest = 0;
@@ -158,7 +184,7 @@ double direct_projection_step(VerletState<Scalar>& state) {
   for (const std::uint32_t island : state.awake_islands) {
     for (const std::uint32_t k : direct.island_components.row(island)) {
       const std::uint32_t begin = components[k].begin, end = components[k].end;
-      // M = 1/w per particle; the right-hand side −C − α̃·λ per constraint, α̃ on its diagonal.
+      // M = 1/w per particle; the right-hand side per constraint, α̃ on its diagonal.
       for (std::uint32_t n = begin; n < end; ++n) {
         const std::int32_t node = order[n];
         if (node < body_count) {
@@ -167,28 +193,24 @@ double direct_projection_step(VerletState<Scalar>& state) {
           continue;
         }
         const auto c = static_cast<std::size_t>(node - body_count);
-        const Scalar compliance = direct.scaled_compliance[c];
-        elimination.diagonal(node) = -compliance * Matrix3::Identity();
-        elimination.work(node) = -constraint_value(state, c, direct.direction[c]) - compliance * direct.multiplier[c];
+        elimination.diagonal(node) = -compliance(c) * Matrix3::Identity();
+        elimination.work(node) = prepare(c);
         ++projected;
       }
       elimination.eliminate(begin, end, edge);
       for (std::uint32_t n = begin; n < end; ++n) {
         const std::int32_t node = order[n];
         if (node < body_count) {
-          const std::uint32_t p = direct.particle_of_body[static_cast<std::size_t>(node)];
           const Vector3s<Scalar>& delta = elimination.work(node);
-          state.particles.set_position(p, state.particles.position(p) + delta);
+          body(direct.particle_of_body[static_cast<std::size_t>(node)], delta);
           largest = std::max(largest, static_cast<double>(delta.norm()));
         } else {
-          const auto c = static_cast<std::size_t>(node - body_count);
-          const int rows = elimination.rows(c);
-          direct.multiplier[c].head(rows) -= elimination.work(node).head(rows);  // Δλ = −μ
+          row(static_cast<std::size_t>(node - body_count), elimination.work(node));
         }
       }
     }
     for (const std::uint32_t c : direct.island_loop_constraints.row(island)) {
-      largest = std::max(largest, static_cast<double>(project_distance_constraint(state.particles, constraints, c, state.options.rule)));
+      largest = std::max(largest, loop(c));
       ++projected;
     }
   }
@@ -196,10 +218,86 @@ double direct_projection_step(VerletState<Scalar>& state) {
   return largest;
 }
 
+}  // namespace
+
+template <typename Scalar>
+double direct_projection_step(VerletState<Scalar>& state) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  auto& particles = state.particles;
+  const bool rattle = uses_rattle(state);
+  std::uint64_t loop_fallbacks = 0;
+  const double largest = eliminate_awake(
+      state,
+      // −C(x) − α̃·λ at the current positions (refreshing n, and the rattle rule's choice of rows).
+      [&](std::size_t c) -> Vector3s<Scalar> {
+        const Vector3s<Scalar> value = constraint_value(state, c, direct.direction[c]);
+        if (rattle && !is_point_constraint(state, c)) linearization(state, c);
+        return -value - direct.scaled_compliance[c] * direct.multiplier[c];
+      },
+      [&](std::size_t c) -> const Vector3s<Scalar>& { return linearization(state, c); },
+      [&](std::size_t c) { return direct.scaled_compliance[c]; },
+      [&](std::uint32_t p, const Vector3s<Scalar>& delta) { particles.set_position(p, particles.position(p) + delta); },
+      [&](std::size_t c, const Vector3s<Scalar>& solution) {
+        const int rows = direct.elimination.rows(c);
+        direct.multiplier[c].head(rows) -= solution.head(rows);  // Δλ = −μ
+      },
+      [&](std::uint32_t c) {
+        return static_cast<double>(rattle ? project_distance_constraint_from_start(particles, state.constraints, c, state.options.rule,
+                                                                                   Scalar(1), state.plan.constraint_gradient[c], loop_fallbacks)
+                                          : project_distance_constraint(particles, state.constraints, c, state.options.rule));
+      });
+  state.plan.fallbacks.value += loop_fallbacks;
+  return largest;
+}
+
+template <typename Scalar>
+double direct_velocity_projection(VerletState<Scalar>& state) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  auto& particles = state.particles;
+  // Rows at the current positions: n for a distance constraint (as stored by
+  // begin_velocity_projection), all three for a zero-length joint; right-hand side −J·v.
+  // Coincident ends have no gradient (0): any unit row keeps the system regular.
+  const auto direction = [&](std::size_t c) -> const Vector3s<Scalar>& {
+    const Vector3s<Scalar>& n = state.plan.constraint_gradient[c];
+    return n.squaredNorm() > Scalar(0) ? n : direct.direction[c];
+  };
+  return eliminate_awake(
+      state,
+      [&](std::size_t c) -> Vector3s<Scalar> {
+        const Vector3s<Scalar> relative =
+            particles.velocity(state.constraints.particle_i[c]) - particles.velocity(state.constraints.particle_j[c]);
+        return is_point_constraint(state, c) ? Vector3s<Scalar>(-relative) : Vector3s<Scalar>(-direction(c).dot(relative), 0, 0);
+      },
+      direction,
+      [](std::size_t) { return Scalar(0); },
+      [&](std::uint32_t p, const Vector3s<Scalar>& delta) { particles.set_velocity(p, particles.velocity(p) + delta); },
+      [](std::size_t, const Vector3s<Scalar>&) {},
+      [&](std::uint32_t c) { return static_cast<double>(project_distance_velocity(particles, state.constraints, c, state.options.rule)); });
+}
+
+template <typename Scalar>
+void kick_compliant_constraints(VerletState<Scalar>& state, double dt) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  auto& particles = state.particles;
+  const auto inverse_step = static_cast<Scalar>(1.0 / dt);
+  for (const std::uint32_t island : state.awake_islands) {
+    for (std::uint32_t c = state.islands[island].constraint_begin; c < state.islands[island].constraint_end; ++c) {
+      constraint_value(state, c, direct.direction[c]);  // n at the end of the substep
+      const Vector3s<Scalar> impulse = inverse_step * direct.multiplier[c];
+      const Vector3s<Scalar> along = is_point_constraint(state, c) ? impulse : Vector3s<Scalar>(direct.direction[c] * impulse.x());
+      const std::uint32_t i = state.constraints.particle_i[c], j = state.constraints.particle_j[c];
+      particles.set_velocity(i, particles.velocity(i) + correction_weight(state, i) * along);
+      particles.set_velocity(j, particles.velocity(j) - correction_weight(state, j) * along);
+    }
+  }
+}
+
 #define LIMBER_INSTANTIATE(Scalar)                                              \
   template void prepare_direct_projection<Scalar>(VerletState<Scalar>&);        \
   template void begin_direct_projection<Scalar>(VerletState<Scalar>&, double);  \
-  template double direct_projection_step<Scalar>(VerletState<Scalar>&);
+  template double direct_projection_step<Scalar>(VerletState<Scalar>&);         \
+  template double direct_velocity_projection<Scalar>(VerletState<Scalar>&);      \
+  template void kick_compliant_constraints<Scalar>(VerletState<Scalar>&, double);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -33,10 +33,27 @@ void prepare_direct_projection(VerletState<Scalar>& state);
 template <typename Scalar>
 void begin_direct_projection(VerletState<Scalar>& state, double dt);
 
-/// One Newton step over the awake islands, then the loop-closing constraints. Returns the
-/// largest particle displacement it made, m.
+/// One Newton step over the awake islands, then the loop-closing constraints. Under the rattle
+/// rule the rows are linearized at the substep's start (SHAKE's gradients, held for the
+/// substep: a chord iteration, J₀ W J₀ᵀ Δλ = −C(x), Δx = W J₀ᵀ Δλ), a row falling back to the
+/// current gradient as the sweeps do. Returns the largest particle displacement it made, m.
 template <typename Scalar>
 double direct_projection_step(VerletState<Scalar>& state);
+
+/// The rattle rule's velocity stage, exact: solves J W Jᵀ μ = −J v at the current positions and
+/// sets v += W Jᵀ μ, so every tree constraint's rate is zero after one call; loop-closing
+/// constraints are then projected once each (Gauss-Seidel). Returns the largest |Δv|, m/s.
+template <typename Scalar>
+double direct_velocity_projection(VerletState<Scalar>& state);
+
+/// The rattle rule's velocity stage for compliant constraints (VerletOptions::compliance α > 0),
+/// which are springs rather than rigid rows: instead of a projection of their rate, the second
+/// half kick of velocity Verlet by the force the position stage found, F = 2λ/Δt² (its
+/// compliance is 2α/Δt² under rattle, begin_direct_projection), along each constraint's
+/// gradient at the current positions: Δv_i = +w_i·(λ/Δt)·n, Δv_j = −w_j·(λ/Δt)·n (w the rule's
+/// weight), so a spring holding a weight at rest leaves it at rest. dt: the substep, s.
+template <typename Scalar>
+void kick_compliant_constraints(VerletState<Scalar>& state, double dt);
 
 extern template void prepare_direct_projection<float>(VerletState<float>&);
 extern template void prepare_direct_projection<double>(VerletState<double>&);
@@ -44,5 +61,9 @@ extern template void begin_direct_projection<float>(VerletState<float>&, double)
 extern template void begin_direct_projection<double>(VerletState<double>&, double);
 extern template double direct_projection_step<float>(VerletState<float>&);
 extern template double direct_projection_step<double>(VerletState<double>&);
+extern template double direct_velocity_projection<float>(VerletState<float>&);
+extern template double direct_velocity_projection<double>(VerletState<double>&);
+extern template void kick_compliant_constraints<float>(VerletState<float>&, double);
+extern template void kick_compliant_constraints<double>(VerletState<double>&, double);
 
 }  // namespace limber

@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "kernel/relaxation/batch_projection.hpp"
+#include "kernel/relaxation/coloured_sweep.hpp"
 #include "kernel/relaxation/direct_projection.hpp"
 #include "kernel/relaxation/distance_projection.hpp"
 #include "kernel/relaxation/gauss_seidel.hpp"
@@ -22,11 +23,7 @@
 namespace limber {
 namespace {
 
-// Work handed to a thread at a time: 512 constraint slots (32 AVX-512 float blocks), or a range
-// of particles for Jacobi's apply pass. Large enough to amortize a claim, small enough to
-// balance two threads on a 10^4-link colour.
-constexpr std::size_t kSlotsPerTask = 512;
-constexpr std::size_t kParticlesPerTask = 4096;
+using coloured::kParticlesPerTask;
 // Below this many slots a colour runs on one thread. Measured (README, "The data-oriented core:
 // SIMD, threads, layouts"): handing a
 // stage to two threads costs ~4.6 us (either strategy) and a slot ~0.8 ns, so a colour pays
@@ -95,128 +92,28 @@ void build_batches(VerletState<Scalar>& state, const std::vector<std::uint32_t>&
   plan.built_for = state.awake_generation;
 }
 
-// One stage's work, as the BlockRunner hands it out: tasks of kSlotsPerTask slots of
-// [begin, end), or of particle_tasks.
-template <typename Scalar, typename Lanes, typename Positions>
-struct StageContext {
-  const RelaxationPlan<Scalar>* plan;
-  Positions positions;
-  Scalar over_relaxation;
-  std::size_t begin, end;
-  CorrectionSums<Scalar> sums;
 
-  std::size_t task_count() const { return (end - begin + kSlotsPerTask - 1) / kSlotsPerTask; }
-  std::size_t task_begin(std::size_t task) const { return begin + task * kSlotsPerTask; }
-  std::size_t task_end(std::size_t task) const { return std::min(end, task_begin(task) + kSlotsPerTask); }
-
-  static double project(const void* context, std::size_t task) {
-    const auto& stage = *static_cast<const StageContext*>(context);
-    return project_blocks<Lanes>(stage.plan->batches, stage.task_begin(task), stage.task_end(task), stage.positions,
-                                 stage.over_relaxation);
-  }
-  static double accumulate(const void* context, std::size_t task) {
-    const auto& stage = *static_cast<const StageContext*>(context);
-    accumulate_blocks<Lanes>(stage.plan->batches, stage.task_begin(task), stage.task_end(task), stage.positions,
-                             stage.sums);
-    return 0;
-  }
-  // Jacobi's apply pass over one range of particles: x += ω·(sum)/(count), sum ← 0.
-  static double apply(const void* context, std::size_t task) {
-    const auto& stage = *static_cast<const StageContext*>(context);
-    const RelaxationPlan<Scalar>& plan = *stage.plan;
-    const auto [begin, end] = plan.particle_tasks[task];
-    Scalar largest = 0;
-    std::uint32_t p = begin;
-    if constexpr (std::is_same_v<Positions, SoaPositions<Scalar>> && Lanes::size > 1) {
-      // Consecutive particles in consecutive lanes: the same arithmetic as the loop below.
-      using V = typename Lanes::value;
-      const V omega = Lanes::broadcast(stage.over_relaxation);
-      V lanes_largest = Lanes::broadcast(Scalar(0));
-      const V zero = Lanes::broadcast(Scalar(0));
-      for (; p + Lanes::size <= end; p += Lanes::size) {
-        const V factor = omega * Lanes::load_unaligned(&plan.inverse_count[p]);
-        const V dx = factor * Lanes::load_unaligned(stage.sums.x + p), dy = factor * Lanes::load_unaligned(stage.sums.y + p),
-                dz = factor * Lanes::load_unaligned(stage.sums.z + p);
-        Lanes::store_unaligned(Lanes::load_unaligned(stage.positions.x + p) + dx, stage.positions.x + p);
-        Lanes::store_unaligned(Lanes::load_unaligned(stage.positions.y + p) + dy, stage.positions.y + p);
-        Lanes::store_unaligned(Lanes::load_unaligned(stage.positions.z + p) + dz, stage.positions.z + p);
-        Lanes::store_unaligned(zero, stage.sums.x + p), Lanes::store_unaligned(zero, stage.sums.y + p);
-        Lanes::store_unaligned(zero, stage.sums.z + p);
-        lanes_largest = Lanes::max(lanes_largest, Lanes::sqrt(dx * dx + dy * dy + dz * dz));
-      }
-      largest = Lanes::reduce_max(lanes_largest);
-    }
-    for (; p < end; ++p) {
-      const Scalar factor = stage.over_relaxation * plan.inverse_count[p];
-      const Scalar dx = factor * stage.sums.x[p], dy = factor * stage.sums.y[p], dz = factor * stage.sums.z[p];
-      const auto offset = Positions::offset(p);
-      stage.positions.x[offset] += dx, stage.positions.y[offset] += dy, stage.positions.z[offset] += dz;
-      stage.sums.x[p] = stage.sums.y[p] = stage.sums.z[p] = 0;
-      largest = std::max(largest, std::sqrt(dx * dx + dy * dy + dz * dz));
-    }
-    return largest;
-  }
-};
-
-template <typename Scalar>
-double run_stage(RelaxationPlan<Scalar>& plan, std::size_t slots, std::size_t tasks, BlockRunner::BlockFunction function,
-                 const void* context) {
-  if (slots >= plan.parallel_minimum_slots) return plan.runner->run(tasks, function, context);
-  double largest = 0;
-  for (std::size_t task = 0; task < tasks; ++task) largest = std::max(largest, function(context, task));
-  return largest;
-}
-
-template <typename Scalar, typename Lanes, typename Positions>
-double coloured_sweep(VerletState<Scalar>& state, Positions positions, Scalar over_relaxation) {
-  RelaxationPlan<Scalar>& plan = state.plan;
-  const ConstraintBatches<Scalar>& batches = plan.batches;
-  using Simd = StageContext<Scalar, Lanes, Positions>;
-  using Scalar1 = StageContext<Scalar, ScalarLanes<Scalar>, Positions>;
-  const CorrectionSums<Scalar> sums{plan.sum_x.data(), plan.sum_y.data(), plan.sum_z.data()};
-  const std::size_t colours = batches.colour_count();
-  const Scalar1 overflow{&plan, positions, over_relaxation, batches.overflow_begin(), batches.slot_count(), sums};
-  double largest = 0;
-
-  if (state.options.solver == RelaxationSolver::jacobi) {
-    for (std::size_t k = 0; k < colours; ++k) {
-      const Simd colour{&plan, positions, over_relaxation, batches.colour_begin[k], batches.colour_begin[k + 1], sums};
-      run_stage(plan, colour.end - colour.begin, colour.task_count(), &Simd::accumulate, &colour);
-    }
-    for (std::size_t task = 0; task < overflow.task_count(); ++task) Scalar1::accumulate(&overflow, task);
-    const Simd apply{&plan, positions, over_relaxation, 0, 0, sums};
-    return run_stage(plan, batches.slot_count(), plan.particle_tasks.size(), &Simd::apply, &apply);
-  }
-
-  const auto project_overflow = [&] {
-    for (std::size_t task = 0; task < overflow.task_count(); ++task) {
-      largest = std::max(largest, Scalar1::project(&overflow, task));
-    }
-  };
-  const bool pinned_first = state.options.direction == SweepDirection::pinned_first;
-  if (pinned_first) project_overflow();
-  for (std::size_t n = 0; n < colours; ++n) {
-    const std::size_t k = pinned_first ? n : colours - 1 - n;
-    const Simd colour{&plan, positions, over_relaxation, batches.colour_begin[k], batches.colour_begin[k + 1], sums};
-    largest = std::max(largest, run_stage(plan, colour.end - colour.begin, colour.task_count(), &Simd::project, &colour));
-  }
-  if (!pinned_first) project_overflow();
-  return largest;
-}
-
-template <typename Scalar, typename Lanes>
+// A position sweep of `kKernel` over the layout relaxation runs on.
+template <typename Scalar, typename Lanes, coloured::Kernel kKernel>
 double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
   RelaxationPlan<Scalar>& plan = state.plan;
   switch (plan.layout) {
     case ParticleLayout::aos:
-      return coloured_sweep<Scalar, Lanes>(state, InterleavedPositions<Scalar, 1>(plan.array_of_structures), over_relaxation);
+      return coloured::coloured_sweep<Scalar, Lanes, kKernel>(state, InterleavedPositions<Scalar, 1>(plan.array_of_structures),
+                                                              over_relaxation);
     case ParticleLayout::aosoa:
-      return coloured_sweep<Scalar, Lanes>(
+      return coloured::coloured_sweep<Scalar, Lanes, kKernel>(
           state, InterleavedPositions<Scalar, kLanesPerLine<Scalar>>(plan.blocked_structures), over_relaxation);
     case ParticleLayout::soa:
     case ParticleLayout::automatic: break;  // resolved by prepare_relaxation_plan
   }
-  return coloured_sweep<Scalar, Lanes>(state, SoaPositions<Scalar>(state.particles), over_relaxation);
+  return coloured::coloured_sweep<Scalar, Lanes, kKernel>(state, SoaPositions<Scalar>(state.particles), over_relaxation);
+}
+
+template <typename Scalar, coloured::Kernel kKernel>
+double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
+  return state.options.simd ? coloured_sweep<Scalar, SimdLanes<Scalar>, kKernel>(state, over_relaxation)
+                            : coloured_sweep<Scalar, ScalarLanes<Scalar>, kKernel>(state, over_relaxation);
 }
 
 // Applies `copy(store)` to the interleaved store in use, if any.
@@ -281,6 +178,48 @@ void prepare_long_range_attachments(VerletState<Scalar>& state) {
   }
 }
 
+// Wakes the helper threads, when some colour is big enough to be split across them.
+template <typename Scalar>
+void begin_helpers(RelaxationPlan<Scalar>& plan) {
+  bool parallel = false;
+  for (std::size_t k = 0; k < plan.batches.colour_count(); ++k) {
+    parallel = parallel || plan.batches.colour_begin[k + 1] - plan.batches.colour_begin[k] >= plan.parallel_minimum_slots;
+  }
+  if (parallel) plan.runner->begin();
+}
+
+// The previous positions and the velocities as the coloured kernels read them (SoA).
+template <typename Scalar>
+SoaPositions<Scalar> previous_positions(ParticleBuffer<Scalar>& particles) {
+  return {particles.previous_x.data(), particles.previous_y.data(), particles.previous_z.data()};
+}
+template <typename Scalar>
+SoaPositions<Scalar> velocities(ParticleBuffer<Scalar>& particles) {
+  return {particles.velocity_x.data(), particles.velocity_y.data(), particles.velocity_z.data()};
+}
+
+// Every awake constraint's gradient at `positions` (the previous positions: the substep's start;
+// or the current ones), into the batches or, for the sequential sweep and the direct solver,
+// into plan.constraint_gradient.
+template <typename Scalar>
+void store_gradients(VerletState<Scalar>& state, SoaPositions<Scalar> positions) {
+  if (state.options.order == SweepOrder::sequential || state.options.solver == RelaxationSolver::direct) {
+    const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+    const auto at = [&](std::uint32_t p) { return Eigen::Matrix<Scalar, 3, 1>(positions.x[p], positions.y[p], positions.z[p]); };
+    for (const std::uint32_t k : state.awake_islands) {
+      for (std::uint32_t c = state.islands[k].constraint_begin; c < state.islands[k].constraint_end; ++c) {
+        state.plan.constraint_gradient[c] = constraint_gradient(at(constraints.particle_i[c]), at(constraints.particle_j[c]), constraints.rest_length[c]);
+      }
+    }
+    return;
+  }
+  if (state.options.simd) {
+    coloured::store_all_gradients<Scalar, SimdLanes<Scalar>>(state, positions);
+  } else {
+    coloured::store_all_gradients<Scalar, ScalarLanes<Scalar>>(state, positions);
+  }
+}
+
 }  // namespace
 
 template <typename Scalar>
@@ -315,6 +254,10 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
       throw std::invalid_argument("options: long-range attachments work on the SoA layout");
     }
     prepare_long_range_attachments(state);
+  }
+  // The rattle rule's start gradients, per constraint, where no batches hold them.
+  if (uses_rattle(state) && (options.solver == RelaxationSolver::direct || options.order == SweepOrder::sequential)) {
+    state.plan.constraint_gradient.assign(state.constraints.size(), Eigen::Matrix<Scalar, 3, 1>::Zero());
   }
   if (options.solver == RelaxationSolver::direct) {
     if (options.layout == ParticleLayout::aos || options.layout == ParticleLayout::aosoa || options.order == SweepOrder::sequential) {
@@ -369,25 +312,44 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   });
 }
 
+
 template <typename Scalar>
 void begin_relaxation(VerletState<Scalar>& state, double dt) {
   RelaxationPlan<Scalar>& plan = state.plan;
   plan.awake_constraints = 0;
   for (std::uint32_t k : state.awake_islands) plan.awake_constraints += state.islands[k].constraint_end - state.islands[k].constraint_begin;
-  if (state.options.solver == RelaxationSolver::direct) return begin_direct_projection(state, dt);
-  if (state.options.order == SweepOrder::sequential) return;
-  if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
-  with_interleaved(state, [&](auto& store) {
-    for (std::uint32_t k : state.awake_islands) {
-      store.copy_from(state.particles, state.islands[k].particle_begin, state.islands[k].particle_end);
-    }
-  });
-  // Helpers only when some colour is big enough to be split.
-  bool parallel = false;
-  for (std::size_t k = 0; k < plan.batches.colour_count(); ++k) {
-    parallel = parallel || plan.batches.colour_begin[k + 1] - plan.batches.colour_begin[k] >= plan.parallel_minimum_slots;
+  if (state.options.solver != RelaxationSolver::direct && state.options.order != SweepOrder::sequential) {
+    if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
+    with_interleaved(state, [&](auto& store) {
+      for (std::uint32_t k : state.awake_islands) {
+        store.copy_from(state.particles, state.islands[k].particle_begin, state.islands[k].particle_end);
+      }
+    });
+    begin_helpers(plan);
   }
-  if (parallel) plan.runner->begin();
+  if (uses_rattle(state)) store_gradients(state, previous_positions(state.particles));
+  if (state.options.solver == RelaxationSolver::direct) begin_direct_projection(state, dt);
+}
+
+template <typename Scalar>
+void begin_velocity_projection(VerletState<Scalar>& state) {
+  if (state.options.solver != RelaxationSolver::direct && state.options.order != SweepOrder::sequential) begin_helpers(state.plan);
+  store_gradients(state, SoaPositions<Scalar>(state.particles));
+}
+
+template <typename Scalar>
+double velocity_sweep(VerletState<Scalar>& state) {
+  if (state.options.solver == RelaxationSolver::direct) return direct_velocity_projection(state);
+  state.counters.constraint_projections += state.plan.awake_constraints;
+  if (state.options.order == SweepOrder::sequential) return gauss_seidel_velocity_sweep(state);
+  return state.options.simd
+      ? coloured::coloured_sweep<Scalar, SimdLanes<Scalar>, coloured::Kernel::velocity>(state, velocities(state.particles), Scalar(1))
+      : coloured::coloured_sweep<Scalar, ScalarLanes<Scalar>, coloured::Kernel::velocity>(state, velocities(state.particles), Scalar(1));
+}
+
+template <typename Scalar>
+void end_velocity_projection(VerletState<Scalar>& state) {
+  if (state.options.solver != RelaxationSolver::direct && state.options.order != SweepOrder::sequential) state.plan.runner->end();
 }
 
 template <typename Scalar>
@@ -396,8 +358,8 @@ double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
   state.counters.constraint_projections += state.plan.awake_constraints;
   if (state.options.order == SweepOrder::sequential) return gauss_seidel_sweep(state, over_relaxation);
   const auto omega = static_cast<Scalar>(over_relaxation);
-  return state.options.simd ? coloured_sweep<Scalar, SimdLanes<Scalar>>(state, omega)
-                            : coloured_sweep<Scalar, ScalarLanes<Scalar>>(state, omega);
+  return uses_rattle(state) ? coloured_sweep<Scalar, coloured::Kernel::start_gradient>(state, omega)
+                                     : coloured_sweep<Scalar, coloured::Kernel::pbd>(state, omega);
 }
 
 template <typename Scalar>
@@ -432,7 +394,10 @@ void contact_particles_from_buffer(VerletState<Scalar>& state) {
   template void end_relaxation<Scalar>(VerletState<Scalar>&);                       \
   template void contact_particles_to_buffer<Scalar>(VerletState<Scalar>&);          \
   template void contact_particles_from_buffer<Scalar>(VerletState<Scalar>&);        \
-  template double project_long_range_attachments<Scalar>(VerletState<Scalar>&);
+  template double project_long_range_attachments<Scalar>(VerletState<Scalar>&);     \
+  template void begin_velocity_projection<Scalar>(VerletState<Scalar>&);           \
+  template double velocity_sweep<Scalar>(VerletState<Scalar>&);                     \
+  template void end_velocity_projection<Scalar>(VerletState<Scalar>&);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -9,6 +9,10 @@
 // overflow (constraints at pinned particles, and at hubs the colouring could not place) runs
 // scalar, before the colours (SweepDirection::pinned_first) or after them in reverse.
 //
+// Rattle (ProjectionRule::rattle): the same sweeps project along each constraint's gradient at
+// the substep's start (SHAKE), and the velocity stage sweeps the velocities onto the tangent
+// space (RATTLE); kernel/relaxation/README.md derives both.
+//
 // Jacobi: every constraint computes its correction from the positions at the start of the
 // sweep; a particle's corrections are summed (colour by colour, so without races or atomics)
 // and it moves by ω·(sum)/(its number of constraints) — the averaged Jacobi of Müller et al.,
@@ -26,17 +30,31 @@ namespace limber {
 template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state);
 
-/// Starts relaxation for a step of dt seconds: rebuilds the batches if islands slept or woke
-/// since the last step (O(awake constraints), no re-colouring, no allocation), copies the awake
-/// particles into the interleaved layout if one is used, and starts the helper threads; for the
-/// direct solver, applies its warm start.
+/// Starts relaxation for a (sub)step of dt seconds: rebuilds the batches if islands slept or
+/// woke since the last step (O(awake constraints), no re-colouring, no allocation), copies the
+/// awake particles into the interleaved layout if one is used, and starts the helper threads;
+/// under the rattle rule, stores each constraint's gradient at the substep's start (the previous
+/// positions); for the direct solver, applies its warm start.
 template <typename Scalar>
 void begin_relaxation(VerletState<Scalar>& state, double dt);
 
 /// One sweep with relaxation factor ω (1: plain projections), or one Newton step of the direct
-/// solver (which ignores ω). Returns the largest particle displacement it made, m.
+/// solver (which ignores ω); along the current gradients (pbd) or the start gradients (rattle).
+/// Returns the largest particle displacement it made, m.
 template <typename Scalar>
 double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation);
+
+/// The rattle rule's velocity stage (RATTLE, Andersen 1983), after end_relaxation: stores each
+/// awake constraint's gradient at the current positions and wakes the helpers; each
+/// velocity_sweep then projects the velocities onto the constraints' tangent space
+/// (Gauss-Seidel or Jacobi by colour, or sequential; the direct solver solves the projection
+/// exactly, J W Jᵀ μ = −J v, in one call) and returns the largest velocity change, m/s.
+template <typename Scalar>
+void begin_velocity_projection(VerletState<Scalar>& state);
+template <typename Scalar>
+double velocity_sweep(VerletState<Scalar>& state);
+template <typename Scalar>
+void end_velocity_projection(VerletState<Scalar>& state);
 
 /// Ends relaxation for one step: stops the helpers and copies positions back from the
 /// interleaved layout.

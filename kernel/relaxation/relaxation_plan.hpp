@@ -4,6 +4,7 @@
 // elimination tree and multipliers (DirectProjection).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -35,6 +36,18 @@ class RunnerHandle {
 
  private:
   std::unique_ptr<BlockRunner> runner_;
+};
+
+/// A counter that threads add to (relaxed: only the total is read, after the stage) and that a
+/// copied state copies.
+struct SharedCounter {
+  std::atomic<std::uint64_t> value{0};
+  SharedCounter() = default;
+  SharedCounter(const SharedCounter& other) : value(other.value.load()) {}
+  SharedCounter& operator=(const SharedCounter& other) {
+    value.store(other.value.load());
+    return *this;
+  }
 };
 
 /// The direct solver's structure and multipliers (kernel/relaxation/direct_projection.hpp).
@@ -85,6 +98,12 @@ struct RelaxationPlan {
   /// particle it hangs from (the null particle: none) and the rest length of the path, m.
   std::vector<std::uint32_t> attachment_pin;
   std::vector<Scalar> attachment_length;
+  /// The rattle rule (ProjectionRule::rattle): constraints whose position projection fell back
+  /// to pbd since the step began (batch_projection.hpp, kStartGradientMinimumCosine). The
+  /// coloured sweeps keep each slot's start gradient in the batches; the sequential sweep and the
+  /// direct solver keep it here, per constraint (unit, or 0: a zero-length joint, or fallen back).
+  SharedCounter fallbacks;
+  std::vector<Eigen::Matrix<Scalar, 3, 1>> constraint_gradient;
 };
 
 }  // namespace limber

@@ -171,7 +171,7 @@ Settings read_settings(const Object& object) {
 
   if (const Json* json = object.find("relaxation")) {
     const Object relaxation(*json, object.path("relaxation"));
-    relaxation.allow_only({"iterations", "tolerance", "budget_us", "over_relaxation"});
+    relaxation.allow_only({"iterations", "tolerance", "budget_us", "over_relaxation", "projection", "substeps"});
     RelaxationSettings& target = settings.relaxation;
     if (relaxation.find("iterations")) target.iterations = relaxation.integer("iterations");
     require_at_least(target.iterations, 1, relaxation.path("iterations"));
@@ -182,6 +182,19 @@ Settings read_settings(const Object& object) {
     relaxation.optional("over_relaxation", target.over_relaxation);
     require_in_range(target.over_relaxation, 0, 2, relaxation.path("over_relaxation"),
                      /*low_open=*/true, /*high_open=*/true);
+    if (relaxation.find("projection")) {
+      const std::string projection = relaxation.string("projection");
+      if (projection == "pbd") {
+        target.projection = ProjectionRule::pbd;
+      } else if (projection == "rattle") {
+        target.projection = ProjectionRule::rattle;
+      } else {
+        fail(relaxation.path("projection"), "must be \"pbd\" or \"rattle\", got " + in_quotes(projection));
+      }
+    }
+    if (relaxation.find("substeps")) target.substeps = relaxation.integer("substeps");
+    require_at_least(target.substeps, 1, relaxation.path("substeps"));
+    require_at_most(target.substeps, kMaxSubsteps, relaxation.path("substeps"));
   }
 
   if (const Json* json = object.find("sleep")) {
@@ -238,8 +251,10 @@ Settings read_settings(const Object& object) {
         settings.verlet.limb_masses = LimbMasses::ends;
       } else if (limb_masses == "inertia") {
         settings.verlet.limb_masses = LimbMasses::inertia;
+      } else if (limb_masses == "lumps") {
+        settings.verlet.limb_masses = LimbMasses::lumps;
       } else {
-        fail(verlet.path("limb_masses"), "must be \"ends\" or \"inertia\", got " + in_quotes(limb_masses));
+        fail(verlet.path("limb_masses"), "must be \"ends\", \"inertia\" or \"lumps\", got " + in_quotes(limb_masses));
       }
     }
     if (verlet.find("drag_factor")) {

@@ -19,7 +19,10 @@
 //       "iterations": 100,                     (100) integer ≥ 1
 //       "tolerance": 0,                        (0) m, ≥ 0; 0 disables
 //       "budget_us": 0,                        (0) µs, ≥ 0; 0 disables
-//       "over_relaxation": 1 },                (1) in (0, 2): successive over-relaxation factor
+//       "over_relaxation": 1,                  (1) in (0, 2): successive over-relaxation factor
+//       "projection": "pbd",                   ("pbd": end-of-step gradient, the thesis's) or "rattle":
+//                                              start-of-step gradient and a velocity stage (SHAKE/RATTLE)
+//       "substeps": 1 },                       (1) integer in [1, 10000]: each step runs as this many
 //     "sleep": {                               optional; each field optional
 //       "enabled": true,                       (true)
 //       "start_asleep": false,                 (false)
@@ -27,8 +30,10 @@
 //       "time_to_sleep": 0.5 },                (0.5) s, ≥ 0
 //     "verlet": {                              optional; each field optional
 //       "joints": "zero_length_constraint",    ("zero_length_constraint") or "shared_particle"
-//       "limb_masses": "ends",                 ("ends": half each end, the thesis) or "inertia": three
-//                                              particles keeping mass, centre of mass, transverse inertia
+//       "limb_masses": "ends",                 ("ends": half each end, the thesis), "inertia": three
+//                                              particles keeping mass, centre of mass, transverse inertia,
+//                                              or "lumps": each point mass (on the axis) to head and tail
+//                                              by the lever rule
 //       "drag_factor": 1.99 } },               (absent) in (1, 2]
 //   "ground": { "height": 0, "restitution": 0.1, "friction": 0.6 },      optional object; all fields required;
 //                                              restitution in [0, 1], friction ≥ 0

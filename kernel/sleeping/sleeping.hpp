@@ -3,7 +3,8 @@
 // An island is a connected set of particles stored contiguously (compile.cpp), so every pass
 // walks state.awake_islands — a few index ranges — and a sleeping island is simply absent. An
 // island falls asleep once all its particles have stayed below Settings::sleep.speed_threshold
-// for sleep.time_to_sleep; its velocity is then zeroed (x_previous = x), so it wakes at rest.
+// for sleep.time_to_sleep; its velocity is then zeroed (x_previous = x, and v = 0 under the
+// rattle rule), so it wakes at rest.
 #pragma once
 
 #include <cmath>
@@ -44,13 +45,16 @@ StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
   const double threshold2 = state.settings.sleep.speed_threshold * state.settings.sleep.speed_threshold;
   StepStatus status = StepStatus::ok;
   bool changed = false;
+  const bool rattle = uses_rattle(state);
   for (std::uint32_t k : state.awake_islands) {
     Island& island = state.islands[k];
     double largest_step2 = 0;
     for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
-      const double dx = x.position_x[p] - x.previous_x[p];
-      const double dy = x.position_y[p] - x.previous_y[p];
-      const double dz = x.position_z[p] - x.previous_z[p];
+      // The step's displacement (pbd), or v·Δt (rattle: v comes from the positions, so a
+      // non-finite position makes it non-finite too).
+      const double dx = rattle ? x.velocity_x[p] * dt : x.position_x[p] - x.previous_x[p];
+      const double dy = rattle ? x.velocity_y[p] * dt : x.position_y[p] - x.previous_y[p];
+      const double dz = rattle ? x.velocity_z[p] * dt : x.position_z[p] - x.previous_z[p];
       const double step2 = dx * dx + dy * dy + dz * dz;
       largest_step2 = step2 > largest_step2 || std::isnan(step2) ? step2 : largest_step2;
     }
@@ -67,6 +71,7 @@ StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
       changed = true;
       for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
         state.particles.set_previous(p, state.particles.position(p));
+        state.particles.set_velocity(p, ParticleBuffer<Scalar>::Vector3::Zero());
       }
     }
   }

@@ -23,6 +23,8 @@ Model configure(const Model& scene, const Method& method) {
     model.settings.relaxation.iterations = method.sweeps;
     model.settings.relaxation.over_relaxation = method.over_relaxation;
     model.settings.relaxation.tolerance = method.relaxation_tolerance;
+    model.settings.relaxation.projection = method.projection;
+    model.settings.relaxation.substeps = method.substeps;
     if (method.limb_masses) model.settings.verlet.limb_masses = *method.limb_masses;
     if (method.joints) model.settings.verlet.joints = *method.joints;
   }

@@ -34,10 +34,13 @@ struct Method {
   double time_step = 1.0 / 240;  ///< s
 
   // Verlet (thesis 3.2, 4.2): the rule and solver, sweeps (settings.relaxation.iterations) or
-  // Newton steps (verlet.newton_iterations), over-relaxation, and the particle model.
+  // Newton steps (verlet.newton_iterations), over-relaxation, the projection rule and substeps,
+  // and the particle model.
   VerletOptions verlet{};
-  int sweeps = 100;
+  int sweeps = 100;                           ///< per substep
   double over_relaxation = 1;
+  ProjectionRule projection = ProjectionRule::pbd;
+  int substeps = 1;
   double relaxation_tolerance = 0;            ///< m; 0: run every sweep / Newton step
   std::optional<LimbMasses> limb_masses{};    ///< unset: the scene's
   std::optional<ParticleJoints> joints{};     ///< unset: the scene's

@@ -87,6 +87,39 @@ LimbParticleMasses inertia_particle_masses(const Model& model, std::size_t index
   return masses;
 }
 
+// LimbMasses::lumps: each point mass m_k at z_k on the axis goes to the head and the tail by the
+// lever rule, m_head += m_k·(z_k + h)/L and m_tail += m_k·(h − z_k)/L (h = L/2): the pair keeps
+// the lump's mass and centre, and a lump at an end goes wholly to that end's particle, so a body
+// of lumps at its ends is represented exactly. Throws ModelError, naming the body, for a body
+// without point masses and for a lump off the axis or beyond an end, which two particles cannot
+// carry. A lump's own radius (a solid sphere's inertia, 2/5·m·r²) is not represented.
+LimbParticleMasses lump_particle_masses(const Model& model, std::size_t index) {
+  using checks::format_number;
+  const Body& body = model.bodies[index];
+  const auto refuse = [&](std::size_t lump, const char* problem) {
+    std::ostringstream message;
+    message << "bodies[" << index << "] '" << body.name << "': limb_masses \"lumps\" " << problem;
+    if (lump < body.point_masses.size()) {
+      const Vector3& at = body.point_masses[lump].position;
+      message << "; point_masses[" << lump << "] at [" << format_number(at.x()) << ", " << format_number(at.y()) << ", "
+              << format_number(at.z()) << "] m is not";
+    }
+    throw ModelError(message.str());
+  };
+  if (body.point_masses.empty()) refuse(0, "needs point_masses on every body; this one has a uniform density");
+  const double half = 0.5 * body.shape.length, tolerance = 1e-9 * body.shape.length;
+  LimbParticleMasses masses;
+  for (std::size_t k = 0; k < body.point_masses.size(); ++k) {
+    const PointMass& lump = body.point_masses[k];
+    if (lump.position.head<2>().norm() > tolerance) refuse(k, "needs every point mass on the limb's axis (x = y = 0)");
+    if (std::abs(lump.position.z()) > half + tolerance) refuse(k, "needs every point mass between the limb's ends (|z| <= length/2)");
+    const double z = std::clamp(lump.position.z(), -half, half);
+    masses.head += lump.mass * (z + half) / body.shape.length;
+    masses.tail += lump.mass * (half - z) / body.shape.length;
+  }
+  return masses;
+}
+
 std::uint32_t checked_index(std::size_t value) {
   if (value >= std::numeric_limits<std::uint32_t>::max()) {
     throw ModelError("model: too many particles or constraints for 32-bit indices");
@@ -123,6 +156,7 @@ void renumber_particles(VerletState<Scalar>& state) {
     const std::uint32_t q = new_index[p];
     particles.set_position(q, state.particles.position(p));
     particles.set_previous(q, state.particles.previous(p));
+    particles.set_velocity(q, state.particles.velocity(p));
     particles.inverse_mass[q] = state.particles.inverse_mass[p];
     particle_mass[q] = state.particle_mass[p];
     origins[q] = state.particle_origins[p];
@@ -153,6 +187,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   const std::size_t joint_count = model.joints.size();
   const bool shared = model.settings.verlet.joints == ParticleJoints::shared_particle;
   const bool centres = model.settings.verlet.limb_masses == LimbMasses::inertia;
+  const bool rattle = model.settings.relaxation.projection == ProjectionRule::rattle;
   const double dt = model.settings.time_step;
 
   VerletState<Scalar> state;
@@ -165,7 +200,11 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   std::vector<LimbParticleMasses> limb_masses(body_count);
   for (std::size_t b = 0; b < body_count; ++b) {
     const double half = 0.5 * model.bodies[b].mass;
-    limb_masses[b] = centres ? inertia_particle_masses(model, b) : LimbParticleMasses{half, 0.0, half};
+    switch (model.settings.verlet.limb_masses) {
+      case LimbMasses::ends: limb_masses[b] = LimbParticleMasses{half, 0.0, half}; break;
+      case LimbMasses::inertia: limb_masses[b] = inertia_particle_masses(model, b); break;
+      case LimbMasses::lumps: limb_masses[b] = lump_particle_masses(model, b); break;
+    }
   }
 
   // Slots: every place a particle may sit. Body b has its head at slot s·b, its tail at s·b + 1
@@ -328,9 +367,19 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     Vector3 position = mass > 0 ? Vector3(mass_weighted_position[p] / mass) : slot_position[first_slot_of_particle[p]];
     Vector3 velocity = mass > 0 ? Vector3(momentum[p] / mass) : Vector3::Zero();
     if (pinned[p]) position = pin_position[p], velocity.setZero();
+    if (!pinned[p] && !(mass > 0)) {  // only limb_masses "lumps" leaves an end without mass
+      const std::uint32_t slot = first_slot_of_particle[p];
+      std::ostringstream message;
+      message << "bodies[" << slot / slots_per_body << "] '" << model.bodies[slot / slots_per_body].name
+              << "': limb_masses \"lumps\" leaves its " << (slot % slots_per_body == 0 ? "head" : "tail")
+              << " without mass, and no joint shares that particle with a massive one or pins it; put a point mass "
+                 "there, or join it with \"joints\": \"shared_particle\"";
+      throw ModelError(message.str());
+    }
     state.particles.set_position(p, position.cast<Scalar>());
     state.particles.set_previous(p, (position - velocity * dt).cast<Scalar>());
-    state.particles.inverse_mass[p] = pinned[p] || mass <= 0 ? Scalar(0) : Scalar(1.0 / mass);
+    if (rattle) state.particles.set_velocity(p, velocity.cast<Scalar>());
+    state.particles.inverse_mass[p] = pinned[p] ? Scalar(0) : Scalar(1.0 / mass);
   }
 
   // Constraints and limbs, island by island in the same breadth-first order: each body's tree
@@ -424,6 +473,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     state.particle_mass[p] = ball.mass;
     state.particles.set_position(p, ball.position.cast<Scalar>());
     state.particles.set_previous(p, (ball.position - ball.velocity * dt).cast<Scalar>());
+    if (rattle) state.particles.set_velocity(p, ball.velocity.cast<Scalar>());
     state.particles.inverse_mass[p] = Scalar(1.0 / ball.mass);
     Island island;
     island.particle_begin = p;

@@ -24,10 +24,14 @@ namespace limber {
 ///     only to second order, so step() also projects it onto the midpoint of head and tail after
 ///     every sweep (step.hpp). The centre is never a joint anchor and has no contact feature:
 ///     contacts push the ends, and the centre follows (collision/contacts.hpp);
+///   - lumps: each of the body's point masses goes to the head and the tail by the lever rule,
+///     so lumps at the ends are represented exactly (a chain of point masses on massless rods,
+///     with shared-particle joints); a lump's own radius is not represented;
 /// - a spherical joint becomes a zero-length distance constraint between the inboard limb's
 ///   anchor particle and the outboard's, or one shared particle when
 ///   settings.verlet.joints == shared_particle; a joint to the world pins a particle (w = 0);
-/// - initial velocities become previous positions, x(−Δt) = x(0) − v·Δt;
+/// - initial velocities become previous positions, x(−Δt) = x(0) − v·Δt, and, under the rattle
+///   projection rule, the particles' velocities (the rule is fixed at compile: the state is (x, v));
 /// - particles are grouped by island (connected limbs) and ordered breadth-first from the
 ///   island's root (a limb held by the world, else its first limb), so constraints are swept
 ///   from the pinned end outwards; the ball is its own island;
@@ -37,7 +41,9 @@ namespace limber {
 /// represent: an anchor that is not an axis end point (naming the joint); with limb_masses
 /// inertia, a limb whose centre of mass is off its axis, or whose transverse inertia three
 /// positive masses on its axis cannot give — a cylinder with radius²/4 ≥ length²/6, mass beyond
-/// an end or all at one point (naming the body; "ends" represents every limb).
+/// an end or all at one point (naming the body; "ends" represents every limb); with lumps, a body
+/// without point masses, a lump off the axis or beyond an end, or an end left without mass that
+/// no joint shares with a massive particle or pins (naming the body).
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options = {});
 

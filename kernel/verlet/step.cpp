@@ -6,6 +6,7 @@
 
 #include "kernel/collision/contacts.hpp"
 #include "kernel/numerics/flush_denormals.hpp"
+#include "kernel/relaxation/direct_projection.hpp"
 #include "kernel/relaxation/relaxation.hpp"
 #include "kernel/sleeping/sleeping.hpp"
 
@@ -42,15 +43,86 @@ void integrate(VerletState<Scalar>& state, double dt) {
     }
     integrated += island.particle_end - island.particle_begin;
   }
-  // Applied forces: x += w·f·Δt².
+  // Applied forces: x += w·f·Δt² (cleared by step(), after its last substep).
   for (const auto& [i, force] : state.pending_forces) {
     const Scalar scale = p.inverse_mass[i] * dt2;
     p.position_x[i] += scale * static_cast<Scalar>(force.x());
     p.position_y[i] += scale * static_cast<Scalar>(force.y());
     p.position_z[i] += scale * static_cast<Scalar>(force.z());
   }
-  state.pending_forces.clear();
   state.counters.particles_integrated += integrated;
+}
+
+// Half of the rattle rule's velocity update: v += (h/2)·(g + w·f) for every awake movable
+// particle (velocity Verlet's kick; Andersen 1983's first and last stage without the constraint
+// forces, which the projections add).
+template <typename Scalar>
+void half_kick(VerletState<Scalar>& state, double h) {
+  auto& p = state.particles;
+  const Scalar half = static_cast<Scalar>(0.5 * h);
+  const Scalar gx = state.gravity.x() * half, gy = state.gravity.y() * half, gz = state.gravity.z() * half;
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      p.velocity_x[i] += gx, p.velocity_y[i] += gy, p.velocity_z[i] += gz;
+    }
+  }
+  for (const auto& [i, force] : state.pending_forces) {
+    p.set_velocity(i, p.velocity(i) + (p.inverse_mass[i] * half) * force.template cast<Scalar>());
+  }
+}
+
+// The rattle rule's start of a substep: damping, the first half kick, then the drift
+// x ← x + h·v with the start positions kept as the previous ones (where relaxation takes the
+// constraints' start gradients): x̃ = x₀ + h·v₀ + (h²/2)·a₀, second order (Verlet's
+// x* = x₀ − v₀·Δt start is first order).
+template <typename Scalar>
+void kick_and_drift(VerletState<Scalar>& state, double h) {
+  auto& p = state.particles;
+  const Settings& settings = state.settings;
+  const Scalar kept = static_cast<Scalar>(settings.verlet.drag_factor ? *settings.verlet.drag_factor - 1.0 : std::exp(-settings.damping * h));
+  const Scalar step = static_cast<Scalar>(h);
+  std::uint64_t integrated = 0;
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      p.velocity_x[i] *= kept, p.velocity_y[i] *= kept, p.velocity_z[i] *= kept;
+    }
+    integrated += island.particle_end - island.particle_begin;
+  }
+  half_kick(state, h);
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      const Scalar x = p.position_x[i], y = p.position_y[i], z = p.position_z[i];
+      p.previous_x[i] = x, p.previous_y[i] = y, p.previous_z[i] = z;
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      p.position_x[i] = x + step * p.velocity_x[i];
+      p.position_y[i] = y + step * p.velocity_y[i];
+      p.position_z[i] = z + step * p.velocity_z[i];
+    }
+  }
+  state.counters.particles_integrated += integrated;
+}
+
+// The rattle rule after the position projections: v ← (x − x₀)/h, the constrained half-step
+// velocity, then the second half kick.
+template <typename Scalar>
+void velocity_from_positions(VerletState<Scalar>& state, double h) {
+  auto& p = state.particles;
+  const Scalar inverse_step = static_cast<Scalar>(1.0 / h);
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      p.velocity_x[i] = (p.position_x[i] - p.previous_x[i]) * inverse_step;
+      p.velocity_y[i] = (p.position_y[i] - p.previous_y[i]) * inverse_step;
+      p.velocity_z[i] = (p.position_z[i] - p.previous_z[i]) * inverse_step;
+    }
+  }
+  half_kick(state, h);
 }
 
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
@@ -94,10 +166,13 @@ void collect_contact_particles(VerletState<Scalar>& state) {
 // gradients E, −E/2, −E/2 and is solved in one projection, λ = C / (w_c + (w_h + w_t)/4),
 // Δx_c = −w_c·λ, Δx_h = Δx_t = +w·λ/2: momentum and angular momentum are kept (the impulses
 // −λ, λ/2, λ/2 sum to zero and their torque is −C × λ = 0). Run after every sweep, like the
-// contacts. With the unweighted rule every movable particle counts w = 1. Returns the largest
-// displacement, m.
-template <typename Scalar>
-double project_limb_centres(VerletState<Scalar>& state) {
+// contacts. With the unweighted rule every movable particle counts w = 1. The constraint is
+// linear, so its gradient is the same at the start and the end of a step: both projection rules
+// project it alike, and the rattle rule's velocity stage projects its rate, v_c − (v_h + v_t)/2,
+// by the same formula (`field` reads and writes positions or velocities). Returns the largest
+// change, m or m/s.
+template <typename Scalar, typename Field>
+double project_limb_centres(VerletState<Scalar>& state, Field field) {
   auto& particles = state.particles;
   const bool weighted = state.options.rule == RelaxationRule::weighted;
   const auto inverse_mass = [&](std::uint32_t p) {
@@ -112,18 +187,128 @@ double project_limb_centres(VerletState<Scalar>& state) {
       const double w_head = inverse_mass(head), w_centre = inverse_mass(centre), w_tail = inverse_mass(tail);
       const double denominator = w_centre + 0.25 * (w_head + w_tail);
       if (denominator <= 0) continue;
-      const Eigen::Vector3d x_head = particles.position(head).template cast<double>();
-      const Eigen::Vector3d x_tail = particles.position(tail).template cast<double>();
-      const Eigen::Vector3d x_centre = particles.position(centre).template cast<double>();
+      const Eigen::Vector3d x_head = field.get(head).template cast<double>();
+      const Eigen::Vector3d x_tail = field.get(tail).template cast<double>();
+      const Eigen::Vector3d x_centre = field.get(centre).template cast<double>();
       const Eigen::Vector3d lambda = (x_centre - 0.5 * (x_head + x_tail)) / denominator;
       const Eigen::Vector3d delta_centre = -w_centre * lambda;
-      particles.set_position(centre, (x_centre + delta_centre).template cast<Scalar>());
-      particles.set_position(head, (x_head + 0.5 * w_head * lambda).template cast<Scalar>());
-      particles.set_position(tail, (x_tail + 0.5 * w_tail * lambda).template cast<Scalar>());
+      field.set(centre, (x_centre + delta_centre).template cast<Scalar>());
+      field.set(head, (x_head + 0.5 * w_head * lambda).template cast<Scalar>());
+      field.set(tail, (x_tail + 0.5 * w_tail * lambda).template cast<Scalar>());
       largest = std::max({largest, delta_centre.norm(), 0.5 * std::max(w_head, w_tail) * lambda.norm()});
     }
   }
   return largest;
+}
+
+// The particles' positions or velocities, as project_limb_centres reads and writes them.
+template <typename Scalar>
+struct PositionField {
+  ParticleBuffer<Scalar>& particles;
+  auto get(std::uint32_t p) const { return particles.position(p); }
+  void set(std::uint32_t p, const typename ParticleBuffer<Scalar>::Vector3& x) const { particles.set_position(p, x); }
+};
+template <typename Scalar>
+struct VelocityField {
+  ParticleBuffer<Scalar>& particles;
+  auto get(std::uint32_t p) const { return particles.velocity(p); }
+  void set(std::uint32_t p, const typename ParticleBuffer<Scalar>::Vector3& v) const { particles.set_velocity(p, v); }
+};
+
+// Stage 3 of a substep: sweeps over joints and links (or Newton steps), then long-range
+// attachments, limb centres and contacts after each, until the iteration count, the tolerance
+// or the wall-clock budget (`budget_us` for this substep) stops it. Fills `report`'s sweep
+// count, last correction and stop.
+template <typename Scalar>
+void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, StepReport& report) {
+  const RelaxationSettings& relaxation = state.settings.relaxation;
+  const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty(), has_centres = has_limb_centres(state);
+  const bool interleaved = state.plan.layout != ParticleLayout::soa;
+  const auto start = std::chrono::steady_clock::now();
+  begin_relaxation(state, dt);
+  const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_centres;
+  const bool direct = state.options.solver == RelaxationSolver::direct;
+  const int iterations = direct ? state.options.newton_iterations : relaxation.iterations;
+  for (int iteration = 1; iteration <= iterations; ++iteration) {
+    // The first sweep starts from the unconstrained prediction, far from the solution;
+    // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
+    double largest = relaxation_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
+    if (state.options.long_range_attachments) largest = std::max(largest, project_long_range_attachments(state));
+    if (interleaved && copies) contact_particles_to_buffer(state);
+    if (has_centres) largest = std::max(largest, project_limb_centres(state, PositionField<Scalar>{state.particles}));
+    if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
+    if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
+    if (interleaved && copies) contact_particles_from_buffer(state);
+    report.iterations += 1;
+    report.largest_correction = largest;
+    report.stop = RelaxationStop::iterations;
+    if (relaxation.tolerance > 0 && largest < relaxation.tolerance) {
+      report.stop = RelaxationStop::tolerance;
+      break;
+    }
+    if (budget_us > 0 && iteration < iterations) {
+      const std::chrono::duration<double, std::micro> elapsed = std::chrono::steady_clock::now() - start;
+      if (elapsed.count() >= budget_us) {
+        report.stop = RelaxationStop::budget;
+        break;
+      }
+    }
+  }
+  end_relaxation(state);
+}
+
+// The rattle rule's velocity stage: as many sweeps as the position stage ran (Newton steps: one
+// exact solve each), each followed by the limb centres' rate and the contacts' restitution pass
+// — Gauss-Seidel over every velocity row, so joints and contacts agree on the velocities the
+// substep ends with — until the velocity changes times the substep fall below the tolerance.
+// Compliant constraints (direct solver, α > 0) are springs, whose rate is free: they get the
+// second half kick of their force instead (kick_compliant_constraints), then the contacts.
+template <typename Scalar>
+void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
+  const bool contacts = state.ball_particle >= 0 || !state.planes.empty();
+  if (state.options.compliance > 0) {
+    kick_compliant_constraints(state, dt);
+    if (contacts) apply_restitution(state, dt);
+    return;
+  }
+  const bool has_centres = has_limb_centres(state);
+  begin_velocity_projection(state);
+  for (int sweep = 0; sweep < sweeps; ++sweep) {
+    double largest = velocity_sweep(state);
+    if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
+    if (contacts) apply_restitution(state, dt);
+    if (state.settings.relaxation.tolerance > 0 && largest * dt < state.settings.relaxation.tolerance) break;
+  }
+  end_velocity_projection(state);
+}
+
+// One substep of either rule (the whole step when settings.relaxation.substeps is 1): the passes
+// of step.hpp's list.
+template <typename Scalar>
+StepReport substep(VerletState<Scalar>& state, double dt, double budget_us) {
+  StepReport report;
+  const bool rattle = uses_rattle(state);
+  const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty();
+  if (rattle) {
+    kick_and_drift(state, dt);
+  } else {
+    integrate(state, dt);
+  }
+  if (has_ball) detect_ball_contacts(state, dt);
+  if (has_planes) detect_plane_contacts(state, dt);
+  if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
+  if (!state.awake_islands.empty()) relax_positions(state, dt, budget_us, report);
+  if (rattle) {
+    velocity_from_positions(state, dt);
+    if (!state.awake_islands.empty()) project_velocities(state, dt, std::max(1, report.iterations));
+  } else if (has_ball || has_planes) {
+    apply_restitution(state, dt);
+  }
+  report.status = update_sleep(state, dt);
+  report.substeps = 1;
+  state.time += dt;
+  state.previous_time_step = dt;
+  return report;
 }
 
 }  // namespace
@@ -136,55 +321,21 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     return state.last_report = report;
   }
   const FlushDenormals flush_denormals;
-  const bool has_ball = state.ball_particle >= 0;
-  const bool has_planes = !state.planes.empty();
-  const bool has_centres = has_limb_centres(state);
-
-  integrate(state, dt);
-  if (has_ball) detect_ball_contacts(state, dt);
-  if (has_planes) detect_plane_contacts(state, dt);
-  const bool interleaved = state.plan.layout != ParticleLayout::soa;
-  if (interleaved) collect_contact_particles(state);
-
-  const RelaxationSettings& relaxation = state.settings.relaxation;
-  const auto start = std::chrono::steady_clock::now();
-  if (!state.awake_islands.empty()) {
-    begin_relaxation(state, dt);
-    const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_centres;
-    const bool direct = state.options.solver == RelaxationSolver::direct;
-    const int iterations = direct ? state.options.newton_iterations : relaxation.iterations;
-    for (int iteration = 1; iteration <= iterations; ++iteration) {
-      // The first sweep starts from the unconstrained prediction, far from the solution;
-      // over-relaxing it overshoots (a chain at one sweep a step diverges at ω = 1.5).
-      double largest = relaxation_sweep(state, iteration == 1 ? 1.0 : relaxation.over_relaxation);
-      if (state.options.long_range_attachments) largest = std::max(largest, project_long_range_attachments(state));
-      if (interleaved && copies) contact_particles_to_buffer(state);
-      if (has_centres) largest = std::max(largest, project_limb_centres(state));
-      if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
-      if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
-      if (interleaved && copies) contact_particles_from_buffer(state);
-      report.iterations = iteration;
-      report.largest_correction = largest;
-      report.stop = RelaxationStop::iterations;
-      if (relaxation.tolerance > 0 && largest < relaxation.tolerance) {
-        report.stop = RelaxationStop::tolerance;
-        break;
-      }
-      if (relaxation.budget_us > 0 && iteration < iterations) {
-        const std::chrono::duration<double, std::micro> elapsed = std::chrono::steady_clock::now() - start;
-        if (elapsed.count() >= relaxation.budget_us) {
-          report.stop = RelaxationStop::budget;
-          break;
-        }
-      }
-    }
-    end_relaxation(state);
+  const int substeps = state.settings.relaxation.substeps;
+  const double h = dt / substeps, start_time = state.time;
+  state.plan.fallbacks.value = 0;
+  for (int k = 0; k < substeps; ++k) {
+    const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps);
+    report.iterations += part.iterations;
+    report.largest_correction = part.largest_correction;
+    report.stop = part.stop;
+    report.status = part.status;
+    report.substeps += 1;
+    if (part.status != StepStatus::ok) break;
   }
-  if (has_ball || has_planes) apply_restitution(state, dt);
-
-  report.status = update_sleep(state, dt);
-  state.time += dt;
-  state.previous_time_step = dt;
+  if (report.status == StepStatus::ok) state.time = start_time + dt;  // not n roundings of h
+  state.pending_forces.clear();
+  report.fallbacks = state.plan.fallbacks.value;
   return state.last_report = report;
 }
 

@@ -5,23 +5,33 @@
 
 namespace limber {
 
-/// Advances `state` by dt seconds. The passes follow the thesis's loop (figure 2.5; 4.2.2):
-///  1. integrate   Verlet, x' = x + k·(x − x*) + a·Δt² (eq. 3.6 / 4.5), over awake islands;
-///                 k = exp(−damping·Δt) (physical damping) or the thesis's f − 1 (f = 1.99),
-///                 scaled by Δt/Δt_previous when Δt changes (time-corrected Verlet);
+/// Advances `state` by dt seconds, as settings.relaxation.substeps substeps of h = dt/substeps
+/// (Macklin et al. 2019, "Small steps in physics simulation"), each running the passes of the
+/// thesis's loop (figure 2.5; 4.2.2) under the projection rule (settings.relaxation.projection;
+/// kernel/relaxation/README.md):
+///  1. integrate   pbd: Verlet, x' = x + k·(x − x*) + a·h² (eq. 3.6 / 4.5), over awake islands;
+///                 k = exp(−damping·h) (physical damping) or the thesis's f − 1 (f = 1.99),
+///                 scaled by h/h_previous when the step changes (time-corrected Verlet);
+///                 rattle: damping, half a kick v += (h/2)·a, and the drift x* ← x, x ← x + h·v;
 ///  2. collide     the ball against every limb (waking the islands it touches), then features
 ///                 against planes — skipped when the scene has neither;
 ///  3. relax       Gauss-Seidel or Jacobi sweeps over joints and links (or Newton steps of the
-///                 direct solver, VerletOptions::newton_iterations of them), then long-range
-///                 attachments if asked for, limb centres (LimbMasses::inertia: each centre
-///                 particle back onto its limb's axis), then contacts, until the iteration
+///                 direct solver, VerletOptions::newton_iterations of them) — along the current
+///                 gradients (pbd) or those at the substep's start (rattle: SHAKE) — then
+///                 long-range attachments if asked for, limb centres (LimbMasses::inertia: each
+///                 centre particle back onto its limb's axis), then contacts, until the iteration
 ///                 count, the tolerance or the wall-clock budget stops it (3.2.3);
-///  4. restitution the velocity pass for contacts (eq. 2.33); a limb with a centre particle
+///  4. velocities  rattle only: v ← (x − x*)/h, the second half kick, then as many velocity
+///                 sweeps as step 3 ran (RATTLE's projection onto the constraints' tangent
+///                 space), each followed by the limb centres' rate and the contacts'
+///                 restitution;
+///  5. restitution pbd: the velocity pass for contacts (eq. 2.33); a limb with a centre particle
 ///                 answers as the rigid body its three particles make (collision/contacts.hpp);
-///  5. sleep       still islands fall asleep; divergence is detected.
-/// Allocates nothing and never throws; a bad Δt or a divergence is reported in the result
-/// (also kept in state.last_report). Denormals are flushed to zero while it runs
-/// (kernel/numerics/flush_denormals.hpp).
+///  6. sleep       still islands fall asleep; divergence is detected.
+/// A force applied before the step (apply_force) acts in every substep. Allocates nothing and
+/// never throws; a bad Δt or a divergence is reported in the result (also kept in
+/// state.last_report), and the report sums the substeps' sweeps and rattle's pbd fallbacks.
+/// Denormals are flushed to zero while it runs (kernel/numerics/flush_denormals.hpp).
 template <typename Scalar>
 StepReport step(VerletState<Scalar>& state, double dt);
 
@@ -36,7 +46,8 @@ StepReport step(VerletState<Scalar>& state) {
 /// limb's mass at each, so each gets the same acceleration F/m and relaxation has nothing to
 /// correct: with LimbMasses::ends half at each end (the force acts at the limb's centre), with
 /// inertia over its three particles (it acts at the limb's centre of mass, the centre for a
-/// uniform limb). No allocation for up to 64 forces a step.
+/// uniform limb). It acts over the whole step, in every substep. No allocation for up to 64
+/// forces a step.
 template <typename Scalar>
 void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force);
 

@@ -89,11 +89,18 @@ enum class RelaxationStop : std::uint8_t {
 };
 
 
+/// What one step did. A step of `substeps` substeps sums their sweeps and fallbacks; `stop`
+/// and `largest_correction` are the last substep's.
 struct StepReport {
   StepStatus status = StepStatus::ok;
   RelaxationStop stop = RelaxationStop::idle;
-  int iterations = 0;              ///< relaxation sweeps run
+  int iterations = 0;              ///< relaxation sweeps run (position sweeps; rattle runs as many velocity sweeps)
   double largest_correction = 0;   ///< largest particle displacement in the last sweep, m
+  int substeps = 0;                ///< substeps run (settings.relaxation.substeps, or fewer on a divergence)
+  /// Rattle: constraint projections that fell back to pbd because their start gradient had
+  /// turned too far from the current one (kStartGradientMinimumCosine), counted once per
+  /// constraint and substep.
+  std::uint64_t fallbacks = 0;
 };
 
 /// A connected set of particles (joined by constraints), stored contiguously in every buffer so
@@ -174,6 +181,15 @@ struct StepCounters {
 };
 
 template <typename Scalar>
+struct VerletState;
+
+/// Whether `state` steps under the rattle projection rule, (x, v) (else pbd, (x, x*)).
+template <typename Scalar>
+bool uses_rattle(const VerletState<Scalar>& state) {
+  return state.settings.relaxation.projection == ProjectionRule::rattle;
+}
+
+template <typename Scalar>
 struct VerletState {
   using Vector3s = Eigen::Matrix<Scalar, 3, 1>;
 
@@ -217,5 +233,14 @@ struct VerletState {
   StepReport last_report;
   StepCounters counters;
 };
+
+/// Particle p's velocity, m/s: the state's v (rattle), or (x − x*)/Δt of the last (sub)step (pbd,
+/// whose velocity is implicit and first order).
+template <typename Scalar>
+Eigen::Vector3d particle_velocity(const VerletState<Scalar>& state, std::uint32_t p) {
+  const auto& particles = state.particles;
+  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
+  return (particles.position(p).template cast<double>() - particles.previous(p).template cast<double>()) / state.previous_time_step;
+}
 
 }  // namespace limber

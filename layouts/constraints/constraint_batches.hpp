@@ -34,6 +34,11 @@ struct ConstraintBatches {
   AlignedArray<Index> particle_i, particle_j;
   AlignedArray<Scalar> rest_length;        ///< m
   AlignedArray<Scalar> share_i, share_j;   ///< fraction of the correction each end takes
+  /// The unit constraint gradient n = (x_i − x_j)/|x_i − x_j| where the projection rule needs it
+  /// stored (rattle: at the substep's start for the position sweeps, at its end for the velocity
+  /// sweeps); 0 for a zero-length joint, whose three-row constraint is linear, and for a slot
+  /// that falls back to the pbd projection. Unused (0) under pbd.
+  AlignedArray<Scalar> gradient_x, gradient_y, gradient_z;
   std::vector<std::uint32_t> colour_begin{0};  ///< slot offsets, colour_count() + 1 entries
   /// Per block of the colours: bit 0 set when its particle_i are consecutive (p, p + 1, …),
   /// bit 1 the same for particle_j — then the sweep loads positions with vector loads instead
@@ -44,6 +49,7 @@ struct ConstraintBatches {
   void for_each_field(Visitor&& visit) {
     visit("particle_i", particle_i), visit("particle_j", particle_j), visit("rest_length", rest_length);
     visit("share_i", share_i), visit("share_j", share_j);
+    visit("gradient_x", gradient_x), visit("gradient_y", gradient_y), visit("gradient_z", gradient_z);
   }
 
   std::size_t colour_count() const { return colour_begin.size() - 1; }
@@ -72,6 +78,7 @@ struct ConstraintBatches {
   void push(Index i, Index j, Scalar rest, Scalar s_i, Scalar s_j) {
     particle_i.push_back(i), particle_j.push_back(j), rest_length.push_back(rest);
     share_i.push_back(s_i), share_j.push_back(s_j);
+    gradient_x.push_back(0), gradient_y.push_back(0), gradient_z.push_back(0);
   }
 
   /// Pads the colour being filled to a whole number of blocks with no-op slots on

@@ -10,9 +10,11 @@
 
 namespace limber {
 
-/// Particles in structure-of-arrays form (one array per coordinate), the state of Verlet
-/// integration (thesis eq. 3.6): current and previous positions; velocity is implicit,
-/// v ≈ (x − x_previous) / Δt.
+/// Particles in structure-of-arrays form (one array per coordinate). Under the pbd projection
+/// rule the state is that of Verlet integration (thesis eq. 3.6): current and previous
+/// positions, velocity implicit, v ≈ (x − x_previous) / Δt. Under the rattle rule it is (x, v):
+/// the velocity arrays hold v, and the previous positions hold x at the start of the (sub)step
+/// (where the constraints' start gradients are taken).
 ///
 /// Shapes: every array holds capacity() ≥ size() + 1 elements, a multiple of the lane count
 /// of its element type (kLanesPerLine). Index size() is the *null particle*: inverse mass 0,
@@ -29,6 +31,8 @@ struct ParticleBuffer {
   AlignedArray<Scalar> position_x, position_y, position_z;
   /// Previous positions x(t − Δt), m.
   AlignedArray<Scalar> previous_x, previous_y, previous_z;
+  /// Velocities, m/s (the rattle rule's state; zero and unused under pbd).
+  AlignedArray<Scalar> velocity_x, velocity_y, velocity_z;
   /// Inverse mass w = 1/m, 1/kg. w = 0 pins a particle (weighted relaxation never moves it).
   AlignedArray<Scalar> inverse_mass;
 
@@ -37,6 +41,7 @@ struct ParticleBuffer {
   void for_each_field(Visitor&& visit) {
     visit("position_x", position_x), visit("position_y", position_y), visit("position_z", position_z);
     visit("previous_x", previous_x), visit("previous_y", previous_y), visit("previous_z", previous_z);
+    visit("velocity_x", velocity_x), visit("velocity_y", velocity_y), visit("velocity_z", velocity_z);
     visit("inverse_mass", inverse_mass);
   }
   template <typename Visitor>
@@ -64,6 +69,8 @@ struct ParticleBuffer {
   Vector3 previous(std::size_t i) const { return {previous_x[i], previous_y[i], previous_z[i]}; }
   void set_position(std::size_t i, const Vector3& x) { position_x[i] = x.x(), position_y[i] = x.y(), position_z[i] = x.z(); }
   void set_previous(std::size_t i, const Vector3& x) { previous_x[i] = x.x(), previous_y[i] = x.y(), previous_z[i] = x.z(); }
+  Vector3 velocity(std::size_t i) const { return {velocity_x[i], velocity_y[i], velocity_z[i]}; }
+  void set_velocity(std::size_t i, const Vector3& v) { velocity_x[i] = v.x(), velocity_y[i] = v.y(), velocity_z[i] = v.z(); }
 
  private:
   std::size_t count_ = 0;

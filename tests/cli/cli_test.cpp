@@ -85,6 +85,38 @@ TEST(Cli, EverySolverPathGivesTheSameSummaryOfAChain) {
     EXPECT_EQ(physics(r.out), physics(reference.out)) << variant[0] << " " << variant[1];
   }
 }
+TEST(Cli, RattleRunsTheChainInSubsteps) {
+  const Result r = run({"run", scene("chain.json"), "--projection", "rattle", "--substeps", "16", "--steps", "60"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("rattle projection; up to"));
+  EXPECT_THAT(r.out, HasSubstr("16 substeps a step"));
+  EXPECT_THAT(r.out, HasSubstr("pbd fallbacks 0"));
+}
+
+TEST(Cli, SceneRelaxationSettingsRunAsStatedAndKeepTheCsvColumns) {
+  // settings.relaxation {"projection": "rattle", "substeps": 64, "iterations": 4}, with --out.
+  const std::string text = R"({"limber_scene": 1, "name": "rattle chain",
+    "settings": {"gravity": [0, 0, -9.81], "time_step": 0.016666666666666666, "duration": 1,
+                 "relaxation": {"projection": "rattle", "substeps": 64, "iterations": 4}},
+    "chain": {"links": 5, "shape": "capsule", "link_length": 0.1, "link_radius": 0.005, "link_mass": 1, "end_mass": 2,
+              "anchor": [0, 0, 1], "direction": [1, 0, 0], "pinned": true}})";
+  const std::string path = ::testing::TempDir() + "/limber_rattle_chain.json", csv_path = ::testing::TempDir() + "/limber_rattle.csv";
+  std::ofstream(path) << text;
+  const Result r = run({"run", path, "--steps", "30", "--out", csv_path});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("rattle projection; up to 4 sweeps a substep, 64 substeps a step"));
+  std::ifstream csv(csv_path);
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_THAT(header, HasSubstr("link_0.head_x,link_0.head_y,link_0.head_z"));
+}
+
+TEST(Cli, RejectsBadProjectionAndSubsteps) {
+  expect_rejected({"run", "--projection", "shake"}, "--projection");
+  expect_rejected({"run", "--substeps", "0"}, "--substeps: must be in [1, 10000], got 0");
+  expect_rejected({"run", "--method", "lagrange", "--substeps", "4"}, "--substeps");
+}
+
 TEST(Cli, RunsJacobiAndTheSequentialSweep) {
   for (const char* solver : {"--solver=jacobi", "--sweep=sequential"}) {
     const Result r = run({"run", scene("chain.json"), "--steps", "20", solver});

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -109,13 +110,24 @@ TYPED_TEST(ColouredRelaxation, BatchesHoldEachMovableConstraintOnceAndNeverAPin)
   EXPECT_EQ(state.colour_count, 3u);  // the fork particle has three constraints
 }
 
+// `model` under a projection rule, in two substeps for rattle (its velocity stage runs too).
+Model with_projection(Model model, ProjectionRule projection) {
+  model.settings.relaxation.projection = projection;
+  if (projection == ProjectionRule::rattle) model.settings.relaxation.substeps = 2;
+  return model;
+}
+
 TYPED_TEST(ColouredRelaxation, ScalarSimdLayoutsAndThreadsGiveTheSameBits) {
   // Every variant of the coloured sweep runs the same arithmetic on the same constraints in the
-  // same order within each particle, so each step's positions must match bit for bit.
-  // parallel_minimum_slots = 1 splits even these small colours across threads.
+  // same order within each particle, so each step's positions (and, under rattle, velocities)
+  // must match bit for bit. parallel_minimum_slots = 1 splits even these small colours across
+  // threads.
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
-    for (const RelaxationRule rule : {RelaxationRule::weighted, RelaxationRule::unweighted}) {
-      for (const Model& model : {mixed_scene(), heavy_end_chain(300)}) {
+    for (const auto& [rule, projection] : {std::pair{RelaxationRule::weighted, ProjectionRule::pbd},
+                                           std::pair{RelaxationRule::unweighted, ProjectionRule::pbd},
+                                           std::pair{RelaxationRule::weighted, ProjectionRule::rattle},
+                                           std::pair{RelaxationRule::unweighted, ProjectionRule::rattle}}) {
+      for (const Model& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
         VerletOptions reference;
         reference.solver = solver, reference.rule = rule, reference.simd = false, reference.threads = 1;
         const auto expected = trajectory_hashes<TypeParam>(model, reference, 60);
@@ -127,7 +139,7 @@ TYPED_TEST(ColouredRelaxation, ScalarSimdLayoutsAndThreadsGiveTheSameBits) {
               options.threads = 2, options.parallel_minimum_slots = 1;
               EXPECT_EQ(trajectory_hashes<TypeParam>(model, options, 60), expected)
                   << "layout " << int(layout) << " threading " << int(threading) << " simd " << simd << " solver "
-                  << int(solver) << " rule " << int(rule);
+                  << int(solver) << " rule " << int(rule) << " projection " << int(projection);
             }
           }
         }
@@ -163,14 +175,16 @@ TYPED_TEST(ColouredRelaxation, ParticleOrderingRenumbersButChangesNoBit) {
 TYPED_TEST(ColouredRelaxation, HumanoidWithContactsIsTheSameInEveryLayout) {
   // The ball and ground contacts move particles between sweeps; the interleaved layouts copy
   // exactly those particles out and back.
-  const Model model = load_shipped_scene("humanoid.json");
-  VerletOptions reference;
-  reference.threads = 1;
-  const auto expected = trajectory_hashes<TypeParam>(model, reference, 150);
-  for (const ParticleLayout layout : {ParticleLayout::aos, ParticleLayout::aosoa}) {
-    VerletOptions options = reference;
-    options.layout = layout, options.threads = 2, options.parallel_minimum_slots = 1;
-    EXPECT_EQ(trajectory_hashes<TypeParam>(model, options, 150), expected) << "layout " << int(layout);
+  for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+    const Model model = with_projection(load_shipped_scene("humanoid.json"), projection);
+    VerletOptions reference;
+    reference.threads = 1;
+    const auto expected = trajectory_hashes<TypeParam>(model, reference, 150);
+    for (const ParticleLayout layout : {ParticleLayout::aos, ParticleLayout::aosoa}) {
+      VerletOptions options = reference;
+      options.layout = layout, options.threads = 2, options.parallel_minimum_slots = 1;
+      EXPECT_EQ(trajectory_hashes<TypeParam>(model, options, 150), expected) << "layout " << int(layout) << " projection " << int(projection);
+    }
   }
 }
 

@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -265,9 +266,13 @@ TYPED_TEST(DirectProjection, CompliantLinksStretchByComplianceTimesTheWeightThey
   // every link below it.
   const std::vector<double> masses{1.0, 2.0, 0.5};
   const double alpha = 2e-5, g = 9.81;  // m/N: stretches of ~1 % of a link
+  // The same under the rattle rule, whose positions the same equations give (its velocity
+  // stage leaves compliant constraints alone).
   Model model = hanging_chain(masses);
   model.settings.damping = 20;  // settle the bounce in well under the 2 s run
-  for (const bool warm_start : {false, true}) {
+  for (const auto& [warm_start, projection] : {std::pair{false, ProjectionRule::pbd}, std::pair{true, ProjectionRule::pbd},
+                                               std::pair{false, ProjectionRule::rattle}}) {
+    model.settings.relaxation.projection = projection;
     for (const double compliance : {alpha, 0.0}) {
       VerletOptions options = direct_options(6);
       options.compliance = compliance, options.warm_start = warm_start;
@@ -284,7 +289,7 @@ TYPED_TEST(DirectProjection, CompliantLinksStretchByComplianceTimesTheWeightThey
           // Double: to rounding, once the bounce has died out. Float resolves positions near
           // 0.3 m only to ulp ≈ 3e-8 m, a part in 10³ of the lowest link's 5e-5 m stretch.
           const double tolerance = this->kFloat ? 1e-6 * kLinkLength : 1e-8 * expected;
-          EXPECT_NEAR(length - kLinkLength, expected, tolerance) << "link " << k << " warm " << warm_start;
+          EXPECT_NEAR(length - kLinkLength, expected, tolerance) << "link " << k << " warm " << warm_start << " projection " << int(projection);
         } else {
           EXPECT_NEAR(length, kLinkLength, (this->kFloat ? 1e-6 : 1e-12) * kLinkLength) << "rigid link " << k;
         }
@@ -371,6 +376,8 @@ TYPED_TEST(DirectProjection, LongRangeAttachmentsKeepAChainWithinItsLength) {
   Model model = make_chain_model(spec);
   model.settings.relaxation.iterations = 2;
   model.settings.time_step = 1.0 / 60;
+  for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+  model.settings.relaxation.projection = projection;
   double overshoot[2] = {0, 0};
   for (const bool attachments : {false, true}) {
     VerletOptions options;
@@ -389,7 +396,8 @@ TYPED_TEST(DirectProjection, LongRangeAttachmentsKeepAChainWithinItsLength) {
     }
   }
   EXPECT_GT(overshoot[false], 0.01) << "without attachments the stretched chain must overshoot its length";
-  EXPECT_LE(overshoot[true], this->kFloat ? 1e-6 : 1e-14);
+  EXPECT_LE(overshoot[true], this->kFloat ? 1e-6 : 1e-14) << "projection " << int(projection);
+  }
 }
 
 TEST(DirectProjectionOptions, BadNewtonIterationsAndComplianceAreRejectedByName) {

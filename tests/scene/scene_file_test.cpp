@@ -474,9 +474,30 @@ TEST(SceneLoading, LimbMassesSettingIsReadAndCheckedByName) {
   EXPECT_EQ(load_scene_text(with_limb_masses(R"("inertia")"), "test.json").settings.verlet.limb_masses,
             LimbMasses::inertia);
   EXPECT_EQ(load_scene_text(with_limb_masses(R"("ends")"), "test.json").settings.verlet.limb_masses, LimbMasses::ends);
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("lumps")"), "test.json").settings.verlet.limb_masses, LimbMasses::lumps);
   EXPECT_EQ(load_error(with_limb_masses(R"("centre")")),
-            "test.json: settings.verlet.limb_masses: must be \"ends\" or \"inertia\", got \"centre\"");
+            "test.json: settings.verlet.limb_masses: must be \"ends\", \"inertia\" or \"lumps\", got \"centre\"");
   EXPECT_EQ(load_error(with_limb_masses("3")), "test.json: settings.verlet.limb_masses: must be a string, got number");
+}
+
+TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {
+  const Settings defaults = load_scene_text(kPendulum, "test.json").settings;
+  EXPECT_EQ(defaults.relaxation.projection, ProjectionRule::pbd);
+  EXPECT_EQ(defaults.relaxation.substeps, 1);
+  const auto with_relaxation = [](std::string_view fields) {
+    return with(kPendulum, R"("duration": 1)", R"("duration": 1, "relaxation": {)" + std::string(fields) + "}");
+  };
+  const Settings rattle =
+      load_scene_text(with_relaxation(R"("projection": "rattle", "substeps": 64, "iterations": 4)"), "test.json").settings;
+  EXPECT_EQ(rattle.relaxation.projection, ProjectionRule::rattle);
+  EXPECT_EQ(rattle.relaxation.substeps, 64);
+  EXPECT_EQ(rattle.relaxation.iterations, 4);
+  EXPECT_EQ(load_error(with_relaxation(R"("projection": "shake")")),
+            "test.json: settings.relaxation.projection: must be \"pbd\" or \"rattle\", got \"shake\"");
+  EXPECT_EQ(load_error(with_relaxation(R"("substeps": 0)")), "test.json: settings.relaxation.substeps: must be >= 1, got 0");
+  EXPECT_EQ(load_error(with_relaxation(R"("substeps": 20000)")),
+            "test.json: settings.relaxation.substeps: must be <= 10000, got 20000");
+  EXPECT_EQ(load_error(with_relaxation(R"("substeps": 1.5)")), "test.json: settings.relaxation.substeps: must be an integer, got 1.5");
 }
 
 // ---- The spring method's settings (issue 4)

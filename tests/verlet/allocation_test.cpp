@@ -70,6 +70,24 @@ TEST(Allocation, TheDirectSolverAllocatesNothing) {
   EXPECT_EQ(allocations_while_stepping<double>(chain, 600, true, options), 0);
 }
 
+TEST(Allocation, TheRattleRuleAllocatesNothing) {
+  // Substeps, start gradients, velocity sweeps with restitution, fallbacks counted from the
+  // threads; every solver and the sequential sweep.
+  Model humanoid = testing::load_shipped_scene("humanoid.json");
+  humanoid.settings.relaxation.projection = ProjectionRule::rattle;
+  humanoid.settings.relaxation.substeps = 3;
+  humanoid.settings.relaxation.iterations = 10;
+  for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi, RelaxationSolver::direct}) {
+    VerletOptions options;
+    options.solver = solver;
+    options.threads = 2, options.threading = Threading::workers, options.parallel_minimum_slots = 1;
+    EXPECT_EQ(allocations_while_stepping<float>(humanoid, 600, false, options), 0) << "solver " << int(solver);
+  }
+  VerletOptions sequential;
+  sequential.order = SweepOrder::sequential;
+  EXPECT_EQ(allocations_while_stepping<double>(humanoid, 600, false, sequential), 0);
+}
+
 TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail
   // (A new-expression may be elided by the compiler; std::allocator calls operator new itself.)
   const long before = testing::allocation_count();

@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gmock/gmock.h>
@@ -13,6 +14,7 @@
 
 #include "kernel/mass/mass_properties.hpp"
 #include "kernel/metrics/observers.hpp"
+#include "kernel/study/workloads.hpp"
 #include "kernel/verlet/compile.hpp"
 #include "kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
@@ -37,6 +39,8 @@ Model one_limb(const Shape& shape, double mass, LimbMasses limb_masses) {
   model.settings.sleep.enabled = false;
   return model;
 }
+
+Model study_chain() { return study::heavy_end_chain(study::ChainRelease::arc); }
 
 /// The particle of `state` that stands for `kind` of body `body`; fails the test if none.
 template <typename Scalar>
@@ -185,13 +189,16 @@ TEST(LimbMasses, RodLyingOnItsEndsStaysStraightAndFallsAsleep) {
 TEST(LimbMasses, RodDroppedFlatBouncesWithTheGroundsRestitution) {
   // Restitution 0.5: the rod must leave the ground at half its impact speed. An impulse given to
   // the ends alone would move only their third of the mass (it bounced at 0.05 of the speed).
+  // Under either projection rule (rattle: restitution is part of its velocity stage).
   const double restitution = 0.5;
-  for (const LimbMasses limb_masses : {LimbMasses::ends, LimbMasses::inertia}) {
+  for (const auto& [limb_masses, projection] : {std::pair{LimbMasses::ends, ProjectionRule::pbd}, std::pair{LimbMasses::inertia, ProjectionRule::pbd},
+                                                std::pair{LimbMasses::ends, ProjectionRule::rattle}, std::pair{LimbMasses::inertia, ProjectionRule::rattle}}) {
     Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 2.0, limb_masses);
     model.bodies[0].axis = Vector3::UnitY();
     model.bodies[0].position = Vector3(0, 0, 0.5);
     model.ground = Ground{0, restitution, 0.0};
     model.settings.time_step = 1.0 / 1000;
+    model.settings.relaxation.projection = projection;
     VerletState<double> state = compile<double>(model);
     double impact = 0, rebound = 0;
     for (int s = 0; s < 600; ++s) {
@@ -201,14 +208,15 @@ TEST(LimbMasses, RodDroppedFlatBouncesWithTheGroundsRestitution) {
       rebound = std::max(rebound, speed);
     }
     ASSERT_LT(impact, -2.5) << "the rod must have fallen onto the ground";
-    EXPECT_NEAR(rebound / -impact, restitution, 0.02) << "limb_masses " << int(limb_masses);
+    EXPECT_NEAR(rebound / -impact, restitution, 0.02) << "limb_masses " << int(limb_masses) << " projection " << int(projection);
   }
 }
 
 // Speed of an elastic ball of mass `ball_mass` after striking, at 3 m/s, a free thin rod of mass
 // 2 kg and length 1 m at `height` above the rod's centre, with no gravity.
-double ball_speed_after_strike(LimbMasses limb_masses, double ball_mass, double height) {
+double ball_speed_after_strike(LimbMasses limb_masses, double ball_mass, double height, ProjectionRule projection) {
   Model model = one_limb({ShapeType::cylinder, 1.0, 0.01}, 2.0, limb_masses);
+  model.settings.relaxation.projection = projection;
   model.bodies[0].position = Vector3(0, 0, 1);
   model.ball = Ball{0.05, ball_mass, 1.0, Vector3(0.2, 0, 1 + height), Vector3(-3, 0, 0)};
   model.settings.gravity.setZero();
@@ -217,8 +225,7 @@ double ball_speed_after_strike(LimbMasses limb_masses, double ball_mass, double 
   const Eigen::Vector3d momentum = observe(state).linear_momentum;
   for (int s = 0; s < 200; ++s) EXPECT_EQ(step(state).status, StepStatus::ok);
   EXPECT_LT((observe(state).linear_momentum - momentum).norm(), 1e-9 * momentum.norm());
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  return (state.particles.position(ball) - state.particles.previous(ball)).x() / model.settings.time_step;
+  return particle_velocity(state, static_cast<std::uint32_t>(state.ball_particle)).x();
 }
 
 TEST(LimbMasses, BallBouncesOffTheRodAsOffTheRigidRod) {
@@ -232,11 +239,15 @@ TEST(LimbMasses, BallBouncesOffTheRodAsOffTheRigidRod) {
     const double effective = 1 / (1 / rod_mass + s * s / inertia);
     return speed * (ball_mass - effective) / (ball_mass + effective);
   };
-  for (const double height : {0.0, 0.4}) {
-    const double inertia = ball_speed_after_strike(LimbMasses::inertia, ball_mass, height);
-    EXPECT_NEAR(inertia, rigid_answer(height, rod.inertia(0, 0)), 0.01 * std::abs(speed)) << "at " << height << " m";
-    const double ends = ball_speed_after_strike(LimbMasses::ends, ball_mass, height);
-    EXPECT_NEAR(ends, rigid_answer(height, rod_mass * 0.25), 0.01 * std::abs(speed)) << "at " << height << " m";
+  for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+    for (const double height : {0.0, 0.4}) {
+      const double inertia = ball_speed_after_strike(LimbMasses::inertia, ball_mass, height, projection);
+      EXPECT_NEAR(inertia, rigid_answer(height, rod.inertia(0, 0)), 0.01 * std::abs(speed))
+          << "at " << height << " m, projection " << int(projection);
+      const double ends = ball_speed_after_strike(LimbMasses::ends, ball_mass, height, projection);
+      EXPECT_NEAR(ends, rigid_answer(height, rod_mass * 0.25), 0.01 * std::abs(speed))
+          << "at " << height << " m, projection " << int(projection);
+    }
   }
 }
 
@@ -357,6 +368,63 @@ TEST(LimbMasses, LimbsThreeAxisParticlesCannotCarryAreRefusedByName) {
   EXPECT_THAT(refusal(lumps), HasSubstr("too concentrated"));
   lumps.point_masses = {{Vector3(0, 0, 0), 2.0, 0.0}};  // all at the centre: nothing at the ends
   EXPECT_THAT(refusal(lumps), HasSubstr("bodies[1] 'lumps'"));
+}
+
+TEST(LimbMasses, LumpsAtTheEndsAreExactlyTheChainsPointMasses) {
+  // The accuracy studies' chain: five rods whose mass is point masses at their ends. With lumps
+  // and shared particles the particle method holds exactly the point-mass system: 1, 1, 1, 1 and
+  // 2 kg at the joints and the free end, and the pin.
+  const Model model = study_chain();
+  const VerletState<double> state = compile<double>(model);
+  ASSERT_EQ(state.particles.size(), 6u);
+  std::vector<double> free_masses;
+  for (std::uint32_t p = 0; p < state.particles.size(); ++p) {
+    if (state.particles.inverse_mass[p] == 0) {
+      EXPECT_LT(state.particles.position(p).norm(), 1e-15) << "only the pin is held";
+      continue;
+    }
+    free_masses.push_back(state.particle_mass[p]);
+    EXPECT_NEAR(state.particles.inverse_mass[p], 1 / state.particle_mass[p], 1e-15);
+  }
+  EXPECT_THAT(free_masses, ::testing::UnorderedElementsAre(1.0, 1.0, 1.0, 1.0, 2.0));
+}
+
+TEST(LimbMasses, LumpsShareEachPointMassByTheLeverRule) {
+  // A lump a quarter of the way from the tail puts 1/4 of its mass on the head, 3/4 on the tail:
+  // the pair keeps its mass and centre of mass.
+  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 4.0, LimbMasses::lumps);
+  model.bodies[0].point_masses = {{Vector3(0, 0, -0.25), 4.0, 0.0}};
+  const VerletState<double> state = compile<double>(model);
+  EXPECT_DOUBLE_EQ(state.particle_mass[particle_of(state, Kind::limb_head)], 1.0);
+  EXPECT_DOUBLE_EQ(state.particle_mass[particle_of(state, Kind::limb_tail)], 3.0);
+}
+
+TEST(LimbMasses, WhatLumpsCannotCarryIsRefusedByName) {
+  const auto refusal = [](Model model) {
+    try {
+      compile<double>(model);
+    } catch (const ModelError& error) {
+      return std::string(error.what());
+    }
+    ADD_FAILURE() << "compiled";
+    return std::string();
+  };
+  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 2.0, LimbMasses::lumps);
+  EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" needs point_masses on every body"));
+  model.bodies[0].point_masses = {{Vector3(0, 0.1, 0.5), 2.0, 0.0}};
+  EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" needs every point mass on the limb's axis"));
+  model.bodies[0].point_masses = {{Vector3(0, 0, 0.7), 2.0, 0.0}};
+  EXPECT_THAT(refusal(model), HasSubstr("between the limb's ends"));
+  // All the mass at the head leaves the tail a particle without mass, which only a shared or
+  // pinned particle may be.
+  model.bodies[0].point_masses = {{Vector3(0, 0, 0.5), 2.0, 0.0}};
+  EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" leaves its tail without mass"));
+  Model chain = study_chain();
+  chain.settings.verlet.joints = ParticleJoints::zero_length_constraint;
+  chain.bodies[0].point_masses.pop_back();  // link_0 only at the pin
+  chain.bodies[0].point_masses.push_back({Vector3(0, 0, 0.05), 0.5, 0.0});
+  chain.bodies[0].mass = 1.0;
+  EXPECT_THAT(refusal(chain), HasSubstr("'link_0': limb_masses \"lumps\" leaves its tail without mass"));
 }
 
 }  // namespace

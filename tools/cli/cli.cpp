@@ -50,7 +50,8 @@ struct RunFlags {
   double ball_speed = 0, ball_radius = 0, ball_mass = 0, ball_restitution = 0, friction = 0;
   std::vector<double> ball_direction;
   long links = 0, steps = 0;
-  int iterations = 0;
+  int iterations = 0, substeps = 0;
+  std::string projection;
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
   std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "auto", threading = "workers";
@@ -68,7 +69,7 @@ struct RunFlags {
       *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
       *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
       *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option, *newton_iterations_option,
-      *compliance_option, *warm_start_option;
+      *compliance_option, *warm_start_option, *projection_option, *substeps_option;
   std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
 
   bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
@@ -131,6 +132,12 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.steps_option = run.add_option("--steps", flags.steps, "Number of steps (default: the scene's duration / dt)");
   flags.dt_option = run.add_option("--dt", flags.dt, "Time step, s");
   flags.iterations_option = run.add_option("--iterations", flags.iterations, "Relaxation sweeps per step");
+  flags.projection_option =
+      run.add_option("--projection", flags.projection,
+                     "Projection rule: pbd (end-of-step gradient, the thesis's) or rattle (start-of-step gradient and a "
+                     "velocity stage: SHAKE/RATTLE, second order)")
+          ->check(CLI::IsMember({"pbd", "rattle"}));
+  flags.substeps_option = run.add_option("--substeps", flags.substeps, "Substeps per step, each with its own sweeps (1 to 10000)");
   flags.tolerance_option = run.add_option("--tolerance", flags.tolerance, "Stop relaxing when a sweep moves less, m");
   flags.budget_option = run.add_option("--budget-us", flags.budget_us, "Wall-clock budget for relaxation per step, µs");
   flags.over_relaxation_option =
@@ -171,7 +178,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"depth-parity", "breadth-first", "rcm", "shuffled"}))
       ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
-  for (const char* name : {"--iterations", "--tolerance", "--budget-us", "--over-relaxation", "--solver", "--sweep", "--pinned",
+  for (const char* name : {"--iterations", "--projection", "--substeps", "--tolerance", "--budget-us", "--over-relaxation",
+                           "--solver", "--sweep", "--pinned",
                            "--threads", "--threading", "--layout", "--ordering", "--scalar", "--newton-iterations",
                            "--compliance", "--warm-start", "--long-range-attachments"}) {
     flags.verlet_only_options.push_back(run.get_option(name));
@@ -321,6 +329,15 @@ void apply_overrides(Model& model, const RunFlags& flags) {
     if (flags.iterations < 1) throw InputError(format("--iterations: must be >= 1, got %d", flags.iterations));
     model.settings.relaxation.iterations = flags.iterations;
   }
+  if (given(flags.projection_option)) {
+    model.settings.relaxation.projection = flags.projection == "rattle" ? ProjectionRule::rattle : ProjectionRule::pbd;
+  }
+  if (given(flags.substeps_option)) {
+    if (flags.substeps < 1 || flags.substeps > kMaxSubsteps) {
+      throw InputError(format("--substeps: must be in [1, %d], got %d", kMaxSubsteps, flags.substeps));
+    }
+    model.settings.relaxation.substeps = flags.substeps;
+  }
   if (given(flags.tolerance_option)) {
     model.settings.relaxation.tolerance = checked(flags.tolerance_option, flags.tolerance, non_negative, ">= 0");
   }
@@ -466,6 +483,7 @@ struct RunRecord {
   double largest_gap = 0, largest_stretch = 0, wall_seconds = 0;
   long steps_done = 0;
   std::array<long, 4> relaxation_stops{};
+  std::uint64_t fallbacks = 0;  ///< rattle projections that fell back to pbd
   std::vector<std::string> sleep_events;
   StepStatus status = StepStatus::ok;
 };
@@ -482,7 +500,10 @@ RunRecord run_steps(State& state, long steps, std::ofstream& csv, KnockMeter& kn
     const auto report = step(state);
     record.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++record.steps_done;
-    if constexpr (requires { report.stop; }) ++record.relaxation_stops[static_cast<int>(report.stop)];
+    if constexpr (requires { report.stop; }) {
+      ++record.relaxation_stops[static_cast<int>(report.stop)];
+      record.fallbacks += report.fallbacks;
+    }
     record.end = observe(state);
     knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
     record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
@@ -510,17 +531,21 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
                 model.settings.time_step, state.time, record.wall_seconds,
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
+  const RelaxationSettings& relaxation = model.settings.relaxation;
+  const bool rattle = relaxation.projection == ProjectionRule::rattle;
+  const std::string per = relaxation.substeps > 1 ? format(" a substep, %d substeps a step", relaxation.substeps) : std::string(" a step");
   if (state.options.solver == RelaxationSolver::direct) {
-    out << format("relaxation  up to %d Newton steps a step (tolerance %g m, budget %g us); stopped by:", state.options.newton_iterations,
-                  model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+    out << format("relaxation  %s projection; up to %d Newton steps%s (tolerance %g m, budget %g us); stopped by:",
+                  rattle ? "rattle" : "pbd", state.options.newton_iterations, per.c_str(), relaxation.tolerance, relaxation.budget_us);
   } else {
-    out << format("relaxation  up to %d sweeps a step (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
-                  model.settings.relaxation.iterations, model.settings.relaxation.over_relaxation,
-                  model.settings.relaxation.tolerance, model.settings.relaxation.budget_us);
+    out << format("relaxation  %s projection; up to %d sweeps%s (over-relaxation %g, tolerance %g m, budget %g us); stopped by:",
+                  rattle ? "rattle" : "pbd", relaxation.iterations, per.c_str(), relaxation.over_relaxation, relaxation.tolerance,
+                  relaxation.budget_us);
   }
   for (int k = 0; k < 4; ++k) {
     if (record.relaxation_stops[k]) out << format(" %s %ld", stop_name(static_cast<RelaxationStop>(k)), record.relaxation_stops[k]);
   }
+  if (rattle) out << format("; pbd fallbacks %llu", static_cast<unsigned long long>(record.fallbacks));
   out << "\n";
 }
 
