@@ -229,9 +229,14 @@ double direct_projection_step(VerletState<Scalar>& state) {
   const double largest = eliminate_awake(
       state,
       // −C(x) − α̃·λ at the current positions (refreshing n, and the rattle rule's choice of rows).
+      // A rigid row linearized at n₀ has the true slope n·n₀ times the one it is solved with:
+      // dividing its right-hand side by n·n₀ makes the step exact for a lone constraint (SHAKE's
+      // own update), leaving only the couplings between rows to the chord iteration.
       [&](std::size_t c) -> Vector3s<Scalar> {
         const Vector3s<Scalar> value = constraint_value(state, c, direct.direction[c]);
-        if (rattle && !is_point_constraint(state, c)) linearization(state, c);
+        if (rattle && !is_point_constraint(state, c) && direct.scaled_compliance[c] == Scalar(0)) {
+          return -value / direct.direction[c].dot(linearization(state, c));
+        }
         return -value - direct.scaled_compliance[c] * direct.multiplier[c];
       },
       [&](std::size_t c) -> const Vector3s<Scalar>& { return linearization(state, c); },

@@ -39,7 +39,12 @@ void ErrorMeter::add(const Observation& observation) {
 
 RunErrors ErrorMeter::result() const { return errors_; }
 
-double trajectory_error(const Trajectory& run, const Trajectory& reference) {
+namespace {
+
+// The largest over common sample times of `measure(points, reference points)`; infinite for a
+// run that stopped early or measured non-finite.
+template <typename Measure>
+double largest_over_samples(const Trajectory& run, const Trajectory& reference, Measure&& measure) {
   if (std::abs(run.sample_interval - reference.sample_interval) > 1e-9) {
     throw std::invalid_argument("trajectory_error: sample intervals differ");
   }
@@ -49,13 +54,32 @@ double trajectory_error(const Trajectory& run, const Trajectory& reference) {
     const auto& a = run.samples[k];
     const auto& b = reference.samples[k];
     if (a.size() != b.size()) throw std::invalid_argument("trajectory_error: the trajectories have different point counts");
-    double squares = 0;
-    for (std::size_t i = 0; i < a.size(); ++i) squares += (a[i] - b[i]).squaredNorm();
-    const double rms = a.empty() ? 0 : std::sqrt(squares / a.size());
-    if (!std::isfinite(rms)) return std::numeric_limits<double>::infinity();
-    largest = std::max(largest, rms);
+    const double value = measure(a, b);
+    if (!std::isfinite(value)) return std::numeric_limits<double>::infinity();
+    largest = std::max(largest, value);
   }
   return largest;
+}
+
+}  // namespace
+
+double trajectory_error(const Trajectory& run, const Trajectory& reference) {
+  return largest_over_samples(run, reference, [](const auto& a, const auto& b) {
+    double squares = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) squares += (a[i] - b[i]).squaredNorm();
+    return a.empty() ? 0.0 : std::sqrt(squares / a.size());
+  });
+}
+
+double max_point_error(const Trajectory& run, const Trajectory& reference) {
+  return largest_over_samples(run, reference, [](const auto& a, const auto& b) {
+    double largest = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const double distance = (a[i] - b[i]).norm();
+      largest = std::isnan(distance) ? distance : std::max(largest, distance);
+    }
+    return largest;
+  });
 }
 
 ObservedRun observe_run(Simulation& simulation, double duration, double sample_interval,

@@ -66,6 +66,12 @@ struct Trajectory {
 /// intervals differ by more than 10⁻⁹ s or the point counts differ.
 double trajectory_error(const Trajectory& run, const Trajectory& reference);
 
+/// The largest, over the common sample times and the points, of the distance between a point
+/// and the reference's, m — the worst point at its worst moment (the heavy end, usually);
+/// infinite like trajectory_error() for a run that stopped early or went non-finite. Throws
+/// std::invalid_argument as trajectory_error() does.
+double max_point_error(const Trajectory& run, const Trajectory& reference);
+
 /// One run of `duration` seconds, observed after every step.
 struct ObservedRun {
   RunErrors errors;

@@ -50,7 +50,13 @@ Simulation::Simulation(const Model& scene, const Method& method)
     : model_(configure(scene, method)), time_step_(method.time_step), state_(compile_state(model_, method)) {}
 
 StepStatus Simulation::step() {
-  return std::visit([&](auto& state) { return limber::step(state, time_step_).status; }, state_);
+  return std::visit(
+      [&](auto& state) {
+        const auto report = limber::step(state, time_step_);
+        if constexpr (requires { report.fallbacks; }) fallbacks_ += report.fallbacks;
+        return report.status;
+      },
+      state_);
 }
 
 Observation Simulation::observe() const {

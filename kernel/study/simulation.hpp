@@ -62,6 +62,9 @@ class Simulation {
 
   /// One step of the method's time step.
   StepStatus step();
+  /// Rattle projections that fell back to pbd over every step so far (StepReport::fallbacks;
+  /// 0 for the other methods).
+  std::uint64_t fallbacks() const { return fallbacks_; }
   Observation observe() const;
   double time() const;
   double time_step() const { return time_step_; }
@@ -76,6 +79,7 @@ class Simulation {
  private:
   Model model_;
   double time_step_ = 0;
+  std::uint64_t fallbacks_ = 0;
   std::variant<VerletState<double>, SpringState, LagrangeState, FeatherstoneState> state_;
 };
 

@@ -45,8 +45,11 @@ Model heavy_end_chain(ChainRelease release) {
   return model;
 }
 
-Model double_pendulum() {
-  return make_chain_model({.links = 2, .link_length = 0.5, .link_mass = 1, .anchor = {0, 0, 1}});
+Model double_pendulum(double release_angle) {
+  const Vector3 direction(std::sin(release_angle), 0, -std::cos(release_angle));
+  Model model = make_chain_model({.links = 2, .link_length = 0.5, .link_mass = 1, .anchor = {0, 0, 1}, .direction = direction});
+  model.name = "double pendulum";
+  return model;
 }
 
 }  // namespace limber::study

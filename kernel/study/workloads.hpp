@@ -29,8 +29,10 @@ enum class ChainRelease : std::uint8_t {
 Model heavy_end_chain(ChainRelease release);
 
 /// Two uniform rods of 0.5 m and 1 kg (capsules of radius 5 mm) joined end to end, pinned at
-/// (0, 0, 1) and released at rest along +x: the double pendulum of the run-time-against-error
-/// study. The particle method needs limb_masses "inertia" to carry a rod's inertia exactly.
-Model double_pendulum();
+/// (0, 0, 1) and released at rest in a straight line `release_angle` rad from the downward
+/// vertical, towards +x: π/2 (horizontal, the default) is the double pendulum of the
+/// run-time-against-error study, which is chaotic; small angles swing regularly. The particle
+/// method needs limb_masses "inertia" to carry a rod's inertia exactly.
+Model double_pendulum(double release_angle = 1.5707963267948966);
 
 }  // namespace limber::study

@@ -294,7 +294,10 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us) {
   } else {
     integrate(state, dt);
   }
-  if (has_ball) detect_ball_contacts(state, dt);
+  if (has_ball) {
+    detect_ball_contacts(state, dt);
+    state.ball_touched = state.ball_touched || !state.ball_contacts.empty();
+  }
   if (has_planes) detect_plane_contacts(state, dt);
   if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
   if (!state.awake_islands.empty()) relax_positions(state, dt, budget_us, report);
@@ -324,6 +327,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const int substeps = state.settings.relaxation.substeps;
   const double h = dt / substeps, start_time = state.time;
   state.plan.fallbacks.value = 0;
+  state.ball_touched = false;
   for (int k = 0; k < substeps; ++k) {
     const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps);
     report.iterations += part.iterations;

@@ -228,7 +228,8 @@ struct VerletState {
   RelaxationPlan<Scalar> plan;
   std::vector<std::uint32_t> contact_particles;  ///< particles the contacts of this step move
   std::vector<PlaneContact> plane_contacts;
-  std::vector<BallContact> ball_contacts;
+  std::vector<BallContact> ball_contacts;  ///< the last substep's
+  bool ball_touched = false;  ///< the ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
   StepReport last_report;
   StepCounters counters;

@@ -71,6 +71,17 @@ TEST(StudyMetrics, TrajectoryErrorIsTheLargestRmsDistance) {
   EXPECT_DOUBLE_EQ(trajectory_error(partly, line(0, 5)), 0.4 / std::sqrt(2.0));
 }
 
+TEST(StudyMetrics, MaxPointErrorIsTheWorstPointAtItsWorstMoment) {
+  EXPECT_DOUBLE_EQ(max_point_error(line(0.25, 5), line(0, 5)), 0.25);
+  Trajectory partly = line(0, 5);
+  partly.samples[3][0].y() = 0.4;  // one point 0.4 m off at one sample
+  EXPECT_DOUBLE_EQ(max_point_error(partly, line(0, 5)), 0.4);
+  Trajectory broken = line(0, 5);
+  broken.samples[2][1].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(max_point_error(broken, line(0, 5)), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(max_point_error(line(0, 3), line(0, 5)), std::numeric_limits<double>::infinity());
+}
+
 TEST(StudyMetrics, TrajectoryErrorOfAStoppedOrNonFiniteRunIsInfinite) {
   EXPECT_EQ(trajectory_error(line(0, 3), line(0, 5)), std::numeric_limits<double>::infinity());
   Trajectory broken = line(0, 5);

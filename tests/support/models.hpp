@@ -15,6 +15,16 @@ inline Model load_shipped_scene(const std::string& file, const SceneOptions& opt
   return load_scene_file(scene_path(file), options);
 }
 
+/// `model` with the relaxation the thesis ran (settings.relaxation back to its defaults: the pbd
+/// rule in one step), `iterations` sweeps and over-relaxation ω — for tests of pbd's facts on
+/// shipped scenes, whatever rule and substeps the files now choose.
+inline Model with_thesis_relaxation(Model model, int iterations, double over_relaxation) {
+  model.settings.relaxation = RelaxationSettings{};
+  model.settings.relaxation.iterations = iterations;
+  model.settings.relaxation.over_relaxation = over_relaxation;
+  return model;
+}
+
 /// A straight chain along +x of capsule links with the given masses (kg), each `link_length` m,
 /// link 0's head at `start`; joints link k−1 tail → link k head; optionally pinned to the world.
 inline Model make_chain(const std::vector<double>& masses, double link_length, bool pinned,

@@ -20,7 +20,7 @@ namespace {
 double knock(const std::string& variant, const std::function<void(Ball&)>& adjust_ball) {
   return testing::humanoid_knock(
       variant, adjust_ball, [](const Model& model) { return compile<double>(model); },
-      [](const VerletState<double>& state) { return !state.ball_contacts.empty(); });
+      [](const VerletState<double>& state) { return state.ball_touched; });
 }
 
 void set_speed(Ball& ball, double speed) { testing::set_ball_speed(ball, speed); }

@@ -47,11 +47,7 @@ struct Case {
 // A shipped scene with the relaxation settings the prints were taken with: the pbd rule, one
 // step, 100 sweeps (the chain over-relaxed by 1.5), whatever the scene files now choose.
 Model pbd_scene(const std::string& file, double over_relaxation) {
-  Model model = load_shipped_scene(file);
-  model.settings.relaxation = RelaxationSettings{};
-  model.settings.relaxation.iterations = 100;
-  model.settings.relaxation.over_relaxation = over_relaxation;
-  return model;
+  return testing::with_thesis_relaxation(load_shipped_scene(file), 100, over_relaxation);
 }
 
 std::vector<Case> cases() {

@@ -76,9 +76,15 @@ TYPED_TEST(VerletMethod, HeavyEndChainKeepsJointsClosedWith100Iterations) {
   EXPECT_LT(largest_stretch, 1e-4);
 }
 
+// chain.json as the thesis ran it (pbd, one step, 100 sweeps, over-relaxation 1.5): the facts
+// below are the pbd rule's and count sweeps per step.
+Model thesis_chain(long links = 5) {
+  return testing::with_thesis_relaxation(load_shipped_scene("chain.json", {.variant = {}, .links = links}), 100, 1.5);
+}
+
 TYPED_TEST(VerletMethod, OverRelaxationConvergesFasterWithoutGainingEnergy) {
   auto run = [](double omega, int sweeps) {
-    Model model = load_shipped_scene("chain.json");
+    Model model = thesis_chain();
     model.settings.relaxation.over_relaxation = omega;
     model.settings.relaxation.iterations = sweeps;
     auto state = compile<TypeParam>(model);
@@ -100,7 +106,7 @@ TYPED_TEST(VerletMethod, OverRelaxationConvergesFasterWithoutGainingEnergy) {
 TYPED_TEST(VerletMethod, SharedParticleJointsMoveLikeClosedZeroLengthJoints) {
   // Thesis 3.2.5: a spherical joint is two limbs sharing a particle. Converged zero-length
   // constraints are the same joint, so the chains must move together.
-  Model model = load_shipped_scene("chain.json");
+  Model model = thesis_chain();
   model.settings.relaxation.iterations = 1000;
   auto constrained = compile<TypeParam>(model);
   model.settings.verlet.joints = ParticleJoints::shared_particle;
@@ -191,7 +197,7 @@ TYPED_TEST(VerletMethod, SameInputGivesSameBits) {
 }
 
 TYPED_TEST(VerletMethod, RelaxationReportsWhichCriterionStoppedIt) {
-  Model model = load_shipped_scene("chain.json");
+  Model model = thesis_chain();
   model.settings.relaxation.iterations = 50;
   auto by_count = compile<TypeParam>(model);
   StepReport report = step(by_count);
@@ -205,7 +211,7 @@ TYPED_TEST(VerletMethod, RelaxationReportsWhichCriterionStoppedIt) {
   EXPECT_LT(report.iterations, 50);
   EXPECT_LT(report.largest_correction, 1e-3);
 
-  Model long_chain = load_shipped_scene("chain.json", {.variant = {}, .links = 2000});
+  Model long_chain = thesis_chain(2000);
   long_chain.settings.relaxation.iterations = 1000000;
   long_chain.settings.relaxation.budget_us = 200;
   auto by_budget = compile<TypeParam>(long_chain);

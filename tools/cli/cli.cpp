@@ -430,7 +430,7 @@ bool has_joint_gaps(const LagrangeState& state) { return state.joints.size() > 0
 bool has_joint_gaps(const FeatherstoneState& state) { return state.joints.size() > 0; }
 
 template <typename Scalar>
-bool ball_touching(const VerletState<Scalar>& state) { return !state.ball_contacts.empty(); }
+bool ball_touching(const VerletState<Scalar>& state) { return state.ball_touched; }
 bool ball_touching(const RigidScene& state) { return state.ball_touching; }
 
 const char* layout_name(ParticleLayout layout) {
