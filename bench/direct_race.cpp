@@ -8,6 +8,10 @@
 // so its joint error is the link stretch | |x_head − x_tail| − L | / L; Bullet's is the distance
 // between where a joint's two links put its pivot, / L. Both are the largest over every step.
 //
+// The rattle contenders run the same race under the rattle projection rule (start-of-step
+// gradients, velocity stage), whole or in substeps; "iters" counts sweeps or Newton steps per
+// frame over all substeps.
+//
 // Usage: direct_race [--links N,N,...] [--csv FILE]   (default 10,100,1000,10000)
 // Prints a table and writes the CSV the plot reads (tools/plot_race.py).
 #include <algorithm>
@@ -42,7 +46,14 @@ struct Contender {
   double tolerance = 0;
   bool long_range_attachments = false;
   bool warm_start = false;
+  ProjectionRule projection = ProjectionRule::pbd;
+  int substeps = 1;  // iterations are per substep
 };
+
+// A rattle contender: `iterations` sweeps or Newton steps in each of `substeps` substeps.
+Contender rattle(std::string name, RelaxationSolver solver, int iterations, int substeps, double tolerance = 0) {
+  return {std::move(name), solver, iterations, tolerance, false, false, ProjectionRule::rattle, substeps};
+}
 
 struct Result {
   double seconds_per_step = 0;
@@ -63,6 +74,8 @@ Result run_limber(std::size_t links, const Contender& contender) {
   model.settings.damping = 0;
   model.settings.relaxation.iterations = contender.solver == RelaxationSolver::direct ? 1 : contender.iterations;
   model.settings.relaxation.tolerance = contender.tolerance;
+  model.settings.relaxation.projection = contender.projection;
+  model.settings.relaxation.substeps = contender.substeps;
   VerletOptions options;
   options.solver = contender.solver;
   options.newton_iterations = contender.solver == RelaxationSolver::direct ? contender.iterations : 1;
@@ -136,6 +149,12 @@ int main(int argc, char** argv) {
       {"direct to 1e-5 m (at most 50)", RelaxationSolver::direct, 50, 1e-5},
       {"direct to 1e-9 m (at most 50)", RelaxationSolver::direct, 50, 1e-9},
       {"direct to 1e-9 m (at most 50) (warm start)", RelaxationSolver::direct, 50, 1e-9, false, true},
+      rattle("rattle direct to 1e-9 m (at most 50)", RelaxationSolver::direct, 50, 1, 1e-9),
+      rattle("rattle direct 1 x 4 substeps", RelaxationSolver::direct, 1, 4),
+      rattle("rattle direct 1 x 8 substeps", RelaxationSolver::direct, 1, 8),
+      rattle("rattle direct 1 x 16 substeps", RelaxationSolver::direct, 1, 16),
+      rattle("rattle direct to 1e-9 m x 16 substeps", RelaxationSolver::direct, 50, 16, 1e-9),
+      rattle("rattle gauss-seidel 2 x 64 substeps", RelaxationSolver::gauss_seidel, 2, 64),
   };
   std::ofstream csv;
   if (!csv_path.empty()) {

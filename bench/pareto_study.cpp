@@ -18,6 +18,9 @@
 // lasts 2 s (issue 8). The humanoid's contacts make trajectories non-smooth: its error is the
 // joint gap or stretch and the energy change only.
 //
+// The rattle series run frames of 1/60 s in substeps (verlet rattle gauss-seidel: 1 or 4 sweeps a
+// substep; verlet rattle direct: one Newton step a substep); "time_step" is the frame.
+//
 // On the chains the particle methods run with LimbMasses::inertia (three particles per limb
 // reproduce a uniform rod's mass, centre and inertia), so every method simulates the same body;
 // the series "verlet gauss-seidel, thesis masses" keeps the thesis's half-mass-at-each-end
@@ -34,6 +37,7 @@
 #include "kernel/scene/generators.hpp"
 #include "kernel/scene/scene_file.hpp"
 #include "kernel/study/run_metrics.hpp"
+#include "kernel/study/workloads.hpp"
 
 namespace limber::study {
 namespace {
@@ -43,9 +47,7 @@ constexpr double kSampleInterval = 0.05;  // s: a whole number of steps of every
 constexpr double kReferenceStep = 1.0 / 20000;
 
 Model scene_model(const std::string& scene) {
-  if (scene == "double-pendulum") {
-    return make_chain_model({.links = 2, .link_length = 0.5, .link_mass = 1, .anchor = {0, 0, 1}});
-  }
+  if (scene == "double-pendulum") return double_pendulum();
   if (scene == "chain-5") return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json");
   if (scene == "chain-100") return make_chain_model({.links = 100, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = 2});
   if (scene == "humanoid") {
@@ -78,6 +80,18 @@ std::vector<Method> methods(bool quick, std::optional<LimbMasses> limb_masses) {
   }
   for (const double dt : all_steps) {
     for (const int newton : {1, 2, 5}) verlet("verlet direct", RelaxationSolver::direct, newton, dt, limb_masses);
+  }
+  // The rattle rule (kernel/relaxation/README.md): frames of 1/60 s in substeps, each with a few
+  // Gauss-Seidel sweeps or Newton steps.
+  const auto rattle = [&](const char* series, RelaxationSolver solver, int iterations, int substeps) {
+    verlet(series, solver, iterations, 1.0 / 60, limb_masses);
+    Method& m = out.back();
+    m.projection = ProjectionRule::rattle, m.substeps = substeps;
+    m.setting = std::to_string(substeps) + " substeps x " + m.setting;
+  };
+  for (const int substeps : quick ? std::vector<int>{16} : std::vector<int>{2, 8, 32, 128}) {
+    for (const int sweeps : {1, 4}) rattle("verlet rattle gauss-seidel", RelaxationSolver::gauss_seidel, sweeps, substeps);
+    rattle("verlet rattle direct", RelaxationSolver::direct, 1, substeps);
   }
   for (const double dt : quick ? std::vector<double>{1.0 / 1000} : std::vector<double>{1.0 / 240, 1.0 / 1000, 1.0 / 2000}) {
     for (const double k : {1e4, 1e5, 1e6}) {

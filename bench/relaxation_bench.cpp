@@ -10,10 +10,16 @@
 // Names: Colour/<workload> (colouring alone), <kind>/<workload>/<scalar type>/<path>, path =
 // scalar (one lane over SoA: the reference) | simd (the default: automatic layout) |
 // simd_2t_workers | simd_2t_parallel_for | simd_soa | simd_aos | simd_aosoa | scalar_aos |
-// jacobi_simd | jacobi_simd_2t_workers.
+// jacobi_simd | jacobi_simd_2t_workers | rattle_simd | rattle_simd_2t_workers (the rattle
+// rule's position sweep, along the stored start gradients) | rattle_velocity_simd |
+// rattle_velocity_simd_2t_workers (its velocity sweep).
 // "Sweep" times one relaxation iteration over every constraint; "Step" one full step (Verlet
-// integration + 10 sweeps + sleep bookkeeping). Counters: constraints, projections/s, and
-// bytes/s of the data a sweep must stream (see streamed_bytes).
+// integration + 10 sweeps + sleep bookkeeping; rattle: + 10 velocity sweeps). Counters:
+// constraints, projections/s, and bytes/s of the data a sweep must stream (see streamed_bytes).
+//
+//   build/bench/relaxation_bench --benchmark_filter='Sweep/chain_1000000?/.*/(simd|rattle_simd)(_2t_workers)?$'
+// compares the rattle sweep with today's pbd sweep on 10^5 and 10^6 links, float and double,
+// 1 and 2 threads, in one run (bench/README.md).
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -83,6 +89,8 @@ const VerletState<Scalar>& compiled(const Workload& workload) {
 struct Path {
   std::string name;
   VerletOptions options;
+  ProjectionRule projection = ProjectionRule::pbd;
+  bool velocity = false;  ///< time the rattle rule's velocity sweep instead of the position sweep
 };
 
 std::vector<Path> paths() {
@@ -94,6 +102,10 @@ std::vector<Path> paths() {
     // Always split across threads when asked to: the crossover is what the benchmark measures.
     options.parallel_minimum_slots = 1;
     return Path{name, options};
+  };
+  auto rattle = [](Path path, bool velocity) {
+    path.projection = ProjectionRule::rattle, path.velocity = velocity;
+    return path;
   };
   const auto gs = RelaxationSolver::gauss_seidel, jacobi = RelaxationSolver::jacobi;
   const auto automatic = ParticleLayout::automatic, soa = ParticleLayout::soa;
@@ -108,6 +120,10 @@ std::vector<Path> paths() {
       make("scalar_aos", false, 1, Threading::serial, ParticleLayout::aos, gs),
       make("jacobi_simd", true, 1, Threading::serial, automatic, jacobi),
       make("jacobi_simd_2t_workers", true, 2, Threading::workers, automatic, jacobi),
+      rattle(make("rattle_simd", true, 1, Threading::serial, automatic, gs), false),
+      rattle(make("rattle_simd_2t_workers", true, 2, Threading::workers, automatic, gs), false),
+      rattle(make("rattle_velocity_simd", true, 1, Threading::serial, automatic, gs), true),
+      rattle(make("rattle_velocity_simd_2t_workers", true, 2, Threading::workers, automatic, gs), true),
   };
 }
 
@@ -121,19 +137,27 @@ double streamed_bytes(const VerletState<Scalar>& state) {
 }
 
 template <typename Scalar>
-VerletState<Scalar> prepared(const Workload& workload, const VerletOptions& options) {
+VerletState<Scalar> prepared(const Workload& workload, const Path& path) {
   VerletState<Scalar> state = compiled<Scalar>(workload);
-  state.options = options;
+  state.options = path.options;
+  state.settings.relaxation.projection = path.projection;
   prepare_relaxation_plan(state);
   return state;
 }
 
 template <typename Scalar>
-void sweep_benchmark(benchmark::State& run, const Workload& workload, const VerletOptions& options) {
-  VerletState<Scalar> state = prepared<Scalar>(workload, options);
+void sweep_benchmark(benchmark::State& run, const Workload& workload, const Path& path) {
+  VerletState<Scalar> state = prepared<Scalar>(workload, path);
   begin_relaxation(state, 1.0 / 60);
-  for (auto _ : run) benchmark::DoNotOptimize(relaxation_sweep(state, 1.0));
-  end_relaxation(state);
+  if (path.velocity) {
+    end_relaxation(state);
+    begin_velocity_projection(state);
+    for (auto _ : run) benchmark::DoNotOptimize(velocity_sweep(state));
+    end_velocity_projection(state);
+  } else {
+    for (auto _ : run) benchmark::DoNotOptimize(relaxation_sweep(state, 1.0));
+    end_relaxation(state);
+  }
   const double constraints = static_cast<double>(state.constraints.size());
   run.counters["constraints"] = constraints;
   run.counters["colours"] = state.colour_count;
@@ -142,8 +166,8 @@ void sweep_benchmark(benchmark::State& run, const Workload& workload, const Verl
 }
 
 template <typename Scalar>
-void step_benchmark(benchmark::State& run, const Workload& workload, const VerletOptions& options) {
-  VerletState<Scalar> state = prepared<Scalar>(workload, options);
+void step_benchmark(benchmark::State& run, const Workload& workload, const Path& path) {
+  VerletState<Scalar> state = prepared<Scalar>(workload, path);
   step(state);  // the first step builds the batches and touches their pages
   for (auto _ : run) benchmark::DoNotOptimize(step(state));
   run.counters["constraints"] = static_cast<double>(state.constraints.size());
@@ -195,18 +219,19 @@ void register_all() {
         const std::string type = use_float ? "float" : "double";
         // AoSoA, scalar-AoS and Jacobi variants in float only.
         const bool main_path = path.name == "scalar" || path.name == "simd" || path.name == "simd_soa" ||
-                               path.name == "simd_aos" || path.name.rfind("simd_2t", 0) == 0;
+                               path.name == "simd_aos" || path.name.rfind("simd_2t", 0) == 0 ||
+                               path.name.rfind("rattle_simd", 0) == 0;
         if (!use_float && !main_path) continue;
         const std::string suffix = workload.name + "/" + type + "/" + path.name;
         if (use_float) {
-          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<float>, workload, path.options)
+          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<float>, workload, path)
               ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
-          if (main_path) benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<float>, workload, path.options)
+          if (main_path && !path.velocity) benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<float>, workload, path)
               ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
         } else {
-          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<double>, workload, path.options)
+          benchmark::RegisterBenchmark(("Sweep/" + suffix).c_str(), sweep_benchmark<double>, workload, path)
               ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
-          benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<double>, workload, path.options)
+          if (!path.velocity) benchmark::RegisterBenchmark(("Step/" + suffix).c_str(), step_benchmark<double>, workload, path)
               ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
         }
       }

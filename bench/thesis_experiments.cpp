@@ -98,7 +98,7 @@ void humanoid_knocks() {
     const long steps = std::lround(model.settings.duration / model.settings.time_step);
     for (long s = 0; s < steps; ++s) {
       step(state);
-      knock.update(state.time, !state.ball_contacts.empty(), observe(state).body_centre_of_mass);
+      knock.update(state.time, state.ball_touched, observe(state).body_centre_of_mass);
     }
     const Eigen::Vector3d moved = observe(state).body_centre_of_mass - start;
     std::printf("| %s | %s | %.3f m | %.3f m |\n", body, label, knock.distance(), std::hypot(moved.x(), moved.y()));

@@ -23,6 +23,8 @@ STYLES = {
     "verlet gauss-seidel thesis masses": ("peru", "d"),
     "verlet jacobi": ("tab:purple", "v"),
     "verlet direct": ("tab:blue", "o"),
+    "verlet rattle gauss-seidel": ("tab:cyan", "h"),
+    "verlet rattle direct": ("navy", "p"),
     "springs explicit": ("tab:olive", "<"),
     "springs implicit": ("tab:green", ">"),
     "lagrange baumgarte": ("tab:brown", "s"),

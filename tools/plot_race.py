@@ -14,7 +14,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-FAMILIES = [("bullet", "tab:red", "s"), ("direct", "tab:blue", "o"), ("long-range", "tab:green", "^"),
+FAMILIES = [("bullet", "tab:red", "s"), ("rattle", "tab:cyan", "h"), ("direct", "tab:blue", "o"), ("long-range", "tab:green", "^"),
             ("jacobi", "tab:purple", "v"), ("gauss-seidel", "tab:orange", "D")]
 
 
