@@ -21,6 +21,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
+#include <utility>
 
 #include <xsimd/xsimd.hpp>
 #if defined(__AVX512F__)
@@ -290,6 +291,33 @@ std::uint8_t consecutive_bits(const ConstraintBatches<Scalar>& batches, std::siz
   }
 }
 
+/// The two particles of each lane of the block at `slot`: where they are in a layout (vector
+/// loads for runs of consecutive particles, else gathers), their values there, and a store back.
+template <typename Lanes, typename Positions>
+struct BlockEnds {
+  const typename Lanes::Index *i, *j;
+  bool i_consecutive, j_consecutive;
+  LanePositions<Lanes> a, b;  ///< particle i's and j's values in each lane
+
+  template <typename Scalar>
+  BlockEnds(const ConstraintBatches<Scalar>& batches, std::size_t slot, const Positions& positions)
+      : i(&batches.particle_i[slot]), j(&batches.particle_j[slot]) {
+    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
+    i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
+    a = positions.template load<Lanes>(i, i_consecutive);
+    b = positions.template load<Lanes>(j, j_consecutive);
+  }
+  /// The same lanes' particles in another array triple of the same layout (Jacobi's sums).
+  template <typename Other>
+  std::pair<LanePositions<Lanes>, LanePositions<Lanes>> load(const Other& other) const {
+    return {other.template load<Lanes>(i, i_consecutive), other.template load<Lanes>(j, j_consecutive)};
+  }
+  template <typename Other>
+  void store(const Other& target, const LanePositions<Lanes>& at_i, const LanePositions<Lanes>& at_j) const {
+    target.template store<Lanes>(i, i_consecutive, at_i), target.template store<Lanes>(j, j_consecutive, at_j);
+  }
+};
+
 /// Projects slots [begin, end) of `batches` (whole blocks of one colour) in place, Gauss-Seidel
 /// style, with over-relaxation ω. Returns the largest particle displacement, m.
 template <typename Lanes, typename Positions, typename Scalar>
@@ -299,12 +327,8 @@ Scalar project_blocks(const ConstraintBatches<Scalar>& batches, std::size_t begi
   const V omega = Lanes::broadcast(over_relaxation);
   V largest = Lanes::broadcast(Scalar(0));
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const auto* i = &batches.particle_i[slot];
-    const auto* j = &batches.particle_j[slot];
-    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
-    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
-    LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
-    LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
+    BlockEnds<Lanes, Positions> ends(batches, slot, positions);
+    LanePositions<Lanes>&a = ends.a, &b = ends.b;
     const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
     const V error = length - Lanes::load(&batches.rest_length[slot]);
@@ -314,7 +338,7 @@ Scalar project_blocks(const ConstraintBatches<Scalar>& batches, std::size_t begi
     const V move_i = s_i * scale, move_j = s_j * scale;
     a.x = a.x - move_i * dx, a.y = a.y - move_i * dy, a.z = a.z - move_i * dz;
     b.x = b.x + move_j * dx, b.y = b.y + move_j * dy, b.z = b.z + move_j * dz;
-    positions.template store<Lanes>(i, i_consecutive, a), positions.template store<Lanes>(j, j_consecutive, b);
+    ends.store(positions, a, b);
     largest = Lanes::max(largest, Lanes::if_positive(length, Lanes::abs(omega * error) * Lanes::max(s_i, s_j)));
   }
   return Lanes::reduce_max(largest);
@@ -328,22 +352,17 @@ void accumulate_blocks(const ConstraintBatches<Scalar>& batches, std::size_t beg
                        Positions positions, CorrectionSums<Scalar> sums) {
   using V = typename Lanes::value;
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const auto* i = &batches.particle_i[slot];
-    const auto* j = &batches.particle_j[slot];
-    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
-    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
-    const LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
-    const LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
+    const BlockEnds<Lanes, Positions> ends(batches, slot, positions);
+    const LanePositions<Lanes>&a = ends.a, &b = ends.b;
     const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
     const V error = length - Lanes::load(&batches.rest_length[slot]);
     const V scale = Lanes::if_positive(length, error / length);
     const V move_i = Lanes::load(&batches.share_i[slot]) * scale, move_j = Lanes::load(&batches.share_j[slot]) * scale;
-    LanePositions<Lanes> sum_i = sums.template load<Lanes>(i, i_consecutive);
-    LanePositions<Lanes> sum_j = sums.template load<Lanes>(j, j_consecutive);
+    auto [sum_i, sum_j] = ends.load(sums);
     sum_i.x = sum_i.x - move_i * dx, sum_i.y = sum_i.y - move_i * dy, sum_i.z = sum_i.z - move_i * dz;
     sum_j.x = sum_j.x + move_j * dx, sum_j.y = sum_j.y + move_j * dy, sum_j.z = sum_j.z + move_j * dz;
-    sums.template store<Lanes>(i, i_consecutive, sum_i), sums.template store<Lanes>(j, j_consecutive, sum_j);
+    ends.store(sums, sum_i, sum_j);
   }
 }
 
@@ -376,10 +395,8 @@ void store_gradients(const ConstraintBatches<Scalar>& batches, GradientField<Sca
   using V = typename Lanes::value;
   const V zero = Lanes::broadcast(Scalar(0)), one = Lanes::broadcast(Scalar(1));
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
-    const LanePositions<Lanes> a = positions.template load<Lanes>(&batches.particle_i[slot], consecutive & 1);
-    const LanePositions<Lanes> b = positions.template load<Lanes>(&batches.particle_j[slot], consecutive & 2);
-    const V dx = a.x - b.x, dy = a.y - b.y, dz = a.z - b.z;
+    const BlockEnds<Lanes, Positions> ends(batches, slot, positions);
+    const V dx = ends.a.x - ends.b.x, dy = ends.a.y - ends.b.y, dz = ends.a.z - ends.b.z;
     const V length = Lanes::sqrt(dx * dx + dy * dy + dz * dz);
     const typename Lanes::mask valid = (Lanes::load(&batches.rest_length[slot]) > zero) & (length > zero);
     const V inverse = Lanes::select(valid, one / Lanes::select(valid, length, one), zero);
@@ -460,17 +477,13 @@ Scalar project_blocks_with(const ConstraintBatches<Scalar>& batches, std::size_t
   using V = typename Lanes::value;
   V largest = Lanes::broadcast(Scalar(0));
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const auto* i = &batches.particle_i[slot];
-    const auto* j = &batches.particle_j[slot];
-    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
-    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
-    LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
-    LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
+    BlockEnds<Lanes, Positions> ends(batches, slot, positions);
+    LanePositions<Lanes>&a = ends.a, &b = ends.b;
     const auto u = make(slot, a, b);
     const V s_i = Lanes::load(&batches.share_i[slot]), s_j = Lanes::broadcast(Scalar(1)) - s_i;  // one field less to stream
     a.x = a.x - s_i * u.x, a.y = a.y - s_i * u.y, a.z = a.z - s_i * u.z;
     b.x = b.x + s_j * u.x, b.y = b.y + s_j * u.y, b.z = b.z + s_j * u.z;
-    positions.template store<Lanes>(i, i_consecutive, a), positions.template store<Lanes>(j, j_consecutive, b);
+    ends.store(positions, a, b);
     largest = Lanes::max(largest, u.magnitude * Lanes::max(s_i, s_j));
   }
   return Lanes::reduce_max(largest);
@@ -483,19 +496,13 @@ void accumulate_blocks_with(const ConstraintBatches<Scalar>& batches, std::size_
                             Positions positions, CorrectionSums<Scalar> sums, Make&& make) {
   using V = typename Lanes::value;
   for (std::size_t slot = begin; slot < end; slot += Lanes::size) {
-    const auto* i = &batches.particle_i[slot];
-    const auto* j = &batches.particle_j[slot];
-    const std::uint8_t consecutive = consecutive_bits<Lanes>(batches, slot);
-    const bool i_consecutive = consecutive & 1, j_consecutive = consecutive & 2;
-    const LanePositions<Lanes> a = positions.template load<Lanes>(i, i_consecutive);
-    const LanePositions<Lanes> b = positions.template load<Lanes>(j, j_consecutive);
-    const auto u = make(slot, a, b);
+    const BlockEnds<Lanes, Positions> ends(batches, slot, positions);
+    const auto u = make(slot, ends.a, ends.b);
     const V s_i = Lanes::load(&batches.share_i[slot]), s_j = Lanes::broadcast(Scalar(1)) - s_i;
-    LanePositions<Lanes> sum_i = sums.template load<Lanes>(i, i_consecutive);
-    LanePositions<Lanes> sum_j = sums.template load<Lanes>(j, j_consecutive);
+    auto [sum_i, sum_j] = ends.load(sums);
     sum_i.x = sum_i.x - s_i * u.x, sum_i.y = sum_i.y - s_i * u.y, sum_i.z = sum_i.z - s_i * u.z;
     sum_j.x = sum_j.x + s_j * u.x, sum_j.y = sum_j.y + s_j * u.y, sum_j.z = sum_j.z + s_j * u.z;
-    sums.template store<Lanes>(i, i_consecutive, sum_i), sums.template store<Lanes>(j, j_consecutive, sum_j);
+    ends.store(sums, sum_i, sum_j);
   }
 }
 

@@ -92,7 +92,6 @@ void build_batches(VerletState<Scalar>& state, const std::vector<std::uint32_t>&
   plan.built_for = state.awake_generation;
 }
 
-
 // A position sweep of `kKernel` over the layout relaxation runs on.
 template <typename Scalar, typename Lanes, coloured::Kernel kKernel>
 double coloured_sweep(VerletState<Scalar>& state, Scalar over_relaxation) {
