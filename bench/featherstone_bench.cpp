@@ -11,7 +11,7 @@
 #include <cmath>
 #include <random>
 
-#include "kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
 
 namespace {
 

@@ -7,9 +7,9 @@
 
 #include <cmath>
 
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/scene/generators.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/scene/generators.hpp"
 
 namespace {
 

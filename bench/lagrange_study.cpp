@@ -7,10 +7,10 @@
 #include <cstdio>
 #include <string>
 
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/scene_file.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 int main() {
   using namespace limber;

@@ -34,10 +34,10 @@
 #include <string>
 #include <vector>
 
-#include "kernel/scene/generators.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/study/run_metrics.hpp"
-#include "kernel/study/workloads.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/workloads.hpp"
 
 namespace limber::study {
 namespace {

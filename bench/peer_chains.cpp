@@ -41,16 +41,16 @@
 #include <vector>
 
 #include "bench/peers/peer_chain.hpp"
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/generators.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

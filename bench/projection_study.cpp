@@ -24,8 +24,8 @@
 #include <utility>
 #include <vector>
 
-#include "kernel/study/run_metrics.hpp"
-#include "kernel/study/workloads.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/workloads.hpp"
 
 namespace limber::study {
 namespace {

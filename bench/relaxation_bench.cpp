@@ -29,11 +29,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "kernel/relaxation/relaxation.hpp"
-#include "kernel/scene/generators.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
-#include "layouts/graph/constraint_colouring.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "limber/layouts/graph/constraint_colouring.hpp"
 
 namespace limber {
 namespace {

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/generators.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

@@ -10,13 +10,13 @@
 #include <string>
 #include <vector>
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/spring_forces.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace {
 

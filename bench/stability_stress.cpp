@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
-#include "kernel/scene/generators.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/study/run_metrics.hpp"
-#include "kernel/study/spring_stability.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/spring_stability.hpp"
 
 namespace {
 

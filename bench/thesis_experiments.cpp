@@ -17,16 +17,16 @@
 #include <string>
 #include <vector>
 
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/metrics/knock.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/metrics/knock.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

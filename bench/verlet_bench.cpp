@@ -10,9 +10,9 @@
 
 #include <benchmark/benchmark.h>
 
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

@@ -8,6 +8,8 @@
 
 #include <xsimd/memory/xsimd_aligned_allocator.hpp>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// Alignment of every buffer array, in bytes: one cache line, and the width of an AVX-512

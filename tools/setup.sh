@@ -1,35 +1,50 @@
 #!/usr/bin/env bash
-# Installs the Debian packages limber needs (only the missing ones), then configures and builds.
+# Installs the Debian packages limber needs (only the missing ones), then configures and builds
+# what was asked for: the library and the `limber` program by default, the test suite with
+# --tests, the benchmarks and studies (and the other engines they compare with) with --bench.
 #
-#   tools/setup.sh [--portable] [--debug]
+#   tools/setup.sh [--tests] [--bench] [--portable] [--debug]
 #
+#   --tests      also GoogleTest, GoogleMock and MuJoCo (the Featherstone cross-check); builds the tests
+#   --bench      also Google Benchmark, Bullet, ODE and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
 #   --portable   build for baseline x86-64 instead of -march=native
 #   --debug      Debug build instead of Release
 #
-# Environment: LIMBER_BUILD_DIR (default: build), LIMBER_SKIP_INSTALL=1 to skip apt-get.
+# What a build directory was once configured with (tests, benchmarks) it keeps, but a call
+# without --tests or --bench builds only the library and the program: `tools/run.sh` after
+# `tools/test.sh` neither drops nor rebuilds the tests. Environment: LIMBER_BUILD_DIR (default: build),
+# LIMBER_SKIP_INSTALL=1 to skip apt-get.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 native=ON
 build_type=Release
+tests=OFF
+bench=OFF
 for arg in "$@"; do
   case "$arg" in
+    --tests) tests=ON ;;
+    --bench) bench=ON ;;
     --portable) native=OFF ;;
     --debug) build_type=Debug ;;
-    *) echo "setup.sh: unknown option '$arg' (expected --portable or --debug)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option '$arg' (expected --tests, --bench, --portable or --debug)" >&2; exit 2 ;;
   esac
 done
 build_dir=${LIMBER_BUILD_DIR:-build}
+build_all=OFF
+if [ "$tests" = ON ] || [ "$bench" = ON ]; then build_all=ON; fi
+if [ -f "$build_dir/CMakeCache.txt" ]; then
+  grep -q '^LIMBER_BUILD_TESTS:BOOL=ON' "$build_dir/CMakeCache.txt" && tests=ON
+  grep -q '^LIMBER_BUILD_BENCHMARKS:BOOL=ON' "$build_dir/CMakeCache.txt" && bench=ON
+fi
 
-# Build tools and libraries, as Debian 12 packages.
-packages=(
-  g++ cmake ninja-build pkg-config
-  libeigen3-dev libtbb-dev libxsimd-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
-  nlohmann-json3-dev libcli11-dev
-  libmujoco-dev libbullet-dev libode-dev
-  python3-matplotlib  # tools/plot_*.py, which draw bench/figures/
-)
+# Debian 12 packages: the library and the CLI; the tests' and the benchmarks' on request.
+packages=(g++ cmake ninja-build pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev)
+if [ "$tests" = ON ]; then packages+=(libgtest-dev libgmock-dev libmujoco-dev); fi
+if [ "$bench" = ON ]; then
+  packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev
+             python3-matplotlib)  # tools/plot_*.py, which draw bench/figures/
+fi
 
 if [ "${LIMBER_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()
@@ -47,7 +62,11 @@ if [ "${LIMBER_SKIP_INSTALL:-0}" != 1 ]; then
   fi
 fi
 
-# Configure once (or again when the options change), then build.
-cmake -S . -B "$build_dir" -G Ninja \
-  -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" >/dev/null
-cmake --build "$build_dir" -j2
+# Configure once (or again when the options change), then build only what was asked for.
+cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \
+  -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" >/dev/null
+if [ "$build_all" = ON ]; then
+  cmake --build "$build_dir" -j2
+else
+  cmake --build "$build_dir" -j2 --target limber_program
+fi

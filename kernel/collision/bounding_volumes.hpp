@@ -24,7 +24,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

@@ -1,4 +1,4 @@
-#include "kernel/collision/broadphase.hpp"
+#include "limber/kernel/collision/broadphase.hpp"
 
 #include <algorithm>
 

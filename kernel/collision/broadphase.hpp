@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/collision/bounding_volumes.hpp"
 
 namespace limber {
 

@@ -1,11 +1,11 @@
-#include "kernel/collision/contacts.hpp"
+#include "limber/kernel/collision/contacts.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 
-#include "kernel/collision/geometry.hpp"
-#include "kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
 namespace {

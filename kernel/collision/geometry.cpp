@@ -1,4 +1,4 @@
-#include "kernel/collision/geometry.hpp"
+#include "limber/kernel/collision/geometry.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

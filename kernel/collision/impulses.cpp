@@ -1,7 +1,7 @@
 // GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (the _mm512_undefined_*
 // operand of masked builtins; GCC bug 105593), instantiated here through Eigen.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/collision/impulses.hpp"
+#include "limber/kernel/collision/impulses.hpp"
 
 #include <cmath>
 #include <stdexcept>
@@ -9,7 +9,7 @@
 
 #include <Eigen/Cholesky>
 
-#include "kernel/rigid/anchor_jacobian.hpp"
+#include "limber/kernel/rigid/anchor_jacobian.hpp"
 
 namespace limber {
 namespace {

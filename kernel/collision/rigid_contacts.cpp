@@ -1,14 +1,14 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/collision/rigid_contacts.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/collision/bounding_volumes.hpp"
-#include "kernel/collision/geometry.hpp"
-#include "kernel/collision/impulses.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/collision/impulses.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
 
 namespace limber {
 namespace {

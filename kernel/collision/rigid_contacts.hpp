@@ -15,7 +15,7 @@
 // own approach plus Settings::contact_recovery_speed·Δt, so an initial overlap is not flung out.
 #pragma once
 
-#include "kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 

@@ -1,13 +1,13 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
 
 #include <cmath>
 #include <string>
 
 #include <Eigen/Eigenvalues>
 
-#include "kernel/model/checks.hpp"
+#include "limber/kernel/model/checks.hpp"
 
 namespace limber {
 

@@ -35,7 +35,7 @@
 
 #include <Eigen/Core>
 
-#include "kernel/featherstone/spatial.hpp"
+#include "limber/kernel/featherstone/spatial.hpp"
 
 namespace limber {
 

@@ -1,12 +1,12 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
 
 #include <string>
 #include <vector>
 
-#include "kernel/featherstone/step.hpp"
-#include "layouts/graph/disjoint_sets.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {

@@ -2,8 +2,8 @@
 // kinematic tree in reduced coordinates (Featherstone 2008, chapter 4).
 #pragma once
 
-#include "kernel/featherstone/featherstone_state.hpp"
-#include "kernel/model/model.hpp"
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

@@ -1,8 +1,8 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
 
-#include "kernel/numerics/small_cholesky.hpp"
+#include "limber/kernel/numerics/small_cholesky.hpp"
 
 #include <cmath>
 #include <stdexcept>

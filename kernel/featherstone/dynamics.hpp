@@ -20,8 +20,8 @@
 
 #include <Eigen/Core>
 
-#include "kernel/featherstone/articulated_tree.hpp"
-#include "kernel/featherstone/spatial.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/spatial.hpp"
 
 namespace limber {
 

@@ -25,11 +25,11 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kernel/featherstone/articulated_tree.hpp"
-#include "kernel/featherstone/dynamics.hpp"
-#include "kernel/featherstone/integration.hpp"
-#include "kernel/featherstone/spatial.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/integration.hpp"
+#include "limber/kernel/featherstone/spatial.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 

@@ -24,8 +24,8 @@
 
 #include <Eigen/Core>
 
-#include "kernel/featherstone/articulated_tree.hpp"
-#include "kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
 
 namespace limber {
 

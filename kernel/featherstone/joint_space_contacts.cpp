@@ -1,12 +1,12 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/featherstone/joint_space_contacts.hpp"
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <type_traits>
 
-#include "kernel/featherstone/step.hpp"
+#include "limber/kernel/featherstone/step.hpp"
 
 namespace limber {
 namespace {

@@ -51,7 +51,7 @@
 
 #include <vector>
 
-#include "kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/featherstone/featherstone_state.hpp"
 
 namespace limber {
 

@@ -1,13 +1,13 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/featherstone/step.hpp"
+#include "limber/kernel/featherstone/step.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/collision/rigid_contacts.hpp"
-#include "kernel/featherstone/joint_space_contacts.hpp"
-#include "kernel/numerics/flush_denormals.hpp"
+#include "limber/kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
+#include "limber/kernel/numerics/flush_denormals.hpp"
 
 namespace limber {
 namespace {

@@ -1,7 +1,7 @@
 // step(FeatherstoneState, dt): one time step of the Featherstone method (reduced coordinates).
 #pragma once
 
-#include "kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/featherstone/featherstone_state.hpp"
 
 namespace limber {
 

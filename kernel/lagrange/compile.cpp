@@ -1,6 +1,6 @@
-#include "kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
 
-#include "kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/lagrange/multipliers.hpp"
 
 namespace limber {
 

@@ -1,8 +1,8 @@
 // compile_lagrange(Model, LagrangeOptions) -> LagrangeState: rigid bodies and joint constraints.
 #pragma once
 
-#include "kernel/lagrange/lagrange_state.hpp"
-#include "kernel/model/model.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

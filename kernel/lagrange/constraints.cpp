@@ -1,13 +1,13 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/lagrange/constraints.hpp"
+#include "limber/kernel/lagrange/constraints.hpp"
 
 #include <algorithm>
 #include <cmath>
 
 #include <Eigen/Geometry>
 
-#include "kernel/rigid/anchor_jacobian.hpp"
+#include "limber/kernel/rigid/anchor_jacobian.hpp"
 
 namespace limber {
 namespace {

@@ -24,8 +24,8 @@
 
 #include <Eigen/Core>
 
-#include "kernel/model/model.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 

@@ -14,10 +14,10 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
-#include "kernel/lagrange/constraints.hpp"
-#include "kernel/numerics/tree_elimination.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/lagrange/constraints.hpp"
+#include "limber/kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 

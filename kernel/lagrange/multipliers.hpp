@@ -13,7 +13,7 @@
 
 #include <Eigen/Core>
 
-#include "kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
 
 namespace limber {
 

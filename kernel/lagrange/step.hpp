@@ -1,7 +1,7 @@
 // step(LagrangeState, dt): one time step of the Lagrange-multiplier method.
 #pragma once
 
-#include "kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
 
 namespace limber {
 

@@ -1,7 +1,7 @@
 // GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (the _mm512_undefined_*
 // operand of masked builtins; GCC bug 105593), instantiated here through Eigen.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/mass/mass_properties.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -11,7 +11,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 namespace {

@@ -1,9 +1,9 @@
-#include "kernel/metrics/observers.hpp"
+#include "limber/kernel/metrics/observers.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/springs/spring_forces.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
 
 namespace limber {
 

@@ -4,10 +4,10 @@
 
 #include <Eigen/Core>
 
-#include "kernel/featherstone/featherstone_state.hpp"
-#include "kernel/lagrange/lagrange_state.hpp"
-#include "kernel/springs/spring_state.hpp"
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber {
 

@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber::checks {
 

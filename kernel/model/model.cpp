@@ -1,7 +1,7 @@
 // GCC 12 false positive in Eigen's AVX-512 reductions (the SVD inside FromTwoVectors): the
 // pragma must precede the Eigen headers, where the warning is located.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <numeric>
 #include <string>
 
-#include "kernel/model/checks.hpp"
+#include "limber/kernel/model/checks.hpp"
 
 namespace limber {
 

@@ -1,7 +1,7 @@
-#include "kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/numerics/tree_elimination.hpp"
 
-#include "layouts/graph/compressed_rows.hpp"
-#include "layouts/graph/disjoint_sets.hpp"
+#include "limber/layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 

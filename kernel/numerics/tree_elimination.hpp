@@ -29,7 +29,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-#include "kernel/numerics/small_cholesky.hpp"
+#include "limber/kernel/numerics/small_cholesky.hpp"
 
 namespace limber {
 

@@ -28,9 +28,9 @@
 #include <immintrin.h>
 #endif
 
-#include "layouts/constraints/constraint_batches.hpp"
-#include "layouts/particles/interleaved_particles.hpp"
-#include "layouts/particles/particle_buffer.hpp"
+#include "limber/layouts/constraints/constraint_batches.hpp"
+#include "limber/layouts/particles/interleaved_particles.hpp"
+#include "limber/layouts/particles/particle_buffer.hpp"
 
 namespace limber {
 

@@ -10,8 +10,8 @@
 #include <cstdint>
 #include <type_traits>
 
-#include "kernel/relaxation/batch_projection.hpp"
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/relaxation/batch_projection.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber::coloured {
 

@@ -1,12 +1,12 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/relaxation/direct_projection.hpp"
+#include "limber/kernel/relaxation/direct_projection.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "kernel/relaxation/distance_projection.hpp"
+#include "limber/kernel/relaxation/distance_projection.hpp"
 
 namespace limber {
 namespace {

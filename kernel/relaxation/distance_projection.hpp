@@ -15,9 +15,9 @@
 #include <cmath>
 #include <cstdint>
 
-#include "kernel/relaxation/batch_projection.hpp"
+#include "limber/kernel/relaxation/batch_projection.hpp"
 
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber {
 

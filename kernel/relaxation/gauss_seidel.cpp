@@ -1,8 +1,8 @@
-#include "kernel/relaxation/gauss_seidel.hpp"
+#include "limber/kernel/relaxation/gauss_seidel.hpp"
 
 #include <algorithm>
 
-#include "kernel/relaxation/distance_projection.hpp"
+#include "limber/kernel/relaxation/distance_projection.hpp"
 
 namespace limber {
 namespace {

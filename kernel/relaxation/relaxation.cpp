@@ -1,7 +1,7 @@
 // GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (the _mm512_undefined_*
 // operand of masked builtins; GCC bug 105593), instantiated here through xsimd.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,13 +12,13 @@
 #include <thread>
 #include <type_traits>
 
-#include "kernel/relaxation/batch_projection.hpp"
-#include "kernel/relaxation/coloured_sweep.hpp"
-#include "kernel/relaxation/direct_projection.hpp"
-#include "kernel/relaxation/distance_projection.hpp"
-#include "kernel/relaxation/gauss_seidel.hpp"
-#include "layouts/graph/compressed_rows.hpp"
-#include "layouts/graph/constraint_colouring.hpp"
+#include "limber/kernel/relaxation/batch_projection.hpp"
+#include "limber/kernel/relaxation/coloured_sweep.hpp"
+#include "limber/kernel/relaxation/direct_projection.hpp"
+#include "limber/kernel/relaxation/distance_projection.hpp"
+#include "limber/kernel/relaxation/gauss_seidel.hpp"
+#include "limber/layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/graph/constraint_colouring.hpp"
 
 namespace limber {
 namespace {

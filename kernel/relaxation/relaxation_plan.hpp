@@ -10,12 +10,12 @@
 #include <utility>
 #include <vector>
 
-#include "kernel/numerics/tree_elimination.hpp"
-#include "kernel/threading/block_runner.hpp"
-#include "layouts/aligned_array.hpp"
-#include "layouts/constraints/constraint_batches.hpp"
-#include "layouts/graph/compressed_rows.hpp"
-#include "layouts/particles/interleaved_particles.hpp"
+#include "limber/kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
+#include "limber/layouts/aligned_array.hpp"
+#include "limber/layouts/constraints/constraint_batches.hpp"
+#include "limber/layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/particles/interleaved_particles.hpp"
 
 namespace limber {
 

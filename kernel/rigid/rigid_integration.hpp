@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "layouts/bodies/rigid_body_buffer.hpp"
+#include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
 

@@ -1,12 +1,12 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "kernel/mass/mass_properties.hpp"
-#include "layouts/graph/disjoint_sets.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {

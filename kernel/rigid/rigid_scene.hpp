@@ -10,11 +10,11 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kernel/collision/geometry.hpp"
-#include "kernel/model/model.hpp"
-#include "kernel/model/step_status.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
-#include "layouts/bodies/rigid_body_buffer.hpp"
+#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
 

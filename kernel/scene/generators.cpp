@@ -1,7 +1,7 @@
 // GCC 12 false positive (bug 105329) in operator+(const char*, std::string&&), here and in
 // checks.hpp's format_vector. The warning is located in <string>, so the pragma precedes it.
 #pragma GCC diagnostic ignored "-Wrestrict"
-#include "kernel/scene/generators.hpp"
+#include "limber/kernel/scene/generators.hpp"
 
 #include <charconv>
 #include <climits>
@@ -12,8 +12,8 @@
 #include <string_view>
 #include <utility>
 
-#include "kernel/model/checks.hpp"
-#include "kernel/scene/scene_file.hpp"
+#include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber {
 

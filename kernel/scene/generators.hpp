@@ -12,7 +12,7 @@
 
 #include <cstddef>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

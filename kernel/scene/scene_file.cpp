@@ -5,7 +5,7 @@
 // load_scene_text adds the "<source>: " prefix in one place. validate() runs last, for what only
 // the assembled Model shows: duplicate names (explicit bodies and joints keep their file indices
 // in the Model, so its paths match the file) and generated chain links that clash.
-#include "kernel/scene/scene_file.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -17,7 +17,7 @@
 #include <unordered_map>
 #include <vector>
 
-#include "kernel/model/checks.hpp"
+#include "limber/kernel/model/checks.hpp"
 
 namespace limber {
 namespace {

@@ -93,7 +93,7 @@
 #include <string>
 #include <string_view>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 

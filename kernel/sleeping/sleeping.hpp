@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstdint>
 
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber {
 

@@ -1,10 +1,10 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/springs/compile.hpp"
+#include "limber/kernel/springs/compile.hpp"
 
 #include <cmath>
 
-#include "kernel/springs/implicit_step.hpp"
+#include "limber/kernel/springs/implicit_step.hpp"
 
 namespace limber {
 

@@ -1,8 +1,8 @@
 // compile_springs(Model, SpringOptions) -> SpringState: the Model as rigid bodies and springs.
 #pragma once
 
-#include "kernel/model/model.hpp"
-#include "kernel/springs/spring_state.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber {
 

@@ -1,11 +1,11 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/springs/implicit_step.hpp"
+#include "limber/kernel/springs/implicit_step.hpp"
 
 #include <algorithm>
 
-#include "kernel/rigid/anchor_jacobian.hpp"
-#include "kernel/springs/spring_forces.hpp"
+#include "limber/kernel/rigid/anchor_jacobian.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
 
 namespace limber {
 namespace {

@@ -16,7 +16,7 @@
 // As h → ∞ an undamped spring's end reaches its anchor in one step (eq. 3.25).
 #pragma once
 
-#include "kernel/springs/spring_state.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber {
 

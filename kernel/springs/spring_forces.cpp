@@ -1,6 +1,6 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/springs/spring_forces.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
 
 namespace limber {
 

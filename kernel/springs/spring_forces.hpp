@@ -3,7 +3,7 @@
 
 #include <Eigen/Core>
 
-#include "kernel/springs/spring_state.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber {
 

@@ -15,11 +15,11 @@
 #include <Eigen/SparseCore>
 #include <Eigen/IterativeLinearSolvers>
 
-#include "kernel/model/model.hpp"
-#include "kernel/model/step_status.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
-#include "layouts/bodies/rigid_body_buffer.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
 

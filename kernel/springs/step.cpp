@@ -1,13 +1,13 @@
 // GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#include "kernel/springs/step.hpp"
+#include "limber/kernel/springs/step.hpp"
 
 #include <cmath>
 
-#include "kernel/numerics/flush_denormals.hpp"
-#include "kernel/collision/rigid_contacts.hpp"
-#include "kernel/springs/implicit_step.hpp"
-#include "kernel/springs/spring_forces.hpp"
+#include "limber/kernel/numerics/flush_denormals.hpp"
+#include "limber/kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/springs/implicit_step.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
 
 namespace limber {
 namespace {

@@ -1,7 +1,7 @@
 // step(SpringState, dt): one time step of the stiff-spring method.
 #pragma once
 
-#include "kernel/springs/spring_state.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber {
 

@@ -1,5 +1,5 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
-#include "kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -12,7 +12,7 @@
 
 #include <Eigen/Core>
 
-#include "kernel/study/simulation.hpp"
+#include "limber/kernel/study/simulation.hpp"
 
 namespace limber::study {
 

@@ -1,18 +1,18 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
-#include "kernel/study/simulation.hpp"
+#include "limber/kernel/study/simulation.hpp"
 
 #include <stdexcept>
 #include <type_traits>
 
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber::study {
 

@@ -14,13 +14,13 @@
 
 #include <Eigen/Core>
 
-#include "kernel/featherstone/featherstone_state.hpp"
-#include "kernel/lagrange/lagrange_state.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/model/model.hpp"
-#include "kernel/model/step_status.hpp"
-#include "kernel/springs/spring_state.hpp"
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber::study {
 

@@ -1,5 +1,5 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
-#include "kernel/study/spring_stability.hpp"
+#include "limber/kernel/study/spring_stability.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "kernel/springs/compile.hpp"
+#include "limber/kernel/springs/compile.hpp"
 
 namespace limber::study {
 

@@ -24,8 +24,8 @@
 
 #include <vector>
 
-#include "kernel/model/model.hpp"
-#include "kernel/springs/spring_state.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber::study {
 

@@ -1,10 +1,10 @@
-#include "kernel/study/workloads.hpp"
+#include "limber/kernel/study/workloads.hpp"
 
 #include <cmath>
 #include <numbers>
 #include <string>
 
-#include "kernel/scene/generators.hpp"
+#include "limber/kernel/scene/generators.hpp"
 
 namespace limber::study {
 

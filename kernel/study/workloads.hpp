@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber::study {
 

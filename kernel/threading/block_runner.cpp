@@ -1,4 +1,4 @@
-#include "kernel/threading/block_runner.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/compile.hpp"
 
 #include <algorithm>
 #include <array>
@@ -7,12 +7,12 @@
 #include <span>
 #include <sstream>
 
-#include "kernel/mass/mass_properties.hpp"
-#include "kernel/model/checks.hpp"
-#include "kernel/relaxation/relaxation.hpp"
-#include "kernel/sleeping/sleeping.hpp"
-#include "layouts/graph/compressed_rows.hpp"
-#include "layouts/graph/disjoint_sets.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <string>
 
-#include "kernel/model/model.hpp"
-#include "kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber {
 

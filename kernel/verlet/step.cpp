@@ -1,14 +1,14 @@
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 
-#include "kernel/collision/contacts.hpp"
-#include "kernel/numerics/flush_denormals.hpp"
-#include "kernel/relaxation/direct_projection.hpp"
-#include "kernel/relaxation/relaxation.hpp"
-#include "kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/collision/contacts.hpp"
+#include "limber/kernel/numerics/flush_denormals.hpp"
+#include "limber/kernel/relaxation/direct_projection.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
 namespace {

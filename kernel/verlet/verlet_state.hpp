@@ -10,16 +10,16 @@
 
 #include <Eigen/Core>
 
-#include "kernel/collision/geometry.hpp"
-#include "kernel/model/model.hpp"
-#include "kernel/model/step_status.hpp"
-#include "kernel/relaxation/relaxation_plan.hpp"
-#include "kernel/threading/block_runner.hpp"
-#include "layouts/aligned_array.hpp"
-#include "layouts/constraints/distance_constraint_buffer.hpp"
-#include "layouts/graph/particle_ordering.hpp"
-#include "layouts/particles/interleaved_particles.hpp"
-#include "layouts/particles/particle_buffer.hpp"
+#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/relaxation/relaxation_plan.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
+#include "limber/layouts/aligned_array.hpp"
+#include "limber/layouts/constraints/distance_constraint_buffer.hpp"
+#include "limber/layouts/graph/particle_ordering.hpp"
+#include "limber/layouts/particles/interleaved_particles.hpp"
+#include "limber/layouts/particles/particle_buffer.hpp"
 
 namespace limber {
 

@@ -6,7 +6,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "layouts/aligned_array.hpp"
+#include "limber/layouts/aligned_array.hpp"
 
 namespace limber {
 

@@ -4,7 +4,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "layouts/aligned_array.hpp"
+#include "limber/layouts/aligned_array.hpp"
 
 namespace limber {
 

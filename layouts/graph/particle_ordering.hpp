@@ -21,7 +21,7 @@
 #include <random>
 #include <vector>
 
-#include "layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/graph/compressed_rows.hpp"
 
 namespace limber {
 

@@ -6,8 +6,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "layouts/aligned_array.hpp"
-#include "layouts/particles/particle_buffer.hpp"
+#include "limber/layouts/aligned_array.hpp"
+#include "limber/layouts/particles/particle_buffer.hpp"
 
 namespace limber {
 

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "layouts/aligned_array.hpp"
+#include "limber/layouts/aligned_array.hpp"
 
 namespace limber {
 

@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/collision/bounding_volumes.hpp"
-#include "kernel/collision/broadphase.hpp"
+#include "limber/kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/collision/broadphase.hpp"
 
 namespace limber {
 namespace {

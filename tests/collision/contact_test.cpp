@@ -4,10 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/collision/geometry.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

@@ -9,7 +9,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "kernel/collision/impulses.hpp"
+#include "limber/kernel/collision/impulses.hpp"
 
 namespace limber {
 namespace {

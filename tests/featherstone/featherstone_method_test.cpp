@@ -17,14 +17,14 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/collision/rigid_contacts.hpp"
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/joint_space_contacts.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/multipliers.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/generators.hpp"
+#include "limber/kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/generators.hpp"
 #include "tests/support/allocation_counter.hpp"
 #include "tests/support/knock.hpp"
 #include "tests/support/models.hpp"

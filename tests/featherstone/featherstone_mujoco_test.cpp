@@ -34,7 +34,7 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
 #include "tests/featherstone/random_trees.hpp"
 
 namespace limber {

@@ -16,11 +16,11 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
-#include "kernel/featherstone/articulated_tree.hpp"
-#include "kernel/featherstone/dynamics.hpp"
-#include "kernel/featherstone/integration.hpp"
-#include "kernel/featherstone/spatial.hpp"
-#include "kernel/model/model.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/integration.hpp"
+#include "limber/kernel/featherstone/spatial.hpp"
+#include "limber/kernel/model/model.hpp"
 #include "tests/featherstone/random_trees.hpp"
 #include "tests/support/allocation_counter.hpp"
 

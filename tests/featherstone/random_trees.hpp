@@ -12,7 +12,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kernel/featherstone/articulated_tree.hpp"
+#include "limber/kernel/featherstone/articulated_tree.hpp"
 
 namespace limber::testing {
 

@@ -3,8 +3,8 @@
 // stabilizations.
 #include <gtest/gtest.h>
 
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
 #include "tests/support/knock.hpp"
 
 namespace limber {

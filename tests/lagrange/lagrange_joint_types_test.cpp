@@ -13,12 +13,12 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/constraints.hpp"
-#include "kernel/lagrange/multipliers.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/scene/generators.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/constraints.hpp"
+#include "limber/kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/generators.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "layouts/graph/constraint_colouring.hpp"
+#include "limber/layouts/graph/constraint_colouring.hpp"
 
 namespace limber {
 namespace {

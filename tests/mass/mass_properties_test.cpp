@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/mass/mass_properties.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
 
 namespace limber {
 namespace {

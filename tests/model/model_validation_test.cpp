@@ -8,7 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "kernel/model/model.hpp"
+#include "limber/kernel/model/model.hpp"
 
 namespace limber {
 namespace {

@@ -8,11 +8,11 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/sleeping/sleeping.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
-#include "layouts/graph/constraint_colouring.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "limber/layouts/graph/constraint_colouring.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

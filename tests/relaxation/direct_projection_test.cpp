@@ -14,11 +14,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/relaxation/relaxation.hpp"
-#include "kernel/scene/generators.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 namespace {

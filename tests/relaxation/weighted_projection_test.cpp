@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/relaxation/distance_projection.hpp"
+#include "limber/kernel/relaxation/distance_projection.hpp"
 
 namespace limber {
 namespace {

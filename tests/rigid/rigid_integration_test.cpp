@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
 
 namespace limber {
 namespace {

@@ -11,9 +11,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "kernel/scene/generators.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/verlet/compile.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/verlet/compile.hpp"
 
 namespace limber {
 namespace {

@@ -9,7 +9,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "kernel/scene/scene_file.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber {
 namespace {

@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
 #include "tests/support/knock.hpp"
 
 namespace limber {

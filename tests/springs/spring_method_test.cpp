@@ -6,13 +6,13 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/mass/mass_properties.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/spring_forces.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/spring_forces.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

@@ -7,8 +7,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/scene/generators.hpp"
-#include "kernel/study/run_metrics.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber::study {

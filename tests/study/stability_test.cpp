@@ -13,9 +13,9 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/scene/generators.hpp"
-#include "kernel/study/run_metrics.hpp"
-#include "kernel/study/spring_stability.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/spring_stability.hpp"
 
 namespace limber::study {
 namespace {

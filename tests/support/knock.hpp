@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/knock.hpp"
-#include "kernel/metrics/observers.hpp"
+#include "limber/kernel/metrics/knock.hpp"
+#include "limber/kernel/metrics/observers.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber::testing {

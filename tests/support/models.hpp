@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "kernel/model/model.hpp"
-#include "kernel/scene/scene_file.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber::testing {
 

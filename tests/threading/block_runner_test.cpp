@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/threading/block_runner.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
 namespace {

@@ -4,12 +4,12 @@
 // tests/support/allocation_counter.cpp, which replaces this program's allocation functions.
 #include <gtest/gtest.h>
 
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/allocation_counter.hpp"
 #include "tests/support/models.hpp"
 

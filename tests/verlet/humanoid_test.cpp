@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/knock.hpp"
 
 namespace limber {

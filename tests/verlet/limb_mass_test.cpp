@@ -12,11 +12,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "kernel/mass/mass_properties.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/study/workloads.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/study/workloads.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

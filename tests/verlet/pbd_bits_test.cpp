@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

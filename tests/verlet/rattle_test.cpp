@@ -8,11 +8,11 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/study/run_metrics.hpp"
-#include "kernel/study/workloads.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
+#include "limber/kernel/study/workloads.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

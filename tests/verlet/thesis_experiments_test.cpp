@@ -8,12 +8,12 @@
 
 #include <gtest/gtest.h>
 
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/rigid/rigid_integration.hpp"
-#include "kernel/rigid/rigid_scene.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

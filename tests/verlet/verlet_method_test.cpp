@@ -8,9 +8,9 @@
 #include <xmmintrin.h>
 #endif
 
-#include "kernel/metrics/observers.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {

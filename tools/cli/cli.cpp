@@ -12,19 +12,19 @@
 
 #include <CLI/CLI.hpp>
 
-#include "kernel/featherstone/compile.hpp"
-#include "kernel/featherstone/step.hpp"
-#include "kernel/metrics/knock.hpp"
-#include "kernel/metrics/observers.hpp"
-#include "kernel/model/model.hpp"
-#include "kernel/lagrange/compile.hpp"
-#include "kernel/lagrange/step.hpp"
-#include "kernel/scene/scene_file.hpp"
-#include "kernel/springs/compile.hpp"
-#include "kernel/springs/step.hpp"
-#include "kernel/verlet/compile.hpp"
-#include "kernel/verlet/step.hpp"
-#include "layouts/graph/constraint_colouring.hpp"
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/metrics/knock.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "limber/layouts/graph/constraint_colouring.hpp"
 
 namespace limber::cli {
 namespace {
