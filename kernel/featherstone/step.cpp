@@ -13,17 +13,21 @@ namespace limber {
 namespace {
 
 // Settings::drag (thesis 2.1.5, 2.1.6; in the limb's own frame, z its axis) at the step's start,
-// as joint forces τ = Σ J_iᵀ f_i (held over the step, so RK4 is first order in the drag).
-void drag_joint_forces(FeatherstoneState& state) {
+// and the applied loads (RigidScene::applied_force, applied_torque), as joint forces
+// τ = Σ J_iᵀ f_i (held over the step, so RK4 is first order in the drag).
+void body_load_joint_forces(FeatherstoneState& state, bool drag_on) {
   const DragSettings& drag = state.settings.drag;
   const RigidBodyState& y = state.bodies.state;
   for (int i = 0; i < state.tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);
     const std::int32_t b = state.scene_body[index];
     if (state.islands[state.island_of_body[b]].sleeping) continue;
-    const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
-    const Eigen::Vector3d force = -rotation * drag.linear.cwiseProduct(rotation.transpose() * state.bodies.linear_velocity(y, b));
-    const Eigen::Vector3d torque = -rotation * drag.angular.cwiseProduct(rotation.transpose() * state.bodies.angular_velocity(y, b));
+    Eigen::Vector3d force = state.applied_force[b], torque = state.applied_torque[b];
+    if (drag_on) {
+      const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
+      force -= rotation * drag.linear.cwiseProduct(rotation.transpose() * state.bodies.linear_velocity(y, b));
+      torque -= rotation * drag.angular.cwiseProduct(rotation.transpose() * state.bodies.angular_velocity(y, b));
+    }
     // (τ + (x − r) × F, F) about the body's origin r, in its coordinates.
     const PluckerTransform& world_to_body = state.kinematics.world_to_body[index];
     state.drag_force[index].head<3>() = world_to_body.rotation * (torque + (y.position[b] - world_to_body.translation).cross(force));
@@ -58,7 +62,10 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   for (const RigidIsland& island : state.islands) (island.sleeping ? any_asleep : any_awake) = true;
   if (!any_awake) return;
   if (any_asleep) state.saved_positions = state.q;
-  if (!state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0)) drag_joint_forces(state);
+  const bool drag = !state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0);
+  bool loads = false;
+  for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
+  if (drag || loads) body_load_joint_forces(state, drag);
   const int substeps = turn_substeps(state, dt);
   for (int k = 0; k < substeps; ++k) {
     integrate(state.tree, state.q, state.v, state.joint_forces, state.settings.gravity, dt / substeps, state.options.integrator,
@@ -111,6 +118,8 @@ FeatherstoneStepReport step(FeatherstoneState& state, double dt) {
   report.contacts = static_cast<int>(state.contacts.size());
   state.time += dt;
   report.status = update_sleep(state, dt);
+  if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
+  clear_applied_loads(state);
   // Islands put to sleep had their rigid momenta zeroed; so are their joint velocities.
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     if (!state.islands[k].sleeping) continue;

@@ -120,6 +120,7 @@ LagrangeStepReport step(LagrangeState& state, double dt) {
   }
   state.time += dt;
   report.status = update_sleep(state, dt);
+  clear_applied_loads(state);
   return state.last_report = report;
 }
 

@@ -298,9 +298,17 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
       array->assign(state.particles.capacity(), Scalar(0));
     }
   }
-  const int threads = options.threads > 0 ? options.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  plan.runner.reset(options.threading, threads);
   plan.parallel_minimum_slots = options.parallel_minimum_slots > 0 ? options.parallel_minimum_slots : kDefaultParallelMinimumSlots;
+  // Automatic threads only when some colour is big enough to be split: a small scene starts none.
+  std::vector<std::uint32_t> colour_size(state.colour_count, 0);
+  for (const std::uint8_t colour : state.constraint_colour) {
+    if (colour != kNoColour) ++colour_size[colour];
+  }
+  const bool big = std::any_of(colour_size.begin(), colour_size.end(), [&](std::uint32_t n) { return n >= plan.parallel_minimum_slots; });
+  const int threads = options.threads > 0 ? options.threads
+                      : big               ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))
+                                          : 1;
+  plan.runner.reset(options.threading, threads);
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
   plan.layout = options.layout;
   if (options.layout == ParticleLayout::automatic) plan.layout = options.long_range_attachments ? ParticleLayout::soa : automatic_layout(state);

@@ -101,6 +101,8 @@ RigidScene compile_rigid_scene(const Model& model) {
   scene.contacts.reserve(2 * body_count * scene.planes.size() + limb_count);
   scene.velocity.assign(body_count, Eigen::Vector3d::Zero());
   scene.angular_velocity.assign(body_count, Eigen::Vector3d::Zero());
+  scene.applied_force.assign(body_count, Eigen::Vector3d::Zero());
+  scene.applied_torque.assign(body_count, Eigen::Vector3d::Zero());
   return scene;
 }
 
@@ -153,7 +155,8 @@ void accumulate_applied_forces(RigidScene& scene, const RigidBodyState& y, Rigid
   for (const RigidIsland& island : scene.islands) {
     if (island.sleeping) continue;
     for (std::uint32_t b : island.bodies) {
-      forces.force[b] += bodies.mass[b] * settings.gravity;
+      forces.force[b] += bodies.mass[b] * settings.gravity + scene.applied_force[b];
+      forces.torque[b] += scene.applied_torque[b];
       if (settings.damping > 0) {
         forces.force[b] -= settings.damping * bodies.mass[b] * scene.velocity[b];
         forces.torque[b] -= settings.damping * y.angular_momentum[b];
@@ -166,6 +169,11 @@ void accumulate_applied_forces(RigidScene& scene, const RigidBodyState& y, Rigid
       }
     }
   }
+}
+
+void clear_applied_loads(RigidScene& scene) {
+  for (Eigen::Vector3d& force : scene.applied_force) force.setZero();
+  for (Eigen::Vector3d& torque : scene.applied_torque) torque.setZero();
 }
 
 StepStatus update_sleep(RigidScene& scene, double dt) {

@@ -76,6 +76,10 @@ struct RigidScene {
   std::vector<RigidContact> contacts;  ///< of the last step
   bool ball_touching = false;          ///< the ball had a contact with a limb in the last step
   std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
+  /// Loads applied from outside over the next step, per body, world frame: a force at the
+  /// centre of mass (N) and a torque (N·m). Every method's step adds them to its own forces
+  /// (accumulate_applied_forces; Featherstone through its joint forces) and zeroes them at its end.
+  std::vector<Eigen::Vector3d> applied_force, applied_torque;
 };
 
 /// The rigid scene of `model`:
@@ -109,8 +113,12 @@ void body_velocities(RigidScene& scene, const RigidBodyState& y);
 
 /// Adds the applied forces at state y for every awake body: gravity m·g; Settings::damping as
 /// −damping·m·v and −damping·I·ω; Settings::drag in the limb's own frame (z: its axis; thesis
-/// 2.1.5, 2.1.6). Fills scene.velocity / angular_velocity for y first.
+/// 2.1.5, 2.1.6); scene.applied_force and applied_torque. Fills scene.velocity /
+/// angular_velocity for y first.
 void accumulate_applied_forces(RigidScene& scene, const RigidBodyState& y, RigidForces& forces);
+
+/// Zeroes scene.applied_force and applied_torque: the end of a step.
+void clear_applied_loads(RigidScene& scene);
 
 /// After a step of length dt: reports divergence (non-finite, or a surface point faster than
 /// settings.divergence_speed) and puts islands whose bodies' fastest surface points all stayed

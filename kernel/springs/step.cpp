@@ -43,6 +43,7 @@ SpringStepReport step(SpringState& state, double dt) {
   report.contacts = static_cast<int>(state.contacts.size());
   state.time += dt;
   report.status = update_sleep(state, dt);
+  clear_applied_loads(state);
   return state.last_report = report;
 }
 

@@ -510,6 +510,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.plane_contacts.reserve(state.features.size() * state.planes.size());
   state.ball_contacts.reserve(has_ball ? state.limbs.size() : 0);
   state.pending_forces.reserve(3 * 64);  // apply_force: up to 64 forces, each over ≤ 3 particles
+  state.kinematic_targets.reserve(64);
   state.awake_islands.reserve(state.islands.size());
   state.contact_particles.reserve(2 * state.plane_contacts.capacity() + 3 * state.ball_contacts.capacity() +
                                   (centres ? 3 * state.limbs.size() : 0));

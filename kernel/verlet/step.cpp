@@ -125,6 +125,22 @@ void velocity_from_positions(VerletState<Scalar>& state, double h) {
   half_kick(state, h);
 }
 
+// Moves each kinematic target's pinned particle to where its path is at the end of substep
+// `index` of `count` (the previous position stays where the substep began), with the matching
+// velocity under the rattle rule.
+template <typename Scalar>
+void move_kinematic_particles(VerletState<Scalar>& state, int index, int count, double h) {
+  auto& p = state.particles;
+  for (const KinematicTarget& target : state.kinematic_targets) {
+    const double along = double(index + 1) / count;
+    const Eigen::Vector3d start = p.position(target.particle).template cast<double>();
+    const Eigen::Vector3d end = target.start + along * (target.target - target.start);
+    p.set_previous(target.particle, start.cast<Scalar>());
+    p.set_position(target.particle, end.cast<Scalar>());
+    if (uses_rattle(state)) p.set_velocity(target.particle, ((end - start) / h).cast<Scalar>());
+  }
+}
+
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
 // on their axes.
 template <typename Scalar>
@@ -285,7 +301,7 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
 // One substep of either rule (the whole step when settings.relaxation.substeps is 1): the passes
 // of step.hpp's list.
 template <typename Scalar>
-StepReport substep(VerletState<Scalar>& state, double dt, double budget_us) {
+StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int index, int count) {
   StepReport report;
   const bool rattle = uses_rattle(state);
   const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty();
@@ -294,6 +310,7 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us) {
   } else {
     integrate(state, dt);
   }
+  if (!state.kinematic_targets.empty()) move_kinematic_particles(state, index, count, dt);
   if (has_ball) {
     detect_ball_contacts(state, dt);
     state.ball_touched = state.ball_touched || !state.ball_contacts.empty();
@@ -328,8 +345,9 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   const double h = dt / substeps, start_time = state.time;
   state.plan.fallbacks.value = 0;
   state.ball_touched = false;
+  for (KinematicTarget& target : state.kinematic_targets) target.start = state.particles.position(target.particle).template cast<double>();
   for (int k = 0; k < substeps; ++k) {
-    const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps);
+    const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps, k, substeps);
     report.iterations += part.iterations;
     report.largest_correction = part.largest_correction;
     report.stop = part.stop;
@@ -339,6 +357,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
   }
   if (report.status == StepStatus::ok) state.time = start_time + dt;  // not n roundings of h
   state.pending_forces.clear();
+  state.kinematic_targets.clear();
   report.fallbacks = state.plan.fallbacks.value;
   return state.last_report = report;
 }

@@ -61,7 +61,10 @@ struct VerletOptions {
   bool simd = true;                          ///< false: the scalar path (one lane)
   ParticleLayout layout = ParticleLayout::automatic;  ///< of the relaxation's particle copy
   ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
-  int threads = 0;                           ///< ≥ 1, or 0: the hardware's threads where they pay off
+  /// Threads for relaxation, the calling one included: 1 (the default) starts none; 0 takes the
+  /// hardware's, and only when some colour is big enough to pay for them
+  /// (parallel_minimum_slots); a small scene then starts none either.
+  int threads = 1;
   Threading threading = Threading::workers;  ///< how a colour is split across threads
   /// Colours a stage must have at least this many constraint slots to be split across threads;
   /// 0 picks the crossover measured on the reference machine (README, "The data-oriented core:
@@ -173,6 +176,14 @@ struct ParticleOrigin {
   Kind kind = Kind::limb_head;
 };
 
+/// A pinned particle moved along a path (a held point: World's kinematic targets): over the
+/// next step it goes from where it is to `target` at constant velocity, substep by substep.
+struct KinematicTarget {
+  std::uint32_t particle = 0;
+  Eigen::Vector3d target = Eigen::Vector3d::Zero();  ///< m, world
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();   ///< m, where the step found it (set by step())
+};
+
 /// Work counters, accumulated over all steps (for benchmarks and the "sleeping costs nothing" test).
 struct StepCounters {
   std::uint64_t particles_integrated = 0;
@@ -231,6 +242,7 @@ struct VerletState {
   std::vector<BallContact> ball_contacts;  ///< the last substep's
   bool ball_touched = false;  ///< the ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
+  std::vector<KinematicTarget> kinematic_targets;  ///< pinned particles only; next step, then cleared
   StepReport last_report;
   StepCounters counters;
 };

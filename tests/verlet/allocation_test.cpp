@@ -10,6 +10,7 @@
 #include "limber/kernel/springs/step.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/world/world.hpp"
 #include "tests/support/allocation_counter.hpp"
 #include "tests/support/models.hpp"
 
@@ -86,6 +87,38 @@ TEST(Allocation, TheRattleRuleAllocatesNothing) {
   VerletOptions sequential;
   sequential.order = SweepOrder::sequential;
   EXPECT_EQ(allocations_while_stepping<double>(humanoid, 600, false, sequential), 0);
+}
+
+TEST(Allocation, AWorldStepWithLoadsAllocatesNothing) {
+  // Every method behind the World, a force, a torque and an impulse each step, and a moving
+  // held point (particles): after the first step, nothing is allocated.
+  Model model = testing::load_shipped_scene("humanoid.json");
+  model.settings.sleep.start_asleep = false;
+  for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
+    World world(model, WorldOptions{.method = method});
+    const BodyId head = world.body("head"), basin = world.body("basin");
+    world.step();
+    const long before = testing::allocation_count();
+    for (int s = 0; s < 200; ++s) {
+      world.apply_force(head, Eigen::Vector3d(1, 0, 0), world.pose(head).position);
+      world.apply_torque(basin, Eigen::Vector3d(0, 0, 0.1));
+      world.apply_impulse(basin, Eigen::Vector3d(0, 0.01, 0), world.pose(basin).position);
+      world.step();
+    }
+    EXPECT_EQ(testing::allocation_count() - before, 0) << method_name(method);
+  }
+  Model rope = testing::make_chain({0.1, 0.1, 0.1}, 0.1, false);
+  rope.settings.verlet.joints = ParticleJoints::shared_particle;
+  World held(rope);
+  const PinId hand = held.pin(held.body("link_0"), Eigen::Vector3d(0, 0, 0.05));
+  held.move_pin(hand, held.pin_position(hand));
+  held.step(1.0 / 60);
+  const long before = testing::allocation_count();
+  for (int s = 0; s < 100; ++s) {
+    held.move_pin(hand, held.pin_position(hand) + Eigen::Vector3d(0.001, 0, 0));
+    held.step(1.0 / 60);
+  }
+  EXPECT_EQ(testing::allocation_count() - before, 0);
 }
 
 TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail

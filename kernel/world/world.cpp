@@ -1,0 +1,435 @@
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's vector paths
+#include "limber/kernel/world/world.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <type_traits>
+
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/springs/compile.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/world/world_bodies.hpp"
+
+namespace limber {
+
+std::string_view method_name(Method method) {
+  switch (method) {
+    case Method::particles: return "particles";
+    case Method::springs: return "springs";
+    case Method::lagrange: return "lagrange";
+    case Method::featherstone: return "featherstone";
+  }
+  return "?";
+}
+
+namespace {
+
+template <typename State>
+constexpr bool kParticles = std::is_same_v<State, VerletState<double>> || std::is_same_v<State, VerletState<float>>;
+
+World::State compile_state(const Model& model, const WorldOptions& options) {
+  switch (options.method) {
+    case Method::particles:
+      if (options.single_precision) return compile<float>(model, options.particles);
+      return compile<double>(model, options.particles);
+    case Method::springs: return compile_springs(model, options.springs);
+    case Method::lagrange: return compile_lagrange(model, options.lagrange);
+    case Method::featherstone: break;
+  }
+  return compile_featherstone(model, options.featherstone);
+}
+
+std::string vector_text(const Eigen::Vector3d& v) {
+  std::ostringstream text;
+  text << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
+  return text.str();
+}
+
+}  // namespace
+
+World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_state(model_, options_)) {
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
+  compile();
+}
+
+// Sizes the per-body scratch after a (re)compile and starts every particle limb's frame at its
+// Model orientation.
+void World::compile() {
+  const std::size_t bodies = model_.bodies.size();
+  load_force_.assign(bodies, Eigen::Vector3d::Zero());
+  load_torque_.assign(bodies, Eigen::Vector3d::Zero());
+  impulse_force_.assign(bodies, Eigen::Vector3d::Zero());
+  impulse_torque_.assign(bodies, Eigen::Vector3d::Zero());
+  limb_frame_.resize(bodies);
+  for (std::size_t b = 0; b < bodies; ++b) limb_frame_[b] = model_.bodies[b].orientation();
+  std::visit(
+      [&](const auto& state) {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          for (std::size_t b = 0; b < bodies; ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
+        }
+      },
+      state_);
+}
+
+double World::time() const {
+  return std::visit([](const auto& state) { return state.time; }, state_);
+}
+
+Observation World::observe() const {
+  return std::visit([](const auto& state) { return limber::observe(state); }, state_);
+}
+
+// --- Handles
+
+BodyId World::body(std::string_view name) const {
+  const int b = model_.find_body(name);
+  if (b < 0) throw WorldError("body: no body called '" + std::string(name) + "'");
+  return BodyId{body_handle_[static_cast<std::size_t>(b)]};
+}
+
+JointId World::joint(std::string_view name) const {
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
+    if (model_.joints[j].name == name) return JointId{joint_handle_[j]};
+  }
+  throw WorldError("joint: no joint called '" + std::string(name) + "'");
+}
+
+std::vector<BodyId> World::bodies() const {
+  std::vector<BodyId> out;
+  for (std::uint32_t handle : body_handle_) out.push_back(BodyId{handle});
+  return out;
+}
+
+const Body& World::body_description(BodyId body) const { return model_.bodies[index(body)]; }
+
+std::size_t World::index(BodyId body) const {
+  const auto it = body_index_.find(body.value);
+  if (it == body_index_.end()) throw WorldError("body handle " + std::to_string(body.value) + ": no such body (removed?)");
+  return it->second;
+}
+
+std::size_t World::index(JointId joint) const {
+  const auto it = joint_index_.find(joint.value);
+  if (it == joint_index_.end()) throw WorldError("joint handle " + std::to_string(joint.value) + ": no such joint (removed?)");
+  return it->second;
+}
+
+[[noreturn]] void World::refuse(std::string_view call, std::string_view why) const {
+  throw WorldError(std::string(call) + ": the " + std::string(method_name(options_.method)) + " method " + std::string(why));
+}
+
+void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const {
+  if (!v.allFinite()) throw WorldError(std::string(call) + ": must be finite, got " + vector_text(v));
+}
+
+// --- Stepping
+
+StepStatus World::step(double dt) {
+  if (!valid_time_step(dt)) return StepStatus::invalid_time_step;
+  // This step's loads: forces and torques, and impulses as their force over the step.
+  for (std::size_t b = 0; b < load_force_.size(); ++b) {
+    load_force_[b] += impulse_force_[b] / dt, load_torque_[b] += impulse_torque_[b] / dt;
+    impulse_force_[b].setZero(), impulse_torque_[b].setZero();
+  }
+  const StepStatus status = std::visit(
+      [&](auto& state) {
+        using State = std::decay_t<decltype(state)>;
+        for (std::size_t b = 0; b < load_force_.size(); ++b) {
+          if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
+          world_bodies::apply_load(state, b, load_force_[b], load_torque_[b]);
+        }
+        for (const auto& [handle, pin] : pins_) {
+          if (pin.target) world_bodies::move_world_anchor(state, model_, index(pin.joint), *pin.target);
+        }
+        const StepStatus result = limber::step(state, dt).status;
+        if constexpr (kParticles<State>) {
+          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
+        }
+        return result;
+      },
+      state_);
+  for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
+  for (auto& [handle, pin] : pins_) {
+    if (pin.target) model_.joints[index(pin.joint)].inboard_anchor = *pin.target;
+    pin.target.reset();
+  }
+  return status;
+}
+
+// --- Reading
+
+Pose World::pose(BodyId body) const {
+  const std::size_t b = index(body);
+  return std::visit(
+      [&](const auto& state) {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          return world_bodies::particle_pose(state, b, limb_frame_[b]);
+        } else {
+          return world_bodies::rigid_pose(state, b);
+        }
+      },
+      state_);
+}
+
+Motion World::motion(BodyId body) const {
+  const std::size_t b = index(body);
+  return std::visit([&](const auto& state) { return world_bodies::motion(state, b); }, state_);
+}
+
+// --- Loads
+
+void World::apply_force(BodyId body, const Eigen::Vector3d& force, const Eigen::Vector3d& world_point) {
+  check_vector(force, "apply_force"), check_vector(world_point, "apply_force");
+  const std::size_t b = index(body);
+  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, state_);
+  load_force_[b] += force;
+  load_torque_[b] += (world_point - centre).cross(force);
+  wake(body);
+}
+
+void World::apply_impulse(BodyId body, const Eigen::Vector3d& impulse, const Eigen::Vector3d& world_point) {
+  check_vector(impulse, "apply_impulse"), check_vector(world_point, "apply_impulse");
+  const std::size_t b = index(body);
+  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, state_);
+  impulse_force_[b] += impulse;
+  impulse_torque_[b] += (world_point - centre).cross(impulse);
+  wake(body);
+}
+
+void World::apply_torque(BodyId body, const Eigen::Vector3d& torque) {
+  check_vector(torque, "apply_torque");
+  load_torque_[index(body)] += torque;
+  wake(body);
+}
+
+void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
+  check_vector(torque, "apply_joint_torque");
+  const Joint& j = model_.joints[index(joint)];
+  load_torque_[static_cast<std::size_t>(j.outboard)] += torque;
+  wake(BodyId{body_handle_[static_cast<std::size_t>(j.outboard)]});
+  if (j.inboard != kWorld) load_torque_[static_cast<std::size_t>(j.inboard)] -= torque;
+}
+
+// --- Held points
+
+PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
+  check_vector(local_point, "pin");
+  if (options_.method == Method::featherstone) {
+    refuse("pin", "holds points only through joints of its tree: a joint to the world added while the tree moves would re-root it; put the joint in the Model");
+  }
+  const std::size_t b = index(body);
+  const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, state_);
+  Joint joint = spherical_joint("pin " + std::to_string(next_pin_), kWorld, static_cast<int>(b), world_point, local_point);
+  const JointId id = add_joint(joint);
+  pins_[next_pin_] = Pin{id, std::nullopt};
+  return PinId{next_pin_++};
+}
+
+void World::unpin(PinId pin) {
+  const auto it = pins_.find(pin.value);
+  if (it == pins_.end()) throw WorldError("unpin: pin " + std::to_string(pin.value) + ": no such pin");
+  const JointId joint = it->second.joint;
+  pins_.erase(it);
+  remove_joint(joint);
+}
+
+void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
+  check_vector(world_target, "move_pin");
+  const auto it = pins_.find(pin.value);
+  if (it == pins_.end()) throw WorldError("move_pin: pin " + std::to_string(pin.value) + ": no such pin");
+  it->second.target = world_target;
+  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[index(it->second.joint)].outboard)]});
+}
+
+Eigen::Vector3d World::pin_position(PinId pin) const {
+  const auto it = pins_.find(pin.value);
+  if (it == pins_.end()) throw WorldError("pin_position: pin " + std::to_string(pin.value) + ": no such pin");
+  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(it->second.joint)); }, state_);
+}
+
+// --- Sleeping
+
+void World::wake(BodyId body) {
+  const std::size_t b = index(body);
+  std::visit([&](auto& state) { world_bodies::wake(state, b); }, state_);
+}
+
+void World::wake_all() {
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b]});
+}
+
+bool World::sleeping(BodyId body) const {
+  const std::size_t b = index(body);
+  return std::visit([&](const auto& state) { return world_bodies::sleeping(state, b); }, state_);
+}
+
+// --- Teleport
+
+void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
+  check_vector(pose.position, "teleport"), check_vector(motion.linear, "teleport"), check_vector(motion.angular, "teleport");
+  const std::size_t b = index(body);
+  const Eigen::Quaterniond orientation = pose.orientation.normalized();
+  std::visit(
+      [&](auto& state) {
+        using State = std::decay_t<decltype(state)>;
+        if constexpr (std::is_same_v<State, FeatherstoneState>) {
+          if (!world_bodies::teleport_floating_root(state, b, pose.position, orientation, motion)) {
+            refuse("teleport", "moves only a floating root (a body whose coordinates are its own); '" + model_.bodies[b].name + "' hangs from a joint");
+          }
+        } else if constexpr (kParticles<State>) {
+          world_bodies::teleport(state, b, pose.position, orientation, motion);
+          limb_frame_[b] = orientation;
+        } else {
+          world_bodies::teleport(state, b, pose.position, orientation, motion);
+        }
+        world_bodies::wake(state, b);
+      },
+      state_);
+}
+
+// --- Structure
+
+BodyId World::add_body(const Body& body) {
+  Model edited = model_;
+  edited.bodies.push_back(body);
+  std::vector<std::int64_t> old_body_of_new(edited.bodies.size(), -1);
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  recompile(edited, old_body_of_new);
+  body_handle_.push_back(next_body_handle_);
+  body_index_[next_body_handle_] = edited.bodies.size() - 1;
+  return BodyId{next_body_handle_++};
+}
+
+JointId World::add_joint(const Joint& joint) {
+  Model edited = model_;
+  edited.joints.push_back(joint);
+  std::vector<std::int64_t> old_body_of_new(edited.bodies.size());
+  for (std::size_t b = 0; b < edited.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  recompile(edited, old_body_of_new);
+  joint_handle_.push_back(next_joint_handle_);
+  joint_index_[next_joint_handle_] = edited.joints.size() - 1;
+  return JointId{next_joint_handle_++};
+}
+
+void World::remove_joint(JointId joint) {
+  const std::size_t j = index(joint);
+  Model edited = model_;
+  edited.joints.erase(edited.joints.begin() + static_cast<std::ptrdiff_t>(j));
+  std::vector<std::int64_t> old_body_of_new(edited.bodies.size());
+  for (std::size_t b = 0; b < edited.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  recompile(edited, old_body_of_new);
+  joint_index_.erase(joint.value);
+  joint_handle_.erase(joint_handle_.begin() + static_cast<std::ptrdiff_t>(j));
+  for (std::size_t k = j; k < joint_handle_.size(); ++k) joint_index_[joint_handle_[k]] = k;
+  std::erase_if(pins_, [&](const auto& entry) { return entry.second.joint == joint; });
+}
+
+void World::remove_body(BodyId body) {
+  const std::size_t removed = index(body);
+  Model edited = model_;
+  edited.bodies.erase(edited.bodies.begin() + static_cast<std::ptrdiff_t>(removed));
+  std::vector<std::uint32_t> kept_joints;  // handles of the joints that survive, in order
+  edited.joints.clear();
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) {
+    Joint joint = model_.joints[j];
+    if (joint.inboard == static_cast<int>(removed) || joint.outboard == static_cast<int>(removed)) continue;
+    if (joint.inboard > static_cast<int>(removed)) --joint.inboard;
+    if (joint.outboard > static_cast<int>(removed)) --joint.outboard;
+    edited.joints.push_back(joint);
+    kept_joints.push_back(joint_handle_[j]);
+  }
+  std::vector<std::int64_t> old_body_of_new;
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) {
+    if (b != removed) old_body_of_new.push_back(static_cast<std::int64_t>(b));
+  }
+  recompile(edited, old_body_of_new);
+  // Handles: the body's and its joints' are gone; the others move down.
+  body_index_.erase(body.value);
+  body_handle_.erase(body_handle_.begin() + static_cast<std::ptrdiff_t>(removed));
+  for (std::size_t b = 0; b < body_handle_.size(); ++b) body_index_[body_handle_[b]] = b;
+  std::erase_if(pins_, [&](const auto& entry) {
+    return std::find(kept_joints.begin(), kept_joints.end(), entry.second.joint.value) == kept_joints.end();
+  });
+  joint_index_.clear();
+  joint_handle_ = kept_joints;
+  for (std::size_t j = 0; j < joint_handle_.size(); ++j) joint_index_[joint_handle_[j]] = j;
+}
+
+std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset) {
+  check_vector(offset, "add_model");
+  Model edited = model_;
+  const int base = static_cast<int>(model_.bodies.size());
+  for (Body body : other.bodies) {
+    body.name = std::string(prefix) + body.name;
+    body.position += offset;
+    edited.bodies.push_back(std::move(body));
+  }
+  for (Joint joint : other.joints) {
+    joint.name = std::string(prefix) + joint.name;
+    if (joint.inboard == kWorld) {
+      joint.inboard_anchor += offset;
+    } else {
+      joint.inboard += base;
+    }
+    joint.outboard += base;
+    edited.joints.push_back(std::move(joint));
+  }
+  std::vector<std::int64_t> old_body_of_new(edited.bodies.size(), -1);
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  recompile(edited, old_body_of_new);
+  std::vector<BodyId> added;
+  for (std::size_t b = static_cast<std::size_t>(base); b < edited.bodies.size(); ++b) {
+    body_handle_.push_back(next_body_handle_);
+    body_index_[next_body_handle_] = b;
+    added.push_back(BodyId{next_body_handle_++});
+  }
+  for (std::size_t j = model_.joints.size() - other.joints.size(); j < model_.joints.size(); ++j) {
+    joint_handle_.push_back(next_joint_handle_);
+    joint_index_[next_joint_handle_++] = j;
+  }
+  return added;
+}
+
+// Compiles `edited` and carries across, for every body whose old index is old_body_of_new[b]
+// (−1: new), the state the old one had; then makes `edited` the model. Nothing changes when the
+// compile throws.
+void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new) {
+  State next = compile_state(edited, options_);
+  std::visit(
+      [&](auto& fresh) {
+        using State = std::decay_t<decltype(fresh)>;
+        const State& old = std::get<State>(state_);
+        if constexpr (std::is_same_v<State, FeatherstoneState>) {
+          std::string problem;
+          if (!world_bodies::carry_state(old, model_, fresh, edited, old_body_of_new, problem)) refuse("a structural edit", problem);
+        } else {
+          world_bodies::carry_state(old, model_, fresh, edited, old_body_of_new);
+        }
+      },
+      next);
+  std::vector<Eigen::Quaterniond> frames(edited.bodies.size());
+  for (std::size_t b = 0; b < edited.bodies.size(); ++b) {
+    frames[b] = old_body_of_new[b] >= 0 ? limb_frame_[static_cast<std::size_t>(old_body_of_new[b])] : edited.bodies[b].orientation();
+  }
+  state_ = std::move(next);
+  model_ = edited;
+  compile();
+  limb_frame_ = std::move(frames);
+  std::visit(
+      [&](const auto& state) {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
+        }
+      },
+      state_);
+}
+
+}  // namespace limber

@@ -1,0 +1,207 @@
+// The World: what an engine drives. One Model under one method, stepped, read and pushed through
+// one set of calls, whatever the method (Box2D v3's world and body functions, Jolt's
+// BodyInterface and MuJoCo's mjData fields are the models).
+//
+//   limber::World world(limber::load_scene_file("ragdoll.json"), {.method = limber::Method::featherstone});
+//   const limber::BodyId head = world.body("head");
+//   world.apply_impulse(head, {2, 0, 0}, world.pose(head).position);
+//   world.step(1.0 / 60);
+//   const limber::Pose pose = world.pose(head);   // position and orientation of the body frame
+//
+// The World owns no physics: every call maps onto the method's state (kernel/verlet, springs,
+// lagrange, featherstone), and what a method cannot do is refused with a WorldError naming the
+// method and the call, never done silently wrong. Loads (forces, impulses, torques, joint
+// torques, kinematic targets) act over the next step and are then gone. Structural edits (add or
+// remove a body or a joint, pin or unpin) recompile the state from the edited Model and carry
+// every surviving body's state across bit for bit (positions, velocities; islands wake).
+//
+// Frames. A body's pose is that of its Model body frame: origin at the centre of its shape,
+// z along its axis (tail → head). A particle limb has no spin about its axis, so its
+// orientation's roll is carried by parallel transport: each step the frame turns by the
+// smallest rotation that takes the old axis to the new one — continuous in time.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <variant>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
+
+namespace limber {
+
+/// A call the world's method cannot do, or a bad argument (an unknown handle, a non-finite
+/// vector). what() is one line naming the call and, where it is the method's limit, the method.
+class WorldError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The method a World steps its Model with.
+enum class Method : std::uint8_t {
+  particles,     ///< Verlet integration and relaxation (thesis 3.2, 4.2): WorldOptions::particles
+  springs,       ///< rigid limbs joined by stiff springs (thesis 3.3): WorldOptions::springs
+  lagrange,      ///< rigid limbs and joint constraints (thesis 3.4): WorldOptions::lagrange
+  featherstone,  ///< reduced coordinates, the articulated-body algorithm (thesis 3.5)
+};
+
+/// The method's name as the command line spells it.
+std::string_view method_name(Method method);
+
+/// What a World is built with: the method and its options (each family reads only its own).
+struct WorldOptions {
+  Method method = Method::particles;
+  bool single_precision = false;  ///< particles only: float state
+  VerletOptions particles{};      ///< threads default to 1: a world starts no threads unless asked
+  SpringOptions springs{};
+  LagrangeOptions lagrange{};
+  FeatherstoneOptions featherstone{};
+};
+
+/// Handles: stable across structural edits (a removed body's handle is refused thereafter).
+struct BodyId {
+  std::uint32_t value = ~0u;
+  friend bool operator==(BodyId, BodyId) = default;
+};
+struct JointId {
+  std::uint32_t value = ~0u;
+  friend bool operator==(JointId, JointId) = default;
+};
+/// A point of a body held to the world (World::pin): a spherical joint to the world.
+struct PinId {
+  std::uint32_t value = ~0u;
+  friend bool operator==(PinId, PinId) = default;
+};
+
+/// A body frame's pose, world: origin (m) and orientation (body → world).
+struct Pose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+/// A body frame's motion, world: the velocity of its origin (m/s) and its angular velocity (rad/s).
+struct Motion {
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();
+};
+
+class World {
+ public:
+  /// Compiles `model` under `options.method`. Throws ModelError when the model is invalid or the
+  /// method cannot represent it (the message names the part), std::invalid_argument for options
+  /// that do not go together.
+  explicit World(Model model, WorldOptions options = {});
+
+  /// One step of dt seconds (the Model's time step without an argument). Never throws; a bad dt
+  /// or a divergence is the status.
+  StepStatus step(double dt);
+  StepStatus step() { return step(model_.settings.time_step); }
+
+  double time() const;
+  const Model& model() const { return model_; }
+  Method method() const { return options_.method; }
+  Observation observe() const;
+
+  // --- Handles ---
+  /// The body or joint called `name`. Throws WorldError when there is none.
+  BodyId body(std::string_view name) const;
+  JointId joint(std::string_view name) const;
+  std::vector<BodyId> bodies() const;  ///< every body, in Model order
+  const Body& body_description(BodyId body) const;  ///< its Model entry (initial pose, shape, mass)
+
+  // --- Reading ---
+  Pose pose(BodyId body) const;
+  Motion motion(BodyId body) const;
+
+  // --- Loads over the next step (each wakes the body's island) ---
+  /// A force (N) at a world point (m). Particle limbs take what particles can: the force at the
+  /// limb's centre of mass and the torque about it across the axis (none about the axis).
+  void apply_force(BodyId body, const Eigen::Vector3d& force, const Eigen::Vector3d& world_point);
+  /// An impulse (N·s) at a world point: the force impulse/dt over the next step of dt, which
+  /// changes the body's momentum by exactly the impulse (with no other force).
+  void apply_impulse(BodyId body, const Eigen::Vector3d& impulse, const Eigen::Vector3d& world_point);
+  /// A torque (N·m) about the body's centre of mass (particle limbs: its part across the axis).
+  void apply_torque(BodyId body, const Eigen::Vector3d& torque);
+  /// A joint's actuation torque (N·m, world): +torque on the outboard body, −torque on the
+  /// inboard one (none on the world).
+  void apply_joint_torque(JointId joint, const Eigen::Vector3d& torque);
+
+  // --- Held points ---
+  /// Holds the body's point `local_point` (its Model body frame, m) where it is now: a spherical
+  /// joint to the world, added by recompiling. The particle method holds only a limb's head or
+  /// tail (its particles; ModelError otherwise).
+  PinId pin(BodyId body, const Eigen::Vector3d& local_point);
+  void unpin(PinId pin);
+  /// A kinematic target: over the next step the held point moves to `world_target` along a
+  /// straight path at constant velocity (a rope in a moving hand). Particles: exact. Springs and
+  /// Lagrange: the joint's world anchor moves, and the body follows through the joint.
+  /// Featherstone: refused (a moving world anchor is not a joint of its tree).
+  void move_pin(PinId pin, const Eigen::Vector3d& world_target);
+  Eigen::Vector3d pin_position(PinId pin) const;  ///< where the held point's world anchor is, m
+
+  // --- Sleeping ---
+  void wake(BodyId body);       ///< wakes the body's island
+  void wake_all();
+  bool sleeping(BodyId body) const;
+
+  // --- Teleport ---
+  /// Sets the body's pose and motion. Featherstone: only a body that is its tree's floating
+  /// root (its coordinates are its own); others are refused.
+  void teleport(BodyId body, const Pose& pose, const Motion& motion);
+
+  // --- Structure (each recompiles and carries every surviving body's state) ---
+  BodyId add_body(const Body& body);
+  JointId add_joint(const Joint& joint);  ///< inboard/outboard: Model indices of bodies(), or kWorld
+  void remove_body(BodyId body);         ///< and its joints
+  void remove_joint(JointId joint);
+  /// Adds every body and joint of `other` (another ragdoll), names prefixed with `prefix`, moved
+  /// by `offset` (m). Returns the new bodies' handles in `other`'s order.
+  std::vector<BodyId> add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
+
+  /// The Model index of a handle (for the state's own arrays); throws WorldError when removed.
+  std::size_t index(BodyId body) const;
+  std::size_t index(JointId joint) const;
+
+  /// The method's state, for what the World does not wrap (observers, counters).
+  using State = std::variant<VerletState<double>, VerletState<float>, SpringState, LagrangeState, FeatherstoneState>;
+  const State& state() const { return state_; }
+
+ private:
+  struct Pin {
+    JointId joint;
+    std::optional<Eigen::Vector3d> target;
+  };
+  void compile();
+  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new);
+  [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
+  void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
+
+  Model model_;
+  WorldOptions options_;
+  State state_;
+  // Handles ↔ Model indices.
+  std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
+  std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;
+  std::uint32_t next_body_handle_ = 0, next_joint_handle_ = 0, next_pin_ = 0;
+  std::unordered_map<std::uint32_t, Pin> pins_;
+  // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
+  // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.
+  std::vector<Eigen::Vector3d> load_force_, load_torque_, impulse_force_, impulse_torque_;
+  // Particle limbs' frames, carried by parallel transport (per Model body).
+  std::vector<Eigen::Quaterniond> limb_frame_;
+};
+
+}  // namespace limber

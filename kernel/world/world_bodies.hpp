@@ -1,0 +1,250 @@
+// The World's per-method work (internal to kernel/world): how each method's state answers a
+// body's pose, motion and centre of mass, takes a load, a held point, a teleport, a wake, and
+// carries its bodies across a recompile. Particle limbs are templates on the scalar type; the
+// rigid methods share RigidScene's arrays (Featherstone's after refreshing them from (q, v)).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/world/world.hpp"
+
+namespace limber::world_bodies {
+
+// ---- Particle limbs
+
+template <typename Scalar>
+Eigen::Vector3d particle_position(const VerletState<Scalar>& state, std::uint32_t p) {
+  return state.particles.position(p).template cast<double>();
+}
+
+/// The limb's axis end points, head and tail, m.
+template <typename Scalar>
+std::pair<Eigen::Vector3d, Eigen::Vector3d> limb_ends(const VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t limb = state.body_limb[body];
+  return {particle_position(state, state.limbs.head[limb]), particle_position(state, state.limbs.tail[limb])};
+}
+
+/// `previous` turned by the smallest rotation that takes its z axis onto the limb's axis now
+/// (parallel transport: the roll a particle limb cannot have stays continuous).
+template <typename Scalar>
+Eigen::Quaterniond transported_frame(const VerletState<Scalar>& state, std::size_t body, const Eigen::Quaterniond& previous) {
+  const auto [head, tail] = limb_ends(state, body);
+  const Eigen::Vector3d axis = head - tail;
+  if (!(axis.norm() > 0) || !axis.allFinite()) return previous;
+  return (Eigen::Quaterniond::FromTwoVectors(previous * Eigen::Vector3d::UnitZ(), axis) * previous).normalized();
+}
+
+template <typename Scalar>
+Pose particle_pose(const VerletState<Scalar>& state, std::size_t body, const Eigen::Quaterniond& frame) {
+  const auto [head, tail] = limb_ends(state, body);
+  return {0.5 * (head + tail), frame};
+}
+
+/// The limb's own mass at its particles, kg, and their positions.
+template <typename Scalar>
+Eigen::Vector3d centre_of_mass(const VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t limb = state.body_limb[body];
+  const LimbBuffer& limbs = state.limbs;
+  Eigen::Vector3d sum = limbs.head_mass[limb] * particle_position(state, limbs.head[limb]) +
+                        limbs.tail_mass[limb] * particle_position(state, limbs.tail[limb]);
+  if (limbs.centre[limb] != kNoCentre) sum += limbs.centre_mass[limb] * particle_position(state, limbs.centre[limb]);
+  return sum / (limbs.head_mass[limb] + limbs.centre_mass[limb] + limbs.tail_mass[limb]);
+}
+
+/// The velocity of the limb's centre (the mean of its ends') and its angular velocity across
+/// its axis (a particle limb does not spin about it).
+template <typename Scalar>
+Motion motion(const VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t limb = state.body_limb[body];
+  const auto [head, tail] = limb_ends(state, body);
+  const Eigen::Vector3d v_head = particle_velocity(state, state.limbs.head[limb]), v_tail = particle_velocity(state, state.limbs.tail[limb]);
+  const Eigen::Vector3d axis = head - tail;
+  const double length2 = axis.squaredNorm();
+  return {0.5 * (v_head + v_tail), length2 > 0 ? Eigen::Vector3d(axis.cross(v_head - v_tail) / length2) : Eigen::Vector3d::Zero()};
+}
+
+/// A force at the limb's centre of mass (shared by its particles in proportion to its mass at
+/// each: apply_force) and the part of a torque across its axis, as a couple on its ends.
+template <typename Scalar>
+void apply_load(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+  if (!force.isZero(0)) apply_force(state, static_cast<int>(body), force);
+  const auto [head, tail] = limb_ends(state, body);
+  const Eigen::Vector3d axis = head - tail;
+  const double length = axis.norm();
+  if (torque.isZero(0) || !(length > 0)) return;
+  const Eigen::Vector3d u = axis / length, across = torque - torque.dot(u) * u;
+  const Eigen::Vector3d at_head = across.cross(u) / length;  // (L·u) × at_head = across
+  const std::uint32_t limb = state.body_limb[body];
+  state.pending_forces.emplace_back(state.limbs.head[limb], at_head);
+  state.pending_forces.emplace_back(state.limbs.tail[limb], -at_head);
+}
+
+template <typename Scalar>
+Eigen::Vector3d world_point(const VerletState<Scalar>& state, const Model&, std::size_t body, const Eigen::Quaterniond& frame,
+                            const Eigen::Vector3d& local_point) {
+  return particle_pose(state, body, frame).position + frame * local_point;
+}
+
+/// The held particle of world joint `joint`: its own pin particle (zero-length joints), or the
+/// limb end it pins (shared-particle joints).
+template <typename Scalar>
+std::uint32_t held_particle(const VerletState<Scalar>& state, const Model& model, std::size_t joint) {
+  for (std::uint32_t p = 0; p < state.particle_origins.size(); ++p) {
+    const ParticleOrigin& origin = state.particle_origins[p];
+    if (origin.kind == ParticleOrigin::Kind::world_pin && origin.index == joint) return p;
+  }
+  const Joint& j = model.joints[joint];
+  const std::uint32_t limb = state.body_limb[static_cast<std::size_t>(j.outboard)];
+  return j.outboard_anchor.z() > 0 ? state.limbs.head[limb] : state.limbs.tail[limb];
+}
+
+template <typename Scalar>
+Eigen::Vector3d world_anchor(const VerletState<Scalar>& state, const Model& model, std::size_t joint) {
+  return particle_position(state, held_particle(state, model, joint));
+}
+
+template <typename Scalar>
+void move_world_anchor(VerletState<Scalar>& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target) {
+  state.kinematic_targets.push_back({held_particle(state, model, joint), target, Eigen::Vector3d::Zero()});
+}
+
+template <typename Scalar>
+std::uint32_t island_of_limb(const VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t limb = state.body_limb[body];
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    if (limb >= state.islands[k].limb_begin && limb < state.islands[k].limb_end) return k;
+  }
+  return 0;
+}
+
+template <typename Scalar>
+void wake(VerletState<Scalar>& state, std::size_t body) {
+  wake_island(state, island_of_limb(state, body));
+}
+
+template <typename Scalar>
+bool sleeping(const VerletState<Scalar>& state, std::size_t body) {
+  return state.islands[island_of_limb(state, body)].sleeping;
+}
+
+/// Puts the limb's movable particles where the pose puts its head, centre and tail, moving as
+/// the motion says (a pinned particle stays; a particle a joint shares moves for both limbs).
+template <typename Scalar>
+void teleport(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
+              const Motion& motion) {
+  const std::uint32_t limb = state.body_limb[body];
+  const double half = 0.5 * double(state.constraints.rest_length[state.limbs.link_constraint[limb]]);
+  const Eigen::Vector3d axis = orientation * Eigen::Vector3d::UnitZ();
+  auto place = [&](std::uint32_t p, const Eigen::Vector3d& x) {
+    if (state.particles.inverse_mass[p] == Scalar(0)) return;
+    const Eigen::Vector3d v = motion.linear + motion.angular.cross(x - position);
+    state.particles.set_position(p, x.cast<Scalar>());
+    state.particles.set_previous(p, (x - v * state.previous_time_step).template cast<Scalar>());
+    state.particles.set_velocity(p, v.cast<Scalar>());
+  };
+  place(state.limbs.head[limb], position + half * axis);
+  place(state.limbs.tail[limb], position - half * axis);
+  if (state.limbs.centre[limb] != kNoCentre) place(state.limbs.centre[limb], position);
+}
+
+/// Copies every particle that stands for the same thing in both states (a limb's head, centre
+/// or tail by body, a pin by joint name): positions, previous positions, velocities, and the
+/// clock. An island of surviving bodies sleeps if they all slept, else wakes; one of new bodies
+/// is as compiled.
+template <typename Scalar>
+void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletState<Scalar>& fresh, const Model& new_model,
+                 const std::vector<std::int64_t>& old_body_of_new) {
+  const auto old_particle = [&](const ParticleOrigin& origin) -> std::int64_t {
+    std::int64_t index = -1;
+    if (origin.kind == ParticleOrigin::Kind::ball) return old.ball_particle;
+    if (origin.kind == ParticleOrigin::Kind::world_pin) {
+      for (std::size_t j = 0; j < old_model.joints.size(); ++j) {
+        if (old_model.joints[j].name == new_model.joints[origin.index].name) index = static_cast<std::int64_t>(j);
+      }
+    } else {
+      index = old_body_of_new[origin.index];
+    }
+    if (index < 0) return -1;
+    for (std::uint32_t p = 0; p < old.particle_origins.size(); ++p) {
+      if (old.particle_origins[p].kind == origin.kind && old.particle_origins[p].index == index) return p;
+    }
+    if (origin.kind == ParticleOrigin::Kind::world_pin) return -1;
+    // A limb end merged into another slot's particle (shared-particle joints): through its limb.
+    const std::uint32_t limb = old.body_limb[static_cast<std::size_t>(index)];
+    switch (origin.kind) {
+      case ParticleOrigin::Kind::limb_head: return old.limbs.head[limb];
+      case ParticleOrigin::Kind::limb_tail: return old.limbs.tail[limb];
+      case ParticleOrigin::Kind::limb_centre: return old.limbs.centre[limb];
+      default: return -1;
+    }
+  };
+  for (std::uint32_t p = 0; p < fresh.particle_origins.size(); ++p) {
+    const std::int64_t q = old_particle(fresh.particle_origins[p]);
+    if (q < 0) continue;
+    const auto from = static_cast<std::uint32_t>(q);
+    fresh.particles.set_position(p, old.particles.position(from));
+    fresh.particles.set_previous(p, old.particles.previous(from));
+    fresh.particles.set_velocity(p, old.particles.velocity(from));
+  }
+  fresh.time = old.time;
+  fresh.previous_time_step = old.previous_time_step;
+  // An island of surviving bodies sleeps if they all slept; one of new bodies as compiled.
+  for (Island& island : fresh.islands) {
+    bool any_old = false, all_asleep = true;
+    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
+      for (std::size_t b = 0; b < fresh.body_limb.size(); ++b) {
+        if (fresh.body_limb[b] != limb || old_body_of_new[b] < 0) continue;
+        any_old = true;
+        all_asleep = all_asleep && sleeping(old, static_cast<std::size_t>(old_body_of_new[b]));
+      }
+    }
+    if (any_old) island.sleeping = all_asleep, island.still_time = 0;
+  }
+  rebuild_awake_islands(fresh);
+}
+
+// ---- Rigid bodies (springs, Lagrange, Featherstone's refreshed bodies)
+
+Pose rigid_pose(const RigidScene& scene, std::size_t body);
+Motion motion(const RigidScene& scene, std::size_t body);
+Eigen::Vector3d centre_of_mass(const RigidScene& scene, std::size_t body);
+void apply_load(RigidScene& scene, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque);
+Eigen::Vector3d world_point(const RigidScene& scene, const Model& model, std::size_t body, const Eigen::Quaterniond& frame,
+                            const Eigen::Vector3d& local_point);
+Eigen::Vector3d world_anchor(const SpringState& state, const Model& model, std::size_t joint);
+Eigen::Vector3d world_anchor(const LagrangeState& state, const Model& model, std::size_t joint);
+Eigen::Vector3d world_anchor(const FeatherstoneState& state, const Model& model, std::size_t joint);
+void move_world_anchor(SpringState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
+void move_world_anchor(LagrangeState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
+void move_world_anchor(FeatherstoneState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
+void wake(RigidScene& scene, std::size_t body);
+bool sleeping(const RigidScene& scene, std::size_t body);
+void teleport(RigidScene& scene, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
+              const Motion& motion);
+/// Featherstone: moves a floating root (and what hangs from it); false for any other body.
+bool teleport_floating_root(FeatherstoneState& state, std::size_t body, const Eigen::Vector3d& position,
+                            const Eigen::Quaterniond& orientation, const Motion& motion);
+/// Copies every surviving body's x, q, P, L (and the ball's) and the clock; islands sleep as
+/// for the particle method.
+void carry_state(const RigidScene& old, const Model& old_model, RigidScene& fresh, const Model& new_model,
+                 const std::vector<std::int64_t>& old_body_of_new);
+/// Featherstone: copies each surviving body's joint coordinates and velocities when it hangs
+/// from the same joint on the same parent (or floats) in both; false, with `problem` naming
+/// the body, when an edit changes how a surviving body hangs.
+bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
+                 const std::vector<std::int64_t>& old_body_of_new, std::string& problem);
+
+}  // namespace limber::world_bodies

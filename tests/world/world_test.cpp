@@ -1,0 +1,313 @@
+// The World: every call under every method that supports it, each asserting a physical fact,
+// and a clear refusal where a method cannot.
+#include <dirent.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "limber/kernel/world/world.hpp"
+#include "tests/support/models.hpp"
+
+namespace limber {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::load_shipped_scene;
+using testing::make_chain;
+
+const Method kMethods[] = {Method::particles, Method::springs, Method::lagrange, Method::featherstone};
+
+std::string name(Method method) { return std::string(method_name(method)); }
+
+WorldOptions options_for(Method method) {
+  WorldOptions options;
+  options.method = method;
+  options.lagrange.stabilization = Stabilization::projection;
+  return options;
+}
+
+// One free capsule without gravity, turning about x and drifting.
+Model free_limb() {
+  Model model = make_chain({2.0}, 0.4, false);
+  model.settings.gravity.setZero();
+  model.bodies[0].linear_velocity = Vector3(0.1, 0.2, -0.3);
+  return model;
+}
+
+double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) { return a.angularDistance(b); }
+
+TEST(World, StartsWhereTheModelPutsItsBodies) {
+  const Model model = make_chain({1, 2, 1}, 0.3, true);
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      const Pose pose = world.pose(world.body(model.bodies[b].name));
+      EXPECT_LT((pose.position - model.bodies[b].position).norm(), 1e-12) << name(method) << " body " << b;
+      EXPECT_LT(angle_between(pose.orientation, model.bodies[b].orientation()), 1e-9) << name(method) << " body " << b;
+    }
+  }
+}
+
+TEST(World, AnImpulseChangesMomentumByExactlyTheImpulse) {
+  // No gravity, a free body: the change of linear momentum over the step is the impulse.
+  const Eigen::Vector3d impulse(0.7, -1.1, 0.4);
+  for (const Method method : kMethods) {
+    World world(free_limb(), options_for(method));
+    const BodyId limb = world.body("link_0");
+    const Eigen::Vector3d before = world.observe().linear_momentum;
+    world.apply_impulse(limb, impulse, world.pose(limb).position);
+    ASSERT_EQ(world.step(1.0 / 120), StepStatus::ok);
+    EXPECT_LT((world.observe().linear_momentum - before - impulse).norm(), 1e-12) << name(method);
+  }
+}
+
+TEST(World, AnOffCentreImpulseTurnsTheBodyByRCrossJ) {
+  // At the head, across the axis: the angular velocity gained is I⁻¹ (r × J), the same for every
+  // method whose limb has the inertia of its particles (limb_masses "ends" is m·L²/4; the rigid
+  // methods use the capsule's), so compare each with its own I: the spin about the centre,
+  // ω·I = r × J, with I about a transverse axis.
+  const Eigen::Vector3d impulse(0, 0.5, 0);
+  for (const Method method : kMethods) {
+    World world(free_limb(), options_for(method));
+    const BodyId limb = world.body("link_0");
+    const Pose pose = world.pose(limb);
+    const Eigen::Vector3d head = pose.position + pose.orientation * Eigen::Vector3d(0, 0, 0.2);
+    const Eigen::Vector3d spin_before = world.motion(limb).angular;
+    world.apply_impulse(limb, impulse, head);
+    world.step(1e-4);
+    const Eigen::Vector3d spin = world.motion(limb).angular - spin_before;
+    const Eigen::Vector3d expected_axis = (head - pose.position).cross(impulse).normalized();
+    EXPECT_GT(spin.norm(), 1e-3) << name(method);
+    EXPECT_LT((spin.normalized() - expected_axis).norm(), 1e-3) << name(method);
+  }
+}
+
+TEST(World, AJointTorqueTurnsTheTwoBodiesApartAndKeepsAngularMomentum) {
+  Model model = make_chain({1, 1}, 0.3, false);
+  model.settings.gravity.setZero();
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    world.apply_joint_torque(world.joint("joint_1"), Eigen::Vector3d(0, 0, 0.2));  // about z, across both axes
+    for (int s = 0; s < 10; ++s) ASSERT_EQ(world.step(1.0 / 240), StepStatus::ok);
+    const double inboard = world.motion(world.body("link_0")).angular.z(), outboard = world.motion(world.body("link_1")).angular.z();
+    EXPECT_GT(outboard, 1e-3) << name(method);
+    EXPECT_LT(inboard, -1e-3) << name(method);
+    EXPECT_LT(world.observe().linear_momentum.norm(), 1e-9) << name(method);
+  }
+}
+
+TEST(World, APinnedPointStaysPut) {
+  // A chain's free end pinned where it is, then released: it swings about the pin, which does
+  // not move (particles: the held particle itself; Lagrange: to its projection's tolerance).
+  for (const Method method : {Method::particles, Method::lagrange}) {
+    for (const ParticleJoints joints : {ParticleJoints::shared_particle, ParticleJoints::zero_length_constraint}) {
+      if (method != Method::particles && joints == ParticleJoints::zero_length_constraint) continue;
+      Model model = make_chain({1, 1, 1}, 0.2, false);
+      model.settings.verlet.joints = joints;
+      model.settings.sleep.enabled = false;
+      World world(model, options_for(method));
+      const BodyId end = world.body("link_2");
+      const Eigen::Vector3d local(0, 0, -0.1);  // the tail
+      const Pose start = world.pose(end);
+      const Eigen::Vector3d held = start.position + start.orientation * local;
+      world.pin(end, local);
+      double largest = 0;
+      for (int s = 0; s < 240; ++s) {
+        ASSERT_EQ(world.step(1.0 / 240), StepStatus::ok);
+        const Pose pose = world.pose(end);
+        largest = std::max(largest, (pose.position + pose.orientation * local - held).norm());
+      }
+      const double tolerance = method == Method::particles && joints == ParticleJoints::shared_particle ? 1e-15 : 1e-4;
+      EXPECT_LT(largest, tolerance) << name(method) << " joints " << int(joints);
+      EXPECT_GT((world.pose(world.body("link_0")).position - model.bodies[0].position).norm(), 0.05) << "the chain must swing";
+    }
+  }
+}
+
+TEST(World, FeatherstoneRefusesPinsAndTeleportsOnlyItsFloatingRoots) {
+  const Model model = make_chain({1, 1}, 0.2, true);
+  World world(model, options_for(Method::featherstone));
+  try {
+    world.pin(world.body("link_1"), Eigen::Vector3d(0, 0, -0.1));
+    FAIL() << "pinned";
+  } catch (const WorldError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("pin: the featherstone method"));
+  }
+  try {
+    world.teleport(world.body("link_1"), {}, {});
+    FAIL() << "teleported";
+  } catch (const WorldError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("'link_1' hangs from a joint"));
+  }
+  World free_world(free_limb(), options_for(Method::featherstone));
+  const Pose target{Eigen::Vector3d(1, 2, 3), Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()))};
+  free_world.teleport(free_world.body("link_0"), target, {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d::Zero()});
+  EXPECT_LT((free_world.pose(free_world.body("link_0")).position - target.position).norm(), 1e-12);
+  EXPECT_LT(angle_between(free_world.pose(free_world.body("link_0")).orientation, target.orientation), 1e-9);
+}
+
+TEST(World, TeleportSetsPoseAndMotion) {
+  for (const Method method : kMethods) {
+    World world(free_limb(), options_for(method));
+    const BodyId limb = world.body("link_0");
+    const Pose target{Eigen::Vector3d(0.5, -1, 2), Eigen::Quaterniond(Eigen::AngleAxisd(1.0, Eigen::Vector3d(1, 1, 0).normalized()))};
+    const Motion moving{Eigen::Vector3d(1, 0, 0), Eigen::Vector3d(0, 0, 0)};
+    world.teleport(limb, target, moving);
+    EXPECT_LT((world.pose(limb).position - target.position).norm(), 1e-12) << name(method);
+    EXPECT_LT(angle_between(world.pose(limb).orientation, target.orientation), 1e-9) << name(method);
+    world.step(0.01);
+    EXPECT_LT((world.pose(limb).position - target.position - Eigen::Vector3d(0.01, 0, 0)).norm(), 1e-9) << name(method);
+  }
+}
+
+TEST(World, AKinematicTargetIsFollowedWithItsVelocity) {
+  // A rope held by a hand moving at 0.5 m/s along +y: the held particle is where the hand is,
+  // moving as it moves (particles exactly; Lagrange's body follows the moving anchor closely).
+  for (const Method method : {Method::particles, Method::lagrange}) {
+    for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+      if (method != Method::particles && projection == ProjectionRule::rattle) continue;
+      Model model = make_chain({0.2, 0.2, 0.2, 0.2}, 0.1, false);
+      model.settings.verlet.joints = ParticleJoints::shared_particle;
+      model.settings.relaxation.projection = projection;
+      model.settings.relaxation.substeps = projection == ProjectionRule::rattle ? 4 : 1;
+      model.settings.sleep.enabled = false;
+      World world(model, options_for(method));
+      const BodyId first = world.body("link_0");
+      const PinId hand = world.pin(first, Eigen::Vector3d(0, 0, 0.05));  // link_0's head
+      const Eigen::Vector3d start = world.pin_position(hand);
+      const double dt = 1.0 / 120, speed = 0.5;
+      double largest = 0;
+      for (int s = 1; s <= 120; ++s) {
+        const Eigen::Vector3d target = start + Eigen::Vector3d(0, speed * s * dt, 0);
+        world.move_pin(hand, target);
+        ASSERT_EQ(world.step(dt), StepStatus::ok);
+        const Pose pose = world.pose(first);
+        largest = std::max(largest, (pose.position + pose.orientation * Eigen::Vector3d(0, 0, 0.05) - target).norm());
+      }
+      EXPECT_LT(largest, method == Method::particles ? 1e-12 : 2e-3) << name(method) << " projection " << int(projection);
+      // The chain was dragged along: its far end moved with the hand, on average.
+      EXPECT_GT(world.pose(world.body("link_3")).position.y() - model.bodies[3].position.y(), 0.2) << name(method);
+    }
+  }
+}
+
+TEST(World, TransformsAreContinuousInTime) {
+  // A chain swinging down: no body's orientation jumps between steps (particle limbs carry their
+  // roll by parallel transport; the rigid methods integrate it).
+  const Model model = make_chain({1, 1, 1, 2}, 0.2, true);
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    std::vector<Pose> last;
+    for (const BodyId body : world.bodies()) last.push_back(world.pose(body));
+    double largest_turn = 0;
+    for (int s = 0; s < 480; ++s) {
+      ASSERT_EQ(world.step(1.0 / 480), StepStatus::ok);
+      for (std::size_t k = 0; k < last.size(); ++k) {
+        const Pose pose = world.pose(world.bodies()[k]);
+        largest_turn = std::max(largest_turn, angle_between(pose.orientation, last[k].orientation));
+        last[k] = pose;
+      }
+    }
+    EXPECT_LT(largest_turn, 0.2) << name(method);  // rad per 1/480 s: a bounded angular speed
+    EXPECT_GT(largest_turn, 1e-3) << name(method) << ": it must have swung";
+  }
+}
+
+TEST(World, StructuralEditsCarryUntouchedBodiesBitForBit) {
+  // Two chains in one world; after some steps, remove a body of the second and add one: the
+  // first chain's poses and motions are the same bits before and after each edit.
+  for (const Method method : kMethods) {
+    Model model = make_chain({1, 1, 1}, 0.2, true);
+    model.settings.sleep.enabled = false;
+    World world(model, options_for(method));
+    world.add_model(make_chain({1, 2}, 0.2, true, Vector3(0, 1, 1)), "b.");
+    for (int s = 0; s < 60; ++s) ASSERT_EQ(world.step(1.0 / 240), StepStatus::ok);
+    const auto snapshot = [&] {
+      std::vector<double> bits;
+      for (const char* body : {"link_0", "link_1", "link_2"}) {
+        const Pose pose = world.pose(world.body(body));
+        const Motion motion = world.motion(world.body(body));
+        bits.insert(bits.end(), {pose.position.x(), pose.position.y(), pose.position.z(), pose.orientation.w(), pose.orientation.x(),
+                                 motion.linear.x(), motion.linear.z(), motion.angular.y()});
+      }
+      return bits;
+    };
+    const std::vector<double> before = snapshot();
+    world.remove_body(world.body("b.link_1"));
+    EXPECT_EQ(snapshot(), before) << name(method) << " after remove";
+    Body extra = model.bodies[0];
+    extra.name = "extra";
+    extra.position += Vector3(0, -1, 0);
+    world.add_body(extra);
+    EXPECT_EQ(snapshot(), before) << name(method) << " after add";
+    EXPECT_EQ(world.model().bodies.size(), 5u);
+    for (int s = 0; s < 10; ++s) ASSERT_EQ(world.step(1.0 / 240), StepStatus::ok);
+  }
+}
+
+TEST(World, SeveralRagdollsShareAWorld) {
+  const Model humanoid = load_shipped_scene("humanoid.json");
+  for (const Method method : kMethods) {
+    World world(humanoid, options_for(method));
+    const std::vector<BodyId> second = world.add_model(humanoid, "second.", Eigen::Vector3d(0, 1.5, 0));  // beside, out of the ball's way
+    EXPECT_EQ(second.size(), humanoid.bodies.size());
+    EXPECT_EQ(world.model().bodies.size(), 2 * humanoid.bodies.size());
+    for (int s = 0; s < 120; ++s) ASSERT_EQ(world.step(), StepStatus::ok) << name(method);
+    // The ball knocks the first over; the second, asleep and untouched, stays where it was put.
+    const BodyId first_head = world.body("head"), second_head = world.body("second.head");
+    EXPECT_LT(world.pose(first_head).position.z(), humanoid.bodies[0].position.z() - 0.05) << name(method);
+    EXPECT_LT((world.pose(second_head).position - humanoid.bodies[0].position - Eigen::Vector3d(0, 1.5, 0)).norm(), 1e-12) << name(method);
+  }
+}
+
+TEST(World, WakeAndSleep) {
+  Model model = load_shipped_scene("humanoid.json");
+  model.ball.reset();
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    const BodyId head = world.body("head");
+    EXPECT_TRUE(world.sleeping(head)) << name(method) << ": the humanoid starts asleep";
+    world.apply_force(head, Eigen::Vector3d(30, 0, 0), world.pose(head).position);
+    EXPECT_FALSE(world.sleeping(head)) << name(method);
+  }
+}
+
+TEST(World, BadHandlesAndVectorsAreRefusedByName) {
+  World world(free_limb());
+  EXPECT_THROW(world.body("nobody"), WorldError);
+  const BodyId limb = world.body("link_0");
+  try {
+    world.apply_force(limb, Eigen::Vector3d(NAN, 0, 0), Eigen::Vector3d::Zero());
+    FAIL();
+  } catch (const WorldError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("apply_force: must be finite"));
+  }
+  world.remove_body(limb);
+  EXPECT_THROW(world.pose(limb), WorldError);
+}
+
+// The threads of this process (Linux: /proc/self/task).
+int thread_count() {
+  int count = 0;
+  if (DIR* tasks = opendir("/proc/self/task")) {
+    while (const dirent* entry = readdir(tasks)) count += entry->d_name[0] != '.';
+    closedir(tasks);
+  }
+  return count;
+}
+
+TEST(World, ADefaultWorldStartsNoThread) {
+  const int before = thread_count();
+  World world(load_shipped_scene("humanoid.json"));
+  for (int s = 0; s < 60; ++s) world.step();
+  World chain(make_chain(std::vector<double>(50, 1.0), 0.1, true));
+  for (int s = 0; s < 60; ++s) chain.step(1.0 / 240);
+  EXPECT_EQ(thread_count(), before);
+}
+
+}  // namespace
+}  // namespace limber
