@@ -1,4 +1,4 @@
-// The equal-error race (issue 7): the Verlet family's solvers and Bullet's btMultiBody on the
+// The equal-error race: the Verlet family's solvers and Bullet's btMultiBody on the
 // heavy-end chain, time per step against the largest joint error over the run.
 //
 // Workload (../shared/reference/PEERS.md, "heavy-end chain"): N links of 0.1 m and 1 kg, the last

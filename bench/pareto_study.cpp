@@ -1,4 +1,4 @@
-// Run time against error for every method (issue 8): one scene under every method and setting,
+// Run time against error for every method: one scene under every method and setting,
 // one CSV row per run, read by tools/plot_pareto.py for the Pareto plot and the README's table.
 //
 //   pareto_study <scene> [--csv FILE] [--repeats R] [--quick]
@@ -15,7 +15,7 @@
 // Δt = 1/20000 s (its ABA agrees with MuJoCo 2.2.2's forward dynamics to 1e-12,
 // tests/featherstone/featherstone_mujoco_test.cpp; its own error is printed as the distance to
 // the same run at Δt = 1/40000 s). A horizontally released chain is chaotic, so every run
-// lasts 2 s (issue 8). The humanoid's contacts make trajectories non-smooth: its error is the
+// lasts 2 s. The humanoid's contacts make trajectories non-smooth: its error is the
 // joint gap or stretch and the energy change only.
 //
 // The rattle series run frames of 1/60 s in substeps (verlet rattle gauss-seidel: 1 or 4 sweeps a

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Plots the figures of the README's thesis experiments (issue 8).
+"""Plots the figures of the README's thesis experiments.
 
 Usage:
   tools/plot_thesis.py speed BENCHMARK_OUTPUT OUT_DIR

@@ -1,5 +1,5 @@
 // What a run costs and how wrong it is: the measures of the run-time-against-error studies and
-// the stability classification of the stress runs (issue 8). Every method is measured by the
+// the stability classification of the stress runs. Every method is measured by the
 // same code from the same Observation (kernel/metrics/observers.hpp) and the same limb points
 // (Simulation::limb_points), so the numbers compare across methods.
 #pragma once
@@ -91,7 +91,7 @@ ObservedRun observe_run(Simulation& simulation, double duration, double sample_i
 /// the method alone. A run that diverges stops there; its time is per simulated second done.
 double wall_time_per_simulated_second(const Model& scene, const Method& method, double duration, int repeats);
 
-/// How a stress run ended (README, "Stability").
+/// How a stress run ended (bench/README.md, "Stability").
 enum class Stability : std::uint8_t {
   stable,
   non_finite,     ///< NaN or infinite state, or a speed beyond Settings::divergence_speed

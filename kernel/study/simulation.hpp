@@ -1,5 +1,5 @@
 // One Model under any of limber's methods, behind one interface: what the run-time-against-error
-// studies, the stability stress runs and the peer comparisons step and observe (issue 8).
+// studies, the stability stress runs and the peer comparisons step and observe.
 //
 // A Method names a family (weighted or unweighted Verlet relaxation, stiff springs, Lagrange
 // multipliers, Featherstone) and that family's settings; configure() writes them into a copy of

@@ -1,5 +1,5 @@
 // Runs a relaxation's stages — each a list of independent blocks (the blocks of one colour) —
-// on one or more threads, with three strategies to compare (issue 3 measures them):
+// on one or more threads, with three strategies to compare:
 //
 // - serial: the calling thread runs every block; no synchronization at all.
 // - parallel_for: oneTBB's parallel_reduce over each stage; a fork and join per stage.

@@ -500,7 +500,7 @@ TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {
   EXPECT_EQ(load_error(with_relaxation(R"("substeps": 1.5)")), "test.json: settings.relaxation.substeps: must be an integer, got 1.5");
 }
 
-// ---- The spring method's settings (issue 4)
+// ---- The spring method's settings
 
 TEST(SceneSprings, StiffnessAndDampingAreReadPerSceneAndPerJoint) {
   const Model model = load_scene_text(

@@ -1,5 +1,5 @@
 // Counts heap allocations: a test program that links tests/support/allocation_counter.cpp has
-// the global allocation functions replaced by counting ones (DESIGN.md: step() allocates
+// the global allocation functions replaced by counting ones (step() allocates
 // nothing; the allocation tests check it).
 #pragma once
 

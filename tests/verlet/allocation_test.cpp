@@ -1,4 +1,4 @@
-// step() allocates nothing after its first call (DESIGN.md): the Verlet method's (every solver), the explicit
+// step() allocates nothing after its first call: the Verlet method's (every solver), the explicit
 // spring method's and the Lagrange tree solve's. (The implicit springs and Lagrange's sparse path
 // allocate inside Eigen's sparse factorization, kernel/springs/step.hpp.) Counted by
 // tests/support/allocation_counter.cpp, which replaces this program's allocation functions.

@@ -1,4 +1,4 @@
-// The thesis's experiments as physical facts (issue 8; the tables are bench/thesis_experiments):
+// The thesis's experiments as physical facts (the tables are bench/thesis_experiments):
 // Verlet's accuracy on one particle against the kernel's RK2 (figure 3.12), and the heavy end of
 // the 4.4 chain under the weighted and the midpoint rule.
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
