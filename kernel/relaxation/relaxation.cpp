@@ -308,7 +308,7 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   const int threads = options.threads > 0 ? options.threads
                       : big               ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))
                                           : 1;
-  plan.runner.reset(options.threading, threads);
+  plan.runner.reset(options.threading, threads, options.tasks);
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
   plan.layout = options.layout;
   if (options.layout == ParticleLayout::automatic) plan.layout = options.long_range_attachments ? ParticleLayout::soa : automatic_layout(state);

@@ -25,12 +25,15 @@ class RunnerHandle {
   RunnerHandle() = default;
   RunnerHandle(const RunnerHandle& other) { *this = other; }
   RunnerHandle& operator=(const RunnerHandle& other) {
-    if (this != &other) runner_ = other.runner_ ? std::make_unique<BlockRunner>(other.runner_->threading(), other.runner_->threads()) : nullptr;
+    if (this != &other) {
+      runner_ = other.runner_ ? std::make_unique<BlockRunner>(other.runner_->threading(), other.runner_->threads(), other.runner_->tasks())
+                              : nullptr;
+    }
     return *this;
   }
   RunnerHandle(RunnerHandle&&) noexcept = default;
   RunnerHandle& operator=(RunnerHandle&&) noexcept = default;
-  void reset(Threading threading, int threads) { runner_ = std::make_unique<BlockRunner>(threading, threads); }
+  void reset(Threading threading, int threads, TaskSystem tasks = {}) { runner_ = std::make_unique<BlockRunner>(threading, threads, tasks); }
   BlockRunner& operator*() const { return *runner_; }
   BlockRunner* operator->() const { return runner_.get(); }
 

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
 #include <oneapi/tbb/parallel_reduce.h>
 #include <oneapi/tbb/task_arena.h>
 
@@ -124,8 +125,12 @@ struct BlockRunner::Shared {
   }
 };
 
-BlockRunner::BlockRunner(Threading threading, int threads) : threading_(threading), threads_(threads) {
+BlockRunner::BlockRunner(Threading threading, int threads, TaskSystem tasks) : threading_(threading), threads_(threads), tasks_(tasks) {
   if (threads < 1) throw std::invalid_argument("BlockRunner: threads must be at least 1");
+  if (threading_ == Threading::tasks) {
+    if (!tasks_.valid()) throw std::invalid_argument("BlockRunner: Threading::tasks needs a task system (enqueue and finish)");
+    return;
+  }
   if (threads == 1) threading_ = Threading::serial;
   if (threading_ == Threading::serial) return;
   shared_ = std::make_unique<Shared>(threads);
@@ -164,8 +169,49 @@ double BlockRunner::run_serial(std::size_t count, BlockFunction function, const 
   return largest;
 }
 
+namespace {
+
+// A stage handed to a task system: each block's result lands in its own slot, reduced after.
+struct TaskStage {
+  BlockRunner::BlockFunction function;
+  const void* context;
+  double* results;
+  static void run(std::size_t begin, std::size_t end, void* stage_pointer) {
+    const auto& stage = *static_cast<const TaskStage*>(stage_pointer);
+    for (std::size_t block = begin; block < end; ++block) stage.results[block] = stage.function(stage.context, block);
+  }
+};
+
+}  // namespace
+
+TaskSystem tbb_task_system(tbb::task_arena& arena) {
+  TaskSystem system;
+  system.user_context = &arena;
+  system.enqueue = [](TaskSystem::Work work, std::size_t count, void* work_context, void* user) -> void* {
+    static_cast<tbb::task_arena*>(user)->execute([&] {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1),
+                        [&](const tbb::blocked_range<std::size_t>& range) { work(range.begin(), range.end(), work_context); });
+    });
+    return nullptr;
+  };
+  system.finish = [](void*, void*) {};
+  return system;
+}
+
+// The largest of the blocks' results, in block order: the same whoever ran them.
+double BlockRunner::run_tasks(std::size_t count, BlockFunction function, const void* context) {
+  if (block_results_.size() < count) block_results_.resize(count);  // grows to the largest stage once
+  TaskStage stage{function, context, block_results_.data()};
+  void* task = tasks_.enqueue(&TaskStage::run, count, &stage, tasks_.user_context);
+  tasks_.finish(task, tasks_.user_context);
+  double largest = 0;
+  for (std::size_t block = 0; block < count; ++block) largest = std::max(largest, block_results_[block]);
+  return largest;
+}
+
 double BlockRunner::run(std::size_t count, BlockFunction function, const void* context) {
   if (threading_ == Threading::serial || count <= 1) return run_serial(count, function, context);
+  if (threading_ == Threading::tasks) return run_tasks(count, function, context);
   Shared& shared = *shared_;
   if (threading_ == Threading::parallel_for) {
     return shared.arena.execute([&] {

@@ -12,6 +12,9 @@
 //   blocks already claimed. (A oneTBB task as the helper was tried first: a task spawned from
 //   arena.execute() stayed in the caller's pool and ran only when the caller waited for it.)
 //
+// - tasks: the engine's own task system (TaskSystem: Box2D v3's enqueueTask/finishTask), or a
+//   oneTBB arena the engine owns (tbb_task_system): limber starts no thread of its own.
+//
 // Blocks of a stage must be independent (different colours' blocks are not). Which thread runs
 // a block never changes its result, so results are the same bits for any thread count.
 #pragma once
@@ -20,24 +23,46 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
+
+#include <oneapi/tbb/task_arena.h>
 
 namespace limber {
 
-enum class Threading : std::uint8_t { serial, parallel_for, workers };
+enum class Threading : std::uint8_t { serial, parallel_for, workers, tasks };
+
+/// An engine's task system (Box2D v3's enqueueTask/finishTask): limber hands it each stage as
+/// `count` independent blocks; the engine runs work(begin, end, work_context) over ranges that
+/// cover [0, count) once, on whatever threads and in whatever order it likes, and finish()
+/// returns once all have run. The results are the same bits however it splits and orders them.
+struct TaskSystem {
+  using Work = void (*)(std::size_t begin, std::size_t end, void* work_context);
+  /// Starts a stage; returns a handle for finish (may be null, e.g. when it ran the stage already).
+  void* (*enqueue)(Work work, std::size_t count, void* work_context, void* user_context) = nullptr;
+  void (*finish)(void* task, void* user_context) = nullptr;
+  void* user_context = nullptr;
+  bool valid() const { return enqueue != nullptr && finish != nullptr; }
+};
+
+/// A TaskSystem that runs each stage with tbb::parallel_for inside `arena` (the engine's: its
+/// threads, its concurrency limit), for Threading::tasks. The arena must outlive its users.
+TaskSystem tbb_task_system(tbb::task_arena& arena);
 
 class BlockRunner {
  public:
   /// Runs block `block` of a stage with `context`; returns a value to maximize over the stage.
   using BlockFunction = double (*)(const void* context, std::size_t block);
 
-  /// `threads` ≥ 1 (1 makes every strategy serial). Throws std::invalid_argument otherwise.
-  BlockRunner(Threading threading, int threads);
+  /// `threads` ≥ 1 (1 makes every strategy but tasks serial). Threading::tasks runs on `tasks`,
+  /// which must be valid. Throws std::invalid_argument otherwise.
+  BlockRunner(Threading threading, int threads, TaskSystem tasks = {});
   ~BlockRunner();
   BlockRunner(const BlockRunner&) = delete;
   BlockRunner& operator=(const BlockRunner&) = delete;
 
   Threading threading() const { return threading_; }
   int threads() const { return threads_; }
+  const TaskSystem& tasks() const { return tasks_; }
 
   /// Brackets the stages of one step: wakes the helper threads and sends them back to sleep
   /// (workers only; otherwise no-ops).
@@ -50,8 +75,11 @@ class BlockRunner {
  private:
   struct Shared;
   double run_serial(std::size_t count, BlockFunction function, const void* context);
+  double run_tasks(std::size_t count, BlockFunction function, const void* context);
   Threading threading_;
   int threads_;
+  TaskSystem tasks_;
+  std::vector<double> block_results_;  ///< Threading::tasks: one per block of the largest stage yet
   bool active_ = false;
   std::unique_ptr<Shared> shared_;
 };

@@ -66,6 +66,9 @@ struct VerletOptions {
   /// (parallel_minimum_slots); a small scene then starts none either.
   int threads = 1;
   Threading threading = Threading::workers;  ///< how a colour is split across threads
+  /// Threading::tasks: the engine's task system (or tbb_task_system(arena)); `threads` then only
+  /// says whether to split (≥ 2, or 0 with a colour big enough) and limber starts no thread.
+  TaskSystem tasks{};
   /// Colours a stage must have at least this many constraint slots to be split across threads;
   /// 0 picks the crossover measured on the reference machine (bench/README.md, "The data-oriented core:
   /// SIMD, threads, layouts").

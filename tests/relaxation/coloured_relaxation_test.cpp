@@ -3,6 +3,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -142,6 +143,43 @@ TYPED_TEST(ColouredRelaxation, ScalarSimdLayoutsAndThreadsGiveTheSameBits) {
                   << int(solver) << " rule " << int(rule) << " projection " << int(projection);
             }
           }
+        }
+      }
+    }
+  }
+}
+
+// An engine's task system for the test: each stage's blocks split in two halves, run backwards on
+// two threads of its own.
+TaskSystem reversed_two_thread_tasks() {
+  TaskSystem system;
+  system.enqueue = [](TaskSystem::Work work, std::size_t count, void* work_context, void*) -> void* {
+    const auto backwards = [=](std::size_t begin, std::size_t end) {
+      for (std::size_t block = end; block-- > begin;) work(block, block + 1, work_context);
+    };
+    std::thread second(backwards, count / 2, count);
+    backwards(0, count / 2);
+    second.join();
+    return nullptr;
+  };
+  system.finish = [](void*, void*) {};
+  return system;
+}
+
+TYPED_TEST(ColouredRelaxation, AnEnginesTaskSystemOrTbbArenaGivesTheSameBits) {
+  // Threading::tasks hands each colour to the engine's scheduler: whoever runs the blocks, in
+  // whatever order, each step's state must be the bits of the serial sweep.
+  tbb::task_arena arena(2);
+  for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
+    for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+      for (const Model& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
+        VerletOptions reference;
+        reference.solver = solver;
+        const auto expected = trajectory_hashes<TypeParam>(model, reference, 40);
+        for (const TaskSystem& tasks : {reversed_two_thread_tasks(), tbb_task_system(arena)}) {
+          VerletOptions options = reference;
+          options.threading = Threading::tasks, options.tasks = tasks, options.threads = 2, options.parallel_minimum_slots = 1;
+          EXPECT_EQ(trajectory_hashes<TypeParam>(model, options, 40), expected) << "solver " << int(solver) << " projection " << int(projection);
         }
       }
     }
