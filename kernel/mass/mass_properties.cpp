@@ -240,6 +240,7 @@ MassProperties combine(std::span<const MassProperties> parts) {
 }
 
 MassProperties body_mass_properties(const Body& body) {
+  if (body.inertial) return MassProperties{body.mass, body.inertial->centre_of_mass, body.inertial->inertia};
   if (body.point_masses.empty()) {
     return body.shape.type == ShapeType::capsule && body.shape.radius > 0 ? solid_capsule(body.mass, body.shape.radius, body.shape.length)
                                                  : solid_cylinder(body.mass, body.shape.radius, body.shape.length);

@@ -64,9 +64,9 @@ MassProperties transformed(const MassProperties& part, const Eigen::Quaterniond&
 MassProperties combine(std::span<const MassProperties> parts);
 
 struct Body;
-/// A limb's mass properties in its body frame (kernel/model/model.hpp): its point masses (eq.
-/// 4.1, each a solid sphere of its radius) when it has any, else its mass spread uniformly over
-/// its shape (solid cylinder or capsule).
+/// A limb's mass properties in its body frame (kernel/model/model.hpp): its Inertial when given,
+/// else its point masses (eq. 4.1, each a solid sphere of its radius) when it has any, else its
+/// mass spread uniformly over its shape (solid cylinder or capsule).
 MassProperties body_mass_properties(const Body& body);
 
 /// Principal moments (ascending) and axes (columns, a right-handed rotation) of an inertia

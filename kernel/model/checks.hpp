@@ -24,9 +24,11 @@ inline std::string format_number(double value) {
   return {buffer, result.ptr};
 }
 
+// Appended piece by piece: `"[" + std::string&&` trips GCC 12's -Wrestrict false positive (bug 105329).
 inline std::string format_vector(const Vector3& v) {
-  return "[" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) +
-         "]";
+  std::string text = "[";
+  text.append(format_number(v.x())).append(", ").append(format_number(v.y())).append(", ").append(format_number(v.z()));
+  return text.append("]");
 }
 
 /// "<path>[index]": an array element or a vector component.

@@ -3,6 +3,8 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/model/model.hpp"
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -70,6 +72,25 @@ auto field_path(const char* collection, std::size_t index) {
   };
 }
 
+/// A physical inertia tensor: finite, symmetric, principal moments positive and each at most
+/// the sum of the other two (equality: a flat body).
+template <typename Path>
+void validate_inertial(const Body& body, const Path& path) {
+  const Inertial& inertial = *body.inertial;
+  if (!body.point_masses.empty()) fail(path("inertial"), "give either inertial or point_masses, not both");
+  require_finite(inertial.centre_of_mass, [&] { return path("inertial")() + ".centre_of_mass"; });
+  const Eigen::Matrix3d& tensor = inertial.inertia;
+  const auto inertia_path = [&] { return path("inertial")() + ".inertia"; };
+  if (!tensor.allFinite()) fail(inertia_path, "must be finite");
+  const double scale = tensor.diagonal().cwiseAbs().maxCoeff();
+  if (!((tensor - tensor.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale)) fail(inertia_path, "must be symmetric");
+  const Eigen::Vector3d moments = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(tensor, Eigen::EigenvaluesOnly).eigenvalues();
+  if (!(moments[0] > 0)) fail(inertia_path, "must be positive definite, smallest principal moment " + format_number(moments[0]));
+  if (moments[0] + moments[1] < moments[2] * (1 - 1e-12)) {
+    fail(inertia_path, "principal moments " + format_vector(moments) + " break the triangle inequality I1 + I2 >= I3 (no body has them)");
+  }
+}
+
 void validate_body(const Body& body, std::size_t index) {
   const auto path = field_path("bodies", index);
   require_name(body.name, path("name"), /*is_body=*/true);
@@ -91,6 +112,7 @@ void validate_body(const Body& body, std::size_t index) {
     fail(path("mass"), "must equal the sum of point_masses' masses, " + format_number(point_mass_sum) + ", got " +
                            format_number(body.mass));
   }
+  if (body.inertial) validate_inertial(body, path);
   require_finite(body.position, path("position"));
   require_unit(body.axis, path("axis"));
   require_finite(body.linear_velocity, path("linear_velocity"));

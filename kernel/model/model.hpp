@@ -55,17 +55,29 @@ struct PointMass {
   double radius = 0;                   ///< m, ≥ 0; its own inertia is (2/5) m r²
 };
 
+/// A limb's mass distribution given directly, as an engine's asset pipeline or MuJoCo's
+/// <inertial> gives it: the centre of mass and the inertia tensor about it, in the body frame.
+/// The tensor must be symmetric and positive definite with principal moments obeying the
+/// triangle inequality (I₁ + I₂ ≥ I₃: a physical body), as validate() checks.
+struct Inertial {
+  Vector3 centre_of_mass = Vector3::Zero();                 ///< m, body frame
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();        ///< kg·m², about the centre of mass, body frame
+};
+
 /// A rigid limb with distributed mass.
 ///
 /// Its mass is spread uniformly over its shape, unless `point_masses` is given: then the limb's
 /// mass, centre of mass and inertia are those of the point masses (eq. 4.1), `mass` is their
-/// sum, and the shape is only its surface for contacts. body_mass_properties()
-/// (kernel/mass/mass_properties.hpp) gives the result either way.
+/// sum, and the shape is only its surface for contacts. Or `inertial` gives the centre of mass
+/// and inertia tensor directly (with `mass`), and the shape is again only a surface.
+/// body_mass_properties() (kernel/mass/mass_properties.hpp) gives the result in every case.
+/// The particle method keeps a limb's mass on its axis: it rejects a centre of mass off the axis.
 struct Body {
   std::string name;
   Shape shape;
   double mass = 0;                            ///< kg, > 0 (a scene may give density × volume instead)
   std::vector<PointMass> point_masses;        ///< empty: uniform density over the shape
+  std::optional<Inertial> inertial;           ///< given: the mass distribution (not with point_masses)
   Vector3 position = Vector3::Zero();         ///< world position of the body-frame origin (the centre), m
   Vector3 axis = Vector3::UnitZ();            ///< unit world direction of local +z (tail → head)
   Vector3 linear_velocity = Vector3::Zero();  ///< of the centre, m/s

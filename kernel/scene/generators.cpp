@@ -190,56 +190,66 @@ Model make_grid_model(const GridSpec& spec) {
   return model;
 }
 
-Model make_humanoid_pile(std::size_t count, double spacing) {
-  require_count(count, 1, "humanoid_pile.count");
-  const Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid");
-  require_int_indices(double(count) * double(humanoid.bodies.size()), "humanoid_pile.count");
-
-  // Footprint: the larger x or y extent of the limbs' bounding boxes (axis end points ± radius).
+double footprint(const Model& model) {
   constexpr double infinity = std::numeric_limits<double>::infinity();
   Vector3 low = Vector3::Constant(infinity), high = Vector3::Constant(-infinity);
-  for (const Body& body : humanoid.bodies) {
+  for (const Body& body : model.bodies) {
     const Vector3 reach = Vector3::Constant(body.shape.radius);
     low = low.cwiseMin(body.head() - reach).cwiseMin(body.tail() - reach);
     high = high.cwiseMax(body.head() + reach).cwiseMax(body.tail() + reach);
   }
-  const double footprint = (high - low).head<2>().maxCoeff();
-  require_finite(spacing, "humanoid_pile.spacing");
-  if (!(spacing >= footprint)) {
-    fail("humanoid_pile.spacing", "must be >= " + format_number(footprint) +
-                                      " (the humanoid's footprint, m) so copies do not overlap, got " +
-                                      format_number(spacing));
-  }
+  return model.bodies.empty() ? 0.0 : (high - low).head<2>().maxCoeff();
+}
 
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path) {
+  require_count(count, 1, std::string(path) + ".count");
+  require_int_indices(double(count) * double(model.bodies.size()), std::string(path) + ".count");
+  const double least = footprint(model);
+  require_finite(spacing, std::string(path) + ".spacing");
+  if (!(spacing >= least)) {
+    fail(std::string(path) + ".spacing", "must be >= " + format_number(least) +
+                                             " (the bodies' footprint in x and y, m) so copies do not overlap, got " +
+                                             format_number(spacing));
+  }
   std::size_t per_row = 1;
   while (per_row * per_row < count) ++per_row;
 
-  Model pile;
-  pile.name = "humanoid_pile";
-  pile.ground = humanoid.ground;
-  pile.settings = humanoid.settings;
-  pile.bodies.reserve(count * humanoid.bodies.size());
-  pile.joints.reserve(count * humanoid.joints.size());
+  Model copies = model;
+  copies.bodies.clear(), copies.joints.clear(), copies.gears.clear();
+  copies.bodies.reserve(count * model.bodies.size());
+  copies.joints.reserve(count * model.joints.size());
+  copies.gears.reserve(count * model.gears.size());
   for (std::size_t k = 0; k < count; ++k) {
-    const std::string prefix = "h" + std::to_string(k) + ".";
+    const std::string lead = std::string(prefix) + std::to_string(k) + ".";
     const Vector3 offset = spacing * Vector3(double(k % per_row), double(k / per_row), 0);
-    const int first_body = static_cast<int>(k * humanoid.bodies.size());
-    for (Body body : humanoid.bodies) {
-      body.name = prefix + body.name;
-      body.position += offset;
-      pile.bodies.push_back(std::move(body));
+    const int first = static_cast<int>(k * model.bodies.size());
+    for (Body body : model.bodies) {
+      body.name = lead + body.name, body.position += offset;
+      copies.bodies.push_back(std::move(body));
     }
-    for (Joint joint : humanoid.joints) {
-      joint.name = prefix + joint.name;
+    for (Joint joint : model.joints) {
+      joint.name = lead + joint.name;
       if (joint.inboard == kWorld) {
         joint.inboard_anchor += offset;
       } else {
-        joint.inboard += first_body;
+        joint.inboard += first;
       }
-      joint.outboard += first_body;
-      pile.joints.push_back(std::move(joint));
+      joint.outboard += first;
+      copies.joints.push_back(std::move(joint));
+    }
+    for (Gear gear : model.gears) {
+      gear.name = lead + gear.name, gear.first += first, gear.second += first;
+      copies.gears.push_back(std::move(gear));
     }
   }
+  return copies;
+}
+
+Model make_humanoid_pile(std::size_t count, double spacing) {
+  Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid");
+  humanoid.ball.reset(), humanoid.bounds.reset();
+  Model pile = copies_of(humanoid, count, spacing, "h", "humanoid_pile");
+  pile.name = "humanoid_pile";
   return pile;
 }
 

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string_view>
 
 #include "limber/kernel/model/model.hpp"
 
@@ -70,12 +71,20 @@ struct GridSpec {
 /// one distance constraint (rows·columns particles; the pins add neither).
 Model make_grid_model(const GridSpec& spec);
 
-/// `count` ≥ 1 copies of the embedded humanoid scene (scene_file.hpp), bodies and joints named
-/// "h<k>.<name>", k = 0 … count−1, copy k shifted by spacing · (k mod n, k div n, 0) with
-/// n = ⌈√count⌉ copies per row. `spacing` (m) must be at least the humanoid's footprint (its
-/// extent in x and y, ≈ 0.2 m) so copies do not overlap. The scene's ball is left out; its
-/// ground and settings are kept — including sleep.start_asleep: with no ball, the copies start
-/// asleep and stay so until a force wakes them (turn sleeping off to measure stepping them).
+/// The larger of the bodies' extents in x and y (capsule axes ± radius), m; 0 for no bodies.
+double footprint(const Model& model);
+
+/// `count` ≥ 1 copies of `model`'s bodies, joints and gears on a square lattice: copy k shifted
+/// by spacing · (k mod n, k div n, 0), n = ⌈√count⌉ copies per row, names led by
+/// "<prefix><k>.". Everything else (settings, ground, bounds, ball) is the model's, once.
+/// `spacing` (m) must be at least footprint(model) so copies do not overlap. Errors name
+/// `path`.count and `path`.spacing.
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path);
+
+/// copies_of the embedded humanoid scene (scene_file.hpp) with prefix "h", its ball and bounds
+/// left out; `spacing` must be at least the humanoid's footprint (≈ 0.2 m). Its ground and
+/// settings are kept — including sleep.start_asleep: with no ball, the copies start asleep and
+/// stay so until a force wakes them (turn sleeping off to measure stepping them).
 /// 160 copies are the size of Jolt's ragdoll performance test.
 Model make_humanoid_pile(std::size_t count, double spacing = 1.0);
 

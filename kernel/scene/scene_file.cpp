@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/scene/generators.hpp"
 
 namespace limber {
 namespace {
@@ -353,8 +355,26 @@ std::vector<PointMass> read_point_masses(const Json& value, const std::string& p
   return lumps;
 }
 
+/// "inertial": {"centre_of_mass": [x, y, z] (m, body frame), "inertia": [Ixx, Iyy, Izz, Ixy,
+/// Ixz, Iyz] (kg·m², about the centre of mass, body frame; MuJoCo's fullinertia order)}.
+Inertial read_inertial(const Object& object) {
+  object.allow_only({"centre_of_mass", "inertia"});
+  Inertial inertial;
+  inertial.centre_of_mass = object.vector("centre_of_mass");
+  const Json& moments = object.at("inertia");
+  const std::string path = object.path("inertia");
+  if (!moments.is_array() || moments.size() != 6) {
+    const std::string found = moments.is_array() ? "an array of " + std::to_string(moments.size()) : std::string(moments.type_name());
+    fail(path, "must be an array of 6 numbers [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], got " + found);
+  }
+  double value[6];
+  for (std::size_t k = 0; k < 6; ++k) value[k] = read_number(moments[k], indexed(path, k));
+  inertial.inertia << value[0], value[3], value[4], value[3], value[1], value[5], value[4], value[5], value[2];
+  return inertial;
+}
+
 BodySpec read_body(const Object& object) {
-  object.allow_only({"name", "shape", "mass", "density", "point_masses", "position", "axis", "linear_velocity",
+  object.allow_only({"name", "shape", "mass", "density", "point_masses", "inertial", "position", "axis", "linear_velocity",
                      "angular_velocity"});
   BodySpec spec;
   Body& body = spec.body;
@@ -370,12 +390,17 @@ BodySpec read_body(const Object& object) {
   require_non_negative(body.shape.radius, shape.path("radius"));
 
   if (const Json* lumps = object.find("point_masses")) {
-    for (const char* other : {"mass", "density"}) {
+    for (const char* other : {"mass", "density", "inertial"}) {
       if (object.find(other)) fail(object.path(), "give either \"point_masses\" or \"" + std::string(other) + "\", not both");
     }
     body.point_masses = read_point_masses(*lumps, object.path("point_masses"));
     body.mass = 0;
     for (const PointMass& lump : body.point_masses) body.mass += lump.mass;  // as validate() sums them
+  } else if (const Json* inertial = object.find("inertial")) {
+    if (object.find("density")) fail(object.path(), "give \"mass\" with \"inertial\", not \"density\"");
+    body.mass = object.number("mass");
+    require_positive(body.mass, object.path("mass"));
+    body.inertial = read_inertial(Object(*inertial, object.path("inertial")));
   } else {
     read_mass(object, spec, /*required=*/true);
   }
@@ -450,6 +475,87 @@ void generate_chain(const Chain& chain, std::vector<BodySpec>& bodies, std::vect
   }
 }
 
+/// Most bodies a scene may generate (chain, tree, grid, copies): a guard against a file asking
+/// for terabytes, well above the largest workload measured (10⁶ links).
+constexpr double kMostGeneratedBodies = 1e7;
+
+void require_generated(double bodies, const std::string& path) {
+  if (bodies > kMostGeneratedBodies) {
+    fail(path, "asks for " + format_number(bodies) + " bodies, more than the " + format_number(kMostGeneratedBodies) +
+                   " a scene may generate");
+  }
+}
+
+/// The "tree" generator: TreeSpec (generators.hpp) by links or by depth, moved to `anchor`.
+Model read_tree(const Object& object, const SceneOptions& options) {
+  object.allow_only({"links", "depth", "branching", "link_length", "link_mass", "anchor", "pinned"});
+  TreeSpec spec;
+  const long branching = object.integer("branching");
+  require_at_least(branching, 1, object.path("branching"));
+  spec.branching = static_cast<std::size_t>(branching);
+  const bool by_links = object.find("links") != nullptr, by_depth = object.find("depth") != nullptr;
+  if (by_links == by_depth) fail(object.path(), "give exactly one of \"links\" and \"depth\"");
+  double links = 0;
+  if (by_depth) {
+    const long depth = object.integer("depth");
+    require_at_least(depth, 0, object.path("depth"));
+    require_at_most(depth, 64, object.path("depth"));
+    links = branching == 1 ? double(depth + 1) : (std::pow(double(branching), double(depth + 1)) - 1) / double(branching - 1);
+    require_generated(links, object.path("depth"));
+  } else {
+    links = object.integer("links");
+    require_at_least(static_cast<long>(links), 1, object.path("links"));
+  }
+  if (options.links) {
+    require_at_least(*options.links, 1, "tree.links (SceneOptions::links)");
+    links = double(*options.links);
+  }
+  require_generated(links, object.path(by_depth ? "depth" : "links"));
+  spec.links = static_cast<std::size_t>(links);
+  spec.link_length = object.number("link_length");
+  spec.link_mass = object.number("link_mass");
+  spec.pinned = object.boolean("pinned");
+  Model tree = make_tree_model(spec);
+  const Vector3 anchor = object.vector("anchor");
+  for (Body& body : tree.bodies) body.position += anchor;
+  for (Joint& joint : tree.joints) {
+    if (joint.inboard == kWorld) joint.inboard_anchor += anchor;
+  }
+  return tree;
+}
+
+/// The "grid" generator: GridSpec (generators.hpp), its top row's first node at `anchor`.
+Model read_grid(const Object& object) {
+  object.allow_only({"columns", "rows", "spacing", "link_mass", "anchor", "pin_top_corners"});
+  GridSpec spec;
+  const long columns = object.integer("columns"), rows = object.integer("rows");
+  require_at_least(columns, 2, object.path("columns"));
+  require_at_least(rows, 2, object.path("rows"));
+  require_generated(2.0 * double(columns) * double(rows), object.path());
+  spec.columns = static_cast<std::size_t>(columns), spec.rows = static_cast<std::size_t>(rows);
+  spec.spacing = object.number("spacing");
+  spec.link_mass = object.number("link_mass");
+  spec.pin_top_corners = object.boolean("pin_top_corners");
+  Model grid = make_grid_model(spec);
+  const Vector3 anchor = object.vector("anchor");
+  for (Body& body : grid.bodies) body.position += anchor;
+  for (Joint& joint : grid.joints) {
+    if (joint.inboard == kWorld) joint.inboard_anchor += anchor;
+  }
+  return grid;
+}
+
+/// A generated Model's bodies and joints appended to the scene's (its settings are the scene's).
+void append_generated(Model generated, std::vector<BodySpec>& bodies, std::vector<Joint>& joints) {
+  const int first_body = static_cast<int>(bodies.size());
+  for (Body& body : generated.bodies) bodies.push_back(BodySpec{std::move(body), std::nullopt, {}});
+  for (Joint& joint : generated.joints) {
+    if (joint.inboard != kWorld) joint.inboard += first_body;
+    joint.outboard += first_body;
+    joints.push_back(std::move(joint));
+  }
+}
+
 /// One variant's changes to one body.
 struct Override {
   int body = 0;
@@ -479,11 +585,14 @@ std::vector<std::pair<std::string, Variant>> read_variants(
       }
       BodySpec scratch;  // checks the mass fields now, so an unused variant is still checked
       read_mass(override_object, scratch, /*required=*/false);
-      if (!bodies[body->second].body.point_masses.empty()) {
+      const Body& original = bodies[body->second].body;
+      if (!original.point_masses.empty() || original.inertial) {
         for (const char* key : {"mass", "density"}) {
           if (!override_object.find(key)) continue;
           fail(override_object.path(key), "body " + in_quotes(body_name) +
-                                              " gives \"point_masses\", whose sum is its mass; a variant may change only its \"radius\"");
+                                              (original.inertial ? " gives \"inertial\", which holds with its mass"
+                                                                 : " gives \"point_masses\", whose sum is its mass") +
+                                              "; a variant may change only its \"radius\"");
         }
       }
       overrides.push_back(std::move(entry));
@@ -623,7 +732,7 @@ Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const 
 Model read_model(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
-                   "bodies", "joints", "gears", "chain", "variants", "variant"});
+                   "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant"});
   const int version = root.integer("limber_scene");
   if (version != 1) {
     fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
@@ -643,7 +752,14 @@ Model read_model(const Json& json, const SceneOptions& options) {
   // Bodies: the explicit ones, then the chain's links.
   const Json* bodies_json = root.find("bodies");
   const Json* chain_json = root.find("chain");
-  if (!bodies_json && !chain_json) fail("bodies", "missing required field (or give a \"chain\")");
+  const Json* tree_json = root.find("tree");
+  const Json* grid_json = root.find("grid");
+  if ((chain_json != nullptr) + (tree_json != nullptr) + (grid_json != nullptr) > 1) {
+    fail(chain_json ? "chain" : "tree", "give at most one generator of \"chain\", \"tree\" and \"grid\"");
+  }
+  if (!bodies_json && !chain_json && !tree_json && !grid_json) {
+    fail("bodies", "missing required field (or give a \"chain\", \"tree\" or \"grid\")");
+  }
   std::vector<BodySpec> bodies;
   if (bodies_json) {
     if (!bodies_json->is_array()) wrong_type(*bodies_json, "bodies", "an array");
@@ -658,14 +774,18 @@ Model read_model(const Json& json, const SceneOptions& options) {
     Chain chain = read_chain(Object(*chain_json, "chain"));
     if (options.links) {
       require_at_least(*options.links, 1, "chain.links (SceneOptions::links)");
-      if (*options.links > INT_MAX) fail("chain.links", "too many links requested");
-      chain.links = static_cast<int>(*options.links);
+      chain.links = static_cast<int>(std::min<long>(*options.links, INT_MAX));
+      require_generated(double(*options.links), "chain.links (SceneOptions::links)");
     }
+    require_generated(chain.links, "chain.links");
     generate_chain(chain, bodies, chain_joints);
+  } else if (tree_json) {
+    append_generated(read_tree(Object(*tree_json, "tree"), options), bodies, chain_joints);
   } else if (options.links) {
     fail("chain", std::to_string(*options.links) +
-                      " links requested but the scene has no \"chain\" generator");
+                      " links requested but the scene has no \"chain\" or \"tree\" generator");
   }
+  if (grid_json) append_generated(read_grid(Object(*grid_json, "grid")), bodies, chain_joints);
   // Names become indices only for what refers to bodies by name (variants, explicit joints); a
   // generated million-link chain needs no map.
   std::unordered_map<std::string, int> body_index;
@@ -708,6 +828,24 @@ Model read_model(const Json& json, const SceneOptions& options) {
     require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
   }
   for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));
+
+  // Copies last, of everything above (generators.hpp's copies_of; the ball and ground stay one).
+  // --copies on a scene without "copies" lays them out 1 m apart beyond their footprint.
+  long copies = 1;
+  double spacing = footprint(model) + 1.0;
+  if (const Json* copies_json = root.find("copies")) {
+    const Object object(*copies_json, "copies");
+    object.allow_only({"count", "spacing"});
+    copies = object.integer("count");
+    require_at_least(copies, 1, object.path("count"));
+    spacing = object.number("spacing");
+  }
+  if (options.copies) {
+    require_at_least(*options.copies, 1, "copies.count (SceneOptions::copies)");
+    copies = *options.copies;
+  }
+  require_generated(double(copies) * double(model.bodies.size()), "copies.count");
+  if (copies > 1) model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies");
   return model;
 }
 

@@ -53,6 +53,9 @@
 //       "point_masses": [ {"position": [0, 0, 0.01], "mass": 1.2, "radius": 0.02}, ... ],
 //                                              lumps in the body frame (m; kg > 0; radius m ≥ 0, optional
 //                                              0; a solid sphere); mass = their sum (thesis eq. 4.1)
+//       "inertial": {"centre_of_mass": [0, 0, 0.02],  optional, with "mass": the distribution given
+//                    "inertia": [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]},  directly (body frame; kg·m² about
+//                                              the centre of mass; symmetric, positive, a physical body)
 //       "position": [0, 0, 1.02],              required, m, centre
 //       "axis": [0, 0, 1],                     required, non-zero (normalized), tail → head
 //       "linear_velocity": [0, 0, 0],          optional ([0,0,0]), m/s
@@ -75,6 +78,21 @@
 //       "pinned": true },                      required: joint "joint_0" holds link_0's head to the world
 //     It appends bodies "link_0" … "link_{N−1}" (after any explicit ones), laid head to tail from
 //     the anchor, and spherical joints "joint_k" (k ≥ 1) from link_{k−1}'s tail to link_k's head.
+//   "tree": {                                  optional generator (at most one of chain, tree, grid):
+//       "branching": 2,                        required integer ≥ 1: children per link
+//       "links": 127, or "depth": 6,           exactly one: links in all, or levels below the root
+//       "link_length": 0.1, "link_mass": 1,    required, > 0
+//       "anchor": [0, 0, 2], "pinned": true }, required: the root's head, held to the world or not
+//     Bodies "link_0" … (link k hangs from link (k−1)/branching; generators.hpp's make_tree_model).
+//   "grid": {                                  optional generator: a cloth-like sheet
+//       "columns": 20, "rows": 20,             required integers ≥ 2: nodes
+//       "spacing": 0.05, "link_mass": 0.01,    required, > 0 (each edge a capsule link)
+//       "anchor": [0, 0, 2],                   required: node (0, 0); rows go down (−z), columns +x
+//       "pin_top_corners": true },             required
+//   "copies": { "count": 16, "spacing": 1.5 }, optional: everything above count times on a square
+//                                              lattice in x, y, spacing m apart, names "c<k>.<name>";
+//                                              SceneOptions::copies (--copies) overrides the count
+//     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together).
 //   "variants": {                              optional: named sets of per-body overrides
 //       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
 //                                              each override may give "radius" and/or "mass" (or
@@ -100,7 +118,8 @@ namespace limber {
 /// Choices made when loading, for scenes that offer them.
 struct SceneOptions {
   std::optional<std::string> variant;  ///< select one of "variants" (e.g. the humanoid's "thin")
-  std::optional<long> links;           ///< number of links of the "chain" generator
+  std::optional<long> links;           ///< number of links of the "chain" or "tree" generator
+  std::optional<long> copies;          ///< copies of the scene's bodies (its "copies" count, or laid out by their extent)
 };
 
 /// Parses and validates a scene. `source` names it in error messages (usually the file path).

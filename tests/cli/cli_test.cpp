@@ -57,6 +57,13 @@ TEST(Cli, ChainRunsWithAHundredLinks) {
   EXPECT_THAT(r.out, HasSubstr("100 limbs, 100 joints"));
 }
 
+TEST(Cli, CopiesLayScenesSideBySide) {
+  const Result r = run({"run", scene("chain.json"), "--copies", "3", "--steps", "10"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("15 limbs, 15 joints"));  // 3 copies of the 5-link chain, 3 islands
+  EXPECT_THAT(r.out, HasSubstr("3 islands"));
+}
+
 TEST(Cli, OutWritesOneCsvRowPerStepPlusTheStart) {
   const std::string path = ::testing::TempDir() + "limber_cli_trajectory.csv";
   const Result r = run({"run", scene("stick_in_box.json"), "--steps", "25", "--out", path});
@@ -196,6 +203,7 @@ TEST(Cli, RejectsFrictionWithoutGround) { expect_rejected({"run", scene("chain.j
 TEST(Cli, RejectsBallFlagsWithoutBall) { expect_rejected({"run", scene("chain.json"), "--ball-speed", "3"}, "no ball"); }
 TEST(Cli, RejectsUnknownBodyVariant) { expect_rejected({"run", "--body", "giant"}, "giant"); }
 TEST(Cli, RejectsLinksOnASceneWithoutChain) { expect_rejected({"run", "--links", "10"}, "chain"); }
+TEST(Cli, RejectsZeroCopies) { expect_rejected({"run", scene("chain.json"), "--copies", "0"}, "copies.count"); }
 TEST(Cli, RejectsZeroSteps) { expect_rejected({"run", "--steps", "0"}, "--steps"); }
 TEST(Cli, RejectsMissingSceneFile) { expect_rejected({"run", "no/such/scene.json"}, "no/such/scene.json"); }
 

@@ -192,7 +192,7 @@ TEST(SceneErrors, LinksForASceneWithoutChainAreRejected) {
   SceneOptions options;
   options.links = 100;
   EXPECT_EQ(load_error(kPendulum, options),
-            "test.json: chain: 100 links requested but the scene has no \"chain\" generator");
+            "test.json: chain: 100 links requested but the scene has no \"chain\" or \"tree\" generator");
 }
 
 TEST(SceneErrors, ZeroLinksAreRejected) {
@@ -361,6 +361,98 @@ TEST(SceneLoading, LinksOptionBuildsALongChainLaidHeadToTail) {
     const Vector3 outboard = model.bodies[joint.outboard].to_world(joint.outboard_anchor);
     EXPECT_LT((inboard - outboard).norm(), 1e-9) << joint.name;
   }
+}
+
+/// Each joint's two anchors at one point in the model's pose.
+void expect_joints_hold(const Model& model) {
+  for (const Joint& joint : model.joints) {
+    const Vector3 inboard = joint.inboard == kWorld ? joint.inboard_anchor : model.bodies[joint.inboard].to_world(joint.inboard_anchor);
+    const Vector3 outboard = model.bodies[joint.outboard].to_world(joint.outboard_anchor);
+    EXPECT_LT((inboard - outboard).norm(), 1e-9) << joint.name;
+  }
+}
+
+constexpr std::string_view kTree = R"({"limber_scene": 1, "name": "tree",
+  "settings": {"gravity": [0, 0, -9.81], "time_step": 0.01, "duration": 1},
+  "tree": {"branching": 2, "depth": 3, "link_length": 0.1, "link_mass": 1, "anchor": [1, 2, 3], "pinned": true}})";
+
+TEST(SceneGenerators, TreeByDepthOrLinksHangsFromItsAnchor) {
+  const Model tree = load_scene_text(kTree, "test.json");
+  ASSERT_EQ(tree.bodies.size(), 15u);  // 1 + 2 + 4 + 8
+  EXPECT_LT((tree.bodies[0].head() - Vector3(1, 2, 3)).norm(), 1e-12);
+  expect_joints_hold(tree);
+  SceneOptions options;
+  options.links = 40;
+  EXPECT_EQ(load_scene_text(kTree, "test.json", options).bodies.size(), 40u);
+  EXPECT_EQ(load_scene_text(with(kTree, R"("depth": 3)", R"("links": 6)"), "test.json").bodies.size(), 6u);
+}
+
+TEST(SceneGenerators, GridIsASheetOfLinksFromItsAnchor) {
+  const Model grid = load_scene_text(with(kTree, R"("tree": {"branching": 2, "depth": 3, "link_length": 0.1, "link_mass": 1, "anchor": [1, 2, 3], "pinned": true})",
+                                          R"("grid": {"columns": 4, "rows": 3, "spacing": 0.1, "link_mass": 0.01, "anchor": [0, 0, 2], "pin_top_corners": true})"),
+                                     "test.json");
+  EXPECT_EQ(grid.bodies.size(), 3u * 3u + 4u * 2u);  // rows·(columns−1) + columns·(rows−1)
+  EXPECT_LT((grid.bodies[0].head() - Vector3(0, 0, 2)).norm(), 1e-12);
+  expect_joints_hold(grid);
+}
+
+TEST(SceneGenerators, CopiesRepeatBodiesJointsAndGearsSideBySide) {
+  const Model one = load_scene_text(kPendulum, "test.json");
+  const Model four = load_scene_text(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 4, "spacing": 2},)"), "test.json");
+  ASSERT_EQ(four.bodies.size(), 4 * one.bodies.size());
+  ASSERT_EQ(four.joints.size(), 4 * one.joints.size());
+  EXPECT_TRUE(four.ball.has_value());  // one ball, one ground, one set of settings
+  // Copy 3 of 4 (two per row) sits at spacing · (1, 1, 0), its names led by "c3.".
+  EXPECT_EQ(four.bodies[7].name, "c3.lower");
+  EXPECT_LT((four.bodies[7].position - one.bodies[1].position - Vector3(2, 2, 0)).norm(), 1e-12);
+  EXPECT_EQ(four.joints[7].inboard, 6);
+  expect_joints_hold(four);
+  // --copies on a scene without "copies": side by side beyond the bodies' footprint.
+  SceneOptions options;
+  options.copies = 3;
+  const Model three = load_scene_text(kPendulum, "test.json", options);
+  ASSERT_EQ(three.bodies.size(), 3 * one.bodies.size());
+  EXPECT_GE((three.bodies[2].position - three.bodies[0].position).norm(), 1.0);
+  expect_joints_hold(three);
+}
+
+TEST(SceneLoading, InertialGivesCentreOfMassAndInertiaTensorInMuJoCosOrder) {
+  const std::string scene = with(kPendulum, R"("mass": 2, "position": [0, 0, 1.3])",
+                                 R"("mass": 2, "inertial": {"centre_of_mass": [0, 0.01, -0.05], "inertia": [0.03, 0.025, 0.012, 0.001, 0.002, 0.003]},
+                                    "position": [0, 0, 1.3])");
+  const Model model = load_scene_text(scene, "test.json");
+  ASSERT_TRUE(model.bodies[0].inertial.has_value());
+  const Inertial& inertial = *model.bodies[0].inertial;
+  EXPECT_EQ(inertial.centre_of_mass, Vector3(0, 0.01, -0.05));
+  Eigen::Matrix3d expected;
+  expected << 0.03, 0.001, 0.002, 0.001, 0.025, 0.003, 0.002, 0.003, 0.012;  // [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]
+  EXPECT_EQ(inertial.inertia, expected);
+  EXPECT_EQ(model.bodies[0].mass, 2);
+  const auto scene_with = [&](std::string_view inertial_text) {
+    return with(kPendulum, R"("mass": 2, "position": [0, 0, 1.3])", std::string(inertial_text) + R"(, "position": [0, 0, 1.3])");
+  };
+  EXPECT_EQ(load_error(scene_with(R"("mass": 2, "inertial": {"centre_of_mass": [0, 0, 0], "inertia": [1, 1, 1]})")),
+            "test.json: bodies[0].inertial.inertia: must be an array of 6 numbers [Ixx, Iyy, Izz, Ixy, Ixz, Iyz], got an array of 3");
+  EXPECT_EQ(load_error(scene_with(R"("density": 2, "inertial": {"centre_of_mass": [0, 0, 0], "inertia": [1, 1, 1, 0, 0, 0]})")),
+            "test.json: bodies[0]: give \"mass\" with \"inertial\", not \"density\"");
+  EXPECT_EQ(load_error(scene_with(R"("mass": 2, "inertial": {"centre_of_mass": [0, 0, 0], "inertia": [1, 1, 3, 0, 0, 0]})")),
+            "test.json: bodies[0].inertial.inertia: principal moments [1, 1, 3] break the triangle inequality I1 + I2 >= I3 (no body has them)");
+}
+
+TEST(SceneErrors, BadGeneratorsAndCopiesAreNamed) {
+  EXPECT_EQ(load_error(with(kTree, R"("depth": 3)", R"("depth": 3, "links": 4)")),
+            "test.json: tree: give exactly one of \"links\" and \"depth\"");
+  EXPECT_EQ(load_error(with(kTree, R"("branching": 2)", R"("branching": 0)")), "test.json: tree.branching: must be >= 1, got 0");
+  EXPECT_THAT(load_error(with(kTree, R"("depth": 3)", R"("depth": 40)")), StartsWith("test.json: tree.depth: asks for "));
+  EXPECT_THAT(load_error(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 2, "spacing": 0.01},)")),
+              StartsWith("test.json: copies.spacing: must be >= "));
+  EXPECT_EQ(load_error(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 0, "spacing": 1},)")),
+            "test.json: copies.count: must be >= 1, got 0");
+  SceneOptions options;
+  options.copies = 6'000'000;  // 12 million bodies
+  EXPECT_THAT(load_error(kPendulum, options), StartsWith("test.json: copies.count: asks for "));
+  options.copies = 0;
+  EXPECT_THAT(load_error(kPendulum, options), StartsWith("test.json: copies.count (SceneOptions::copies): must be >= 1"));
 }
 
 TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {

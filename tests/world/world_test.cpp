@@ -3,6 +3,7 @@
 #include <dirent.h>
 
 #include <cmath>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -288,6 +289,74 @@ TEST(World, BadHandlesAndVectorsAreRefusedByName) {
   }
   world.remove_body(limb);
   EXPECT_THROW(world.pose(limb), WorldError);
+}
+
+// A limb hung by its head, its mass given directly: centre of mass 5 cm beyond its centre
+// towards the tail, a transverse inertia unlike its shape's. It swings with the compound
+// pendulum's period T = 2π √(I_pivot / (m g d)), I_pivot = I_c + m d², d the pivot to the centre
+// of mass — with the given tensor, not the shape's.
+Model pendulum_with_given_inertia() {
+  Model model;
+  model.name = "compound_pendulum";
+  Body body;
+  body.name = "limb";
+  body.shape = {ShapeType::capsule, 0.4, 0.02};
+  body.mass = 2;
+  body.inertial = Inertial{Vector3(0, 0, -0.05), Eigen::Vector3d(0.02, 0.02, 0.004).asDiagonal()};
+  const double release = 0.05;  // rad from hanging straight down
+  body.axis = Vector3(std::sin(release), 0, std::cos(release));
+  const Vector3 pivot(0, 0, 1);
+  body.position = pivot - 0.5 * body.shape.length * body.axis;
+  model.bodies.push_back(body);
+  model.joints.push_back(spherical_joint("pin", kWorld, 0, pivot, Vector3(0, 0, 0.2)));
+  model.settings.sleep.enabled = false;
+  model.settings.verlet.limb_masses = LimbMasses::inertia;  // particles: mass placed to match the tensor
+  return model;
+}
+
+TEST(World, AGivenInertiaTensorAndCentreOfMassSetTheSwingPeriod) {
+  const double m = 2, g = 9.81, d = 0.2 + 0.05, pivot_inertia = 0.02 + m * d * d;
+  const double expected = 2 * std::numbers::pi * std::sqrt(pivot_inertia / (m * g * d)) * (1 + 0.05 * 0.05 / 16);
+  for (const Method method : kMethods) {
+    World world(pendulum_with_given_inertia(), options_for(method));
+    const BodyId limb = world.body("limb");
+    // Upward zero crossings of the limb's x, interpolated within the step.
+    const double dt = 1e-3;
+    std::vector<double> crossings;
+    double previous = world.pose(limb).position.x();
+    for (int s = 1; s <= 2600 && crossings.size() < 3; ++s) {
+      ASSERT_EQ(world.step(dt), StepStatus::ok) << name(method);
+      const double x = world.pose(limb).position.x();
+      if (previous < 0 && x >= 0) crossings.push_back(dt * (s - x / (x - previous)));
+      previous = x;
+    }
+    ASSERT_EQ(crossings.size(), 3u) << name(method);
+    const double period = 0.5 * (crossings[2] - crossings[0]);
+    // Springs flex at the pin (a stiff spring, not a constraint): 1%; the others 0.2%.
+    EXPECT_NEAR(period / expected, 1.0, method == Method::springs ? 1e-2 : 2e-3) << name(method) << " period " << period;
+  }
+}
+
+TEST(World, AGivenInertiaIsCheckedAndParticlesRefuseAnOffAxisCentre) {
+  Model model = pendulum_with_given_inertia();
+  const auto error_of = [](const Model& candidate, Method method) -> std::string {
+    try {
+      World world(candidate, options_for(method));
+    } catch (const ModelError& error) {
+      return error.what();
+    }
+    return "";
+  };
+  model.bodies[0].inertial->inertia(0, 1) = 0.001;  // not symmetric
+  EXPECT_EQ(error_of(model, Method::featherstone), "bodies[0].inertial.inertia: must be symmetric");
+  model.bodies[0].inertial->inertia = Eigen::Vector3d(0.01, 0.01, 0.03).asDiagonal();  // I1 + I2 < I3
+  EXPECT_THAT(error_of(model, Method::featherstone), HasSubstr("bodies[0].inertial.inertia: principal moments [0.01, 0.01, 0.03] break the triangle inequality"));
+  model.bodies[0].inertial->inertia = Eigen::Vector3d(0.01, 0.01, -0.001).asDiagonal();
+  EXPECT_THAT(error_of(model, Method::lagrange), HasSubstr("must be positive definite"));
+  model = pendulum_with_given_inertia();
+  model.bodies[0].inertial->centre_of_mass = Vector3(0.01, 0, 0);
+  EXPECT_EQ(error_of(model, Method::featherstone), "");  // the rigid methods take any centre of mass
+  EXPECT_THAT(error_of(model, Method::particles), HasSubstr("the centre of mass on the limb's axis"));
 }
 
 // The threads of this process (Linux: /proc/self/task).

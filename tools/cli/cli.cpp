@@ -49,7 +49,7 @@ struct RunFlags {
   std::string body;
   double ball_speed = 0, ball_radius = 0, ball_mass = 0, ball_restitution = 0, friction = 0;
   std::vector<double> ball_direction;
-  long links = 0, steps = 0;
+  long links = 0, copies = 0, steps = 0;
   int iterations = 0, substeps = 0;
   std::string projection;
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
@@ -66,7 +66,7 @@ struct RunFlags {
   std::string stabilization = "baumgarte", constraint_solver = "auto";
 
   CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
-      *ball_restitution_option, *friction_option, *links_option, *steps_option, *dt_option, *iterations_option,
+      *ball_restitution_option, *friction_option, *links_option, *copies_option, *steps_option, *dt_option, *iterations_option,
       *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
       *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option, *newton_iterations_option,
       *compliance_option, *warm_start_option, *projection_option, *substeps_option;
@@ -128,7 +128,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.ball_mass_option = run.add_option("--ball-mass", flags.ball_mass, "Ball mass, kg");
   flags.ball_restitution_option = run.add_option("--ball-restitution", flags.ball_restitution, "Ball restitution, 0..1");
   flags.friction_option = run.add_option("--friction", flags.friction, "Ground Coulomb friction coefficient");
-  flags.links_option = run.add_option("--links", flags.links, "Number of links of a chain scene");
+  flags.links_option = run.add_option("--links", flags.links, "Number of links of a chain or tree scene");
+  flags.copies_option = run.add_option("--copies", flags.copies, "Copies of the scene's bodies, side by side");
   flags.steps_option = run.add_option("--steps", flags.steps, "Number of steps (default: the scene's duration / dt)");
   flags.dt_option = run.add_option("--dt", flags.dt, "Time step, s");
   flags.iterations_option = run.add_option("--iterations", flags.iterations, "Relaxation sweeps per step");
@@ -711,6 +712,7 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
     SceneOptions scene_options;
     if (given(flags.body_option)) scene_options.variant = flags.body;
     if (given(flags.links_option)) scene_options.links = flags.links;
+    if (given(flags.copies_option)) scene_options.copies = flags.copies;
     const bool embedded = flags.scene.empty();
     Model model = embedded ? load_scene_text(embedded_humanoid_scene(), "embedded tools/scenes/humanoid.json", scene_options)
                            : load_scene_file(flags.scene, scene_options);
