@@ -20,10 +20,10 @@ int main() {
     LagrangeOptions options;
   };
   const Configuration configurations[] = {
-      {"semi-implicit Euler + Baumgarte", {.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte}},
-      {"RK4 + Baumgarte", {.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::baumgarte}},
-      {"semi-implicit Euler + projection", {.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::projection}},
-      {"RK4 + projection", {.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::projection}},
+      {"semi-implicit Euler + Baumgarte", {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte}},
+      {"RK4 + Baumgarte", {.integrator = Integrator::rk4, .stabilization = Stabilization::baumgarte}},
+      {"semi-implicit Euler + projection", {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::projection}},
+      {"RK4 + projection", {.integrator = Integrator::rk4, .stabilization = Stabilization::projection}},
   };
   const double dt = 1.0 / 240;
   std::printf("configuration,time,largest_gap,energy_change\n");
@@ -32,7 +32,7 @@ int main() {
     const double start = observe(state).energy();
     double largest = 0;  // over the last interval
     for (int s = 1; s <= 10000; ++s) {
-      const LagrangeStepReport report = step(state, dt);
+      const StepReport report = step(state, dt);
       if (report.status != StepStatus::ok) {
         std::fprintf(stderr, "%s: diverged at step %d\n", configuration.name, s);
         break;

@@ -65,7 +65,7 @@ std::vector<Method> methods(bool quick, std::optional<LimbMasses> limb_masses) {
   const std::vector<double> three_steps = quick ? std::vector<double>{1.0 / 240} : std::vector<double>{1.0 / 60, 1.0 / 240, 1.0 / 1000};
   std::vector<Method> out;
   auto verlet = [&](const char* series, RelaxationSolver solver, int sweeps, double dt, std::optional<LimbMasses> masses) {
-    Method m{.series = series, .family = Family::verlet, .time_step = dt};
+    Method m{.series = series, .family = Family::particles, .time_step = dt};
     m.verlet.solver = solver;
     m.sweeps = sweeps;
     m.limb_masses = masses;
@@ -96,7 +96,7 @@ std::vector<Method> methods(bool quick, std::optional<LimbMasses> limb_masses) {
   for (const double dt : quick ? std::vector<double>{1.0 / 1000} : std::vector<double>{1.0 / 240, 1.0 / 1000, 1.0 / 2000}) {
     for (const double k : {1e4, 1e5, 1e6}) {
       Method m{.series = "springs explicit", .setting = "k " + std::to_string(int(k)) + " N/m", .family = Family::springs, .time_step = dt};
-      m.springs.integrator = SpringIntegrator::semi_implicit_euler;
+      m.springs.integrator = Integrator::semi_implicit_euler;
       m.springs.stiffness = k;
       out.push_back(m);
     }
@@ -104,23 +104,23 @@ std::vector<Method> methods(bool quick, std::optional<LimbMasses> limb_masses) {
   for (const double dt : three_steps) {
     for (const double k : {1e4, 1e5, 1e6, 1e7}) {
       Method m{.series = "springs implicit", .setting = "k " + std::to_string(int(k)) + " N/m", .family = Family::springs, .time_step = dt};
-      m.springs.integrator = SpringIntegrator::backward_euler;
+      m.springs.integrator = Integrator::backward_euler;
       m.springs.stiffness = k;
       out.push_back(m);
     }
   }
   for (const double dt : all_steps) {
-    struct Lagrange { const char* series; RigidIntegrator integrator; Stabilization stabilization; };
-    for (const Lagrange& l : {Lagrange{"lagrange baumgarte", RigidIntegrator::semi_implicit_euler, Stabilization::baumgarte},
-                              Lagrange{"lagrange projection", RigidIntegrator::semi_implicit_euler, Stabilization::projection},
-                              Lagrange{"lagrange rk4 projection", RigidIntegrator::rk4, Stabilization::projection}}) {
+    struct Lagrange { const char* series; Integrator integrator; Stabilization stabilization; };
+    for (const Lagrange& l : {Lagrange{"lagrange baumgarte", Integrator::semi_implicit_euler, Stabilization::baumgarte},
+                              Lagrange{"lagrange projection", Integrator::semi_implicit_euler, Stabilization::projection},
+                              Lagrange{"lagrange rk4 projection", Integrator::rk4, Stabilization::projection}}) {
       Method m{.series = l.series, .setting = "", .family = Family::lagrange, .time_step = dt};
       m.lagrange.integrator = l.integrator;
       m.lagrange.stabilization = l.stabilization;
       out.push_back(m);
     }
-    for (const FeatherstoneIntegrator integrator : {FeatherstoneIntegrator::rk4, FeatherstoneIntegrator::semi_implicit_euler}) {
-      Method m{.series = integrator == FeatherstoneIntegrator::rk4 ? "featherstone rk4" : "featherstone semi-implicit",
+    for (const Integrator integrator : {Integrator::rk4, Integrator::semi_implicit_euler}) {
+      Method m{.series = integrator == Integrator::rk4 ? "featherstone rk4" : "featherstone semi-implicit",
                .setting = "", .family = Family::featherstone, .time_step = dt};
       m.featherstone.integrator = integrator;
       out.push_back(m);

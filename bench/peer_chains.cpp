@@ -140,20 +140,20 @@ std::vector<Contender> limber_contenders() {
        [](std::size_t links) { return run_verlet(links, RelaxationSolver::gauss_seidel, 100, 0); }, "Verlet Gauss-Seidel"},
       {"limber", "Featherstone ABA, RK4", true, 1,
        [](std::size_t links) {
-         FeatherstoneState state = compile_featherstone(chain_model(links), {.integrator = FeatherstoneIntegrator::rk4});
+         FeatherstoneState state = compile_featherstone(chain_model(links), {.integrator = Integrator::rk4});
          return simulate(state);
        },
        "Featherstone"},
       {"limber", "Lagrange, semi-implicit Euler + Baumgarte", true, 1,
        [](std::size_t links) {
          LagrangeState state = compile_lagrange(
-             chain_model(links), {.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte});
+             chain_model(links), {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte});
          return simulate(state);
        },
        "Lagrange"},
       {"limber", "implicit springs (backward Euler, k 2e4 N/m, c 20 N s/m)", true, 1,
        [](std::size_t links) {
-         SpringState state = compile_springs(chain_model(links), {.integrator = SpringIntegrator::backward_euler});
+         SpringState state = compile_springs(chain_model(links), {.integrator = Integrator::backward_euler});
          return simulate(state);
        },
        "springs"},

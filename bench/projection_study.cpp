@@ -51,7 +51,7 @@ Method reference_method(double dt) { return {.series = "reference", .family = Fa
 // The particle method at frames of kFrame split into `substeps`: `sweeps` Gauss-Seidel sweeps a
 // substep, or (sweeps = 0) the direct solver to convergence.
 Method verlet(ProjectionRule projection, int substeps, int sweeps) {
-  Method method{.series = projection == ProjectionRule::rattle ? "rattle" : "pbd", .family = Family::verlet, .time_step = kFrame};
+  Method method{.series = projection == ProjectionRule::rattle ? "rattle" : "pbd", .family = Family::particles, .time_step = kFrame};
   method.projection = projection, method.substeps = substeps;
   if (sweeps > 0) {
     method.sweeps = sweeps;

@@ -59,10 +59,10 @@ void gap_table(double damping) {
   const double dt = model.settings.time_step, seconds = 5;
   std::printf("method,stiffness,damping,dt,stable,top_gap,other_gap,energy_gain\n");
   for (const double k : kStiffnesses) {
-    struct Variant { const char* name; SpringIntegrator integrator; int newton_iterations; };
-    for (const Variant& variant : {Variant{"springs-explicit", SpringIntegrator::semi_implicit_euler, 1},
-                                   Variant{"springs-implicit-linearized", SpringIntegrator::backward_euler, 1},
-                                   Variant{"springs-implicit", SpringIntegrator::backward_euler, 2}}) {
+    struct Variant { const char* name; Integrator integrator; int newton_iterations; };
+    for (const Variant& variant : {Variant{"springs-explicit", Integrator::semi_implicit_euler, 1},
+                                   Variant{"springs-implicit-linearized", Integrator::backward_euler, 1},
+                                   Variant{"springs-implicit", Integrator::backward_euler, 2}}) {
       const char* name = variant.name;
       const Run run = run_springs(model, {.integrator = variant.integrator, .stiffness = k, .damping = damping,
                                           .newton_iterations = variant.newton_iterations}, dt, seconds);
@@ -87,10 +87,10 @@ void gap_table(double damping) {
 void stable_dt_table(double damping) {
   const Model model = chain_scene();
   std::printf("integrator,stiffness,damping,largest_stable_dt,symplectic_bound\n");
-  struct Named { const char* name; SpringIntegrator integrator; int newton_iterations; };
-  for (const Named& method : {Named{"euler", SpringIntegrator::euler, 1}, Named{"semi-implicit", SpringIntegrator::semi_implicit_euler, 1},
-                              Named{"rk4", SpringIntegrator::rk4, 1}, Named{"backward-euler-linearized", SpringIntegrator::backward_euler, 1},
-                              Named{"backward-euler", SpringIntegrator::backward_euler, 2}}) {
+  struct Named { const char* name; Integrator integrator; int newton_iterations; };
+  for (const Named& method : {Named{"euler", Integrator::euler, 1}, Named{"semi-implicit", Integrator::semi_implicit_euler, 1},
+                              Named{"rk4", Integrator::rk4, 1}, Named{"backward-euler-linearized", Integrator::backward_euler, 1},
+                              Named{"backward-euler", Integrator::backward_euler, 2}}) {
     for (const double k : kStiffnesses) {
       // Time steps from 1/15 s down by 2^(1/4); the first that runs 2 s stably.
       double largest = 0;

@@ -44,7 +44,7 @@ using namespace limber::study;
 // The scene's spring (Settings::springs): k = 2·10⁴ N/m, c = 20 N·s/m.
 constexpr double kSceneStiffness = 2e4, kSceneDamping = 20;
 
-Method spring_method(std::string series, SpringIntegrator integrator, double stiffness, double damping, double dt) {
+study::Method spring_method(std::string series, Integrator integrator, double stiffness, double damping, double dt) {
   return {.series = std::move(series), .setting = "k " + std::to_string(static_cast<long>(stiffness)) + " N/m",
           .family = Family::springs, .time_step = dt,
           .springs = {.integrator = integrator, .stiffness = stiffness, .damping = damping, .newton_iterations = 2}};
@@ -52,23 +52,23 @@ Method spring_method(std::string series, SpringIntegrator integrator, double sti
 
 // One Method per series the issue names, at time step `dt`. Verlet runs one thread: the runs are
 // small and the machine is shared.
-std::vector<Method> stress_methods(double dt) {
+std::vector<study::Method> stress_methods(double dt) {
   return {
-      {.series = "verlet gauss-seidel", .setting = "20 sweeps", .family = Family::verlet, .time_step = dt,
+      {.series = "verlet gauss-seidel", .setting = "20 sweeps", .family = Family::particles, .time_step = dt,
        .verlet = {.threads = 1}, .sweeps = 20},
-      {.series = "verlet direct", .setting = "2 Newton steps", .family = Family::verlet, .time_step = dt,
+      {.series = "verlet direct", .setting = "2 Newton steps", .family = Family::particles, .time_step = dt,
        .verlet = {.solver = RelaxationSolver::direct, .threads = 1, .newton_iterations = 2}},
-      spring_method("springs semi-implicit euler", SpringIntegrator::semi_implicit_euler, kSceneStiffness, kSceneDamping, dt),
-      spring_method("springs forward euler", SpringIntegrator::euler, kSceneStiffness, kSceneDamping, dt),
-      spring_method("springs backward euler", SpringIntegrator::backward_euler, kSceneStiffness, kSceneDamping, dt),
+      spring_method("springs semi-implicit euler", Integrator::semi_implicit_euler, kSceneStiffness, kSceneDamping, dt),
+      spring_method("springs forward euler", Integrator::euler, kSceneStiffness, kSceneDamping, dt),
+      spring_method("springs backward euler", Integrator::backward_euler, kSceneStiffness, kSceneDamping, dt),
       {.series = "lagrange baumgarte", .setting = "semi-implicit euler", .family = Family::lagrange, .time_step = dt,
-       .lagrange = {.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte}},
+       .lagrange = {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte}},
       {.series = "lagrange projection", .setting = "semi-implicit euler", .family = Family::lagrange, .time_step = dt,
-       .lagrange = {.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::projection}},
+       .lagrange = {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::projection}},
       {.series = "featherstone rk4", .setting = "", .family = Family::featherstone, .time_step = dt,
-       .featherstone = {.integrator = FeatherstoneIntegrator::rk4}},
+       .featherstone = {.integrator = Integrator::rk4}},
       {.series = "featherstone semi-implicit euler", .setting = "", .family = Family::featherstone, .time_step = dt,
-       .featherstone = {.integrator = FeatherstoneIntegrator::semi_implicit_euler}},
+       .featherstone = {.integrator = Integrator::semi_implicit_euler}},
   };
 }
 
@@ -152,13 +152,13 @@ void grid(bool quick, Output& out) {
 
   const std::size_t method_count = stress_methods(1.0 / 240).size();
   for (std::size_t m = 0; m < method_count; ++m) {
-    const Method named = stress_methods(1.0 / 240)[m];
+    const study::Method named = stress_methods(1.0 / 240)[m];
     std::printf("\n%s %s\n%8s", named.series.c_str(), named.setting.c_str(), "dt\\ratio");
     for (const double ratio : ratios) std::printf(" %6g", ratio);
     std::printf("\n");
     // The explicit springs' predicted boundary per mass ratio (see above).
     std::vector<double> predicted(ratios.size(), std::numeric_limits<double>::quiet_NaN());
-    if (named.family == Family::springs && named.springs.integrator != SpringIntegrator::backward_euler) {
+    if (named.family == Family::springs && named.springs.integrator != Integrator::backward_euler) {
       for (std::size_t r = 0; r < ratios.size(); ++r) {
         predicted[r] = predicted_largest_stable_step(named.springs.integrator, spring_mode_frequencies(stress_chain(ratios[r]), kSceneStiffness),
                                                      kSceneStiffness, kSceneDamping);
@@ -167,7 +167,7 @@ void grid(bool quick, Output& out) {
     for (auto dt = steps.rbegin(); dt != steps.rend(); ++dt) {
       std::printf("%8s", time_step_name(*dt).c_str());
       for (std::size_t r = 0; r < ratios.size(); ++r) {
-        const Method method = stress_methods(*dt)[m];
+        const study::Method method = stress_methods(*dt)[m];
         const auto start = std::chrono::steady_clock::now();
         Simulation simulation(stress_chain(ratios[r]), method);
         const RunErrors errors = observe_run(simulation, duration, 0, diverged).errors;
@@ -203,14 +203,14 @@ void long_runs(bool quick, Output& out) {
   out.header("section,method,setting,dt,steps_asked,steps,stability,max_gap,rms_gap,energy_drift,energy_gain,energy_scale_J,wall_s");
   // Every method at 1/240 s, then the explicit ones that diverge there again at a step inside
   // their bound (springs: eq. 3.15 above; Featherstone's semi-implicit Euler: the grid's).
-  std::vector<Method> methods = stress_methods(dt);
-  methods.push_back(spring_method("springs semi-implicit euler", SpringIntegrator::semi_implicit_euler, kSceneStiffness, kSceneDamping, 1.0 / 480));
-  methods.push_back(spring_method("springs forward euler", SpringIntegrator::euler, kSceneStiffness, kSceneDamping, 1.0 / 2000));
+  std::vector<study::Method> methods = stress_methods(dt);
+  methods.push_back(spring_method("springs semi-implicit euler", Integrator::semi_implicit_euler, kSceneStiffness, kSceneDamping, 1.0 / 480));
+  methods.push_back(spring_method("springs forward euler", Integrator::euler, kSceneStiffness, kSceneDamping, 1.0 / 2000));
   methods.push_back(stress_methods(1.0 / 1000).back());
-  for (Method& method : methods) {
+  for (study::Method& method : methods) {
     if (method.time_step != dt) method.setting += (method.setting.empty() ? "dt " : ", dt ") + time_step_name(method.time_step);
   }
-  for (const Method& method : methods) {
+  for (const study::Method& method : methods) {
     const auto start = std::chrono::steady_clock::now();
     Simulation simulation(stress_chain(1), method);
     const RunErrors errors = observe_run(simulation, steps * method.time_step, 0, diverged).errors;
@@ -241,7 +241,7 @@ void impacts(bool quick, Output& out) {
   for (const double speed : speeds) std::printf(" %20s", (std::to_string(static_cast<int>(speed)) + " m/s").c_str());
   std::printf("\n");
   out.header("section,method,setting,ball_speed,dt,duration,steps,stability,max_gap,energy_gain,energy_drift,energy_scale_J,knock_m");
-  for (const Method& method : stress_methods(dt)) {
+  for (const study::Method& method : stress_methods(dt)) {
     std::printf("%-34s %-18s", method.series.c_str(), method.setting.c_str());
     for (const double speed : speeds) {
       Model model = scene;
@@ -289,9 +289,9 @@ void spring_check(bool quick, Output& out) {
   std::printf("%-28s %9s %11s %11s %11s  %-13s  %s\n", "integrator", "k (N/m)", "omega_max", "predicted", "measured", "check",
               "map (dt up; . stable, x diverged, | predicted boundary)");
   out.header("section,integrator,stiffness,damping,dt,duration,steps,stability,max_gap,energy_gain,omega_max,predicted_stable_dt,predicted_stable,diverged");
-  struct Named { const char* name; SpringIntegrator integrator; };
-  for (const Named integrator : {Named{"semi-implicit euler", SpringIntegrator::semi_implicit_euler},
-                                 Named{"forward euler", SpringIntegrator::euler}}) {
+  struct Named { const char* name; Integrator integrator; };
+  for (const Named integrator : {Named{"semi-implicit euler", Integrator::semi_implicit_euler},
+                                 Named{"forward euler", Integrator::euler}}) {
     for (const double k : stiffnesses) {
       const std::vector<double> frequencies = spring_mode_frequencies(chain, k);
       const double omega_max = *std::max_element(frequencies.begin(), frequencies.end());

@@ -198,7 +198,7 @@ struct VerletParticle {
   }
 };
 
-// The kernel's rigid-body RK2 (midpoint) step, RigidIntegrator::rk2, on one body of 1 kg: its
+// The kernel's rigid-body RK2 (midpoint) step, Integrator::rk2, on one body of 1 kg: its
 // velocity is part of the state, so it is as accurate as its position.
 struct RungeKuttaParticle {
   const ParticleProblem* problem;
@@ -215,7 +215,7 @@ struct RungeKuttaParticle {
   Eigen::Vector3d position() const { return bodies.state.position[0]; }
   Eigen::Vector3d velocity() const { return bodies.linear_velocity(bodies.state, 0); }
   void advance() {
-    integrate_rigid_bodies(bodies, dt, RigidIntegrator::rk2, scratch, [this](const RigidBodyState& y, RigidForces& forces) {
+    integrate_rigid_bodies(bodies, dt, Integrator::rk2, scratch, [this](const RigidBodyState& y, RigidForces& forces) {
       forces.force[0] += bodies.mass[0] * problem->acceleration(y.position[0]);
     });
   }
@@ -406,9 +406,9 @@ void chain_methods() {
       {"midpoint Verlet (eq. 4.6)", "2 × link", &heavy_end, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::unweighted}); }},
       {"weighted = midpoint Verlet", "1 × link", &equal, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
       {"stiff springs, explicit, k = 2·10⁴ N/m (the thesis's step)", "2 × link", &heavy_end,
-       [](const Model& m) { return spring_stepper(m, {.integrator = SpringIntegrator::semi_implicit_euler}); }},
+       [](const Model& m) { return spring_stepper(m, {.integrator = Integrator::semi_implicit_euler}); }},
       {"stiff springs, implicit, k = 10⁶ N/m", "2 × link", &heavy_end,
-       [](const Model& m) { return spring_stepper(m, {.integrator = SpringIntegrator::backward_euler, .stiffness = 1e6}); }},
+       [](const Model& m) { return spring_stepper(m, {.integrator = Integrator::backward_euler, .stiffness = 1e6}); }},
       {"weighted Verlet, three-particle limbs (rigid-limb inertia)", "2 × link", &heavy_inertia,
        [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
       {"Featherstone (exact rigid chain, reference)", "2 × link", &heavy_end, [](const Model& m) { return featherstone_stepper(m); }},

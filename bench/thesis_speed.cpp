@@ -10,7 +10,7 @@
 //   pinned, released horizontally), lengthened by the scene's chain generator;
 // - springs: each joint a damped spring between the inboard tail and the outboard head, and the
 //   printed integrator IDynamic::Update, v += a·Δt then x += v·Δt — the symplectic Euler step
-//   (SpringIntegrator::semi_implicit_euler) although the text calls it forward Euler; forward and
+//   (Integrator::semi_implicit_euler) although the text calls it forward Euler; forward and
 //   symplectic Euler cost the same per step. Implicit springs (backward Euler, 2 Newton
 //   iterations) are measured too;
 // - Verlet: 5 sweeps a step, the setting of the thesis's 597 frames/s (the printed chain demo
@@ -32,7 +32,7 @@ namespace limber {
 namespace {
 
 Model chain(long links) {
-  Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links});
+  Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links, .copies = {}});
   model.settings.sleep.enabled = false;
   return model;
 }
@@ -64,7 +64,7 @@ void time_steps(benchmark::State& run, const std::function<State()>& compile_sta
 // Figure 4.7: stiff springs, integrated as the thesis's program did (see the top of the file).
 void BM_SpringsExplicit(benchmark::State& run) {
   const Model model = chain(run.range(0));
-  time_steps<SpringState>(run, [&] { return compile_springs(model, {.integrator = SpringIntegrator::semi_implicit_euler}); });
+  time_steps<SpringState>(run, [&] { return compile_springs(model, {.integrator = Integrator::semi_implicit_euler}); });
 }
 
 // The same springs under linearized backward Euler plus one Newton iteration (thesis 3.3,
@@ -72,7 +72,7 @@ void BM_SpringsExplicit(benchmark::State& run) {
 void BM_SpringsImplicit(benchmark::State& run) {
   const Model model = chain(run.range(0));
   time_steps<SpringState>(run, [&] {
-    return compile_springs(model, {.integrator = SpringIntegrator::backward_euler, .newton_iterations = 2});
+    return compile_springs(model, {.integrator = Integrator::backward_euler, .newton_iterations = 2});
   });
 }
 

@@ -18,7 +18,7 @@ namespace limber {
 namespace {
 
 Model chain(long links, int iterations) {
-  Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links});
+  Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links, .copies = {}});
   model.settings.relaxation.iterations = iterations;
   model.settings.sleep.enabled = false;
   return model;

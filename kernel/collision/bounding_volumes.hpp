@@ -14,7 +14,7 @@
 // Conventions: world frame, metres, double precision. Touching counts as overlapping (every test
 // uses ≤), so a resting contact is never dropped by a bound that is exactly tight. A Contact's
 // normal points from the second volume towards the first (move the first along +normal by depth
-// to separate them), matching SphereLimbContact in kernel/collision/geometry.hpp.
+// to separate them), matching SphereLimbContact in kernel/geometry/geometry.hpp.
 // Volumes are assumed valid: finite numbers, radii and extents ≥ 0, min ≤ max, rotation a rotation.
 #pragma once
 

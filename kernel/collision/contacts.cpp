@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -44,12 +44,6 @@ void change_velocity(VerletState<Scalar>& state, std::uint32_t p, const Eigen::V
     return;
   }
   particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
-}
-
-// The separation a contact may be left at this step: 0 if it began the step outside, else its
-// starting penetration reduced by at most the recovery distance.
-double allowed_separation(double start_separation, double recovery) {
-  return start_separation < 0 ? std::min(0.0, start_separation + recovery) : 0.0;
 }
 
 // Normal speed a contact must leave with: e·(approach speed), or 0 for slow (resting) approaches.

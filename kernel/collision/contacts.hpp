@@ -26,7 +26,7 @@
 // such a limb couples its two ends' contacts.
 #pragma once
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

@@ -6,7 +6,7 @@
 #include <cmath>
 
 #include "limber/kernel/collision/bounding_volumes.hpp"
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/collision/impulses.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 
@@ -33,15 +33,9 @@ void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_inde
   const int ends = length > 0 ? 2 : 1;
   for (int e = 0; e < ends; ++e) {
     const Eigen::Vector3d centre = e == 0 ? head : tail;
-    Eigen::Vector3d lowest = centre - radius * plane.normal;
-    if (disk && length > 0) {
-      // The rim point farthest into the plane: along −(n − (n·u)u); a disk lying flat touches
-      // with its whole rim, represented by its centre.
-      const Eigen::Vector3d u = axis / length;
-      const Eigen::Vector3d across = plane.normal - plane.normal.dot(u) * u;
-      const double across_length = across.norm();
-      lowest = across_length > 1e-9 ? Eigen::Vector3d(centre - radius * across / across_length) : centre;
-    }
+    const bool end_disk = disk && length > 0;
+    const Eigen::Vector3d u = end_disk ? Eigen::Vector3d(axis / length) : Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d lowest = centre + end_support(plane.normal, u, radius, end_disk).offset;
     const double depth = plane.offset - plane.normal.dot(lowest);
     if (depth <= 0) continue;
     const double restitution = state.shapes.is_ball[b] ? std::max(plane.restitution, state.ball_restitution) : plane.restitution;
@@ -95,7 +89,7 @@ void detect_rigid_contacts(RigidScene& state) {
       const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
       if (contact.separation >= 0) continue;
       const auto island = state.island_of_body[b];
-      if (state.islands[island].sleeping) state.islands[island].sleeping = false, state.islands[island].still_time = 0;
+      state.islands[island].wake();
       state.ball_touching = true;
       const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
       state.contacts.push_back({state.ball, static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
@@ -132,7 +126,9 @@ void resolve_rigid_contacts(RigidScene& state, double dt) {
   // Push out what still overlaps, through the effective mass along the normal.
   RigidBodyState& y = state.bodies.state;
   for (const RigidContact& contact : state.contacts) {
-    const double correction = std::min(contact.depth, (contact.approach_speed + state.settings.contact_recovery_speed) * dt);
+    // allowed_separation with the separation at the step's start, −depth + approach·Δt.
+    const double correction =
+        contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, state.settings.contact_recovery_speed * dt);
     if (correction <= 0) continue;
     const ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
     const double effective_inverse_mass = contact.normal.dot(collision_matrix(a, b, contact.point) * contact.normal);

@@ -2,11 +2,12 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/featherstone/compile.hpp"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "limber/kernel/featherstone/step.hpp"
-#include "limber/layouts/graph/disjoint_sets.hpp"
+#include "limber/kernel/numerics/tree_elimination.hpp"
 
 namespace limber {
 namespace {
@@ -22,21 +23,17 @@ ArticulatedJoint articulated_joint(JointType type) {
   return ArticulatedJoint::spherical;
 }
 
-// Refuses the first joint, in joint order, whose two sides are already connected (the world is
-// one node, so a second joint to the world in one island closes a loop through it).
+// Refuses a joint that closes a loop (order_tree's loop constraints: between bodies already
+// joined, or a second joint to the world in one island), naming the first in joint order.
 void refuse_kinematic_loops(const Model& model) {
-  const auto world = static_cast<std::uint32_t>(model.bodies.size());
-  DisjointSets connected(model.bodies.size() + 1);
-  for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    const Joint& joint = model.joints[j];
-    const std::uint32_t inboard = joint.inboard == kWorld ? world : static_cast<std::uint32_t>(joint.inboard);
-    const auto outboard = static_cast<std::uint32_t>(joint.outboard);
-    if (connected.find(inboard) == connected.find(outboard)) {
-      throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name +
-                       "': closes a kinematic loop, which reduced coordinates cannot express; use --method lagrange");
-    }
-    connected.unite(inboard, outboard);
-  }
+  std::vector<std::int32_t> inboard, outboard;
+  inboard.reserve(model.joints.size()), outboard.reserve(model.joints.size());
+  for (const Joint& joint : model.joints) inboard.push_back(joint.inboard), outboard.push_back(joint.outboard);
+  const std::vector<std::uint32_t> loops = order_tree(model.bodies.size(), inboard, outboard).loop_constraints;
+  if (loops.empty()) return;
+  const std::uint32_t j = *std::min_element(loops.begin(), loops.end());
+  throw ModelError("joints[" + std::to_string(j) + "] '" + model.joints[j].name +
+                   "': closes a kinematic loop, which reduced coordinates cannot express; use --method lagrange");
 }
 
 // A tree body before it is built: its rigid-scene body, its parent (tree index, −1: the world)
@@ -92,6 +89,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::fixed},
                       /*gears_supported=*/false, "featherstone");
   refuse_kinematic_loops(model);
+  require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");
   state.options = options;
   const std::size_t limb_count = model.bodies.size();
   const std::size_t body_count = state.bodies.size();

@@ -43,12 +43,7 @@ struct FeatherstoneOptions {
   /// (Ω ≈ 100 rad/s), diverges within a few dozen steps at Δt = 1/240 s (measured on every
   /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
   /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
-  FeatherstoneIntegrator integrator = FeatherstoneIntegrator::rk4;
-};
-
-struct FeatherstoneStepReport {
-  StepStatus status = StepStatus::ok;
-  int contacts = 0;
+  Integrator integrator = Integrator::rk4;
 };
 
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
@@ -103,7 +98,7 @@ struct FeatherstoneState : RigidScene {
   Eigen::VectorXd joint_forces;  ///< nv: Settings::drag as joint forces, held over a step
   Eigen::VectorXd saved_positions;  ///< nq: q of sleeping islands, restored after integrating
   std::vector<SpatialVector> drag_force;  ///< per tree body (scratch)
-  FeatherstoneStepReport last_report;
+  StepReport last_report;
 };
 
 /// Where island k's tree bodies' coordinates lie: [first, last) in v (velocities) or q (positions).

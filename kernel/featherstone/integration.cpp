@@ -99,17 +99,17 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               FeatherstoneIntegrator integrator, FeatherstoneIntegratorWorkspace& workspace) {
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace) {
   if (!workspace.fits(tree)) workspace.resize(tree);
   FeatherstoneIntegratorWorkspace& w = workspace;
   switch (integrator) {
-    case FeatherstoneIntegrator::semi_implicit_euler:
+    case Integrator::semi_implicit_euler:
       forward_dynamics(tree, q, v, joint_forces, gravity, w.dynamics, w.accelerations);
       v += h * w.accelerations;
       w.stage_displacement = h * v;
       displace_positions(tree, q, w.stage_displacement, q);
       return;
-    case FeatherstoneIntegrator::rk4: {
+    case Integrator::rk4: {
       // Stage s at (q₀ ⊕ Θ_s, v₀ + c_s h a_{s−1}); weights b = (1, 2, 2, 1)/6, nodes c = (0, ½, ½, 1).
       constexpr double kWeights[4] = {1.0 / 6, 2.0 / 6, 2.0 / 6, 1.0 / 6};
       constexpr double kNextNodes[3] = {0.5, 0.5, 1.0};
@@ -132,7 +132,11 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
       displace_positions(tree, w.start_positions, w.stage_displacement, q);
       return;
     }
+    case Integrator::euler:
+    case Integrator::rk2:
+    case Integrator::backward_euler: break;
   }
+  require_integrator(integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");  // throws
 }
 
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

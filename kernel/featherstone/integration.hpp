@@ -26,13 +26,9 @@
 
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/numerics/integrator.hpp"
 
 namespace limber {
-
-enum class FeatherstoneIntegrator : std::uint8_t {
-  semi_implicit_euler,  ///< v ← v + h v̇(q, v); q ← q ⊕ h v (with the new v). Order 1.
-  rk4,                  ///< classical Runge–Kutta, stages combined in the tangent space. Order 4.
-};
 
 /// Scratch for `integrate`, sized by resize(tree) or by the first call.
 struct FeatherstoneIntegratorWorkspace {
@@ -51,10 +47,12 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
                         const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out);
 
 /// Advances (q, v) by h seconds under constant joint forces τ (nv) and gravity g (world frame,
-/// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized.
+/// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized. Implements
+/// semi_implicit_euler (v ← v + h v̇(q, v); q ← q ⊕ h v with the new v; order 1) and rk4
+/// (stages combined in the tangent space; order 4); compile refuses the others.
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               FeatherstoneIntegrator integrator, FeatherstoneIntegratorWorkspace& workspace);
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace);
 
 /// T = Σ ½ v_iᵀ I_i v_i over the bodies, J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

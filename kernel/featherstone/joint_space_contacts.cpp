@@ -238,7 +238,9 @@ void push_out(FeatherstoneState& state, double dt) {
     bool pushed = false;
     for (std::size_t c = 0; c < state.contacts.size(); ++c) {
       const RigidContact& contact = state.contacts[c];
-      const double target = std::min(contact.depth, (contact.approach_speed + state.settings.contact_recovery_speed) * dt);
+      // allowed_separation with the separation at the step's start, −depth + approach·Δt.
+      const double target =
+          contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, state.settings.contact_recovery_speed * dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
       const double done = relative_motion(state, contact, s.body_displacement).dot(contact.normal);

@@ -7,7 +7,6 @@
 
 #include "limber/kernel/collision/rigid_contacts.hpp"
 #include "limber/kernel/featherstone/joint_space_contacts.hpp"
-#include "limber/kernel/numerics/flush_denormals.hpp"
 
 namespace limber {
 namespace {
@@ -104,29 +103,24 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
   }
 }
 
-FeatherstoneStepReport step(FeatherstoneState& state, double dt) {
-  FeatherstoneStepReport report;
-  if (!valid_time_step(dt)) {
-    report.status = StepStatus::invalid_time_step;
-    return state.last_report = report;
-  }
-  const FlushDenormals flush;
-  integrate_awake_islands(state, dt);
-  refresh_rigid_bodies(state);
-  detect_rigid_contacts(state);
-  resolve_joint_space_contacts(state, dt);
-  report.contacts = static_cast<int>(state.contacts.size());
-  state.time += dt;
-  report.status = update_sleep(state, dt);
-  if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
-  clear_applied_loads(state);
-  // Islands put to sleep had their rigid momenta zeroed; so are their joint velocities.
-  for (std::size_t k = 0; k < state.islands.size(); ++k) {
-    if (!state.islands[k].sleeping) continue;
-    const auto [first, last] = island_velocities(state, k);
-    state.v.segment(first, last - first).setZero();
-  }
-  return state.last_report = report;
+StepReport step(FeatherstoneState& state, double dt) {
+  return guarded_step(state, dt, [&](StepReport& report) {
+    integrate_awake_islands(state, dt);
+    refresh_rigid_bodies(state);
+    detect_rigid_contacts(state);
+    resolve_joint_space_contacts(state, dt);
+    report.contacts = static_cast<int>(state.contacts.size());
+    state.time += dt;
+    report.status = update_sleep(state, dt);
+    if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
+    clear_applied_loads(state);
+    // Islands put to sleep had their rigid momenta zeroed; so are their joint velocities.
+    for (std::size_t k = 0; k < state.islands.size(); ++k) {
+      if (!state.islands[k].sleeping) continue;
+      const auto [first, last] = island_velocities(state, k);
+      state.v.segment(first, last - first).setZero();
+    }
+  });
 }
 
 }  // namespace limber

@@ -24,10 +24,10 @@ namespace limber {
 ///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
 /// divergence is reported in the result (also state.last_report). Allocates nothing.
-FeatherstoneStepReport step(FeatherstoneState& state, double dt);
+StepReport step(FeatherstoneState& state, double dt);
 
 /// step() with the scene's own time step.
-inline FeatherstoneStepReport step(FeatherstoneState& state) { return step(state, state.settings.time_step); }
+inline StepReport step(FeatherstoneState& state) { return step(state, state.settings.time_step); }
 
 /// Recomputes the rigid bodies (positions, orientations, momenta) and state.kinematics (poses
 /// and spatial velocities of the tree bodies) from (q, v) by forward kinematics.

@@ -7,6 +7,7 @@ namespace limber {
 LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& options) {
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
+  require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");
   state.options = options;
   state.time_step = model.settings.time_step;
   state.joints = joint_anchors(state, model);

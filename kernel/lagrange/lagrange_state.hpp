@@ -36,21 +36,13 @@ enum class MultiplierSolver : std::uint8_t {
 };
 
 struct LagrangeOptions {
-  RigidIntegrator integrator = RigidIntegrator::semi_implicit_euler;
+  Integrator integrator = Integrator::semi_implicit_euler;
   Stabilization stabilization = Stabilization::baumgarte;
   MultiplierSolver solver = MultiplierSolver::automatic;
   /// ω_b of Baumgarte stabilization, 1/s; 0: 1/(4Δt), critically damped and four steps to
   /// correct an error.
   double baumgarte_frequency = 0;
   int projection_iterations = 2;  ///< Newton iterations of the position projection
-};
-
-
-struct LagrangeStepReport {
-  StepStatus status = StepStatus::ok;
-  int contacts = 0;
-  double constraint_error = 0;  ///< largest |C| of a joint's point and slide rows after the step, m
-  double angular_error = 0;     ///< largest |u·v| of a joint's angular rows after the step (≈ rad)
 };
 
 struct LagrangeState : RigidScene {
@@ -74,7 +66,7 @@ struct LagrangeState : RigidScene {
   /// the constraints' levers and Jacobian blocks and each body's world inertia tensor.
   ConstraintGeometry geometry;
   std::vector<Eigen::Matrix3d> world_inertia;
-  LagrangeStepReport last_report;
+  StepReport last_report;
 };
 
 }  // namespace limber

@@ -7,7 +7,6 @@
 
 #include "limber/kernel/collision/rigid_contacts.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
-#include "limber/kernel/numerics/flush_denormals.hpp"
 
 namespace limber {
 namespace {
@@ -86,17 +85,10 @@ void velocity_level_step(LagrangeState& state, double dt) {
   for (auto& lambda : state.multipliers) lambda /= dt;  // the solve gave impulses h·λ
 }
 
-}  // namespace
-
-LagrangeStepReport step(LagrangeState& state, double dt) {
-  LagrangeStepReport report;
-  if (!valid_time_step(dt)) {
-    report.status = StepStatus::invalid_time_step;
-    return state.last_report = report;
-  }
-  const FlushDenormals flush;
+// One step after the guard: integrate, contacts, projections, errors, sleep.
+void advance(LagrangeState& state, double dt, StepReport& report) {
   state.time_step = dt;
-  if (state.options.integrator == RigidIntegrator::semi_implicit_euler) {
+  if (state.options.integrator == Integrator::semi_implicit_euler) {
     velocity_level_step(state, dt);
   } else {
     integrate_rigid_bodies(state.bodies, dt, state.options.integrator, state.scratch,
@@ -121,7 +113,12 @@ LagrangeStepReport step(LagrangeState& state, double dt) {
   state.time += dt;
   report.status = update_sleep(state, dt);
   clear_applied_loads(state);
-  return state.last_report = report;
+}
+
+}  // namespace
+
+StepReport step(LagrangeState& state, double dt) {
+  return guarded_step(state, dt, [&](StepReport& report) { advance(state, dt, report); });
 }
 
 }  // namespace limber

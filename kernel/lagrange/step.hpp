@@ -18,9 +18,9 @@ namespace limber {
 ///  4. sleep      still islands fall asleep; divergence is detected.
 /// Never throws; a bad Δt or a divergence is reported in the result (also state.last_report).
 /// The tree solver allocates nothing; the sparse one (graphs with loops) allocates per solve.
-LagrangeStepReport step(LagrangeState& state, double dt);
+StepReport step(LagrangeState& state, double dt);
 
 /// step() with the scene's own time step.
-inline LagrangeStepReport step(LagrangeState& state) { return step(state, state.settings.time_step); }
+inline StepReport step(LagrangeState& state) { return step(state, state.settings.time_step); }
 
 }  // namespace limber

@@ -7,7 +7,7 @@
 #include "limber/kernel/featherstone/featherstone_state.hpp"
 #include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

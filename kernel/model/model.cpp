@@ -12,6 +12,7 @@
 #include <string>
 
 #include "limber/kernel/model/checks.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 
@@ -61,6 +62,23 @@ int Model::find_body(std::string_view body_name) const {
 double Model::body_mass() const {
   return std::accumulate(bodies.begin(), bodies.end(), 0.0,
                          [](double sum, const Body& body) { return sum + body.mass; });
+}
+
+BodyIslands body_islands(const Model& model) {
+  const auto body_count = static_cast<std::uint32_t>(model.bodies.size());
+  DisjointSets connected(body_count);
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard != kWorld) connected.unite(static_cast<std::uint32_t>(joint.inboard), static_cast<std::uint32_t>(joint.outboard));
+  }
+  for (const Gear& gear : model.gears) connected.unite(static_cast<std::uint32_t>(gear.first), static_cast<std::uint32_t>(gear.second));
+  // The representative is the lowest body of its set, so it is met before the rest of its set.
+  BodyIslands islands;
+  islands.island_of_body.resize(body_count);
+  for (std::uint32_t b = 0; b < body_count; ++b) {
+    const std::uint32_t root = connected.find(b);
+    islands.island_of_body[b] = root == b ? static_cast<std::uint32_t>(islands.count++) : islands.island_of_body[root];
+  }
+  return islands;
 }
 
 namespace {

@@ -306,6 +306,16 @@ struct Model {
   double body_mass() const;
 };
 
+/// The Model's islands: bodies joined by joints between bodies and by gears (a joint to the world
+/// joins nothing), which every method simulates, puts to sleep and wakes together (thesis
+/// 4.5.3). Islands are numbered in order of their lowest body, so bodies listed in order visit
+/// the islands in order.
+struct BodyIslands {
+  std::vector<std::uint32_t> island_of_body;  ///< per body
+  std::size_t count = 0;
+};
+BodyIslands body_islands(const Model& model);
+
 /// Checks every field for range and consistency (finite numbers, positive masses and lengths,
 /// unit axes, joints naming existing and distinct bodies, unique names, ...).
 /// Throws ModelError naming the first bad field.

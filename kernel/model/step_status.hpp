@@ -1,8 +1,12 @@
-// How a step ended: the same for every method.
+// How a step ended and what it did, the same for every method, and the guard every method's
+// step() runs inside.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
+#include <utility>
+
+#include "limber/kernel/numerics/flush_denormals.hpp"
 
 namespace limber {
 
@@ -14,8 +18,56 @@ enum class StepStatus : std::uint8_t {
   invalid_time_step,    ///< Δt was not a positive finite number; nothing was done
 };
 
-/// Whether step() can take a step of dt seconds: a positive finite number. Every method's step()
-/// reports invalid_time_step and does nothing otherwise.
+/// Whether step() can take a step of dt seconds: a positive finite number.
 inline bool valid_time_step(double dt) { return dt > 0 && std::isfinite(dt); }
+
+/// Why the particle method's relaxation stopped in a step (thesis 3.2.3 lists the three).
+enum class RelaxationStop : std::uint8_t {
+  iterations,  ///< ran the configured number of sweeps
+  tolerance,   ///< the largest correction of a sweep fell below the tolerance
+  budget,      ///< the wall-clock budget ran out (hard real-time stop)
+  idle,        ///< nothing awake to relax
+};
+
+/// What one step did, under any method: the status, and what the method's solvers say (a field
+/// another method fills stays 0). A particle step of `substeps` substeps sums their sweeps and
+/// fallbacks; `stop` and `largest_correction` are the last substep's.
+struct StepReport {
+  StepStatus status = StepStatus::ok;
+  int contacts = 0;  ///< rigid methods: contacts found this step
+
+  // Particles: the relaxation.
+  RelaxationStop stop = RelaxationStop::idle;
+  int iterations = 0;             ///< sweeps run (position sweeps; rattle runs as many velocity sweeps)
+  double largest_correction = 0;  ///< largest particle displacement in the last sweep, m
+  int substeps = 0;               ///< substeps run (settings.relaxation.substeps, or fewer on a divergence)
+  /// Rattle: constraint projections that fell back to pbd because their start gradient had
+  /// turned too far from the current one (kStartGradientMinimumCosine), once per constraint and
+  /// substep.
+  std::uint64_t fallbacks = 0;
+
+  // Springs, backward Euler with conjugate gradients: the linear solve.
+  int linear_solver_iterations = 0;
+  double linear_solver_error = 0;  ///< its relative residual
+
+  // Lagrange: how well the joints hold after the step.
+  double constraint_error = 0;  ///< largest |C| of a joint's point and slide rows, m
+  double angular_error = 0;     ///< largest |u·v| of a joint's angular rows (≈ rad)
+};
+
+/// The step guard of every method's step(): a bad dt is refused (invalid_time_step, nothing
+/// done); otherwise `advance(report)` runs with denormals flushed to zero. The report is kept as
+/// state.last_report and returned.
+template <typename State, typename Advance>
+StepReport guarded_step(State& state, double dt, Advance&& advance) {
+  StepReport report;
+  if (!valid_time_step(dt)) {
+    report.status = StepStatus::invalid_time_step;
+  } else {
+    const FlushDenormals flush;
+    std::forward<Advance>(advance)(report);
+  }
+  return state.last_report = report;
+}
 
 }  // namespace limber

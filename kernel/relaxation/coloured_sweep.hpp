@@ -11,7 +11,7 @@
 #include <type_traits>
 
 #include "limber/kernel/relaxation/batch_projection.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber::coloured {
 

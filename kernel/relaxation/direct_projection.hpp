@@ -20,7 +20,7 @@
 // to step like gravity, so the first linearization starts near the solution.
 #pragma once
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

@@ -17,7 +17,7 @@
 
 #include "limber/kernel/relaxation/batch_projection.hpp"
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

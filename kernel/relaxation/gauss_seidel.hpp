@@ -6,7 +6,7 @@
 // so on a chain hanging from a pin a sweep runs from the pin down.
 #pragma once
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

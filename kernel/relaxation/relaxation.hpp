@@ -20,7 +20,7 @@
 // factor (RelaxationSettings::over_relaxation).
 #pragma once
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

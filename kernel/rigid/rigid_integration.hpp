@@ -12,18 +12,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/kernel/numerics/integrator.hpp"
 #include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
-
-/// Explicit integrators for rigid bodies. Orders are for the state; every one renormalizes q.
-enum class RigidIntegrator : std::uint8_t {
-  euler,                ///< forward Euler, Y' = Y + h·Ẏ(Y): the thesis's (order 1); q advanced additively
-  semi_implicit_euler,  ///< symplectic Euler: P, L first, then x with the new v and q by the free
-                        ///< rotation with the new L (rotate_free_body; order 1 with forces, 2 without)
-  rk2,                  ///< midpoint Runge-Kutta (order 2)
-  rk4,                  ///< classical Runge-Kutta (order 4)
-};
 
 /// Per-body force F (N) and torque τ about the centre of mass (N·m), world frame.
 struct RigidForces {
@@ -124,17 +116,23 @@ inline void advance(const RigidBodyState& y, double h, std::initializer_list<std
 /// Advances `bodies.state` by h seconds with `integrator`. `accumulate(const RigidBodyState& y,
 /// RigidForces& forces)` must *add* every force and torque acting at state y (the forces
 /// arrive zeroed); it is called 1, 1, 2 or 4 times. `scratch` must be resized to the body
-/// count. semi_implicit_euler needs diagonal body inertias (principal axes). Allocates nothing.
+/// count. Allocates nothing. Orders are for the state; every integrator renormalizes q:
+/// - euler: Y' = Y + h·Ẏ(Y), the thesis's (order 1); q advanced additively;
+/// - semi_implicit_euler: P, L first, then x with the new v and q by the free rotation with the
+///   new L (rotate_free_body; order 1 with forces, 2 without); needs diagonal body inertias;
+/// - rk2 (midpoint, order 2) and rk4 (classical, order 4).
+/// backward_euler is the spring method's own (kernel/springs/implicit_step.hpp): compile refuses
+/// it elsewhere, and here it does nothing.
 template <typename AccumulateForces>
-void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, RigidIntegrator integrator, RigidIntegratorScratch& scratch,
+void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, Integrator integrator, RigidIntegratorScratch& scratch,
                             AccumulateForces&& accumulate) {
   RigidBodyState& y = bodies.state;
   switch (integrator) {
-    case RigidIntegrator::euler:
+    case Integrator::euler:
       detail::derivative(bodies, y, accumulate, scratch, 0);
       detail::advance(y, h, {{0, 1.0}}, scratch, y);
       return;
-    case RigidIntegrator::semi_implicit_euler:
+    case Integrator::semi_implicit_euler:
       scratch.forces.clear();
       accumulate(y, scratch.forces);
       for (std::size_t b = 0; b < y.size(); ++b) {
@@ -144,13 +142,13 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, RigidIntegrator i
         rotate_free_body(y.orientation[b], y.angular_momentum[b], bodies.body_inertia[b].diagonal(), h);
       }
       return;
-    case RigidIntegrator::rk2:
+    case Integrator::rk2:
       detail::derivative(bodies, y, accumulate, scratch, 0);
       detail::advance(y, h, {{0, 0.5}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
       detail::advance(y, h, {{1, 1.0}}, scratch, y);
       return;
-    case RigidIntegrator::rk4:
+    case Integrator::rk4:
       detail::derivative(bodies, y, accumulate, scratch, 0);
       detail::advance(y, h, {{0, 0.5}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
@@ -160,6 +158,7 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, RigidIntegrator i
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 3);
       detail::advance(y, h, {{0, 1.0 / 6}, {1, 2.0 / 6}, {2, 2.0 / 6}, {3, 1.0 / 6}}, scratch, y);
       return;
+    case Integrator::backward_euler: return;
   }
 }
 

@@ -4,9 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "limber/kernel/mass/mass_properties.hpp"
-#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {
@@ -69,25 +69,12 @@ RigidScene compile_rigid_scene(const Model& model) {
     shapes.is_ball[b] = true;
   }
 
-  // Islands in order of their lowest body; the ball is its own.
-  DisjointSets connected(static_cast<std::uint32_t>(body_count));
-  for (const Joint& joint : model.joints) {
-    if (joint.inboard != kWorld) connected.unite(static_cast<std::uint32_t>(joint.inboard), static_cast<std::uint32_t>(joint.outboard));
-  }
-  for (const Gear& gear : model.gears) {  // meshed gears move, sleep and wake together
-    connected.unite(static_cast<std::uint32_t>(gear.first), static_cast<std::uint32_t>(gear.second));
-  }
-  scene.island_of_body.assign(body_count, 0);
-  std::vector<std::int64_t> island_of_root(body_count, -1);
-  for (std::uint32_t b = 0; b < body_count; ++b) {
-    const std::uint32_t root = connected.find(b);
-    if (island_of_root[root] < 0) {
-      island_of_root[root] = static_cast<std::int64_t>(scene.islands.size());
-      scene.islands.emplace_back();
-    }
-    scene.island_of_body[b] = static_cast<std::uint32_t>(island_of_root[root]);
-    scene.islands[island_of_root[root]].bodies.push_back(b);
-  }
+  // The Model's islands (body_islands), and the ball as its own, last.
+  const BodyIslands islands = body_islands(model);
+  scene.island_of_body = islands.island_of_body;
+  scene.islands.resize(islands.count);
+  if (model.ball) scene.island_of_body.push_back(static_cast<std::uint32_t>(scene.islands.size())), scene.islands.emplace_back();
+  for (std::uint32_t b = 0; b < body_count; ++b) scene.islands[scene.island_of_body[b]].bodies.push_back(b);
   for (RigidIsland& island : scene.islands) {
     bool at_rest = true;
     for (std::uint32_t b : island.bodies) {
@@ -182,28 +169,19 @@ StepStatus update_sleep(RigidScene& scene, double dt) {
   body_velocities(scene, scene.bodies.state);
   for (RigidIsland& island : scene.islands) {
     if (island.sleeping) continue;
-    double fastest = 0;
-    bool finite = true;
+    double fastest = 0;  // NaN once a body's speed or position is not finite
     for (std::uint32_t b : island.bodies) {
       // The fastest surface point: spin about the limb's axis moves it at most ω·r, the rest at
       // most |ω⊥|·(L/2 + r).
       const Eigen::Vector3d axis = scene.bodies.state.orientation[b] * (scene.shapes.principal_frame[b].conjugate() * Eigen::Vector3d::UnitZ());
       const Eigen::Vector3d& omega = scene.angular_velocity[b];
       const double axial = omega.dot(axis);
-      const double speed = scene.velocity[b].norm() + std::abs(axial) * scene.shapes.radius[b] +
-                           (omega - axial * axis).norm() * (0.5 * scene.shapes.length[b] + scene.shapes.radius[b]);
-      finite = finite && std::isfinite(speed) && scene.bodies.state.position[b].allFinite();
-      fastest = std::max(fastest, speed);
+      double speed = scene.velocity[b].norm() + std::abs(axial) * scene.shapes.radius[b] +
+                     (omega - axial * axis).norm() * (0.5 * scene.shapes.length[b] + scene.shapes.radius[b]);
+      if (!scene.bodies.state.position[b].allFinite()) speed = std::numeric_limits<double>::quiet_NaN();
+      fastest = speed > fastest || std::isnan(speed) ? speed : fastest;
     }
-    if (!finite) {
-      status = StepStatus::diverged_non_finite;
-      continue;
-    }
-    if (fastest > settings.divergence_speed && status == StepStatus::ok) status = StepStatus::diverged_speed;
-    if (!settings.sleep.enabled) continue;
-    island.still_time = fastest < settings.sleep.speed_threshold ? island.still_time + dt : 0.0;
-    if (island.still_time >= settings.sleep.time_to_sleep && island.still_time > 0) {
-      island.sleeping = true;
+    if (island.settle(fastest, dt, settings, status)) {
       for (std::uint32_t b : island.bodies) {
         scene.bodies.state.linear_momentum[b].setZero();
         scene.bodies.state.angular_momentum[b].setZero();

@@ -10,7 +10,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/model/island_sleep.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
@@ -30,10 +31,8 @@ struct RigidShapes {
 };
 
 /// Bodies joined by joints, simulated, put to sleep and woken together (thesis 4.5.3).
-struct RigidIsland {
+struct RigidIsland : IslandSleep {
   std::vector<std::uint32_t> bodies;
-  bool sleeping = false;
-  double still_time = 0;  ///< s below the sleep threshold
 };
 
 /// A contact found this step: body `a` touches body `b` (−1: a plane, immovable), normal from b

@@ -3,14 +3,15 @@
 // An island is a connected set of particles stored contiguously (compile.cpp), so every pass
 // walks state.awake_islands — a few index ranges — and a sleeping island is simply absent. An
 // island falls asleep once all its particles have stayed below Settings::sleep.speed_threshold
-// for sleep.time_to_sleep; its velocity is then zeroed (x_previous = x, and v = 0 under the
-// rattle rule), so it wakes at rest.
+// for sleep.time_to_sleep (IslandSleep, kernel/model/island_sleep.hpp: the rule every method
+// shares); its velocity is then zeroed (x_previous = x, and v = 0 under the rattle rule), so it
+// wakes at rest.
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 
@@ -27,10 +28,7 @@ void rebuild_awake_islands(VerletState<Scalar>& state) {
 /// Wakes island `k` (no-op when awake). Returns true when it was asleep.
 template <typename Scalar>
 bool wake_island(VerletState<Scalar>& state, std::uint32_t k) {
-  Island& island = state.islands[k];
-  if (!island.sleeping) return false;
-  island.sleeping = false;
-  island.still_time = 0;
+  if (!state.islands[k].wake()) return false;
   rebuild_awake_islands(state);
   return true;
 }
@@ -41,8 +39,6 @@ bool wake_island(VerletState<Scalar>& state, std::uint32_t k) {
 template <typename Scalar>
 StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
   const auto& x = state.particles;
-  const double divergence_speed2 = state.settings.divergence_speed * state.settings.divergence_speed;
-  const double threshold2 = state.settings.sleep.speed_threshold * state.settings.sleep.speed_threshold;
   StepStatus status = StepStatus::ok;
   bool changed = false;
   const bool rattle = uses_rattle(state);
@@ -58,16 +54,7 @@ StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
       const double step2 = dx * dx + dy * dy + dz * dz;
       largest_step2 = step2 > largest_step2 || std::isnan(step2) ? step2 : largest_step2;
     }
-    const double speed2 = largest_step2 / (dt * dt);
-    if (!std::isfinite(speed2)) {
-      status = StepStatus::diverged_non_finite;
-    } else if (speed2 > divergence_speed2 && status == StepStatus::ok) {
-      status = StepStatus::diverged_speed;
-    }
-    if (!state.settings.sleep.enabled) continue;
-    island.still_time = speed2 < threshold2 ? island.still_time + dt : 0.0;
-    if (island.still_time >= state.settings.sleep.time_to_sleep && island.still_time > 0) {
-      island.sleeping = true;
+    if (island.settle(std::sqrt(largest_step2) / dt, dt, state.settings, status)) {
       changed = true;
       for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
         state.particles.set_previous(p, state.particles.position(p));

@@ -31,7 +31,7 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   const std::size_t body_count = state.bodies.size();
   state.scratch.resize(body_count);
   state.scratch_world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
-  if (options.integrator == SpringIntegrator::backward_euler) prepare_implicit_system(state);
+  if (options.integrator == Integrator::backward_euler) prepare_implicit_system(state);
   return state;
 }
 

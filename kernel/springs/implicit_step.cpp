@@ -69,7 +69,7 @@ void prepare_implicit_system(SpringState& state) {
   system.conjugate_gradient.setTolerance(state.options.solver_tolerance);
 }
 
-void implicit_step(SpringState& state, double h, SpringStepReport& report) {
+void implicit_step(SpringState& state, double h, StepReport& report) {
   ImplicitSystem& system = *state.implicit;
   RigidBodyBuffer& bodies = state.bodies;
   RigidBodyState& y = bodies.state;

@@ -26,6 +26,6 @@ void prepare_implicit_system(SpringState& state);
 
 /// One implicit step of h seconds over the awake bodies (sleeping islands' rows get Δu = 0).
 /// Fills the report's linear-solver fields.
-void implicit_step(SpringState& state, double h, SpringStepReport& report);
+void implicit_step(SpringState& state, double h, StepReport& report);
 
 }  // namespace limber

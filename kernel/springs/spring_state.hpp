@@ -17,21 +17,12 @@
 
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/numerics/integrator.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 #include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
-
-/// How the spring method advances a step.
-enum class SpringIntegrator : std::uint8_t {
-  euler,                ///< explicit forward Euler (the thesis's): stable only for small h·k (eq. 3.15)
-  semi_implicit_euler,  ///< explicit symplectic Euler: stable for h·ω < 2, ω² = k/m_effective
-  rk2,                  ///< explicit midpoint Runge-Kutta
-  rk4,                  ///< explicit classical Runge-Kutta
-  backward_euler,       ///< implicit: one linearized backward-Euler solve over the whole system
-                        ///< (eq. 3.16–3.22; Baraff & Witkin 1998), stable for every h·k
-};
 
 /// The sparse solver of the implicit step.
 enum class SpringLinearSolver : std::uint8_t {
@@ -41,7 +32,10 @@ enum class SpringLinearSolver : std::uint8_t {
 
 /// Choices the spring method takes besides the Model.
 struct SpringOptions {
-  SpringIntegrator integrator = SpringIntegrator::semi_implicit_euler;
+  /// Any of the five: euler is stable only for small h·k (eq. 3.15), semi_implicit_euler for
+  /// h·ω < 2 (ω² = k/m_effective); backward_euler is one linearized solve over the whole system
+  /// (eq. 3.16–3.22; Baraff & Witkin 1998), stable for every h·k.
+  Integrator integrator = Integrator::semi_implicit_euler;
   SpringLinearSolver linear_solver = SpringLinearSolver::ldlt;
   std::optional<double> stiffness{};  ///< N/m: overrides every joint's and the scene's
   std::optional<double> damping{};    ///< N·s/m: likewise
@@ -55,13 +49,6 @@ struct SpringOptions {
 struct SpringBuffer : JointAnchors {
   std::vector<double> stiffness;  ///< k, N/m
   std::vector<double> damping;    ///< c, N·s/m
-};
-
-struct SpringStepReport {
-  StepStatus status = StepStatus::ok;
-  int contacts = 0;                 ///< found this step
-  int linear_solver_iterations = 0; ///< conjugate gradient only
-  double linear_solver_error = 0;   ///< its relative residual
 };
 
 /// The implicit step's system A Δu = b in block form: one 6×6 block per body (translation,
@@ -85,7 +72,7 @@ struct SpringState : RigidScene {
   RigidIntegratorScratch scratch;
   std::unique_ptr<ImplicitSystem> implicit;  ///< the backward-Euler integrator only (Eigen's solvers do not move)
   std::vector<Eigen::Matrix3d> scratch_world_inertia;  ///< scratch for the implicit step
-  SpringStepReport last_report;
+  StepReport last_report;
 };
 
 }  // namespace limber

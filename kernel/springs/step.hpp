@@ -14,9 +14,9 @@ namespace limber {
 /// Never throws; a bad Δt or a divergence is reported in the result (also state.last_report).
 /// The explicit integrators allocate nothing; the implicit step allocates inside Eigen's sparse
 /// factorization (a few temporaries per step).
-SpringStepReport step(SpringState& state, double dt);
+StepReport step(SpringState& state, double dt);
 
 /// step() with the scene's own time step.
-inline SpringStepReport step(SpringState& state) { return step(state, state.settings.time_step); }
+inline StepReport step(SpringState& state) { return step(state, state.settings.time_step); }
 
 }  // namespace limber

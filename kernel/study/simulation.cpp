@@ -4,14 +4,10 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/step.hpp"
-#include "limber/kernel/lagrange/compile.hpp"
 #include "limber/kernel/lagrange/step.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
-#include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
 
 namespace limber::study {
@@ -19,7 +15,7 @@ namespace limber::study {
 Model configure(const Model& scene, const Method& method) {
   Model model = scene;
   model.settings.time_step = method.time_step;
-  if (method.family == Family::verlet) {
+  if (method.family == Family::particles) {
     model.settings.relaxation.iterations = method.sweeps;
     model.settings.relaxation.over_relaxation = method.over_relaxation;
     model.settings.relaxation.tolerance = method.relaxation_tolerance;
@@ -33,21 +29,16 @@ Model configure(const Model& scene, const Method& method) {
 
 namespace {
 
-std::variant<VerletState<double>, SpringState, LagrangeState, FeatherstoneState> compile_state(const Model& model,
-                                                                                             const Method& method) {
-  switch (method.family) {
-    case Family::verlet: return compile<double>(model, method.verlet);
-    case Family::springs: return compile_springs(model, method.springs);
-    case Family::lagrange: return compile_lagrange(model, method.lagrange);
-    case Family::featherstone: break;
-  }
-  return compile_featherstone(model, method.featherstone);
+// The study's method as the one dispatch's options (kernel/methods/), double precision.
+WorldOptions method_options(const Method& method) {
+  return {.method = method.family, .single_precision = false, .particles = method.verlet, .springs = method.springs,
+          .lagrange = method.lagrange, .featherstone = method.featherstone};
 }
 
 }  // namespace
 
 Simulation::Simulation(const Model& scene, const Method& method)
-    : model_(configure(scene, method)), time_step_(method.time_step), state_(compile_state(model_, method)) {}
+    : model_(configure(scene, method)), time_step_(method.time_step), state_(compile_method(model_, method_options(method))) {}
 
 StepStatus Simulation::step() {
   return std::visit(

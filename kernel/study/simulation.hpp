@@ -14,23 +14,21 @@
 
 #include <Eigen/Core>
 
-#include "limber/kernel/featherstone/featherstone_state.hpp"
-#include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
-#include "limber/kernel/springs/spring_state.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
 
 namespace limber::study {
 
-enum class Family : std::uint8_t { verlet, springs, lagrange, featherstone };
+/// The method family (kernel/methods/): particles, springs, lagrange or featherstone.
+using Family = limber::Method;
 
 /// A method and its settings. Only the fields of `family` are read.
 struct Method {
   std::string series{};   ///< the method as plots name it, e.g. "verlet gauss-seidel"
   std::string setting{};  ///< this point of the series, e.g. "20 sweeps"
-  Family family = Family::verlet;
+  Family family = Family::particles;
   double time_step = 1.0 / 240;  ///< s
 
   // Verlet (thesis 3.2, 4.2): the rule and solver, sweeps (settings.relaxation.iterations) or
@@ -80,7 +78,7 @@ class Simulation {
   Model model_;
   double time_step_ = 0;
   std::uint64_t fallbacks_ = 0;
-  std::variant<VerletState<double>, SpringState, LagrangeState, FeatherstoneState> state_;
+  MethodState state_;
 };
 
 }  // namespace limber::study

@@ -53,16 +53,16 @@ std::vector<double> spring_mode_frequencies(const Model& model, double stiffness
 
 // The largest stable step (s) of `integrator` on the chain whose spring modes are `frequencies`,
 // springs k (N/m) and c (N·s/m), by the bounds above. Infinity for the implicit step.
-double predicted_largest_stable_step(SpringIntegrator integrator, const std::vector<double>& frequencies, double stiffness,
+double predicted_largest_stable_step(Integrator integrator, const std::vector<double>& frequencies, double stiffness,
                                      double damping) {
   const double ratio = damping / stiffness;  // c/k, s
   double largest = std::numeric_limits<double>::infinity();
   for (const double omega : frequencies) {
     const double gamma = ratio * omega * omega;  // the mode's damping rate, 1/s
     double bound = largest;
-    if (integrator == SpringIntegrator::semi_implicit_euler) {
+    if (integrator == Integrator::semi_implicit_euler) {
       bound = std::sqrt(ratio * ratio + 4 / (omega * omega)) - ratio;
-    } else if (integrator == SpringIntegrator::euler) {
+    } else if (integrator == Integrator::euler) {
       bound = gamma < 2 * omega ? ratio : 4 / (gamma + std::sqrt(gamma * gamma - 4 * omega * omega));
     }
     largest = std::min(largest, bound);

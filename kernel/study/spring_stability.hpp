@@ -36,8 +36,8 @@ std::vector<double> spring_mode_frequencies(const Model& model, double stiffness
 
 /// The largest stable step (s) of `integrator` on a model whose spring modes are `frequencies`
 /// (rad/s), with springs k (N/m) and c (N·s/m), by the bounds above. Infinity for the implicit
-/// step (SpringIntegrator::backward_euler) and the Runge-Kutta ones, which this does not bound.
-double predicted_largest_stable_step(SpringIntegrator integrator, const std::vector<double>& frequencies, double stiffness,
+/// step (Integrator::backward_euler) and the Runge-Kutta ones, which this does not bound.
+double predicted_largest_stable_step(Integrator integrator, const std::vector<double>& frequencies, double stiffness,
                                      double damping);
 
 }  // namespace limber::study

@@ -261,9 +261,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     for (std::size_t k = 0; k < joint_count; ++k) merged.unite(joint_inboard_slot[k], joint_outboard_slot[k]);
   }
 
-  // Islands: bodies connected through joints (the world does not connect them). Per body: its
-  // (joint, other body) neighbours and its joints to the world.
-  DisjointSets connected(body_count);
+  // Islands: the Model's (body_islands). Per body: its (joint, other body) neighbours and its
+  // joints to the world.
+  const BodyIslands islands = body_islands(model);
   using Neighbour = std::pair<std::uint32_t, std::uint32_t>;
   std::vector<std::pair<std::uint32_t, Neighbour>> neighbour_pairs;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> world_joint_pairs;
@@ -276,19 +276,19 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       continue;
     }
     const auto inboard = static_cast<std::uint32_t>(joint.inboard);
-    connected.unite(inboard, outboard);
     neighbour_pairs.push_back({inboard, {j, outboard}});
     neighbour_pairs.push_back({outboard, {j, inboard}});
   }
   const CompressedRows<Neighbour> neighbours = group_by_row(body_count, neighbour_pairs);
   const CompressedRows<std::uint32_t> world_joints = group_by_row(body_count, world_joint_pairs);
 
-  // Each island starts from its first body held by the world, else its first body. The union-find
-  // representative of an island is its lowest body index.
-  std::vector<std::uint32_t> island_root(body_count);
-  for (std::uint32_t b = 0; b < body_count; ++b) island_root[b] = b;  // read only at representatives
-  for (std::size_t b = body_count; b-- > 0;) {  // descending, so the lowest held body wins
-    if (!world_joints.row(b).empty()) island_root[connected.find(static_cast<std::uint32_t>(b))] = static_cast<std::uint32_t>(b);
+  // Each island starts from its first body held by the world, else its first body.
+  std::vector<std::uint32_t> island_root(islands.count);
+  for (std::size_t b = body_count; b-- > 0;) {  // descending, so the lowest (held) body wins
+    island_root[islands.island_of_body[b]] = static_cast<std::uint32_t>(b);
+  }
+  for (std::size_t b = body_count; b-- > 0;) {
+    if (!world_joints.row(b).empty()) island_root[islands.island_of_body[b]] = static_cast<std::uint32_t>(b);
   }
 
   // Breadth-first order of each island's bodies from its root, and the tree joint reaching each.
@@ -298,10 +298,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   body_order.reserve(body_count);
   std::vector<std::int64_t> tree_joint(body_count, -1);
   std::vector<bool> visited(body_count, false);
-  for (std::size_t b = 0; b < body_count; ++b) {
-    if (connected.find(static_cast<std::uint32_t>(b)) != b) continue;  // one search per island
+  for (std::size_t island = 0; island < islands.count; ++island) {
     island_begin.push_back(static_cast<std::uint32_t>(body_order.size()));
-    const std::uint32_t root = island_root[b];
+    const std::uint32_t root = island_root[island];
     body_order.push_back(root);
     visited[root] = true;
     for (std::size_t next = island_begin.back(); next < body_order.size(); ++next) {

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "limber/kernel/model/model.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

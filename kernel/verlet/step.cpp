@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include "limber/kernel/collision/contacts.hpp"
-#include "limber/kernel/numerics/flush_denormals.hpp"
 #include "limber/kernel/relaxation/direct_projection.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
@@ -335,31 +334,26 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
 
 template <typename Scalar>
 StepReport step(VerletState<Scalar>& state, double dt) {
-  StepReport report;
-  if (!valid_time_step(dt)) {
-    report.status = StepStatus::invalid_time_step;
-    return state.last_report = report;
-  }
-  const FlushDenormals flush_denormals;
-  const int substeps = state.settings.relaxation.substeps;
-  const double h = dt / substeps, start_time = state.time;
-  state.plan.fallbacks.value = 0;
-  state.ball_touched = false;
-  for (KinematicTarget& target : state.kinematic_targets) target.start = state.particles.position(target.particle).template cast<double>();
-  for (int k = 0; k < substeps; ++k) {
-    const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps, k, substeps);
-    report.iterations += part.iterations;
-    report.largest_correction = part.largest_correction;
-    report.stop = part.stop;
-    report.status = part.status;
-    report.substeps += 1;
-    if (part.status != StepStatus::ok) break;
-  }
-  if (report.status == StepStatus::ok) state.time = start_time + dt;  // not n roundings of h
-  state.pending_forces.clear();
-  state.kinematic_targets.clear();
-  report.fallbacks = state.plan.fallbacks.value;
-  return state.last_report = report;
+  return guarded_step(state, dt, [&](StepReport& report) {
+    const int substeps = state.settings.relaxation.substeps;
+    const double h = dt / substeps, start_time = state.time;
+    state.plan.fallbacks.value = 0;
+    state.ball_touched = false;
+    for (KinematicTarget& target : state.kinematic_targets) target.start = state.particles.position(target.particle).template cast<double>();
+    for (int k = 0; k < substeps; ++k) {
+      const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps, k, substeps);
+      report.iterations += part.iterations;
+      report.largest_correction = part.largest_correction;
+      report.stop = part.stop;
+      report.status = part.status;
+      report.substeps += 1;
+      if (part.status != StepStatus::ok) break;
+    }
+    if (report.status == StepStatus::ok) state.time = start_time + dt;  // not n roundings of h
+    state.pending_forces.clear();
+    state.kinematic_targets.clear();
+    report.fallbacks = state.plan.fallbacks.value;
+  });
 }
 
 template <typename Scalar>

@@ -1,7 +1,7 @@
 // step(State, dt): one time step of the Verlet method.
 #pragma once
 
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 
 namespace limber {
 

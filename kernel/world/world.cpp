@@ -19,32 +19,10 @@
 
 namespace limber {
 
-std::string_view method_name(Method method) {
-  switch (method) {
-    case Method::particles: return "particles";
-    case Method::springs: return "springs";
-    case Method::lagrange: return "lagrange";
-    case Method::featherstone: return "featherstone";
-  }
-  return "?";
-}
-
 namespace {
 
 template <typename State>
 constexpr bool kParticles = std::is_same_v<State, VerletState<double>> || std::is_same_v<State, VerletState<float>>;
-
-World::State compile_state(const Model& model, const WorldOptions& options) {
-  switch (options.method) {
-    case Method::particles:
-      if (options.single_precision) return compile<float>(model, options.particles);
-      return compile<double>(model, options.particles);
-    case Method::springs: return compile_springs(model, options.springs);
-    case Method::lagrange: return compile_lagrange(model, options.lagrange);
-    case Method::featherstone: break;
-  }
-  return compile_featherstone(model, options.featherstone);
-}
 
 std::string vector_text(const Eigen::Vector3d& v) {
   std::ostringstream text;
@@ -54,7 +32,7 @@ std::string vector_text(const Eigen::Vector3d& v) {
 
 }  // namespace
 
-World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_state(model_, options_)) {
+World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_method(model_, options_)) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
   compile();
@@ -402,7 +380,7 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
 // (−1: new), the state the old one had; then makes `edited` the model. Nothing changes when the
 // compile throws.
 void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new) {
-  State next = compile_state(edited, options_);
+  State next = compile_method(edited, options_);
   std::visit(
       [&](auto& fresh) {
         using State = std::decay_t<decltype(fresh)>;

@@ -33,13 +33,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "limber/kernel/featherstone/featherstone_state.hpp"
-#include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
-#include "limber/kernel/springs/spring_state.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/methods/method.hpp"
 
 namespace limber {
 
@@ -48,27 +45,6 @@ namespace limber {
 class WorldError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-/// The method a World steps its Model with.
-enum class Method : std::uint8_t {
-  particles,     ///< Verlet integration and relaxation (thesis 3.2, 4.2): WorldOptions::particles
-  springs,       ///< rigid limbs joined by stiff springs (thesis 3.3): WorldOptions::springs
-  lagrange,      ///< rigid limbs and joint constraints (thesis 3.4): WorldOptions::lagrange
-  featherstone,  ///< reduced coordinates, the articulated-body algorithm (thesis 3.5)
-};
-
-/// The method's name as the command line spells it.
-std::string_view method_name(Method method);
-
-/// What a World is built with: the method and its options (each family reads only its own).
-struct WorldOptions {
-  Method method = Method::particles;
-  bool single_precision = false;  ///< particles only: float state
-  VerletOptions particles{};      ///< threads default to 1: a world starts no threads unless asked
-  SpringOptions springs{};
-  LagrangeOptions lagrange{};
-  FeatherstoneOptions featherstone{};
 };
 
 /// Handles: stable across structural edits (a removed body's handle is refused thereafter).
@@ -176,7 +152,7 @@ class World {
   std::size_t index(JointId joint) const;
 
   /// The method's state, for what the World does not wrap (observers, counters).
-  using State = std::variant<VerletState<double>, VerletState<float>, SpringState, LagrangeState, FeatherstoneState>;
+  using State = MethodState;
   const State& state() const { return state_; }
 
  private:

@@ -48,9 +48,7 @@ void move_world_anchor(FeatherstoneState&, const Model&, std::size_t, const Eige
 }
 
 void wake(RigidScene& scene, std::size_t body) {
-  RigidIsland& island = scene.islands[scene.island_of_body[body]];
-  island.sleeping = false;
-  island.still_time = 0;
+  scene.islands[scene.island_of_body[body]].wake();
 }
 
 bool sleeping(const RigidScene& scene, std::size_t body) { return scene.islands[scene.island_of_body[body]].sleeping; }

@@ -18,7 +18,7 @@
 #include "limber/kernel/sleeping/sleeping.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
 #include "limber/kernel/verlet/step.hpp"
-#include "limber/kernel/verlet/verlet_state.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 #include "limber/kernel/world/world.hpp"
 
 namespace limber::world_bodies {

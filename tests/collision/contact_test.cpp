@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"

@@ -241,7 +241,7 @@ TEST(FeatherstoneStep, JointsCannotOpen) {
 }
 
 // Largest |E − E₀| of the undamped chain over one second at time step dt, J.
-double chain_energy_error(double dt, FeatherstoneIntegrator integrator) {
+double chain_energy_error(double dt, Integrator integrator) {
   Model model = load_shipped_scene("chain.json");
   model.settings.sleep.enabled = false;
   FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
@@ -255,8 +255,8 @@ double chain_energy_error(double dt, FeatherstoneIntegrator integrator) {
 }
 
 TEST(FeatherstoneStep, RungeKuttaKeepsTheChainsEnergyToFourthOrder) {
-  const double coarse = chain_energy_error(1.0 / 240, FeatherstoneIntegrator::rk4);
-  const double fine = chain_energy_error(1.0 / 480, FeatherstoneIntegrator::rk4);
+  const double coarse = chain_energy_error(1.0 / 240, Integrator::rk4);
+  const double fine = chain_energy_error(1.0 / 480, Integrator::rk4);
   EXPECT_LT(coarse, 1e-2);  // of 200 J
   EXPECT_GT(coarse / fine, 8) << "coarse " << coarse << " J, fine " << fine << " J";
   RecordProperty("energy_error_J", number(coarse) + " -> " + number(fine));
@@ -272,12 +272,13 @@ TEST(FeatherstoneStep, SemiImplicitEulerGainsEnergyOnASpinningBodyWhereRungeKutt
   model.bodies[0].linear_velocity = Vector3(0, 1, 0);
   model.settings.gravity.setZero();
   model.settings.sleep.enabled = false;
+  const Integrator integrators[2] = {Integrator::semi_implicit_euler, Integrator::rk4};
   double gain[2];
-  for (const FeatherstoneIntegrator integrator : {FeatherstoneIntegrator::semi_implicit_euler, FeatherstoneIntegrator::rk4}) {
-    FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
+  for (int i = 0; i < 2; ++i) {
+    FeatherstoneState state = compile_featherstone(model, {.integrator = integrators[i]});
     const double start = observe(state).kinetic_energy;
     for (int s = 0; s < 240; ++s) step(state);  // semi-implicit Euler: ×1.03 in |ω⊥| a step, and worse as it grows
-    gain[static_cast<int>(integrator)] = observe(state).kinetic_energy / start - 1;
+    gain[i] = observe(state).kinetic_energy / start - 1;
   }
   RecordProperty("gain", number(gain[0]) + ", " + number(gain[1]));
   EXPECT_GT(gain[0], 0.1) << "semi-implicit Euler";
@@ -360,7 +361,7 @@ TEST(FeatherstoneStep, DragBringsAFallingStickToItsTerminalSpeed) {
 }
 
 TEST(FeatherstoneStep, StepAllocatesNothing) {
-  for (const FeatherstoneIntegrator integrator : {FeatherstoneIntegrator::semi_implicit_euler, FeatherstoneIntegrator::rk4}) {
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
     Model model = load_shipped_scene("humanoid.json");
     model.settings.drag.linear = Vector3(0.1, 0.1, 0.01);
     FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});

@@ -314,13 +314,13 @@ TEST(Dynamics, ForwardDynamicsAndSteppingAllocateNothingOnceSized) {
   Eigen::VectorXd accelerations, forces;
   forward_dynamics(tree, q, v, tau, kGravity, workspace, accelerations);  // sizes
   inverse_dynamics(tree, q, v, accelerations, kGravity, workspace, forces);
-  integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::rk4, stepper);
+  integrate(tree, q, v, tau, kGravity, 1e-3, Integrator::rk4, stepper);
   const long before = testing::allocation_count();
   for (int step = 0; step < 10; ++step) {
     forward_dynamics(tree, q, v, tau, kGravity, workspace, accelerations);
     inverse_dynamics(tree, q, v, accelerations, kGravity, workspace, forces);
-    integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::rk4, stepper);
-    integrate(tree, q, v, tau, kGravity, 1e-3, FeatherstoneIntegrator::semi_implicit_euler, stepper);
+    integrate(tree, q, v, tau, kGravity, 1e-3, Integrator::rk4, stepper);
+    integrate(tree, q, v, tau, kGravity, 1e-3, Integrator::semi_implicit_euler, stepper);
   }
   EXPECT_EQ(testing::allocation_count() - before, 0);
 }
@@ -381,7 +381,7 @@ struct EnergyDrift {
 };
 
 // |E(t) − E(0)| of a pendulum chain over `duration` seconds with step h.
-EnergyDrift energy_drift(int links, ArticulatedJoint joint, const PendulumStart& start, FeatherstoneIntegrator integrator, double h,
+EnergyDrift energy_drift(int links, ArticulatedJoint joint, const PendulumStart& start, Integrator integrator, double h,
                          double duration) {
   Eigen::VectorXd q, v;
   const ArticulatedTree tree = pendulum_chain(links, joint, start, q, v);
@@ -405,8 +405,8 @@ double energy_scale(int links) { return links * 9.81 * 0.6 * links; }
 TEST(Integration, RungeKuttaEnergyErrorShrinksSixteenfoldWhenTheStepHalves) {
   for (const ArticulatedJoint joint : {ArticulatedJoint::revolute, ArticulatedJoint::spherical}) {
     const PendulumStart start{.amplitude = 0.3, .spin = 1};
-    const double coarse = energy_drift(3, joint, start, FeatherstoneIntegrator::rk4, 1.0 / 100, 5).largest;
-    const double fine = energy_drift(3, joint, start, FeatherstoneIntegrator::rk4, 1.0 / 200, 5).largest;
+    const double coarse = energy_drift(3, joint, start, Integrator::rk4, 1.0 / 100, 5).largest;
+    const double fine = energy_drift(3, joint, start, Integrator::rk4, 1.0 / 200, 5).largest;
     EXPECT_GT(coarse / fine, 8) << articulated_joint_name(joint) << ": drift " << coarse << " J, then " << fine << " J";
     EXPECT_LT(coarse, 1e-6 * energy_scale(3)) << articulated_joint_name(joint);
   }
@@ -415,7 +415,7 @@ TEST(Integration, RungeKuttaEnergyErrorShrinksSixteenfoldWhenTheStepHalves) {
 // With a constant joint-space inertia (one revolute pendulum) semi-implicit Euler is symplectic:
 // over 10⁵ steps of 1 ms its energy error oscillates, O(h), and never outgrows the first 10 s.
 TEST(Integration, SemiImplicitEulerKeepsAPendulumsEnergyBounded) {
-  const EnergyDrift drift = energy_drift(1, ArticulatedJoint::revolute, {.amplitude = 0.5}, FeatherstoneIntegrator::semi_implicit_euler, 1e-3, 100);
+  const EnergyDrift drift = energy_drift(1, ArticulatedJoint::revolute, {.amplitude = 0.5}, Integrator::semi_implicit_euler, 1e-3, 100);
   EXPECT_LT(drift.largest, 1e-3 * energy_scale(1));
   EXPECT_LE(drift.largest, 1.1 * drift.largest_early);
 }
@@ -428,17 +428,17 @@ TEST(Integration, SemiImplicitEulerKeepsAPendulumsEnergyBounded) {
 TEST(Integration, SemiImplicitEulerEnergyDriftOfAChainIsFirstOrder) {
   for (const ArticulatedJoint joint : {ArticulatedJoint::revolute, ArticulatedJoint::spherical}) {
     const PendulumStart start = joint == ArticulatedJoint::revolute ? PendulumStart{.amplitude = 0.3} : PendulumStart{.amplitude = 0.2, .spin = 0.5};
-    const double coarse = energy_drift(3, joint, start, FeatherstoneIntegrator::semi_implicit_euler, 2e-3, 20).largest;
-    const double fine = energy_drift(3, joint, start, FeatherstoneIntegrator::semi_implicit_euler, 1e-3, 20).largest;
+    const double coarse = energy_drift(3, joint, start, Integrator::semi_implicit_euler, 2e-3, 20).largest;
+    const double fine = energy_drift(3, joint, start, Integrator::semi_implicit_euler, 1e-3, 20).largest;
     EXPECT_GT(coarse / fine, 1.6) << articulated_joint_name(joint);
     EXPECT_LT(coarse / fine, 2.5) << articulated_joint_name(joint);
-    const double long_run = energy_drift(3, joint, start, FeatherstoneIntegrator::semi_implicit_euler, 1e-3, 100).largest;
+    const double long_run = energy_drift(3, joint, start, Integrator::semi_implicit_euler, 1e-3, 100).largest;
     EXPECT_LT(long_run, 0.02 * energy_scale(3)) << articulated_joint_name(joint);
   }
 }
 
 TEST(Integration, QuaternionsStayUnitOverAHundredThousandSteps) {
-  for (const FeatherstoneIntegrator integrator : {FeatherstoneIntegrator::semi_implicit_euler, FeatherstoneIntegrator::rk4}) {
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
     Eigen::VectorXd q, v;
     const ArticulatedTree tree = pendulum_chain(3, ArticulatedJoint::spherical, {.amplitude = 0.2, .spin = 0.5, .floating_root = true}, q, v);
     const Eigen::VectorXd no_forces = Eigen::VectorXd::Zero(tree.velocity_count());
@@ -451,8 +451,8 @@ TEST(Integration, QuaternionsStayUnitOverAHundredThousandSteps) {
         worst = std::max(worst, std::abs(q.segment<4>(start).norm() - 1));
       }
     }
-    EXPECT_LT(worst, 1e-12) << static_cast<int>(integrator);
-    EXPECT_TRUE(v.allFinite() && q.allFinite()) << static_cast<int>(integrator);
+    EXPECT_LT(worst, 1e-12) << integrator_name(integrator);
+    EXPECT_TRUE(v.allFinite() && q.allFinite()) << integrator_name(integrator);
   }
 }
 
@@ -471,7 +471,7 @@ TEST(Integration, AFreeFloatingTreeKeepsItsSpatialMomentum) {
     DynamicsWorkspace observer;
     const SpatialVector start = spatial_momentum(tree, q, v, observer);
     const double start_energy = kinetic_energy(tree, q, v, observer);
-    for (int step = 0; step < 1000; ++step) integrate(tree, q, v, no_forces, no_gravity, 1e-3, FeatherstoneIntegrator::rk4, stepper);
+    for (int step = 0; step < 1000; ++step) integrate(tree, q, v, no_forces, no_gravity, 1e-3, Integrator::rk4, stepper);
     const SpatialVector end = spatial_momentum(tree, q, v, observer);
     EXPECT_LT((end - start).norm(), 1e-9 * start.norm()) << "trial " << trial;
     EXPECT_NEAR(kinetic_energy(tree, q, v, observer), start_energy, 1e-9 * start_energy) << "trial " << trial;

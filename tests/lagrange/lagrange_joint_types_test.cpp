@@ -138,7 +138,7 @@ TEST(LagrangeJointTypes, HingedRodSwingsInItsPlaneWithTheExactSpeedAtTheBottom) 
   // only about y, and passes the bottom with ω² = 3g/L·(1 + O(r²/L²)) (energy: ½·(mL²/3)·ω² = mgL/2).
   const double length = 1, g = 9.81;
   const Model model = rod_on(JointType::revolute, Vector3::UnitY(), length);
-  LagrangeState state = compile_lagrange(model, {.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::projection});
+  LagrangeState state = compile_lagrange(model, {.integrator = Integrator::rk4, .stabilization = Stabilization::projection});
   const double dt = 1e-3;
   double fastest = 0;
   for (int s = 0; s < 1000; ++s) {
@@ -160,7 +160,7 @@ TEST(LagrangeJointTypes, PrismaticJointSlidesWithoutTurning) {
   const Vector3 axis(std::cos(std::numbers::pi / 6), 0, -std::sin(std::numbers::pi / 6));
   Model model = rod_on(JointType::prismatic, axis);
   model.bodies[0].angular_velocity = Vector3(0.3, -1, 2);  // projected away
-  LagrangeState state = compile_lagrange(model, {.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::projection});
+  LagrangeState state = compile_lagrange(model, {.integrator = Integrator::rk4, .stabilization = Stabilization::projection});
   const Eigen::Quaterniond start_orientation = state.bodies.state.orientation[0];
   const Eigen::Vector3d start = state.bodies.state.position[0];
   const double dt = 1e-3, duration = 0.5;
@@ -242,7 +242,7 @@ Model geared_disks(double ratio) {
 
 TEST(LagrangeGears, MeshedGearsKeepTheirSpeedRatio) {
   const double ratio = -2;  // the small gear (half the radius) turns twice as fast, the other way
-  for (RigidIntegrator integrator : {RigidIntegrator::semi_implicit_euler, RigidIntegrator::rk4}) {
+  for (Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
     LagrangeState state = compile_lagrange(geared_disks(ratio), {.integrator = integrator});
     EXPECT_FALSE(state.uses_tree);  // the gear closes a loop through the world
     for (int s = 0; s < 480; ++s) {
@@ -251,7 +251,7 @@ TEST(LagrangeGears, MeshedGearsKeepTheirSpeedRatio) {
       const double first = state.bodies.angular_velocity(y, 0).y(), second = state.bodies.angular_velocity(y, 1).y();
       // The velocity-level step holds J·u = 0 exactly; RK4 at the acceleration level drifts by
       // its truncation error only.
-      const double bound = integrator == RigidIntegrator::semi_implicit_euler ? 1e-9 : 1e-5;
+      const double bound = integrator == Integrator::semi_implicit_euler ? 1e-9 : 1e-5;
       EXPECT_NEAR(second, ratio * first, bound * (1 + std::abs(second))) << s;
     }
     EXPECT_GT(std::abs(state.bodies.angular_velocity(state.bodies.state, 0).y()), 1);  // it turned
@@ -260,7 +260,7 @@ TEST(LagrangeGears, MeshedGearsKeepTheirSpeedRatio) {
 
 TEST(LagrangeGears, IdealGearsDoNoWork) {
   // Energy is conserved (to RK4's accuracy): the gear's force only passes power from one disk to the other.
-  LagrangeState state = compile_lagrange(geared_disks(-2), {.integrator = RigidIntegrator::rk4});
+  LagrangeState state = compile_lagrange(geared_disks(-2), {.integrator = Integrator::rk4});
   const double start = observe(state).energy();
   for (int s = 0; s < 1000; ++s) step(state, 1e-3);
   EXPECT_LT(std::abs(observe(state).energy() - start), 1e-4 * 9.81 * 0.2);  // of the lump's mg·r

@@ -86,7 +86,7 @@ TEST(LagrangeMultipliers, ConstrainedAccelerationsKeepTheJointsClosed) {
   };
   LagrangeState later = state;
   later.options.stabilization = Stabilization::projection;
-  integrate_rigid_bodies(later.bodies, h, RigidIntegrator::rk4, later.scratch,
+  integrate_rigid_bodies(later.bodies, h, Integrator::rk4, later.scratch,
                          [&later](const RigidBodyState& y, RigidForces& f) { accumulate_constrained_forces(later, y, f); });
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     EXPECT_LT((gap_rate(later, j) - gap_rate(state, j)).norm() / h, 1e-4) << "joint " << j;
@@ -100,7 +100,7 @@ double largest_error(const LagrangeOptions& options, int steps, double dt) {
   LagrangeState state = compile_lagrange(model, options);
   double largest = 0;
   for (int s = 0; s < steps; ++s) {
-    const LagrangeStepReport report = step(state, dt);
+    const StepReport report = step(state, dt);
     EXPECT_EQ(report.status, StepStatus::ok);
     largest = std::max(largest, report.constraint_error);
   }
@@ -114,16 +114,16 @@ TEST(LagrangeDrift, ProjectionHoldsTheJointsClosed) {
 }
 
 TEST(LagrangeDrift, BaumgarteKeepsTheJointErrorBounded) {
-  EXPECT_LT(largest_error({.integrator = RigidIntegrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte},
+  EXPECT_LT(largest_error({.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte},
                           10000, 1.0 / 240),
             1e-2);
-  EXPECT_LT(largest_error({.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::baumgarte}, 10000, 1.0 / 240), 1e-3);
+  EXPECT_LT(largest_error({.integrator = Integrator::rk4, .stabilization = Stabilization::baumgarte}, 10000, 1.0 / 240), 1e-3);
 }
 
 // |energy change| over 1 s of the undamped pendulum chain with RK4 and step h, J.
 double energy_drift(double h) {
   const Model model = testing::load_shipped_scene("chain.json");
-  LagrangeState state = compile_lagrange(model, {.integrator = RigidIntegrator::rk4, .stabilization = Stabilization::baumgarte});
+  LagrangeState state = compile_lagrange(model, {.integrator = Integrator::rk4, .stabilization = Stabilization::baumgarte});
   const double start = observe(state).energy();
   for (int s = 0; s < std::lround(1.0 / h); ++s) step(state, h);
   return std::abs(observe(state).energy() - start);
@@ -139,7 +139,7 @@ TEST(LagrangeMomentum, FreeTreeKeepsItsLinearMomentum) {
   Model model = random_tree(15, 2, 3);
   model.joints.erase(model.joints.begin());  // the pin: free-floating
   model.settings.gravity.setZero();
-  for (RigidIntegrator integrator : {RigidIntegrator::semi_implicit_euler, RigidIntegrator::rk4}) {
+  for (Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
     LagrangeState state = compile_lagrange(model, {.integrator = integrator});
     const Eigen::Vector3d start = observe(state).linear_momentum;
     for (int s = 0; s < 500; ++s) step(state, 1e-3);

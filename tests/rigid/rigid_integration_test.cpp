@@ -30,7 +30,7 @@ double rotational_energy(const RigidBodyBuffer& bodies) {
 }
 
 // The body after 1 s of free motion with step h.
-RigidBodyBuffer spin(RigidIntegrator integrator, double h) {
+RigidBodyBuffer spin(Integrator integrator, double h) {
   RigidBodyBuffer bodies = spinning_body();
   RigidIntegratorScratch scratch;
   scratch.resize(1);
@@ -43,29 +43,29 @@ RigidBodyBuffer spin(RigidIntegrator integrator, double h) {
 }
 
 // Angle between the orientation after 1 s and a converged reference (RK4, h = 1e-4), rad.
-double orientation_error(RigidIntegrator integrator, double h) {
-  static const Eigen::Quaterniond reference = spin(RigidIntegrator::rk4, 1e-4).state.orientation[0];
+double orientation_error(Integrator integrator, double h) {
+  static const Eigen::Quaterniond reference = spin(Integrator::rk4, 1e-4).state.orientation[0];
   return spin(integrator, h).state.orientation[0].angularDistance(reference);
 }
 
-double energy_error(RigidIntegrator integrator, double h) {
+double energy_error(Integrator integrator, double h) {
   return std::abs(rotational_energy(spin(integrator, h)) - rotational_energy(spinning_body()));
 }
 
 TEST(RigidIntegration, FreeBodyKeepsItsAngularMomentumExactly) {
   const Eigen::Vector3d start = spinning_body().state.angular_momentum[0];
-  for (RigidIntegrator integrator : {RigidIntegrator::euler, RigidIntegrator::semi_implicit_euler, RigidIntegrator::rk2, RigidIntegrator::rk4}) {
+  for (Integrator integrator : {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}) {
     const Eigen::Vector3d end = spin(integrator, 1e-3).state.angular_momentum[0];
-    EXPECT_LT((end - start).norm(), 1e-13 * start.norm()) << static_cast<int>(integrator);
+    EXPECT_LT((end - start).norm(), 1e-13 * start.norm()) << integrator_name(integrator);
   }
 }
 
 TEST(RigidIntegration, FreeBodyConvergesAtTheIntegratorsOrder) {
   // Halving h divides the orientation error by 2^order; the energy error shrinks with it.
-  struct Case { RigidIntegrator integrator; int order; double h; };
+  struct Case { Integrator integrator; int order; double h; };
   // Without torque the semi-implicit step is the free-rotation splitting alone: second order.
-  for (const Case& c : {Case{RigidIntegrator::euler, 1, 1e-3}, Case{RigidIntegrator::semi_implicit_euler, 2, 4e-3},
-                        Case{RigidIntegrator::rk2, 2, 4e-3}, Case{RigidIntegrator::rk4, 4, 2e-2}}) {
+  for (const Case& c : {Case{Integrator::euler, 1, 1e-3}, Case{Integrator::semi_implicit_euler, 2, 4e-3},
+                        Case{Integrator::rk2, 2, 4e-3}, Case{Integrator::rk4, 4, 2e-2}}) {
     const double coarse = orientation_error(c.integrator, c.h), fine = orientation_error(c.integrator, c.h / 2);
     EXPECT_NEAR(std::log2(coarse / fine), c.order, 0.3) << "integrator " << static_cast<int>(c.integrator) << ": errors " << coarse << ", " << fine;
     EXPECT_LT(energy_error(c.integrator, c.h / 2), energy_error(c.integrator, c.h));
@@ -88,14 +88,14 @@ TEST(RigidIntegration, ThinSpinningRodStaysStableWithTheSemiImplicitStep) {
   scratch.resize(1);
   double largest = start;
   for (int k = 0; k < 10000; ++k) {
-    integrate_rigid_bodies(bodies, 5e-3, RigidIntegrator::semi_implicit_euler, scratch, [](const RigidBodyState&, RigidForces&) {});
+    integrate_rigid_bodies(bodies, 5e-3, Integrator::semi_implicit_euler, scratch, [](const RigidBodyState&, RigidForces&) {});
     largest = std::max(largest, rotational_energy(bodies));
   }
   EXPECT_LT(largest, 1.05 * start);
 }
 
 TEST(RigidIntegration, ConstantForceGivesTheParabolaExactlyWithRungeKutta) {
-  for (RigidIntegrator integrator : {RigidIntegrator::rk2, RigidIntegrator::rk4}) {
+  for (Integrator integrator : {Integrator::rk2, Integrator::rk4}) {
     RigidBodyBuffer bodies = spinning_body();
     const Eigen::Vector3d x0 = bodies.state.position[0], v0 = bodies.linear_velocity(bodies.state, 0), g(0, 0, -9.81);
     RigidIntegratorScratch scratch;

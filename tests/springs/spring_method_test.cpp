@@ -69,7 +69,7 @@ TEST(SpringStability, ForwardEulerIsStableExactlyBelowItsBound) {
     for (const double damping_ratio : {0.05, 0.5, 2.0}) {
       const double c = damping_ratio * 2 * std::sqrt(k * kMass);
       const double bound = forward_euler_bound(k, c);
-      const SpringOptions options{.integrator = SpringIntegrator::euler, .stiffness = k, .damping = c};
+      const SpringOptions options{.integrator = Integrator::euler, .stiffness = k, .damping = c};
       // Enough steps for the unstable run's growth, |1 + hλ| per step, to reach 100×.
       double growth = 1;
       const std::complex<double> root = std::sqrt(std::complex<double>(c * c - 4 * k * kMass));
@@ -86,7 +86,7 @@ TEST(SpringStability, ForwardEulerIsStableExactlyBelowItsBound) {
 TEST(SpringStability, UndampedForwardEulerAlwaysGainsEnergy) {
   // With c = 0 the eigenvalues ±iω give |1 + hλ| = √(1 + h²ω²) > 1 for every h: the thesis's
   // springs needed their damping.
-  const SpringOptions options{.integrator = SpringIntegrator::euler, .stiffness = 1e3, .damping = 0.0};
+  const SpringOptions options{.integrator = Integrator::euler, .stiffness = 1e3, .damping = 0.0};
   EXPECT_GT(largest_excursion(single_spring(), options, 1e-3, 20000), 1.1);
 }
 
@@ -94,7 +94,7 @@ TEST(SpringStability, SemiImplicitEulerIsStableExactlyBelowTwoOverOmega) {
   const Model model = single_spring();
   for (const double k : {1e2, 1e4, 1e6}) {
     const double bound = 2 / std::sqrt(k / kMass);  // h·ω < 2
-    const SpringOptions options{.integrator = SpringIntegrator::semi_implicit_euler, .stiffness = k, .damping = 0.0};
+    const SpringOptions options{.integrator = Integrator::semi_implicit_euler, .stiffness = k, .damping = 0.0};
     EXPECT_LT(largest_excursion(model, options, 0.95 * bound, 2000), 10.0) << "k " << k;
     EXPECT_GT(largest_excursion(model, options, 1.05 * bound, 2000), 1e3) << "k " << k;
   }
@@ -107,7 +107,7 @@ TEST(SpringStability, BackwardEulerIsStableForEveryStiffness) {
     // k such that h is `factor` times the symplectic Euler bound, i.e. h·ω = 2·factor.
     const double omega = 2 * factor / h, k = omega * omega * kMass;
     for (SpringLinearSolver solver : {SpringLinearSolver::ldlt, SpringLinearSolver::conjugate_gradient}) {
-      const SpringOptions options{.integrator = SpringIntegrator::backward_euler, .linear_solver = solver, .stiffness = k, .damping = 0.0};
+      const SpringOptions options{.integrator = Integrator::backward_euler, .linear_solver = solver, .stiffness = k, .damping = 0.0};
       EXPECT_LE(largest_excursion(model, options, h, 500), 1.0 + 1e-9) << "h·ω = " << h * omega << ", solver " << static_cast<int>(solver);
     }
   }
@@ -117,7 +117,7 @@ TEST(SpringStability, BackwardEulerReachesTheAnchorInOneStepAsTheStepGrows) {  /
   const Model model = single_spring();
   double previous = INFINITY;
   for (const double h : {1e-2, 1e0, 1e2}) {
-    SpringState state = compile_springs(model, {.integrator = SpringIntegrator::backward_euler, .stiffness = 1e3, .damping = 0.0});
+    SpringState state = compile_springs(model, {.integrator = Integrator::backward_euler, .stiffness = 1e3, .damping = 0.0});
     step(state, h);
     const double remaining = state.bodies.state.position[0].norm() / 0.1;
     EXPECT_LT(remaining, previous) << "h " << h;
@@ -139,7 +139,7 @@ TEST(SpringChain, EachJointStretchesByTheWeightItCarries) {
   // joint opens most (the thesis's observation, 4.4.1).
   const Model model = hanging_chain();
   const double k = 2e4;
-  for (SpringIntegrator integrator : {SpringIntegrator::semi_implicit_euler, SpringIntegrator::backward_euler}) {
+  for (Integrator integrator : {Integrator::semi_implicit_euler, Integrator::backward_euler}) {
     // c = 300 N·s/m damps the slowest mode (ω ≈ 33 rad/s) at (c/k)·ω²/2 ≈ 8 /s: at rest after 3 s.
     SpringState state = compile_springs(model, {.integrator = integrator, .stiffness = k, .damping = 300.0});
     for (int s = 0; s < 3000; ++s) ASSERT_EQ(step(state, 1e-3).status, StepStatus::ok);
@@ -159,19 +159,19 @@ TEST(SpringChain, FreeFloatingSpringsKeepLinearMomentum) {
     model.bodies[k].linear_velocity = Vector3(0.3 * k, -0.2, 0.1 * k * k);
     model.bodies[k].angular_velocity = Vector3(1, -2.0 * k, 0.5);
   }
-  for (SpringIntegrator integrator : {SpringIntegrator::euler, SpringIntegrator::semi_implicit_euler, SpringIntegrator::rk4,
-                                      SpringIntegrator::backward_euler}) {
+  for (Integrator integrator : {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk4,
+                                      Integrator::backward_euler}) {
     SpringState state = compile_springs(model, {.integrator = integrator, .stiffness = 1e3, .damping = 1.0});
     const Eigen::Vector3d start = observe(state).linear_momentum;
     for (int s = 0; s < 500; ++s) step(state, 1e-3);
-    EXPECT_LT((observe(state).linear_momentum - start).norm(), 1e-11 * (1 + start.norm())) << static_cast<int>(integrator);
+    EXPECT_LT((observe(state).linear_momentum - start).norm(), 1e-11 * (1 + start.norm())) << integrator_name(integrator);
   }
 }
 
 TEST(SpringChain, UndampedSpringsKeepEnergyWithRungeKutta) {
   Model model = testing::make_chain({1, 1, 1, 2}, 0.2, true);
   model.settings.damping = 0;
-  SpringState state = compile_springs(model, {.integrator = SpringIntegrator::rk4, .stiffness = 1e3, .damping = 0.0});
+  SpringState state = compile_springs(model, {.integrator = Integrator::rk4, .stiffness = 1e3, .damping = 0.0});
   const double start = observe(state).energy();
   for (int s = 0; s < 2000; ++s) step(state, 5e-4);
   EXPECT_NEAR(observe(state).energy(), start, 1e-6 * std::abs(start) + 1e-6);
@@ -194,7 +194,7 @@ Model ball_over_ground(double restitution) {
 
 TEST(SpringContacts, BallLeavesTheGroundWithItsRestitution) {  // eq. 2.32
   for (const double restitution : {0.2, 0.5, 0.9}) {
-    SpringState state = compile_springs(ball_over_ground(restitution), {.integrator = SpringIntegrator::semi_implicit_euler});
+    SpringState state = compile_springs(ball_over_ground(restitution), {.integrator = Integrator::semi_implicit_euler});
     double impact_speed = 0, rebound_speed = 0;
     for (int s = 0; s < 600 && rebound_speed == 0; ++s) {
       const double before = state.bodies.state.linear_momentum[0].z() / 2.0;
@@ -220,7 +220,7 @@ TEST(SpringContacts, LimbLyingOnTheGroundStaysAtRest) {
     body.position = Vector3(0, 0, 0.05);
     model.bodies.push_back(body);
     model.settings.sleep.enabled = false;
-    for (SpringIntegrator integrator : {SpringIntegrator::semi_implicit_euler, SpringIntegrator::backward_euler}) {
+    for (Integrator integrator : {Integrator::semi_implicit_euler, Integrator::backward_euler}) {
       SpringState state = compile_springs(model, {.integrator = integrator});
       const double start = observe(state).energy();
       for (int s = 0; s < 1000; ++s) ASSERT_EQ(step(state, 1.0 / 240).status, StepStatus::ok);
@@ -286,7 +286,7 @@ TEST(SpringAgreement, RigidRodOnAStiffSpringSwingsLikeThePhysicalPendulumAndTheI
   const double amplitude = 5 * 3.14159265358979 / 180;
   const double expected = 2 * 3.14159265358979 * std::sqrt(inertia_about_pivot / (9.81 * 0.5)) * (1 + amplitude * amplitude / 16);
 
-  SpringState springs = compile_springs(model, {.integrator = SpringIntegrator::backward_euler, .stiffness = 1e7, .damping = 0.0});
+  SpringState springs = compile_springs(model, {.integrator = Integrator::backward_euler, .stiffness = 1e7, .damping = 0.0});
   const double spring_period = period([&] { step(springs, 1e-3); }, [&] { return observe(springs).body_centre_of_mass.x(); }, 1e-3);
   EXPECT_NEAR(spring_period, expected, 1e-3 * expected);
 
@@ -320,7 +320,7 @@ TEST(SpringDrag, DragActsInTheLimbsOwnFrame) {  // thesis 2.1.5, 2.1.6
     model.settings.gravity.setZero();
     model.settings.sleep.enabled = false;
     model.settings.drag.linear = Vector3(4, 4, 0);  // N·s/m across the axis (body x, y), none along it (z)
-    SpringState state = compile_springs(model, {.integrator = SpringIntegrator::rk4});
+    SpringState state = compile_springs(model, {.integrator = Integrator::rk4});
     for (int s = 0; s < 1000; ++s) step(state, 1e-3);
     const double speed = state.bodies.state.linear_momentum[0].norm() / 2;
     EXPECT_NEAR(speed, along ? 3.0 : 3.0 * std::exp(-4.0 * 1.0 / 2.0), 1e-6) << (along ? "along" : "across");

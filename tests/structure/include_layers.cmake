@@ -1,11 +1,12 @@
 # The kernel's folders in layers: a folder may include only folders listed before it, so the
-# includes between folders point one way and form no cycle. The order is the one kernel/README.md
-# explains. Run as: cmake -DSOURCE_DIR=<repository> -P include_layers.cmake
+# includes between folders point one way and form no cycle; kernel/README.md explains the order.
+# Run as: cmake -DSOURCE_DIR=<repository> -P include_layers.cmake
 set(layers
-  model numerics threading mass geometry scene  # descriptions and maths, no state
+  numerics threading model mass geometry scene  # maths and descriptions, no state
   particles rigid                               # the two kinds of state: particles, rigid bodies
   sleeping relaxation collision                 # passes over that state
   verlet springs lagrange featherstone          # the four methods: compile and step
+  methods                                       # the one dispatch over the four
   metrics study world)                          # what reads or drives the methods
 
 file(GLOB folders LIST_DIRECTORIES true RELATIVE ${SOURCE_DIR}/kernel ${SOURCE_DIR}/kernel/*)

@@ -44,7 +44,7 @@ TEST(StudyMetrics, FreeBodyEnergyIsExactUnderRungeKutta) {
   model.bodies[0].linear_velocity = Vector3(3, -1, 8);
   for (const Method& method : {featherstone_rk4(1.0 / 30),
                                Method{.series = "lagrange rk4", .family = Family::lagrange, .time_step = 1.0 / 30,
-                                      .lagrange = {.integrator = RigidIntegrator::rk4}}}) {
+                                      .lagrange = {.integrator = Integrator::rk4}}}) {
     Simulation simulation(model, method);
     const Observation start = simulation.observe();
     const ObservedRun run = observe_run(simulation, 1.0);
@@ -129,7 +129,7 @@ double pendulum_trajectory_error(const Method& method) {
 }
 
 Method verlet_direct(double dt, LimbMasses masses) {
-  Method method{.series = "verlet direct", .family = Family::verlet, .time_step = dt};
+  Method method{.series = "verlet direct", .family = Family::particles, .time_step = dt};
   method.verlet.solver = RelaxationSolver::direct;
   method.verlet.newton_iterations = 5;
   method.limb_masses = masses;
@@ -142,7 +142,7 @@ TEST(StudyMetrics, EveryMethodConvergesToTheReferenceOnTheSameBodyModel) {
                                                           .lagrange = {.stabilization = Stabilization::projection}}; },
                            +[](double dt) { return Method{.series = "featherstone semi-implicit", .family = Family::featherstone,
                                                           .time_step = dt,
-                                                          .featherstone = {.integrator = FeatherstoneIntegrator::semi_implicit_euler}}; }}) {
+                                                          .featherstone = {.integrator = Integrator::semi_implicit_euler}}; }}) {
     const double coarse = pendulum_trajectory_error(make(1.0 / 200)), fine = pendulum_trajectory_error(make(1.0 / 800));
     // At least first order: a quarter of the step leaves at most ~a quarter of the error (0.4 allows for noise).
     EXPECT_LT(fine, 0.4 * coarse) << make(1).series << ": " << coarse << " m at 1/200 s, " << fine << " m at 1/800 s";

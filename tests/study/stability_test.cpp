@@ -26,15 +26,15 @@ Model stress_chain(double end_mass_ratio) {
   return make_chain_model({.links = 10, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = end_mass_ratio});
 }
 
-Method springs(SpringIntegrator integrator, double stiffness, double dt) {
+Method springs(Integrator integrator, double stiffness, double dt) {
   return {.series = "springs", .family = Family::springs, .time_step = dt,
           .springs = {.integrator = integrator, .stiffness = stiffness, .damping = kDamping, .newton_iterations = 2}};
 }
 
 std::vector<Method> methods_that_hold(double dt) {
   return {
-      {.series = "verlet gauss-seidel 20 sweeps", .family = Family::verlet, .time_step = dt, .verlet = {.threads = 1}, .sweeps = 20},
-      {.series = "verlet direct 2 Newton steps", .family = Family::verlet, .time_step = dt,
+      {.series = "verlet gauss-seidel 20 sweeps", .family = Family::particles, .time_step = dt, .verlet = {.threads = 1}, .sweeps = 20},
+      {.series = "verlet direct 2 Newton steps", .family = Family::particles, .time_step = dt,
        .verlet = {.solver = RelaxationSolver::direct, .threads = 1, .newton_iterations = 2}},
       {.series = "lagrange projection", .family = Family::lagrange, .time_step = dt,
        .lagrange = {.stabilization = Stabilization::projection}},
@@ -57,7 +57,7 @@ Stability run(const Model& model, const Method& method, double duration, const S
 }
 
 // The chain's bound (kernel/study/spring_stability.hpp) at the scene's damping.
-double predicted_largest_stable_step(SpringIntegrator integrator, const Model& model, double stiffness) {
+double predicted_largest_stable_step(Integrator integrator, const Model& model, double stiffness) {
   return study::predicted_largest_stable_step(integrator, spring_mode_frequencies(model, stiffness), stiffness, kDamping);
 }
 
@@ -99,43 +99,43 @@ TEST(StabilityStress, OneLinkSpringModeIsTwiceTheTranslationalFrequency) {
 
 TEST(StabilityStress, ExplicitSpringsDivergeJustAboveThePredictedBoundAndNotBelowIt) {
   const Model chain = stress_chain(1);
-  struct Case { SpringIntegrator integrator; double stiffness; };
-  for (const Case c : {Case{SpringIntegrator::semi_implicit_euler, 2e4}, Case{SpringIntegrator::semi_implicit_euler, 1e5},
-                       Case{SpringIntegrator::euler, 1e4}}) {
+  struct Case { Integrator integrator; double stiffness; };
+  for (const Case c : {Case{Integrator::semi_implicit_euler, 2e4}, Case{Integrator::semi_implicit_euler, 1e5},
+                       Case{Integrator::euler, 1e4}}) {
     const double bound = predicted_largest_stable_step(c.integrator, chain, c.stiffness);
-    const std::string label = (c.integrator == SpringIntegrator::euler ? "forward euler, k " : "semi-implicit euler, k ") +
+    const std::string label = (c.integrator == Integrator::euler ? "forward euler, k " : "semi-implicit euler, k ") +
                               std::to_string(c.stiffness) + ", predicted " + std::to_string(bound) + " s";
     EXPECT_EQ(run(chain, springs(c.integrator, c.stiffness, bound / 1.4), 10, kIntegratorOnly), Stability::stable) << label;
     EXPECT_NE(run(chain, springs(c.integrator, c.stiffness, bound * 1.4), 10, kIntegratorOnly), Stability::stable) << label;
   }
   // The scene's spring, measured by bench/stability_stress: 1/304 s symplectic, c/k = 1/1000 s forward.
-  EXPECT_NEAR(predicted_largest_stable_step(SpringIntegrator::semi_implicit_euler, chain, kStiffness), 1.0 / 304, 0.01 / 304);
-  EXPECT_DOUBLE_EQ(predicted_largest_stable_step(SpringIntegrator::euler, chain, kStiffness), kDamping / kStiffness);
+  EXPECT_NEAR(predicted_largest_stable_step(Integrator::semi_implicit_euler, chain, kStiffness), 1.0 / 304, 0.01 / 304);
+  EXPECT_DOUBLE_EQ(predicted_largest_stable_step(Integrator::euler, chain, kStiffness), kDamping / kStiffness);
 }
 
 // A light end (10⁻² kg on 1 kg links) raises the stiffest spring mode ~8×: explicit springs need
 // steps below 1/4000 s and diverge at every step of the grid, while the implicit step holds.
 TEST(StabilityStress, LightEndMakesExplicitSpringsDivergeButNotImplicitOnes) {
   const Model chain = stress_chain(1e-2);
-  EXPECT_LT(predicted_largest_stable_step(SpringIntegrator::semi_implicit_euler, chain, kStiffness), 1.0 / 4000);
-  EXPECT_NE(run(chain, springs(SpringIntegrator::semi_implicit_euler, kStiffness, 1.0 / 1000), 10), Stability::stable);
-  EXPECT_EQ(run(chain, springs(SpringIntegrator::backward_euler, kStiffness, 1.0 / 240), 10), Stability::stable);
+  EXPECT_LT(predicted_largest_stable_step(Integrator::semi_implicit_euler, chain, kStiffness), 1.0 / 4000);
+  EXPECT_NE(run(chain, springs(Integrator::semi_implicit_euler, kStiffness, 1.0 / 1000), 10), Stability::stable);
+  EXPECT_EQ(run(chain, springs(Integrator::backward_euler, kStiffness, 1.0 / 240), 10), Stability::stable);
 }
 
 TEST(StabilityStress, AtEqualMassesOnlyTheExplicitIntegratorsDivergeAt240Hz) {
   const Model chain = stress_chain(1);
   const double dt = 1.0 / 240;
   std::vector<Method> stable = methods_that_hold(dt);
-  stable.push_back(springs(SpringIntegrator::backward_euler, kStiffness, dt));
+  stable.push_back(springs(Integrator::backward_euler, kStiffness, dt));
   stable.push_back({.series = "lagrange baumgarte", .family = Family::lagrange, .time_step = dt});
   stable.push_back({.series = "featherstone rk4", .family = Family::featherstone, .time_step = dt});
   for (const Method& method : stable) EXPECT_EQ(run(chain, method, 10), Stability::stable) << method.series;
   // Beyond their bounds (1/304 s, 1/1000 s) the explicit springs gain energy.
-  EXPECT_EQ(run(chain, springs(SpringIntegrator::semi_implicit_euler, kStiffness, dt), 10), Stability::energy_growth);
-  EXPECT_EQ(run(chain, springs(SpringIntegrator::euler, kStiffness, dt), 10), Stability::energy_growth);
+  EXPECT_EQ(run(chain, springs(Integrator::semi_implicit_euler, kStiffness, dt), 10), Stability::energy_growth);
+  EXPECT_EQ(run(chain, springs(Integrator::euler, kStiffness, dt), 10), Stability::energy_growth);
   // Featherstone's semi-implicit Euler takes the velocity-product terms explicitly (bench/README.md).
   EXPECT_EQ(run(chain, {.series = "featherstone semi-implicit", .family = Family::featherstone, .time_step = dt,
-                        .featherstone = {.integrator = FeatherstoneIntegrator::semi_implicit_euler}}, 10),
+                        .featherstone = {.integrator = Integrator::semi_implicit_euler}}, 10),
             Stability::energy_growth);
 }
 
@@ -145,7 +145,7 @@ TEST(StabilityStress, HeavyEndIsHeldByProjectionAndTearsTheScenesSprings) {
   const Model chain = stress_chain(100);
   const double dt = 1.0 / 240;
   for (const Method& method : methods_that_hold(dt)) EXPECT_EQ(run(chain, method, 10), Stability::stable) << method.series;
-  for (const SpringIntegrator integrator : {SpringIntegrator::semi_implicit_euler, SpringIntegrator::backward_euler}) {
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::backward_euler}) {
     EXPECT_EQ(run(chain, springs(integrator, kStiffness, dt), 10), Stability::joint_gap);
   }
 }
@@ -165,7 +165,7 @@ TEST(StabilityStressLong, StableMethodsRun100000StepsWithoutGainingEnergy) {
   cases.push_back({hold[0], 0.01});
   cases.push_back({hold[1], 1e-6});
   cases.push_back({hold[2], 1e-4});
-  cases.push_back({springs(SpringIntegrator::backward_euler, kStiffness, dt), 0.2});
+  cases.push_back({springs(Integrator::backward_euler, kStiffness, dt), 0.2});
   cases.push_back({{.series = "featherstone rk4", .family = Family::featherstone, .time_step = dt}, 1e-9});
   for (const Case& c : cases) {
     Simulation simulation(chain, c.method);

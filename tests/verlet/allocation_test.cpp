@@ -133,13 +133,13 @@ TEST(Allocation, ExplicitSpringStepAllocatesNothingAfterItsFirstCall) {
   // Every explicit integrator, on the three shipped scenes: contacts, impulses, sleeping.
   for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
     const Model model = testing::load_shipped_scene(file);
-    for (SpringIntegrator integrator : {SpringIntegrator::euler, SpringIntegrator::semi_implicit_euler, SpringIntegrator::rk2,
-                                        SpringIntegrator::rk4}) {
+    for (Integrator integrator : {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2,
+                                        Integrator::rk4}) {
       SpringState state = compile_springs(model, {.integrator = integrator, .damping = 50.0});
       step(state);
       const long before = testing::allocation_count();
       for (int s = 0; s < 600; ++s) step(state);
-      EXPECT_EQ(testing::allocation_count() - before, 0) << file << ", integrator " << static_cast<int>(integrator);
+      EXPECT_EQ(testing::allocation_count() - before, 0) << file << ", integrator " << integrator_name(integrator);
     }
   }
 }
@@ -150,13 +150,13 @@ TEST(Allocation, LagrangeTreeStepAllocatesNothingAfterItsFirstCall) {
   for (const char* file : {"humanoid.json", "chain.json", "stick_in_box.json"}) {
     const Model model = testing::load_shipped_scene(file);
     for (Stabilization stabilization : {Stabilization::baumgarte, Stabilization::projection}) {
-      for (RigidIntegrator integrator : {RigidIntegrator::semi_implicit_euler, RigidIntegrator::rk4}) {
+      for (Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
         LagrangeState state = compile_lagrange(model, {.integrator = integrator, .stabilization = stabilization});
         ASSERT_TRUE(state.uses_tree);
         step(state, model.settings.time_step);
         const long before = testing::allocation_count();
         for (int s = 0; s < 600; ++s) step(state, model.settings.time_step);
-        EXPECT_EQ(testing::allocation_count() - before, 0) << file << ", integrator " << static_cast<int>(integrator)
+        EXPECT_EQ(testing::allocation_count() - before, 0) << file << ", integrator " << integrator_name(integrator)
                                                   << ", stabilization " << static_cast<int>(stabilization);
       }
     }

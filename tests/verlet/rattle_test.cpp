@@ -112,7 +112,7 @@ TEST(Rattle, IsSecondOrderOnTheThreeParticleDoublePendulum) {
   const study::Trajectory expected = study::observe_run(reference, 0.5, 1.0 / 60).trajectory;
   std::vector<double> errors;
   for (const int substeps : {4, 8, 16}) {
-    study::Method method{.family = study::Family::verlet, .time_step = 1.0 / 60};
+    study::Method method{.family = study::Family::particles, .time_step = 1.0 / 60};
     method.verlet.solver = RelaxationSolver::direct;
     method.verlet.newton_iterations = 20;
     method.relaxation_tolerance = 1e-14;

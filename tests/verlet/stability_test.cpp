@@ -35,7 +35,7 @@ TEST(Stability, HumanoidRuns100000StepsWithoutDivergenceOrEnergyGain) {
 }
 
 TEST(Stability, HundredLinkChainRuns100000StepsWithoutDivergenceOrEnergyGain) {
-  const Model model = testing::load_shipped_scene("chain.json", {.variant = {}, .links = 100});
+  const Model model = testing::load_shipped_scene("chain.json", {.variant = {}, .links = 100, .copies = {}});
   // Released horizontally from rest: the energy scale is the drop of its centre of mass.
   const double drop_energy = model.body_mass() * 9.81 * 0.5 * 100 * 0.2;
   expect_stable<double>(model, 100000, 1e-3 * drop_energy);

@@ -106,7 +106,7 @@ SpringErrors spring_errors(double dt) {
   start_consistently(verlet, -kOmega * kOmega * x0, dt);
   SpringErrors e;
   for (int n = 1; n <= steps; ++n) {
-    integrate_rigid_bodies(bodies, dt, RigidIntegrator::rk2, scratch,
+    integrate_rigid_bodies(bodies, dt, Integrator::rk2, scratch,
                            [](const RigidBodyState& y, RigidForces& forces) { forces.force[0] -= kOmega * kOmega * y.position[0]; });
     apply_force(verlet, 0, Eigen::Vector3d(-kOmega * kOmega * centre(verlet)));
     step(verlet);

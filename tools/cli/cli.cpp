@@ -8,21 +8,20 @@
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
-#include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
-#include "limber/kernel/lagrange/compile.hpp"
 #include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
-#include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/compile.hpp"  // particle_name
 #include "limber/kernel/verlet/step.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
 
@@ -198,6 +197,15 @@ void refuse_verlet_flags(const RunFlags& flags) {
   if (flags.precision == "float") throw InputError("--precision float: the rigid-body methods run in double only");
 }
 
+// --integrator's spellings (CLI11 admits only these five).
+Integrator integrator_of(const std::string& flag) {
+  return flag == "euler"            ? Integrator::euler
+         : flag == "rk2"            ? Integrator::rk2
+         : flag == "rk4"            ? Integrator::rk4
+         : flag == "backward-euler" ? Integrator::backward_euler
+                                    : Integrator::semi_implicit_euler;
+}
+
 // The SpringOptions the flags ask for.
 SpringOptions spring_options(const RunFlags& flags) {
   refuse_verlet_flags(flags);
@@ -209,11 +217,7 @@ SpringOptions spring_options(const RunFlags& flags) {
     throw InputError("--integrator " + integrator + ": " +
                      (implicit ? "springs-implicit integrates with backward-euler" : "springs-explicit takes euler, semi-implicit, rk2 or rk4"));
   }
-  options.integrator = integrator == "euler"            ? SpringIntegrator::euler
-                       : integrator == "rk2"            ? SpringIntegrator::rk2
-                       : integrator == "rk4"            ? SpringIntegrator::rk4
-                       : integrator == "backward-euler" ? SpringIntegrator::backward_euler
-                                                        : SpringIntegrator::semi_implicit_euler;
+  options.integrator = integrator_of(integrator);
   if (flags.linear_solver_option->count() && !implicit) throw InputError("--linear-solver: applies to springs-implicit only");
   options.linear_solver = flags.linear_solver == "cg" ? SpringLinearSolver::conjugate_gradient : SpringLinearSolver::ldlt;
   if (given(flags.stiffness_option)) options.stiffness = checked(flags.stiffness_option, flags.stiffness, positive, "> 0");
@@ -228,10 +232,7 @@ LagrangeOptions lagrange_options(const RunFlags& flags) {
   LagrangeOptions options;
   const std::string integrator = flags.integrator_option->count() ? flags.integrator : "semi-implicit";
   if (integrator == "backward-euler") throw InputError("--integrator backward-euler: lagrange takes euler, semi-implicit, rk2 or rk4");
-  options.integrator = integrator == "euler" ? RigidIntegrator::euler
-                       : integrator == "rk2" ? RigidIntegrator::rk2
-                       : integrator == "rk4" ? RigidIntegrator::rk4
-                                             : RigidIntegrator::semi_implicit_euler;
+  options.integrator = integrator_of(integrator);
   options.stabilization = flags.stabilization == "projection" ? Stabilization::projection : Stabilization::baumgarte;
   options.solver = flags.constraint_solver == "tree"     ? MultiplierSolver::tree
                    : flags.constraint_solver == "sparse" ? MultiplierSolver::sparse
@@ -249,7 +250,7 @@ FeatherstoneOptions featherstone_options(const RunFlags& flags) {
   if (integrator != "semi-implicit" && integrator != "rk4") {
     throw InputError("--integrator " + integrator + ": featherstone takes semi-implicit or rk4");
   }
-  options.integrator = integrator == "rk4" ? FeatherstoneIntegrator::rk4 : FeatherstoneIntegrator::semi_implicit_euler;
+  options.integrator = integrator_of(integrator);
   return options;
 }
 
@@ -550,17 +551,6 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   out << "\n";
 }
 
-const char* integrator_name(SpringIntegrator integrator) {
-  switch (integrator) {
-    case SpringIntegrator::euler: return "forward Euler";
-    case SpringIntegrator::semi_implicit_euler: return "semi-implicit Euler";
-    case SpringIntegrator::rk2: return "RK2 (midpoint)";
-    case SpringIntegrator::rk4: return "RK4";
-    case SpringIntegrator::backward_euler: return "linearized backward Euler";
-  }
-  return "?";
-}
-
 void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, const SpringState& state, const RunRecord& record) {
   out << format("method      %s: rigid limbs joined by stiff springs, %s, double precision\n", flags.method.c_str(),
                 integrator_name(state.options.integrator));
@@ -576,7 +566,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
                 model.ball ? ", ball" : "", state.bodies.size(), state.springs.size(), range.c_str(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
-  if (state.options.integrator == SpringIntegrator::backward_euler) {
+  if (state.options.integrator == Integrator::backward_euler) {
     out << format("solver      sparse %s over %zu unknowns\n",
                   state.options.linear_solver == SpringLinearSolver::ldlt ? "LDLT (AMD ordering)" : "conjugate gradient (Jacobi)",
                   6 * state.bodies.size());
@@ -605,7 +595,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
 
 void method_lines(std::ostream& out, const Model& model, const RunFlags&, const FeatherstoneState& state, const RunRecord& record) {
   out << format("method      featherstone: rigid limbs in reduced coordinates (articulated-body algorithm), %s, double precision\n",
-                state.options.integrator == FeatherstoneIntegrator::rk4 ? "RK4" : "semi-implicit Euler");
+                state.options.integrator == Integrator::rk4 ? "RK4" : "semi-implicit Euler");
   out << format("model       %zu limbs, %zu joints%s%s%s; %zu island%s\n", model.bodies.size(), model.joints.size(),
                 model.ground ? ", ground" : "", model.bounds ? ", bounds" : "", model.ball ? ", ball" : "", state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
@@ -669,25 +659,25 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }
 
-int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
+// The method and its options the flags ask for (each reader refuses the other methods' flags).
+WorldOptions method_options(const RunFlags& flags) {
+  WorldOptions options;
   if (flags.springs()) {
-    SpringState state = compile_springs(model, spring_options(flags));
-    return simulate(state, model, flags, source, out);
+    options.method = Method::springs, options.springs = spring_options(flags);
+  } else if (flags.lagrange()) {
+    options.method = Method::lagrange, options.lagrange = lagrange_options(flags);
+  } else if (flags.featherstone()) {
+    options.method = Method::featherstone, options.featherstone = featherstone_options(flags);
+  } else {
+    options.method = Method::particles, options.particles = verlet_options(flags);
+    options.single_precision = flags.precision == "float";
   }
-  if (flags.lagrange()) {
-    LagrangeState state = compile_lagrange(model, lagrange_options(flags));
-    return simulate(state, model, flags, source, out);
-  }
-  if (flags.featherstone()) {
-    FeatherstoneState state = compile_featherstone(model, featherstone_options(flags));
-    return simulate(state, model, flags, source, out);
-  }
-  if (flags.precision == "float") {
-    VerletState<float> state = compile<float>(model, verlet_options(flags));
-    return simulate(state, model, flags, source, out);
-  }
-  VerletState<double> state = compile<double>(model, verlet_options(flags));
-  return simulate(state, model, flags, source, out);
+  return options;
+}
+
+int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
+  MethodState state = compile_method(model, method_options(flags));
+  return std::visit([&](auto& compiled) { return simulate(compiled, model, flags, source, out); }, state);
 }
 
 }  // namespace

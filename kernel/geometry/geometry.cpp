@@ -1,4 +1,4 @@
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -65,6 +65,20 @@ SphereLimbContact sphere_limb_contact(const Eigen::Vector3d& centre, double sphe
   return contact;
 }
 
+EndSupport end_support(const Eigen::Vector3d& normal, const Eigen::Vector3d& axis, double radius, bool is_disk) {
+  EndSupport support;
+  if (!is_disk) {
+    support.offset = -radius * normal;
+    support.reach = radius;
+    return support;
+  }
+  support.cosine = normal.dot(axis);
+  support.sine = std::sqrt(std::max(0.0, 1.0 - support.cosine * support.cosine));
+  support.reach = radius * support.sine;
+  if (support.sine > 1e-9) support.offset = -(radius / support.sine) * (normal - support.cosine * axis);
+  return support;
+}
+
 PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, double offset,
                                                 const Eigen::Vector3d& point, const Eigen::Vector3d& partner,
                                                 double radius, bool is_disk) {
@@ -72,16 +86,12 @@ PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, d
   constraint.gradient_point = normal;
   const Eigen::Vector3d along = point - partner;
   const double length = along.norm();
-  if (!is_disk || !(length > 0)) {
-    constraint.separation = normal.dot(point) - offset - radius;
-    return constraint;
-  }
-  const Eigen::Vector3d axis = along / length;
-  const double cosine = normal.dot(axis);
-  const double sine = std::sqrt(std::max(0.0, 1.0 - cosine * cosine));
-  constraint.separation = normal.dot(point) - offset - radius * sine;
-  if (sine > 1e-9) {
-    const Eigen::Vector3d tilt = (radius * cosine / (sine * length)) * (normal - cosine * axis);
+  const bool disk = is_disk && length > 0;
+  const EndSupport support = end_support(normal, disk ? Eigen::Vector3d(along / length) : Eigen::Vector3d::UnitZ(), radius, disk);
+  constraint.separation = normal.dot(point) - offset - support.reach;
+  if (disk && support.sine > 1e-9) {
+    const double cosine = support.cosine, sine = support.sine;
+    const Eigen::Vector3d tilt = (radius * cosine / (sine * length)) * (normal - cosine * (along / length));
     constraint.gradient_point += tilt;
     constraint.gradient_partner = -tilt;
   }

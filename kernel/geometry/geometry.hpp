@@ -1,6 +1,7 @@
 // Closest-point geometry between the ball, limbs and planes (double precision; few contacts).
 #pragma once
 
+#include <algorithm>
 #include <vector>
 
 #include <Eigen/Core>
@@ -34,6 +35,26 @@ struct SphereLimbContact {
 SphereLimbContact sphere_limb_contact(const Eigen::Vector3d& centre, double sphere_radius,
                                       const Eigen::Vector3d& head, const Eigen::Vector3d& tail,
                                       ShapeType shape, double limb_radius);
+
+/// A limb end's support against a plane of normal n (unit): its lowest point relative to the
+/// end's centre, and how far below the centre that is. A capsule's end sphere (or the ball)
+/// reaches `radius` along −n; a cylinder's end disk with unit axis u reaches its rim point along
+/// −(n − c·u), c = n·u, radius·√(1 − c²) below — a disk lying flat (√(1 − c²) ≤ 1e-9) touches
+/// with its whole face, represented by its centre. One rule for the particle and rigid methods.
+struct EndSupport {
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< lowest point − centre, m
+  double reach = 0;                                  ///< −n·offset, m, ≥ 0
+  double cosine = 0, sine = 0;                       ///< disk: n·u and √(1 − (n·u)²)
+};
+EndSupport end_support(const Eigen::Vector3d& normal, const Eigen::Vector3d& axis, double radius, bool is_disk);
+
+/// The separation (m, ≤ 0) a contact may be left at after a step: 0 for an overlap the step
+/// made, and an overlap there at the start (`start_separation` < 0) reduced by at most
+/// `recovery` (Settings::contact_recovery_speed·Δt, m), so an initial overlap is not flung out
+/// (Box2D's push-out limit). One rule for every method's push-out.
+inline double allowed_separation(double start_separation, double recovery) {
+  return start_separation < 0 ? std::min(0.0, start_separation + recovery) : 0.0;
+}
 
 /// The contact of a feature with the half-space n·x ≥ offset (n unit, solid below), as a
 /// constraint on two particles for position-based projection. The feature is a sphere of

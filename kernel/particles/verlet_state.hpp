@@ -10,10 +10,11 @@
 
 #include <Eigen/Core>
 
-#include "limber/kernel/collision/geometry.hpp"
+#include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/model/island_sleep.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
-#include "limber/kernel/relaxation/relaxation_plan.hpp"
+#include "limber/kernel/particles/relaxation_plan.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
 #include "limber/layouts/aligned_array.hpp"
 #include "limber/layouts/constraints/distance_constraint_buffer.hpp"
@@ -86,38 +87,13 @@ struct VerletOptions {
   bool long_range_attachments = false;
 };
 
-/// Why relaxation stopped in a step (thesis 3.2.3 lists the three).
-enum class RelaxationStop : std::uint8_t {
-  iterations,  ///< ran the configured number of sweeps
-  tolerance,   ///< the largest correction of a sweep fell below the tolerance
-  budget,      ///< the wall-clock budget ran out (hard real-time stop)
-  idle,        ///< nothing awake to relax
-};
-
-
-/// What one step did. A step of `substeps` substeps sums their sweeps and fallbacks; `stop`
-/// and `largest_correction` are the last substep's.
-struct StepReport {
-  StepStatus status = StepStatus::ok;
-  RelaxationStop stop = RelaxationStop::idle;
-  int iterations = 0;              ///< relaxation sweeps run (position sweeps; rattle runs as many velocity sweeps)
-  double largest_correction = 0;   ///< largest particle displacement in the last sweep, m
-  int substeps = 0;                ///< substeps run (settings.relaxation.substeps, or fewer on a divergence)
-  /// Rattle: constraint projections that fell back to pbd because their start gradient had
-  /// turned too far from the current one (kStartGradientMinimumCosine), counted once per
-  /// constraint and substep.
-  std::uint64_t fallbacks = 0;
-};
-
 /// A connected set of particles (joined by constraints), stored contiguously in every buffer so
 /// a pass over the awake islands is a pass over a few index ranges. Islands sleep and wake whole.
-struct Island {
+struct Island : IslandSleep {
   std::uint32_t particle_begin = 0, particle_end = 0;
   std::uint32_t constraint_begin = 0, constraint_end = 0;
   std::uint32_t limb_begin = 0, limb_end = 0;
   std::uint32_t feature_begin = 0, feature_end = 0;  ///< contact features (plane contacts)
-  bool sleeping = false;
-  double still_time = 0;  ///< s spent below the sleep speed threshold
 };
 
 /// LimbBuffer::centre of a limb without a centre particle (LimbMasses::ends).
