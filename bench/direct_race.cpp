@@ -72,11 +72,12 @@ Result run_limber(std::size_t links, const Contender& contender) {
   model.settings.sleep.enabled = false;
   model.settings.time_step = kTimeStep;
   model.settings.damping = 0;
-  model.settings.relaxation.iterations = contender.solver == RelaxationSolver::direct ? 1 : contender.iterations;
-  model.settings.relaxation.tolerance = contender.tolerance;
-  model.settings.relaxation.projection = contender.projection;
-  model.settings.relaxation.substeps = contender.substeps;
   VerletOptions options;
+  options.verlet.joints = ParticleJoints::shared_particle;
+  options.relaxation.iterations = contender.solver == RelaxationSolver::direct ? 1 : contender.iterations;
+  options.relaxation.tolerance = contender.tolerance;
+  options.relaxation.projection = contender.projection;
+  options.relaxation.substeps = contender.substeps;
   options.solver = contender.solver;
   options.newton_iterations = contender.solver == RelaxationSolver::direct ? contender.iterations : 1;
   options.long_range_attachments = contender.long_range_attachments;

@@ -14,7 +14,7 @@
 
 int main() {
   using namespace limber;
-  const Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {});
+  const Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {}).model;
   struct Configuration {
     const char* name;
     LagrangeOptions options;

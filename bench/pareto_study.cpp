@@ -46,14 +46,18 @@ constexpr double kDuration = 2;           // s: trajectories of a chaotic chain 
 constexpr double kSampleInterval = 0.05;  // s: a whole number of steps of every Δt below
 constexpr double kReferenceStep = 1.0 / 20000;
 
-Model scene_model(const std::string& scene) {
+Scene scene_model(const std::string& scene) {
   if (scene == "double-pendulum") return double_pendulum();
   if (scene == "chain-5") return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json");
-  if (scene == "chain-100") return make_chain_model({.links = 100, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = 2});
+  if (scene == "chain-100") {
+    Scene chain{make_chain_model({.links = 100, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = 2}), {}};
+    chain.methods.verlet.joints = ParticleJoints::shared_particle;  // one particle a joint, as measured
+    return chain;
+  }
   if (scene == "humanoid") {
-    Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/humanoid.json");
-    model.settings.sleep.start_asleep = false;  // every method steps the whole body from t = 0
-    return model;
+    Scene humanoid = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/humanoid.json");
+    humanoid.model.settings.sleep.start_asleep = false;  // every method steps the whole body from t = 0
+    return humanoid;
   }
   throw std::invalid_argument("scene: '" + scene + "' is not one of double-pendulum, chain-5, chain-100, humanoid");
 }
@@ -148,7 +152,7 @@ int run(int argc, char** argv) {
       if (repeats < 1) throw std::invalid_argument("--repeats: must be an integer ≥ 1");
     } else throw std::invalid_argument(flag + ": unknown flag (or missing value)");
   }
-  const Model model = scene_model(scene);
+  const Scene model = scene_model(scene);
   const bool has_trajectory = scene != "humanoid";
 
   Trajectory reference;

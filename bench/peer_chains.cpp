@@ -122,9 +122,10 @@ Measurement simulate(State& state) {
 
 Measurement run_verlet(std::size_t links, RelaxationSolver solver, int iterations, double tolerance) {
   Model model = chain_model(links);
-  model.settings.relaxation.iterations = solver == RelaxationSolver::direct ? 1 : iterations;
-  model.settings.relaxation.tolerance = tolerance;
   VerletOptions options;
+  options.verlet.joints = ParticleJoints::shared_particle;  // make_chain_model's chain, one particle a joint
+  options.relaxation.iterations = solver == RelaxationSolver::direct ? 1 : iterations;
+  options.relaxation.tolerance = tolerance;
   options.solver = solver;
   options.newton_iterations = solver == RelaxationSolver::direct ? iterations : 1;
   options.threads = 1;

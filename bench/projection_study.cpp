@@ -35,12 +35,12 @@ constexpr double kReferenceStep = kFrame / 400;
 
 struct Workload {
   std::string name;
-  Model model;
+  Scene model;
 };
 
 std::vector<Workload> workloads() {
-  Model pendulum = double_pendulum();
-  pendulum.settings.verlet.limb_masses = LimbMasses::inertia;
+  Scene pendulum = double_pendulum();
+  pendulum.methods.verlet.limb_masses = LimbMasses::inertia;
   return {{"double-pendulum", pendulum},
           {"chain-arc", heavy_end_chain(ChainRelease::arc)},
           {"chain-3d", heavy_end_chain(ChainRelease::small_3d)}};
@@ -65,12 +65,12 @@ Method verlet(ProjectionRule projection, int substeps, int sweeps) {
   return method;
 }
 
-Trajectory reference_trajectory(const Model& model, double duration) {
+Trajectory reference_trajectory(const Scene& model, double duration) {
   Simulation fine(model, reference_method(kReferenceStep));
   Trajectory reference = observe_run(fine, duration, kFrame).trajectory;
   Simulation finer(model, reference_method(kReferenceStep / 2));
   std::fprintf(stderr, "%s: reference featherstone rk4 at 1/%.0f s; its distance to 1/%.0f s over %.0f s: %.2e m\n",
-               model.name.c_str(), 1 / kReferenceStep, 2 / kReferenceStep, duration,
+               model.model.name.c_str(), 1 / kReferenceStep, 2 / kReferenceStep, duration,
                max_point_error(observe_run(finer, duration, kFrame).trajectory, reference));
   return reference;
 }
@@ -114,7 +114,7 @@ int order(const std::string& csv_path) {
 }
 
 // Median of three runs' wall time per frame, µs (stepping only).
-double microseconds_per_frame(const Model& model, const Method& method, double duration) {
+double microseconds_per_frame(const Scene& model, const Method& method, double duration) {
   return 1e6 * kFrame * wall_time_per_simulated_second(model, method, duration, 3);
 }
 
@@ -126,7 +126,7 @@ int frames(const std::string& csv_path) {
     std::fprintf(csv, "projection,substeps,sweeps,position_sweeps_per_frame,max_point_error_2s,relative_energy_drift_10s,"
                       "fallbacks_10s,microseconds_per_frame\n");
   }
-  const Model model = heavy_end_chain(ChainRelease::arc);
+  const Scene model = heavy_end_chain(ChainRelease::arc);
   const Trajectory reference = reference_trajectory(model, 2.0);
   std::printf("%-7s %9s %7s %14s %12s %18s %10s %10s\n", "rule", "substeps", "sweeps", "sweeps/frame", "error 2 s m",
               "drift 10 s /mgL", "fallbacks", "us/frame");
@@ -162,8 +162,8 @@ int frames(const std::string& csv_path) {
 // it swings regularly. The error at 2 s and over the whole 10 s.
 int pendulum() {
   for (const double angle : {1.5707963267948966, 0.5235987755982988}) {
-    Model model = double_pendulum(angle);
-    model.settings.verlet.limb_masses = LimbMasses::inertia;
+    Scene model = double_pendulum(angle);
+    model.methods.verlet.limb_masses = LimbMasses::inertia;
     std::printf("released %.0f degrees from the vertical\n", angle * 180 / 3.141592653589793);
     std::fflush(stdout);
     const Trajectory reference = reference_trajectory(model, 10.0);
@@ -187,13 +187,13 @@ int pendulum() {
 // substeps (15625 frames, 260 s), converged (direct solver) and with 2 sweeps a substep, and
 // pbd with 2 sweeps; the largest drift in each tenth of the run shows whether it grows.
 int long_run() {
-  const Model model = heavy_end_chain(ChainRelease::arc);
+  const Scene model = heavy_end_chain(ChainRelease::arc);
   constexpr int kSubsteps = 64, kFrames = 1000000 / kSubsteps;
   for (const auto& [projection, sweeps] : {std::pair{ProjectionRule::rattle, 0}, std::pair{ProjectionRule::rattle, 2},
                                            std::pair{ProjectionRule::pbd, 2}}) {
     const Method method = verlet(projection, kSubsteps, sweeps);
     Simulation simulation(model, method);
-    const double start = simulation.observe().energy(), scale = energy_scale(model);
+    const double start = simulation.observe().energy(), scale = energy_scale(model.model);
     std::printf("%s, %s, %d frames (10^6 substeps): largest |E - E0| / mgL in each tenth:", method.series.c_str(),
                 method.setting.c_str(), kFrames);
     double tenth = 0;

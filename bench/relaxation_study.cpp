@@ -37,9 +37,10 @@ double largest_stretch(const Variant& variant, int sweeps) {
   Model model = make_chain_model(spec);
   model.settings.sleep.enabled = false;
   model.settings.time_step = 1.0 / 240;
-  model.settings.relaxation.iterations = sweeps;
-  model.settings.relaxation.over_relaxation = variant.relaxation_factor;
   VerletOptions options;
+  options.verlet.joints = ParticleJoints::shared_particle;
+  options.relaxation.iterations = sweeps;
+  options.relaxation.over_relaxation = variant.relaxation_factor;
   options.solver = variant.solver, options.order = variant.order, options.direction = variant.direction;
   options.threads = 1;
   VerletState<double> state = compile<double>(model, options);

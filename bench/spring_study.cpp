@@ -24,7 +24,7 @@ using namespace limber;
 
 const double kStiffnesses[] = {1e3, 3e3, 1e4, 3e4, 1e5, 3e5, 1e6, 1e7, 1e8};
 
-Model chain_scene() { return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {}); }
+Model chain_scene() { return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {}).model; }
 
 struct Run {
   bool stable = true;

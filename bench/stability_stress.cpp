@@ -41,7 +41,7 @@ using namespace limber::study;
 // ---------------------------------------------------------------------------------------------
 // The methods and the chain.
 
-// The scene's spring (Settings::springs): k = 2·10⁴ N/m, c = 20 N·s/m.
+// The default spring (SpringSettings, a scene's "springs"): k = 2·10⁴ N/m, c = 20 N·s/m.
 constexpr double kSceneStiffness = 2e4, kSceneDamping = 20;
 
 study::Method spring_method(std::string series, Integrator integrator, double stiffness, double damping, double dt) {
@@ -230,7 +230,7 @@ void long_runs(bool quick, Output& out) {
 // impacts: the humanoid and the ball.
 
 void impacts(bool quick, Output& out) {
-  const Model scene = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/humanoid.json");
+  const Model scene = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/humanoid.json").model;
   const std::vector<double> speeds = quick ? std::vector<double>{10, 100} : std::vector<double>{10, 20, 50, 100};
   const double dt = scene.settings.time_step, duration = quick ? 1 : 3;
   print_bounds(duration);

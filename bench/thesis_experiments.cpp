@@ -32,7 +32,17 @@ namespace limber {
 namespace {
 
 Model scene(const std::string& file, const SceneOptions& options = {}) {
-  return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file, options);
+  return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file, options).model;
+}
+
+// chain.json's own particle settings (its rule and substeps), with the relaxation rule `rule`.
+VerletOptions chain_json_options(RelaxationRule rule) {
+  const Scene chain = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json");
+  VerletOptions options;
+  options.rule = rule;
+  options.relaxation = chain.methods.relaxation;
+  options.verlet = chain.methods.verlet;
+  return options;
 }
 
 // Thesis 3.2.3 / 4.4.2: more sweeps, smaller gaps; over-relaxation gets there sooner.
@@ -41,11 +51,12 @@ void relaxation_sweeps() {
   std::printf("| sweeps per step | joint gap, ω = 1 (thesis) | joint gap, ω = 1.5 (chain.json) | link stretch, shared-particle joints, ω = 1 |\n|---|---|---|---|\n");
   // Largest joint gap (or, with shared particles, link stretch) over 5 s, relative to the link length.
   const auto largest_error = [](int sweeps, double omega, bool shared) {
-    Model model = scene("chain.json");
-    model.settings.relaxation.iterations = sweeps;
-    model.settings.relaxation.over_relaxation = omega;
-    if (shared) model.settings.verlet.joints = ParticleJoints::shared_particle;
-    auto state = compile<double>(model);
+    const Model model = scene("chain.json");
+    VerletOptions options = chain_json_options(RelaxationRule::weighted);
+    options.relaxation.iterations = sweeps;
+    options.relaxation.over_relaxation = omega;
+    if (shared) options.verlet.joints = ParticleJoints::shared_particle;
+    auto state = compile<double>(model, options);
     double largest = 0;
     for (int s = 0; s < 1200; ++s) {
       step(state);
@@ -90,7 +101,7 @@ void humanoid_knocks() {
               "contact. Rest: its horizontal distance from the start at 5 s, when the passive body lies on the ground.\n\n");
   std::printf("| body | ball | knock | rest |\n|---|---|---|---|\n");
   const auto row = [](const char* body, const char* label, const std::function<void(Ball&)>& adjust) {
-    Model model = scene("humanoid.json", {.variant = std::string(body), .links = {}});
+    Model model = scene("humanoid.json", {.variant = std::string(body), .links = {}, .copies = {}});
     adjust(*model.ball);
     auto state = compile<double>(model);
     const Eigen::Vector3d start = observe(state).body_centre_of_mass;
@@ -156,7 +167,7 @@ struct VerletParticle {
   const ParticleProblem* problem;
   VerletState<double> state;
 
-  VerletParticle(const ParticleProblem& p, double dt, bool consistent_start) : problem(&p), state(compile<double>(model(p, dt))) {
+  VerletParticle(const ParticleProblem& p, double dt, bool consistent_start) : problem(&p), state(compile<double>(model(p, dt), one_sweep())) {
     if (!consistent_start) return;
     const Eigen::Vector3d shift = 0.5 * p.acceleration(p.position) * dt * dt;
     for (std::size_t i = 0; i < state.particles.size(); ++i) {
@@ -174,9 +185,13 @@ struct VerletParticle {
     model.bodies.push_back(body);
     model.settings.gravity = p.gravity;
     model.settings.time_step = dt;
-    model.settings.relaxation.iterations = 1;
     model.settings.sleep.enabled = false;
     return model;
+  }
+  static VerletOptions one_sweep() {
+    VerletOptions options;
+    options.relaxation.iterations = 1;
+    return options;
   }
   Eigen::Vector3d position() const {
     return 0.5 * (state.particles.position(state.limbs.head[0]) + state.particles.position(state.limbs.tail[0]));
@@ -396,25 +411,27 @@ void chain_methods() {
   const Model heavy_end = scene("chain.json");
   Model equal = heavy_end;
   equal.bodies.back().mass = equal.bodies.front().mass;
-  Model heavy_inertia = heavy_end;
-  heavy_inertia.settings.verlet.limb_masses = LimbMasses::inertia;
   Model heavier = heavy_end;  // a 10× end makes the rules' difference plain
   heavier.bodies.back().mass = 10 * heavier.bodies.front().mass;
   struct Row { const char* name; const char* end; const Model* model; ChainMethod method; };
   const Row rows[] = {
-      {"weighted Verlet (eq. 4.7)", "2 × link", &heavy_end, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
-      {"midpoint Verlet (eq. 4.6)", "2 × link", &heavy_end, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::unweighted}); }},
-      {"weighted = midpoint Verlet", "1 × link", &equal, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
+      {"weighted Verlet (eq. 4.7)", "2 × link", &heavy_end, [](const Model& m) { return verlet_stepper(m, chain_json_options(RelaxationRule::weighted)); }},
+      {"midpoint Verlet (eq. 4.6)", "2 × link", &heavy_end, [](const Model& m) { return verlet_stepper(m, chain_json_options(RelaxationRule::unweighted)); }},
+      {"weighted = midpoint Verlet", "1 × link", &equal, [](const Model& m) { return verlet_stepper(m, chain_json_options(RelaxationRule::weighted)); }},
       {"stiff springs, explicit, k = 2·10⁴ N/m (the thesis's step)", "2 × link", &heavy_end,
        [](const Model& m) { return spring_stepper(m, {.integrator = Integrator::semi_implicit_euler}); }},
       {"stiff springs, implicit, k = 10⁶ N/m", "2 × link", &heavy_end,
        [](const Model& m) { return spring_stepper(m, {.integrator = Integrator::backward_euler, .stiffness = 1e6}); }},
-      {"weighted Verlet, three-particle limbs (rigid-limb inertia)", "2 × link", &heavy_inertia,
-       [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
+      {"weighted Verlet, three-particle limbs (rigid-limb inertia)", "2 × link", &heavy_end,
+       [](const Model& m) {
+         VerletOptions options = chain_json_options(RelaxationRule::weighted);
+         options.verlet.limb_masses = LimbMasses::inertia;
+         return verlet_stepper(m, options);
+       }},
       {"Featherstone (exact rigid chain, reference)", "2 × link", &heavy_end, [](const Model& m) { return featherstone_stepper(m); }},
       {"Featherstone (exact rigid chain, reference)", "1 × link", &equal, [](const Model& m) { return featherstone_stepper(m); }},
-      {"weighted Verlet (eq. 4.7)", "10 × link", &heavier, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::weighted}); }},
-      {"midpoint Verlet (eq. 4.6)", "10 × link", &heavier, [](const Model& m) { return verlet_stepper(m, {.rule = RelaxationRule::unweighted}); }},
+      {"weighted Verlet (eq. 4.7)", "10 × link", &heavier, [](const Model& m) { return verlet_stepper(m, chain_json_options(RelaxationRule::weighted)); }},
+      {"midpoint Verlet (eq. 4.6)", "10 × link", &heavier, [](const Model& m) { return verlet_stepper(m, chain_json_options(RelaxationRule::unweighted)); }},
       {"Featherstone (exact rigid chain, reference)", "10 × link", &heavier, [](const Model& m) { return featherstone_stepper(m); }},
   };
   for (const Row& row : rows) {

@@ -31,11 +31,12 @@
 namespace limber {
 namespace {
 
-Model chain(long links) {
-  Model model = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links, .copies = {}});
-  model.settings.sleep.enabled = false;
-  return model;
+Scene chain_scene(long links) {
+  Scene scene = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json", {.variant = {}, .links = links, .copies = {}});
+  scene.model.settings.sleep.enabled = false;
+  return scene;
 }
+Model chain(long links) { return chain_scene(links).model; }
 
 // Steps the chain from its released pose, and again from it after every simulated second
 // (240 steps; the restart is not timed). Long chains on k = 2·10⁴ N/m tear — each joint carries
@@ -79,10 +80,12 @@ void BM_SpringsImplicit(benchmark::State& run) {
 // Figure 4.8: Verlet with weighted relaxation (eq. 4.7), range(1) sweeps a step. range(2) = 1:
 // the thesis's loop (sequential Gauss-Seidel, scalar) instead of the default coloured SIMD sweep.
 void BM_WeightedVerlet(benchmark::State& run) {
-  Model model = chain(run.range(0));
-  model.settings.relaxation.iterations = static_cast<int>(run.range(1));
-  model.settings.relaxation.over_relaxation = 1;  // the thesis's plain Gauss-Seidel (chain.json ships 1.5)
+  const Scene scene = chain_scene(run.range(0));
+  const Model& model = scene.model;
   VerletOptions options{.rule = RelaxationRule::weighted};
+  options.relaxation = scene.methods.relaxation;  // chain.json's rule and substeps
+  options.relaxation.iterations = static_cast<int>(run.range(1));
+  options.relaxation.over_relaxation = 1;  // the thesis's plain Gauss-Seidel (chain.json ships 1.5)
   if (run.range(2) == 1) options.order = SweepOrder::sequential, options.simd = false;
   time_steps<VerletState<double>>(run, [&] { return compile<double>(model, options); });
   run.counters["sweeps"] = static_cast<double>(run.range(1));

@@ -18,6 +18,15 @@ std::string_view method_name(Method method) {
   return "?";
 }
 
+WorldOptions world_options(Method method, const MethodSettings& scene) {
+  WorldOptions options;
+  options.method = method;
+  options.particles.relaxation = scene.relaxation;
+  options.particles.verlet = scene.verlet;
+  options.springs.defaults = scene.springs;
+  return options;
+}
+
 MethodState compile_method(const Model& model, const WorldOptions& options) {
   switch (options.method) {
     case Method::particles:

@@ -9,6 +9,7 @@
 
 #include "limber/kernel/featherstone/featherstone_state.hpp"
 #include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/particles/verlet_state.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
@@ -35,6 +36,10 @@ struct WorldOptions {
   LagrangeOptions lagrange{};
   FeatherstoneOptions featherstone{};
 };
+
+/// Default options for `method` that carry a scene's method settings (a scene file's
+/// relaxation, particle and spring settings: Scene::methods); change any field after.
+WorldOptions world_options(Method method, const MethodSettings& scene);
 
 /// Any method's compiled state.
 using MethodState = std::variant<VerletState<double>, VerletState<float>, SpringState, LagrangeState, FeatherstoneState>;

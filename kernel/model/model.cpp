@@ -188,25 +188,12 @@ void validate_settings(const Settings& settings) {
   require_non_negative(settings.damping, "settings.damping");
   require_positive(settings.divergence_speed, "settings.divergence_speed");
   require_non_negative(settings.contact_recovery_speed, "settings.contact_recovery_speed");
-  require_at_least(settings.relaxation.iterations, 1, "settings.relaxation.iterations");
-  require_non_negative(settings.relaxation.tolerance, "settings.relaxation.tolerance");
-  require_non_negative(settings.relaxation.budget_us, "settings.relaxation.budget_us");
-  require_in_range(settings.relaxation.over_relaxation, 0, 2, "settings.relaxation.over_relaxation",
-                   /*low_open=*/true, /*high_open=*/true);
-  require_at_least(settings.relaxation.substeps, 1, "settings.relaxation.substeps");
-  require_at_most(settings.relaxation.substeps, kMaxSubsteps, "settings.relaxation.substeps");
-  require_positive(settings.springs.stiffness, "settings.springs.stiffness");
-  require_non_negative(settings.springs.damping, "settings.springs.damping");
   for (int axis = 0; axis < 3; ++axis) {
     require_non_negative(settings.drag.linear[axis], [axis] { return indexed("settings.drag.linear", axis); });
     require_non_negative(settings.drag.angular[axis], [axis] { return indexed("settings.drag.angular", axis); });
   }
   require_non_negative(settings.sleep.speed_threshold, "settings.sleep.speed_threshold");
   require_non_negative(settings.sleep.time_to_sleep, "settings.sleep.time_to_sleep");
-  if (settings.verlet.drag_factor) {
-    require_in_range(*settings.verlet.drag_factor, 1, 2, "settings.verlet.drag_factor",
-                     /*low_open=*/true);
-  }
 }
 
 }  // namespace

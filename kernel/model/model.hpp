@@ -1,7 +1,8 @@
 // The model: an immutable, solver-independent description of a scene.
 //
-// Every method (Verlet + relaxation now; springs, Lagrange, Featherstone later) compiles from
-// this one description, so the same scene can be run by each and the numbers compared. Nothing
+// Every method (particles, springs, Lagrange, Featherstone) compiles from this one description,
+// so the same scene can be run by each and the numbers compared. How a method solves it (sweeps,
+// substeps, integrators) is not here but in the method's options (method_settings.hpp). Nothing
 // here changes while stepping; everything that does lives in a method's State.
 //
 // Units are SI throughout (m, kg, s, N); z is up. The thesis's cm, ms and lb are converted at
@@ -132,12 +133,12 @@ struct Joint {
   /// Unit, world frame at the initial poses: universal only, the axis fixed in the outboard body,
   /// perpendicular to `axis`.
   Vector3 second_axis = Vector3::UnitY();
-  /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset: Settings::springs.
+  /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset: SpringOptions::defaults (kernel/springs/spring_state.hpp).
   std::optional<double> stiffness;  ///< N/m, > 0
   std::optional<double> damping;    ///< N·s/m, ≥ 0
 };
 
-/// A spherical joint with the scene's spring settings (the common case, without naming every field).
+/// A spherical joint with the default spring (the common case, without naming every field).
 inline Joint spherical_joint(std::string name, int inboard, int outboard, const Vector3& inboard_anchor,
                              const Vector3& outboard_anchor) {
   Joint joint;
@@ -185,43 +186,6 @@ struct Ball {
   Vector3 velocity = Vector3::Zero();   ///< initial, m/s
 };
 
-/// Along which gradient a distance constraint's projection moves its particles
-/// (kernel/relaxation/README.md derives both).
-enum class ProjectionRule : std::uint8_t {
-  /// The gradient at the end of the step: the nearest point on the constraint manifold. The
-  /// thesis's and Jakobsen's rule (position-based dynamics), state (x, x*). First order in Δt,
-  /// and it damps fast rotation.
-  pbd,
-  /// The gradient at the start of the (sub)step (SHAKE, Ryckaert, Ciccotti & Berendsen 1977),
-  /// then a velocity stage that projects velocities onto the constraints' tangent space (RATTLE,
-  /// Andersen 1983); state (x, v). Second order and symplectic (Leimkuhler & Skeel 1994). The
-  /// same inverse-mass weights, the same sweeps.
-  rattle,
-};
-
-/// Most substeps a step may be split into (a guard against hostile input, not a physical limit).
-inline constexpr int kMaxSubsteps = 10000;
-
-/// When relaxation stops (thesis 3.2.3): after `iterations` sweeps, or earlier when the largest
-/// correction of a sweep falls below `tolerance`, or when `budget_us` of wall-clock time has
-/// passed (the hard real-time stop; not deterministic). Each step of Δt runs as `substeps` steps
-/// of Δt/substeps (Macklin et al. 2019, "Small steps in physics simulation"), each with its own
-/// sweeps (and, for rattle, as many velocity sweeps).
-struct RelaxationSettings {
-  int iterations = 100;    ///< ≥ 1 sweeps per substep; the thesis's program used 100
-  double tolerance = 0;    ///< m; 0 disables
-  double budget_us = 0;    ///< µs per step; 0 disables
-  /// Successive over-relaxation factor ω in (0, 2) for distance constraints: each projection
-  /// moves ω times the plain correction (thesis 3.2.3, "over-relaxation techniques"). 1 is the
-  /// thesis's Gauss-Seidel; > 1 converges faster along chains. Contacts are never over-relaxed,
-  /// nor is the first sweep of a step (it starts far from the solution and would overshoot).
-  /// The projections are nonlinear, so the linear theory's (0, 2) is not all safe: on chain.json
-  /// ω ≤ 1.8 never gained energy, ω = 1.9 did below 10 sweeps (bench/README.md, "Relaxation").
-  double over_relaxation = 1;
-  ProjectionRule projection = ProjectionRule::pbd;
-  int substeps = 1;        ///< in [1, kMaxSubsteps]
-};
-
 /// Bodies at rest are not simulated (thesis 4.5.3): an island sleeps after its particles have
 /// moved slower than `speed_threshold` for `time_to_sleep`, and wakes on contact or force.
 struct SleepSettings {
@@ -229,37 +193,6 @@ struct SleepSettings {
   bool start_asleep = false;      ///< islands with no initial velocity start asleep (the standing humanoid)
   double speed_threshold = 0.05;  ///< m/s
   double time_to_sleep = 0.5;     ///< s
-};
-
-/// How the particle (Verlet) methods build a spherical joint (thesis 3.2.5).
-enum class ParticleJoints {
-  zero_length_constraint,  ///< inboard and outboard anchor particles joined by a distance constraint with d = 0
-  shared_particle,         ///< the two limbs share one particle carrying both mass shares
-};
-
-/// Where the particle (Verlet) methods put a limb's mass (thesis 4.1).
-enum class LimbMasses {
-  ends,     ///< half at each end: the thesis's program; a uniform rod's inertia is 3× too large
-  inertia,  ///< three particles (tail, centre, head) whose masses reproduce the limb's mass, centre
-            ///< of mass along the axis and inertia about a transverse axis (uniform rod: m/6, 2m/3, m/6)
-  lumps,    ///< the body's point masses, each shared between head and tail by the lever rule
-            ///< (exact for lumps at the ends; every lump must lie on the axis, between the ends)
-};
-
-struct VerletSettings {
-  ParticleJoints joints = ParticleJoints::zero_length_constraint;
-  LimbMasses limb_masses = LimbMasses::ends;
-  /// The thesis's drag (3.2.1, [Jak03]): x' = f·x − (f − 1)·x* + a·Δt², e.g. f = 1.99. Depends on
-  /// Δt; prefer Settings::damping. When set it replaces the damping.
-  std::optional<double> drag_factor;
-};
-
-/// The stiff-spring method (thesis 3.3, 4.4.1): each spherical joint becomes a zero-length
-/// spring with damping between its two anchor points, f = −k·d − c·ḋ (eq. 3.11 with damping),
-/// d the inboard anchor minus the outboard anchor. Joint::stiffness / damping override these.
-struct SpringSettings {
-  double stiffness = 2e4;  ///< k, N/m, > 0
-  double damping = 20;     ///< c, N·s/m, ≥ 0
 };
 
 /// Drag on rigid bodies (thesis 2.1.5, 2.1.6), in each body's frame (z: the limb's axis), so a
@@ -276,10 +209,7 @@ struct Settings {
   double duration = 5;           ///< simulated time of a run, s, > 0
   /// Linear velocity damping, 1/s: without forces, speed decays as exp(−damping·t), whatever Δt.
   double damping = 0;
-  RelaxationSettings relaxation;
   SleepSettings sleep;
-  VerletSettings verlet;
-  SpringSettings springs;
   DragSettings drag;
   /// A particle faster than this is reported as divergence, m/s.
   double divergence_speed = 1000;

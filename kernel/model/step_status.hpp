@@ -40,7 +40,7 @@ struct StepReport {
   RelaxationStop stop = RelaxationStop::idle;
   int iterations = 0;             ///< sweeps run (position sweeps; rattle runs as many velocity sweeps)
   double largest_correction = 0;  ///< largest particle displacement in the last sweep, m
-  int substeps = 0;               ///< substeps run (settings.relaxation.substeps, or fewer on a divergence)
+  int substeps = 0;               ///< substeps run (VerletOptions::relaxation.substeps, or fewer on a divergence)
   /// Rattle: constraint projections that fell back to pbd because their start gradient had
   /// turned too far from the current one (kStartGradientMinimumCosine), once per constraint and
   /// substep.

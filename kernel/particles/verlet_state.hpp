@@ -12,6 +12,7 @@
 
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/model/island_sleep.hpp"
+#include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/particles/relaxation_plan.hpp"
@@ -76,7 +77,7 @@ struct VerletOptions {
   std::uint32_t parallel_minimum_slots = 0;
   std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
   /// RelaxationSolver::direct: Newton steps per time step (≥ 1; replaces
-  /// settings.relaxation.iterations), whether they start from the previous step's multipliers,
+  /// relaxation.iterations), whether they start from the previous step's multipliers,
   /// and the compliance α of every distance constraint, m/N (0: rigid; XPBD, Macklin et al.
   /// 2016 — the other solvers treat every constraint as rigid and refuse α > 0).
   int newton_iterations = 2;
@@ -85,6 +86,10 @@ struct VerletOptions {
   /// Long-range attachments (Kim, Chentanez, Müller 2012): after every sweep, each particle
   /// joined to a pinned one is pulled back within the rest length of the path between them.
   bool long_range_attachments = false;
+  /// Sweeps, tolerance, over-relaxation, projection rule and substeps (a scene file's
+  /// "settings.relaxation"), and how limbs become particles ("settings.verlet").
+  RelaxationSettings relaxation{};
+  VerletSettings verlet{};
 };
 
 /// A connected set of particles (joined by constraints), stored contiguously in every buffer so
@@ -176,7 +181,7 @@ struct VerletState;
 /// Whether `state` steps under the rattle projection rule, (x, v) (else pbd, (x, x*)).
 template <typename Scalar>
 bool uses_rattle(const VerletState<Scalar>& state) {
-  return state.settings.relaxation.projection == ProjectionRule::rattle;
+  return state.options.relaxation.projection == ProjectionRule::rattle;
 }
 
 template <typename Scalar>

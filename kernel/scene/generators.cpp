@@ -58,10 +58,9 @@ Joint tail_to_head(std::string name, std::size_t inboard, std::size_t outboard, 
 }
 
 /// Settings of a workload: sleeping would skip the work being measured.
-Settings workload_settings(ParticleJoints joints) {
+Settings workload_settings() {
   Settings settings;
   settings.sleep.enabled = false;
-  settings.verlet.joints = joints;
   return settings;
 }
 
@@ -80,7 +79,7 @@ Model make_chain_model(const ChainSpec& spec) {
   const Vector3 direction = spec.direction.normalized();
   Model model;
   model.name = "chain";
-  model.settings = workload_settings(spec.joints);
+  model.settings = workload_settings();
   model.bodies.reserve(spec.links);
   model.joints.reserve(spec.links);
   for (std::size_t k = 0; k < spec.links; ++k) {
@@ -108,7 +107,7 @@ Model make_tree_model(const TreeSpec& spec) {
   };
   Model model;
   model.name = "tree";
-  model.settings = workload_settings(spec.joints);
+  model.settings = workload_settings();
   model.bodies.reserve(spec.links);
   model.joints.reserve(spec.links);
   model.bodies.push_back(make_link("link_0", Vector3::Zero(), -Vector3::UnitZ(), length, spec.link_mass));
@@ -142,7 +141,7 @@ Model make_grid_model(const GridSpec& spec) {
 
   Model model;
   model.name = "grid";
-  model.settings = workload_settings(ParticleJoints::shared_particle);
+  model.settings = workload_settings();
   model.bodies.resize(horizontal_count + columns * (rows - 1));
   for (std::size_t r = 0; r < rows; ++r) {
     for (std::size_t c = 0; c < columns; ++c) {
@@ -246,7 +245,7 @@ Model copies_of(const Model& model, std::size_t count, double spacing, std::stri
 }
 
 Model make_humanoid_pile(std::size_t count, double spacing) {
-  Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid");
+  Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid").model;
   humanoid.ball.reset(), humanoid.bounds.reset();
   Model pile = copies_of(humanoid, count, spacing, "h", "humanoid_pile");
   pile.name = "humanoid_pile";

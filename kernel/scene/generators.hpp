@@ -7,7 +7,9 @@
 // on a spec that describes no model (no links, a non-positive length or mass, ...).
 //
 // Chains, trees and grids turn sleeping off: a workload measures the cost of simulating, which
-// sleeping bodies skip.
+// sleeping bodies skip. The particle method joins their links with zero-length constraints
+// unless told VerletSettings::joints = shared_particle (VerletOptions::verlet), which makes each
+// joint one particle: the workloads' usual form.
 #pragma once
 
 #include <cstddef>
@@ -27,7 +29,6 @@ struct ChainSpec {
   Vector3 direction{1, 0, 0};       ///< non-zero (normalized): from each link's head to its tail;
                                     ///< horizontal releases the chain to swing down
   bool pinned = true;               ///< joint "pin" holds link_0's head at the anchor
-  ParticleJoints joints = ParticleJoints::shared_particle;
 };
 
 /// Bodies "link_0" … "link_{N−1}"; joints "pin" (if pinned) and "joint_k" (k ≥ 1) from
@@ -42,7 +43,6 @@ struct TreeSpec {
   double link_length = 0.1;   ///< m, > 0; capsule radius 0.01 · link_length
   double link_mass = 1;       ///< kg, > 0
   bool pinned = true;         ///< joint "pin" holds the root's head at the origin
-  ParticleJoints joints = ParticleJoints::shared_particle;
 };
 
 /// Body "link_k" hangs from the tail of its parent "link_{(k−1)/branching}" by joint "joint_k"
@@ -67,8 +67,8 @@ struct GridSpec {
 /// (c·spacing, 0, −r·spacing): a vertical sheet hanging from its top corners, row 0 at z = 0.
 /// At a node meeting d link ends, joints "node_<r>_<c>_<k>" (k = 1 … d−1) join the first end to
 /// each other one — a star, so zero-length constraints would not be redundant either.
-/// settings.verlet.joints = shared_particle: compiled, each node is one particle and each edge
-/// one distance constraint (rows·columns particles; the pins add neither).
+/// Compiled with shared-particle joints, each node is one particle and each edge one distance
+/// constraint (rows·columns particles; the pins add neither).
 Model make_grid_model(const GridSpec& spec);
 
 /// The larger of the bodies' extents in x and y (capsule axes ± radius), m; 0 for no bodies.

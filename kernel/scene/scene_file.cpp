@@ -171,10 +171,38 @@ Settings read_settings(const Object& object) {
   object.optional("contact_recovery_speed", settings.contact_recovery_speed);
   require_non_negative(settings.contact_recovery_speed, object.path("contact_recovery_speed"));
 
+  if (const Json* json = object.find("sleep")) {
+    const Object sleep(*json, object.path("sleep"));
+    sleep.allow_only({"enabled", "start_asleep", "speed_threshold", "time_to_sleep"});
+    SleepSettings& target = settings.sleep;
+    sleep.optional("enabled", target.enabled);
+    sleep.optional("start_asleep", target.start_asleep);
+    sleep.optional("speed_threshold", target.speed_threshold);
+    require_non_negative(target.speed_threshold, sleep.path("speed_threshold"));
+    sleep.optional("time_to_sleep", target.time_to_sleep);
+    require_non_negative(target.time_to_sleep, sleep.path("time_to_sleep"));
+  }
+
+  if (const Json* json = object.find("drag")) {
+    const Object drag(*json, object.path("drag"));
+    drag.allow_only({"linear", "angular"});
+    for (const char* key : {"linear", "angular"}) {
+      if (!drag.find(key)) continue;
+      const Vector3 coefficients = drag.vector(key);
+      for (int axis = 0; axis < 3; ++axis) require_non_negative(coefficients[axis], indexed(drag.path(key), axis));
+      (std::string_view(key) == "linear" ? settings.drag.linear : settings.drag.angular) = coefficients;
+    }
+  }
+  return settings;
+}
+
+/// The settings' method part ("relaxation", "verlet", "springs"; read_settings allows the keys).
+MethodSettings read_method_settings(const Object& object) {
+  MethodSettings methods;
   if (const Json* json = object.find("relaxation")) {
     const Object relaxation(*json, object.path("relaxation"));
     relaxation.allow_only({"iterations", "tolerance", "budget_us", "over_relaxation", "projection", "substeps"});
-    RelaxationSettings& target = settings.relaxation;
+    RelaxationSettings& target = methods.relaxation;
     if (relaxation.find("iterations")) target.iterations = relaxation.integer("iterations");
     require_at_least(target.iterations, 1, relaxation.path("iterations"));
     relaxation.optional("tolerance", target.tolerance);
@@ -199,38 +227,16 @@ Settings read_settings(const Object& object) {
     require_at_most(target.substeps, kMaxSubsteps, relaxation.path("substeps"));
   }
 
-  if (const Json* json = object.find("sleep")) {
-    const Object sleep(*json, object.path("sleep"));
-    sleep.allow_only({"enabled", "start_asleep", "speed_threshold", "time_to_sleep"});
-    SleepSettings& target = settings.sleep;
-    sleep.optional("enabled", target.enabled);
-    sleep.optional("start_asleep", target.start_asleep);
-    sleep.optional("speed_threshold", target.speed_threshold);
-    require_non_negative(target.speed_threshold, sleep.path("speed_threshold"));
-    sleep.optional("time_to_sleep", target.time_to_sleep);
-    require_non_negative(target.time_to_sleep, sleep.path("time_to_sleep"));
-  }
-
   if (const Json* json = object.find("springs")) {
     const Object springs(*json, object.path("springs"));
     springs.allow_only({"stiffness", "damping"});
     if (springs.find("stiffness")) {
-      settings.springs.stiffness = springs.number("stiffness");
-      require_positive(settings.springs.stiffness, springs.path("stiffness"));
+      methods.springs.stiffness = springs.number("stiffness");
+      require_positive(methods.springs.stiffness, springs.path("stiffness"));
     }
     if (springs.find("damping")) {
-      settings.springs.damping = springs.number("damping");
-      require_non_negative(settings.springs.damping, springs.path("damping"));
-    }
-  }
-  if (const Json* json = object.find("drag")) {
-    const Object drag(*json, object.path("drag"));
-    drag.allow_only({"linear", "angular"});
-    for (const char* key : {"linear", "angular"}) {
-      if (!drag.find(key)) continue;
-      const Vector3 coefficients = drag.vector(key);
-      for (int axis = 0; axis < 3; ++axis) require_non_negative(coefficients[axis], indexed(drag.path(key), axis));
-      (std::string_view(key) == "linear" ? settings.drag.linear : settings.drag.angular) = coefficients;
+      methods.springs.damping = springs.number("damping");
+      require_non_negative(methods.springs.damping, springs.path("damping"));
     }
   }
   if (const Json* json = object.find("verlet")) {
@@ -239,9 +245,9 @@ Settings read_settings(const Object& object) {
     if (verlet.find("joints")) {
       const std::string joints = verlet.string("joints");
       if (joints == "zero_length_constraint") {
-        settings.verlet.joints = ParticleJoints::zero_length_constraint;
+        methods.verlet.joints = ParticleJoints::zero_length_constraint;
       } else if (joints == "shared_particle") {
-        settings.verlet.joints = ParticleJoints::shared_particle;
+        methods.verlet.joints = ParticleJoints::shared_particle;
       } else {
         fail(verlet.path("joints"),
              "must be \"zero_length_constraint\" or \"shared_particle\", got " + in_quotes(joints));
@@ -250,11 +256,11 @@ Settings read_settings(const Object& object) {
     if (verlet.find("limb_masses")) {
       const std::string limb_masses = verlet.string("limb_masses");
       if (limb_masses == "ends") {
-        settings.verlet.limb_masses = LimbMasses::ends;
+        methods.verlet.limb_masses = LimbMasses::ends;
       } else if (limb_masses == "inertia") {
-        settings.verlet.limb_masses = LimbMasses::inertia;
+        methods.verlet.limb_masses = LimbMasses::inertia;
       } else if (limb_masses == "lumps") {
-        settings.verlet.limb_masses = LimbMasses::lumps;
+        methods.verlet.limb_masses = LimbMasses::lumps;
       } else {
         fail(verlet.path("limb_masses"), "must be \"ends\", \"inertia\" or \"lumps\", got " + in_quotes(limb_masses));
       }
@@ -262,10 +268,10 @@ Settings read_settings(const Object& object) {
     if (verlet.find("drag_factor")) {
       const double drag_factor = verlet.number("drag_factor");
       require_in_range(drag_factor, 1, 2, verlet.path("drag_factor"), /*low_open=*/true);
-      settings.verlet.drag_factor = drag_factor;
+      methods.verlet.drag_factor = drag_factor;
     }
   }
-  return settings;
+  return methods;
 }
 
 Ground read_ground(const Object& object) {
@@ -729,7 +735,7 @@ Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const 
   return gear;
 }
 
-Model read_model(const Json& json, const SceneOptions& options) {
+Scene read_scene(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
                    "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant"});
@@ -738,11 +744,13 @@ Model read_model(const Json& json, const SceneOptions& options) {
     fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
   }
 
-  Model model;
+  Scene scene;
+  Model& model = scene.model;
   model.name = root.string("name");
   if (model.name.empty()) fail("name", "must be a non-empty name");
   if (root.find("description")) root.string("description");  // type-checked, not kept
   model.settings = read_settings(Object(root.at("settings"), "settings"));
+  scene.methods = read_method_settings(Object(root.at("settings"), "settings"));
   if (const Json* ground = root.find("ground"))
     model.ground = read_ground(Object(*ground, "ground"));
   if (const Json* bounds = root.find("bounds"))
@@ -846,7 +854,7 @@ Model read_model(const Json& json, const SceneOptions& options) {
   }
   require_generated(double(copies) * double(model.bodies.size()), "copies.count");
   if (copies > 1) model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies");
-  return model;
+  return scene;
 }
 
 /// Replays a parse that failed to find where and why: nlohmann's exceptions carry only a byte
@@ -941,7 +949,7 @@ std::string parse_error_message(std::string_view text, std::string_view source) 
 
 }  // namespace
 
-Model load_scene_text(std::string_view json_text, std::string_view source,
+Scene load_scene_text(std::string_view json_text, std::string_view source,
                       const SceneOptions& options) {
   Json json;
   try {
@@ -950,15 +958,16 @@ Model load_scene_text(std::string_view json_text, std::string_view source,
     throw ModelError(parse_error_message(json_text, source));
   }
   try {
-    Model model = read_model(json, options);
-    validate(model);
-    return model;
+    Scene scene = read_scene(json, options);
+    validate(scene.model);
+    validate(scene.methods);
+    return scene;
   } catch (const ModelError& error) {
     throw ModelError(std::string(source) + ": " + error.what());
   }
 }
 
-Model load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
+Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
   const std::string source = path.string();
   const auto cannot_read = [&] {
     throw ModelError(source + ": cannot read file: " + std::strerror(errno));

@@ -1,4 +1,5 @@
-// Scene files: JSON in, validated Model out, or one clear error line.
+// Scene files: JSON in, a validated Scene out (its Model, and the settings it gives the methods
+// that may step it), or one clear error line.
 //
 // Format (version 1). All numbers SI (m, kg, s). "required" fields missing, unknown fields,
 // wrong types and non-finite numbers (e.g. 1e999) are errors. Optional fields and their
@@ -111,6 +112,7 @@
 #include <string>
 #include <string_view>
 
+#include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 
 namespace limber {
@@ -122,13 +124,21 @@ struct SceneOptions {
   std::optional<long> copies;          ///< copies of the scene's bodies (its "copies" count, or laid out by their extent)
 };
 
+/// A loaded scene: the solver-independent Model, and what the file says about the methods
+/// ("settings.relaxation", "settings.verlet", "settings.springs"), which each method takes
+/// through its options (methods/method.hpp: world_options(method, scene.methods)).
+struct Scene {
+  Model model;
+  MethodSettings methods;
+};
+
 /// Parses and validates a scene. `source` names it in error messages (usually the file path).
 /// Throws ModelError (one line naming source, field and problem) on any bad input, including
 /// an option the scene cannot honour (a variant it lacks, links without a "chain").
-Model load_scene_text(std::string_view json_text, std::string_view source, const SceneOptions& options = {});
+Scene load_scene_text(std::string_view json_text, std::string_view source, const SceneOptions& options = {});
 
 /// Reads and loads a scene file. Throws ModelError when it cannot be read or is invalid.
-Model load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
+Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
 
 /// The text of tools/scenes/humanoid.json, compiled into the library: the default scene.
 std::string_view embedded_humanoid_scene();

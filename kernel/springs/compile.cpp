@@ -15,6 +15,7 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   if (options.damping && !(*options.damping >= 0 && std::isfinite(*options.damping))) {
     throw ModelError("damping: must be a finite number >= 0");
   }
+  validate(options.defaults);
   SpringState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
   require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "stiff-spring");
@@ -24,8 +25,8 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   SpringBuffer& springs = state.springs;
   static_cast<JointAnchors&>(springs) = joint_anchors(state, model);
   for (const Joint& joint : model.joints) {
-    springs.stiffness.push_back(options.stiffness.value_or(joint.stiffness.value_or(model.settings.springs.stiffness)));
-    springs.damping.push_back(options.damping.value_or(joint.damping.value_or(model.settings.springs.damping)));
+    springs.stiffness.push_back(options.stiffness.value_or(joint.stiffness.value_or(options.defaults.stiffness)));
+    springs.damping.push_back(options.damping.value_or(joint.damping.value_or(options.defaults.damping)));
   }
 
   const std::size_t body_count = state.bodies.size();

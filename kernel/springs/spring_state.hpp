@@ -15,6 +15,7 @@
 #include <Eigen/SparseCore>
 #include <Eigen/IterativeLinearSolvers>
 
+#include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/numerics/integrator.hpp"
@@ -43,6 +44,9 @@ struct SpringOptions {
   /// Backward Euler: 1 is the linearized step (eq. 3.16–3.22); each further iteration is a
   /// Newton step on the nonlinear equations with the same matrix (implicit_step.hpp).
   int newton_iterations = 2;
+  /// The spring of a joint that names none (Joint::stiffness, ::damping; a scene file's
+  /// "settings.springs"). `stiffness` and `damping` above override both.
+  SpringSettings defaults{};
 };
 
 /// The springs, one per Model joint: the joint's anchors and, per spring, one array per field.

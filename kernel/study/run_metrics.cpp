@@ -118,7 +118,7 @@ ObservedRun observe_run(Simulation& simulation, double duration, double sample_i
   return run;
 }
 
-double wall_time_per_simulated_second(const Model& scene, const Method& method, double duration, int repeats) {
+double wall_time_per_simulated_second(const Scene& scene, const Method& method, double duration, int repeats) {
   std::vector<double> times;
   const long steps = std::lround(duration / method.time_step);
   for (int r = 0; r < std::max(1, repeats); ++r) {

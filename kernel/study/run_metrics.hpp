@@ -89,7 +89,7 @@ ObservedRun observe_run(Simulation& simulation, double duration, double sample_i
 /// Median over `repeats` fresh runs of the wall time per simulated second (s/s) of stepping
 /// `method` on `scene` for `duration` s, compile excluded and nothing observed — the cost of
 /// the method alone. A run that diverges stops there; its time is per simulated second done.
-double wall_time_per_simulated_second(const Model& scene, const Method& method, double duration, int repeats);
+double wall_time_per_simulated_second(const Scene& scene, const Method& method, double duration, int repeats);
 
 /// How a stress run ended (bench/README.md, "Stability").
 enum class Stability : std::uint8_t {

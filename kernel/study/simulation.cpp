@@ -12,33 +12,32 @@
 
 namespace limber::study {
 
-Model configure(const Model& scene, const Method& method) {
-  Model model = scene;
-  model.settings.time_step = method.time_step;
-  if (method.family == Family::particles) {
-    model.settings.relaxation.iterations = method.sweeps;
-    model.settings.relaxation.over_relaxation = method.over_relaxation;
-    model.settings.relaxation.tolerance = method.relaxation_tolerance;
-    model.settings.relaxation.projection = method.projection;
-    model.settings.relaxation.substeps = method.substeps;
-    if (method.limb_masses) model.settings.verlet.limb_masses = *method.limb_masses;
-    if (method.joints) model.settings.verlet.joints = *method.joints;
-  }
-  return model;
+WorldOptions configure(const MethodSettings& scene, const Method& method) {
+  WorldOptions options{.method = method.family, .single_precision = false, .particles = method.verlet,
+                       .springs = method.springs, .lagrange = method.lagrange, .featherstone = method.featherstone};
+  options.particles.relaxation = {.iterations = method.sweeps, .tolerance = method.relaxation_tolerance, .budget_us = 0,
+                                  .over_relaxation = method.over_relaxation, .projection = method.projection,
+                                  .substeps = method.substeps};
+  options.particles.verlet = scene.verlet;
+  if (method.limb_masses) options.particles.verlet.limb_masses = *method.limb_masses;
+  if (method.joints) options.particles.verlet.joints = *method.joints;
+  options.springs.defaults = scene.springs;
+  return options;
 }
 
 namespace {
 
-// The study's method as the one dispatch's options (kernel/methods/), double precision.
-WorldOptions method_options(const Method& method) {
-  return {.method = method.family, .single_precision = false, .particles = method.verlet, .springs = method.springs,
-          .lagrange = method.lagrange, .featherstone = method.featherstone};
+Model at_time_step(Model model, double time_step) {
+  model.settings.time_step = time_step;
+  return model;
 }
 
 }  // namespace
 
-Simulation::Simulation(const Model& scene, const Method& method)
-    : model_(configure(scene, method)), time_step_(method.time_step), state_(compile_method(model_, method_options(method))) {}
+Simulation::Simulation(const Scene& scene, const Method& method)
+    : model_(at_time_step(scene.model, method.time_step)),
+      time_step_(method.time_step),
+      state_(compile_method(model_, configure(scene.methods, method))) {}
 
 StepStatus Simulation::step() {
   return std::visit(

@@ -2,8 +2,9 @@
 // studies, the stability stress runs and the peer comparisons step and observe.
 //
 // A Method names a family (weighted or unweighted Verlet relaxation, stiff springs, Lagrange
-// multipliers, Featherstone) and that family's settings; configure() writes them into a copy of
-// the Model, and Simulation compiles it and steps it. Nothing here changes the physics of a
+// multipliers, Featherstone) and that family's settings; configure() turns them and the scene's
+// method settings into the one dispatch's options, and Simulation compiles the Model with them
+// and steps it. Nothing here changes the physics of a
 // method: a Simulation steps exactly what `limber run` with the same flags steps.
 #pragma once
 
@@ -18,6 +19,7 @@
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber::study {
 
@@ -31,7 +33,7 @@ struct Method {
   Family family = Family::particles;
   double time_step = 1.0 / 240;  ///< s
 
-  // Verlet (thesis 3.2, 4.2): the rule and solver, sweeps (settings.relaxation.iterations) or
+  // Verlet (thesis 3.2, 4.2): the rule and solver, sweeps (VerletOptions::relaxation.iterations) or
   // Newton steps (verlet.newton_iterations), over-relaxation, the projection rule and substeps,
   // and the particle model.
   VerletOptions verlet{};
@@ -48,15 +50,18 @@ struct Method {
   FeatherstoneOptions featherstone{};
 };
 
-/// `scene` with `method`'s time step and Verlet settings written into its Settings.
-Model configure(const Model& scene, const Method& method);
+/// `method` as the one dispatch's options (double precision): the scene's method settings, then
+/// the relaxation and particle settings `method` gives.
+WorldOptions configure(const MethodSettings& scene, const Method& method);
 
 /// A compiled Model stepping under one method (double precision).
 class Simulation {
  public:
-  /// Compiles configure(scene, method). Throws ModelError when the model is invalid for the
+  /// Compiles scene.model at `method`'s time step with configure(scene.methods, method). Throws ModelError when the model is invalid for the
   /// method (as the method's own compile does).
-  Simulation(const Model& scene, const Method& method);
+  Simulation(const Scene& scene, const Method& method);
+  /// A Model without method settings of its own (the methods' defaults).
+  Simulation(const Model& model, const Method& method) : Simulation(Scene{model, {}}, method) {}
 
   /// One step of the method's time step.
   StepStatus step();

@@ -3,20 +3,19 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "limber/kernel/scene/generators.hpp"
 
 namespace limber::study {
 
-Model heavy_end_chain(ChainRelease release) {
+Scene heavy_end_chain(ChainRelease release) {
   constexpr int kLinks = 5;
   constexpr double kLength = 0.1;
   const double joint_mass[kLinks + 1] = {1.0, 1, 1, 1, 1, 2};  // at the pin (no effect), then the outer ends
   Model model;
   model.name = release == ChainRelease::arc ? "heavy-end chain, arc release" : "heavy-end chain, small 3-D release";
   model.settings.sleep.enabled = false;
-  model.settings.verlet.joints = ParticleJoints::shared_particle;
-  model.settings.verlet.limb_masses = LimbMasses::lumps;
   Vector3 head = Vector3::Zero();
   for (int k = 0; k < kLinks; ++k) {
     Vector3 direction;  // head → tail
@@ -42,14 +41,19 @@ Model heavy_end_chain(ChainRelease release) {
     head += kLength * direction;
   }
   validate(model);
-  return model;
+  MethodSettings methods;
+  methods.verlet.joints = ParticleJoints::shared_particle;
+  methods.verlet.limb_masses = LimbMasses::lumps;
+  return {std::move(model), methods};
 }
 
-Model double_pendulum(double release_angle) {
+Scene double_pendulum(double release_angle) {
   const Vector3 direction(std::sin(release_angle), 0, -std::cos(release_angle));
   Model model = make_chain_model({.links = 2, .link_length = 0.5, .link_mass = 1, .anchor = {0, 0, 1}, .direction = direction});
   model.name = "double pendulum";
-  return model;
+  MethodSettings methods;
+  methods.verlet.joints = ParticleJoints::shared_particle;
+  return {std::move(model), methods};
 }
 
 }  // namespace limber::study

@@ -182,12 +182,14 @@ void renumber_particles(VerletState<Scalar>& state) {
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   validate(model);
+  validate(options.relaxation);
+  validate(options.verlet);
   require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "verlet");
   const std::size_t body_count = model.bodies.size();
   const std::size_t joint_count = model.joints.size();
-  const bool shared = model.settings.verlet.joints == ParticleJoints::shared_particle;
-  const bool centres = model.settings.verlet.limb_masses == LimbMasses::inertia;
-  const bool rattle = model.settings.relaxation.projection == ProjectionRule::rattle;
+  const bool shared = options.verlet.joints == ParticleJoints::shared_particle;
+  const bool centres = options.verlet.limb_masses == LimbMasses::inertia;
+  const bool rattle = options.relaxation.projection == ProjectionRule::rattle;
   const double dt = model.settings.time_step;
 
   VerletState<Scalar> state;
@@ -200,7 +202,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   std::vector<LimbParticleMasses> limb_masses(body_count);
   for (std::size_t b = 0; b < body_count; ++b) {
     const double half = 0.5 * model.bodies[b].mass;
-    switch (model.settings.verlet.limb_masses) {
+    switch (options.verlet.limb_masses) {
       case LimbMasses::ends: limb_masses[b] = LimbParticleMasses{half, 0.0, half}; break;
       case LimbMasses::inertia: limb_masses[b] = inertia_particle_masses(model, b); break;
       case LimbMasses::lumps: limb_masses[b] = lump_particle_masses(model, b); break;

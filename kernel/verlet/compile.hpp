@@ -11,7 +11,7 @@ namespace limber {
 /// Builds the Verlet state of `model` (thesis 3.2.5, 4.2.2):
 /// - each limb becomes two particles, its head and tail (the ends of its axis), joined by a
 ///   distance constraint of the limb's length (its link constraint). Where its mass goes is
-///   settings.verlet.limb_masses (thesis 4.1):
+///   options.verlet.limb_masses (thesis 4.1):
 ///   - ends: half at each end, the thesis's program, whatever the limb's point masses; the
 ///     particle limb has the right mass and centre (for a uniform limb) but a uniform rod's
 ///     transverse inertia m·L²/4 instead of m·L²/12, so it swings like a simple pendulum;
@@ -29,7 +29,7 @@ namespace limber {
 ///     with shared-particle joints); a lump's own radius is not represented;
 /// - a spherical joint becomes a zero-length distance constraint between the inboard limb's
 ///   anchor particle and the outboard's, or one shared particle when
-///   settings.verlet.joints == shared_particle; a joint to the world pins a particle (w = 0);
+///   options.verlet.joints == shared_particle; a joint to the world pins a particle (w = 0);
 /// - initial velocities become previous positions, x(−Δt) = x(0) − v·Δt, and, under the rattle
 ///   projection rule, the particles' velocities (the rule is fixed at compile: the state is (x, v));
 /// - particles are grouped by island (connected limbs) and ordered breadth-first from the

@@ -15,9 +15,8 @@ namespace {
 // Fraction of the last step's displacement a particle keeps (its implicit velocity).
 template <typename Scalar>
 double velocity_retention(const VerletState<Scalar>& state, double dt) {
-  const Settings& settings = state.settings;
-  const double kept = settings.verlet.drag_factor ? *settings.verlet.drag_factor - 1.0
-                                                  : std::exp(-settings.damping * dt);
+  const std::optional<double>& drag_factor = state.options.verlet.drag_factor;
+  const double kept = drag_factor ? *drag_factor - 1.0 : std::exp(-state.settings.damping * dt);
   return kept * dt / state.previous_time_step;
 }
 
@@ -79,8 +78,8 @@ void half_kick(VerletState<Scalar>& state, double h) {
 template <typename Scalar>
 void kick_and_drift(VerletState<Scalar>& state, double h) {
   auto& p = state.particles;
-  const Settings& settings = state.settings;
-  const Scalar kept = static_cast<Scalar>(settings.verlet.drag_factor ? *settings.verlet.drag_factor - 1.0 : std::exp(-settings.damping * h));
+  const std::optional<double>& drag_factor = state.options.verlet.drag_factor;
+  const Scalar kept = static_cast<Scalar>(drag_factor ? *drag_factor - 1.0 : std::exp(-state.settings.damping * h));
   const Scalar step = static_cast<Scalar>(h);
   std::uint64_t integrated = 0;
   for (std::uint32_t island_index : state.awake_islands) {
@@ -236,7 +235,7 @@ struct VelocityField {
 // count, last correction and stop.
 template <typename Scalar>
 void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, StepReport& report) {
-  const RelaxationSettings& relaxation = state.settings.relaxation;
+  const RelaxationSettings& relaxation = state.options.relaxation;
   const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty(), has_centres = has_limb_centres(state);
   const bool interleaved = state.plan.layout != ParticleLayout::soa;
   const auto start = std::chrono::steady_clock::now();
@@ -292,12 +291,12 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     double largest = velocity_sweep(state);
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
     if (contacts) apply_restitution(state, dt);
-    if (state.settings.relaxation.tolerance > 0 && largest * dt < state.settings.relaxation.tolerance) break;
+    if (state.options.relaxation.tolerance > 0 && largest * dt < state.options.relaxation.tolerance) break;
   }
   end_velocity_projection(state);
 }
 
-// One substep of either rule (the whole step when settings.relaxation.substeps is 1): the passes
+// One substep of either rule (the whole step when relaxation.substeps is 1): the passes
 // of step.hpp's list.
 template <typename Scalar>
 StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int index, int count) {
@@ -335,13 +334,13 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
 template <typename Scalar>
 StepReport step(VerletState<Scalar>& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
-    const int substeps = state.settings.relaxation.substeps;
+    const int substeps = state.options.relaxation.substeps;
     const double h = dt / substeps, start_time = state.time;
     state.plan.fallbacks.value = 0;
     state.ball_touched = false;
     for (KinematicTarget& target : state.kinematic_targets) target.start = state.particles.position(target.particle).template cast<double>();
     for (int k = 0; k < substeps; ++k) {
-      const StepReport part = substep(state, h, state.settings.relaxation.budget_us / substeps, k, substeps);
+      const StepReport part = substep(state, h, state.options.relaxation.budget_us / substeps, k, substeps);
       report.iterations += part.iterations;
       report.largest_correction = part.largest_correction;
       report.stop = part.stop;

@@ -5,9 +5,9 @@
 
 namespace limber {
 
-/// Advances `state` by dt seconds, as settings.relaxation.substeps substeps of h = dt/substeps
+/// Advances `state` by dt seconds, as options.relaxation.substeps substeps of h = dt/substeps
 /// (Macklin et al. 2019, "Small steps in physics simulation"), each running the passes of the
-/// thesis's loop (figure 2.5; 4.2.2) under the projection rule (settings.relaxation.projection;
+/// thesis's loop (figure 2.5; 4.2.2) under the projection rule (options.relaxation.projection;
 /// kernel/relaxation/README.md):
 ///  1. integrate   pbd: Verlet, x' = x + k·(x − x*) + a·h² (eq. 3.6 / 4.5), over awake islands;
 ///                 k = exp(−damping·h) (physical damping) or the thesis's f − 1 (f = 1.99),

@@ -2,7 +2,7 @@
 // one set of calls, whatever the method (Box2D v3's world and body functions, Jolt's
 // BodyInterface and MuJoCo's mjData fields are the models).
 //
-//   limber::World world(limber::load_scene_file("ragdoll.json"), {.method = limber::Method::featherstone});
+//   limber::World world(limber::load_scene_file("ragdoll.json"), limber::Method::featherstone);
 //   const limber::BodyId head = world.body("head");
 //   world.apply_impulse(head, {2, 0, 0}, world.pose(head).position);
 //   world.step(1.0 / 60);
@@ -37,6 +37,7 @@
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/methods/method.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber {
 
@@ -80,6 +81,9 @@ class World {
   /// method cannot represent it (the message names the part), std::invalid_argument for options
   /// that do not go together.
   explicit World(Model model, WorldOptions options = {});
+  /// A loaded scene under `method`, with the method settings the scene gives
+  /// (world_options(method, scene.methods)).
+  World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
 
   /// One step of dt seconds (the Model's time step without an argument). Never throws; a bad dt
   /// or a divergence is the status.

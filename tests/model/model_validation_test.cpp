@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 
 namespace limber {
@@ -162,9 +163,25 @@ TEST(ModelValidation, ValidateRejectsBoundsWhoseMaxIsNotAboveMin) {
             "bounds.max[2]: must be > bounds.min[2] = 0, got -1");
 }
 
+// What validate(MethodSettings) throws, or "" (the scene file's names for the fields).
+std::string method_settings_error(const std::function<void(MethodSettings&)>& change) {
+  MethodSettings settings;
+  change(settings);
+  try {
+    validate(settings);
+  } catch (const ModelError& error) {
+    return error.what();
+  }
+  return "";
+}
+
 TEST(ModelValidation, ValidateRejectsZeroRelaxationIterations) {
-  EXPECT_EQ(error_after([](Model& m) { m.settings.relaxation.iterations = 0; }),
+  EXPECT_EQ(method_settings_error([](MethodSettings& m) { m.relaxation.iterations = 0; }),
             "settings.relaxation.iterations: must be >= 1, got 0");
+  EXPECT_EQ(method_settings_error([](MethodSettings& m) { m.relaxation.substeps = 10001; }),
+            "settings.relaxation.substeps: must be <= 10000, got 10001");
+  EXPECT_EQ(method_settings_error([](MethodSettings& m) { m.springs.stiffness = 0; }),
+            "settings.springs.stiffness: must be > 0, got 0");
 }
 
 TEST(ModelValidation, ValidateRejectsBallWithoutSizeOrMass) {
@@ -173,8 +190,8 @@ TEST(ModelValidation, ValidateRejectsBallWithoutSizeOrMass) {
 }
 
 TEST(ModelValidation, ValidateChecksDragFactorOnlyWhenSet) {
-  EXPECT_EQ(error_after([](Model& m) { m.settings.verlet.drag_factor = 1.99; }), "");
-  EXPECT_EQ(error_after([](Model& m) { m.settings.verlet.drag_factor = 1; }),
+  EXPECT_EQ(method_settings_error([](MethodSettings& m) { m.verlet.drag_factor = 1.99; }), "");
+  EXPECT_EQ(method_settings_error([](MethodSettings& m) { m.verlet.drag_factor = 1; }),
             "settings.verlet.drag_factor: must be in (1, 2], got 1");
 }
 

@@ -28,17 +28,18 @@ using Scalars = ::testing::Types<float, double>;
 TYPED_TEST_SUITE(ColouredRelaxation, Scalars);
 
 // A chain of `links` with a heavy end (670× a link: the mass ratio), horizontal, pinned.
-Model heavy_end_chain(std::size_t links) {
+// Relaxed by 20 sweeps a step.
+Scene heavy_end_chain(std::size_t links) {
   std::vector<double> masses(links, 0.01);
   masses.back() = 6.7;
-  Model model = make_chain(masses, 0.05, true);
-  model.settings.relaxation.iterations = 20;
-  return model;
+  Scene scene{make_chain(masses, 0.05, true), {}};
+  scene.methods.relaxation.iterations = 20;
+  return scene;
 }
 
 // Two chains and a Y-shaped tree of capsules: several islands, a particle with three
-// constraints (the fork), one pinned chain and one free.
-Model mixed_scene() {
+// constraints (the fork), one pinned chain and one free. Relaxed by 15 sweeps a step.
+Scene mixed_scene() {
   Model model = make_chain({1, 2, 1, 3, 1, 2, 5}, 0.1, true);
   Model free_chain = make_chain({1, 1, 1, 1}, 0.1, false, Vector3(0, 1, 1));
   for (Body body : free_chain.bodies) {
@@ -58,8 +59,9 @@ Model mixed_scene() {
   model.bodies.push_back(branch);
   model.joints.push_back(spherical_joint("branch_joint", 2, static_cast<int>(model.bodies.size() - 1),
                           Vector3(0, 0, -0.05), Vector3(0, 0, 0.05)));
-  model.settings.relaxation.iterations = 15;
-  return model;
+  Scene scene{model, {}};
+  scene.methods.relaxation.iterations = 15;
+  return scene;
 }
 
 // The worst relative constraint error: link stretch or joint gap.
@@ -70,8 +72,8 @@ double worst_error(const VerletState<Scalar>& state) {
 }
 
 template <typename Scalar>
-std::vector<std::uint64_t> trajectory_hashes(const Model& model, const VerletOptions& options, int steps) {
-  VerletState<Scalar> state = compile<Scalar>(model, options);
+std::vector<std::uint64_t> trajectory_hashes(const Scene& scene, const VerletOptions& options, int steps) {
+  VerletState<Scalar> state = compile<Scalar>(scene.model, testing::with_scene_settings(scene, options));
   std::vector<std::uint64_t> hashes;
   for (int s = 0; s < steps; ++s) {
     EXPECT_EQ(step(state).status, StepStatus::ok);
@@ -81,8 +83,8 @@ std::vector<std::uint64_t> trajectory_hashes(const Model& model, const VerletOpt
 }
 
 TYPED_TEST(ColouredRelaxation, BatchesHoldEachMovableConstraintOnceAndNeverAPin) {
-  const Model model = mixed_scene();
-  VerletState<TypeParam> state = compile<TypeParam>(model);
+  const Scene scene = mixed_scene();
+  VerletState<TypeParam> state = compile<TypeParam>(scene.model, testing::with_scene_settings(scene));
   step(state);
   const auto& batches = state.plan.batches;
   const auto null_particle = state.particles.null_particle();
@@ -111,11 +113,11 @@ TYPED_TEST(ColouredRelaxation, BatchesHoldEachMovableConstraintOnceAndNeverAPin)
   EXPECT_EQ(state.colour_count, 3u);  // the fork particle has three constraints
 }
 
-// `model` under a projection rule, in two substeps for rattle (its velocity stage runs too).
-Model with_projection(Model model, ProjectionRule projection) {
-  model.settings.relaxation.projection = projection;
-  if (projection == ProjectionRule::rattle) model.settings.relaxation.substeps = 2;
-  return model;
+// `scene` under a projection rule, in two substeps for rattle (its velocity stage runs too).
+Scene with_projection(Scene scene, ProjectionRule projection) {
+  scene.methods.relaxation.projection = projection;
+  if (projection == ProjectionRule::rattle) scene.methods.relaxation.substeps = 2;
+  return scene;
 }
 
 TYPED_TEST(ColouredRelaxation, ScalarSimdLayoutsAndThreadsGiveTheSameBits) {
@@ -128,7 +130,7 @@ TYPED_TEST(ColouredRelaxation, ScalarSimdLayoutsAndThreadsGiveTheSameBits) {
                                            std::pair{RelaxationRule::unweighted, ProjectionRule::pbd},
                                            std::pair{RelaxationRule::weighted, ProjectionRule::rattle},
                                            std::pair{RelaxationRule::unweighted, ProjectionRule::rattle}}) {
-      for (const Model& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
+      for (const Scene& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
         VerletOptions reference;
         reference.solver = solver, reference.rule = rule, reference.simd = false, reference.threads = 1;
         const auto expected = trajectory_hashes<TypeParam>(model, reference, 60);
@@ -172,7 +174,7 @@ TYPED_TEST(ColouredRelaxation, AnEnginesTaskSystemOrTbbArenaGivesTheSameBits) {
   tbb::task_arena arena(2);
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
     for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
-      for (const Model& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
+      for (const Scene& model : {with_projection(mixed_scene(), projection), with_projection(heavy_end_chain(300), projection)}) {
         VerletOptions reference;
         reference.solver = solver;
         const auto expected = trajectory_hashes<TypeParam>(model, reference, 40);
@@ -214,7 +216,7 @@ TYPED_TEST(ColouredRelaxation, HumanoidWithContactsIsTheSameInEveryLayout) {
   // The ball and ground contacts move particles between sweeps; the interleaved layouts copy
   // exactly those particles out and back.
   for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
-    const Model model = with_projection(load_shipped_scene("humanoid.json"), projection);
+    const Scene model = with_projection(testing::shipped_scene("humanoid.json"), projection);
     VerletOptions reference;
     reference.threads = 1;
     const auto expected = trajectory_hashes<TypeParam>(model, reference, 150);
@@ -241,11 +243,11 @@ TYPED_TEST(ColouredRelaxation, JacobiAndGaussSeidelSettleOnTheSameHangingChain) 
   model.settings.damping = 5;
   // Relax each step until the largest correction is negligible, so that both reach the static
   // solution, not just their own per-step balance with gravity.
-  model.settings.relaxation.iterations = 20000;
-  model.settings.relaxation.tolerance = std::is_same_v<TypeParam, float> ? 1e-7 : 1e-12;
   std::vector<Vector3> settled[2];
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
     VerletOptions options;
+    options.relaxation.iterations = 20000;
+    options.relaxation.tolerance = std::is_same_v<TypeParam, float> ? 1e-7 : 1e-12;
     options.solver = solver;
     VerletState<TypeParam> state = compile<TypeParam>(model, options);
     for (int s = 0; s < 300; ++s) ASSERT_EQ(step(state).status, StepStatus::ok);
@@ -263,12 +265,12 @@ TYPED_TEST(ColouredRelaxation, JacobiAndGaussSeidelSettleOnTheSameHangingChain) 
 
 TYPED_TEST(ColouredRelaxation, GaussSeidelConvergesFasterThanJacobiPerSweep) {
   // The convergence difference the README plots: after the same sweeps, Jacobi leaves more stretch.
-  const Model model = heavy_end_chain(100);
+  const Scene chain = heavy_end_chain(100);
   double stretch[2];
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi}) {
-    VerletOptions options;
+    VerletOptions options = testing::with_scene_settings(chain);
     options.solver = solver;
-    VerletState<TypeParam> state = compile<TypeParam>(model, options);
+    VerletState<TypeParam> state = compile<TypeParam>(chain.model, options);
     for (int s = 0; s < 120; ++s) step(state);
     stretch[int(solver)] = worst_error(state);
   }
@@ -276,9 +278,9 @@ TYPED_TEST(ColouredRelaxation, GaussSeidelConvergesFasterThanJacobiPerSweep) {
 }
 
 TYPED_TEST(ColouredRelaxation, SleepingIslandLeavesTheBatchesWithoutRecolouring) {
-  Model model = mixed_scene();
-  model.settings.sleep.enabled = true;
-  VerletState<TypeParam> state = compile<TypeParam>(model);
+  Scene scene = mixed_scene();
+  scene.model.settings.sleep.enabled = true;
+  VerletState<TypeParam> state = compile<TypeParam>(scene.model, testing::with_scene_settings(scene));
   const std::vector<std::uint8_t> colours = state.constraint_colour;
   step(state);
   const std::size_t all_slots = state.plan.batches.slot_count();

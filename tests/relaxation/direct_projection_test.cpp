@@ -33,8 +33,10 @@ TYPED_TEST_SUITE(DirectProjection, Scalars);
 
 constexpr double kLinkLength = 0.1;
 
-VerletOptions direct_options(int newton_iterations = 2) {
+// The direct solver; the generated models' joints as one particle each unless `joints` says not.
+VerletOptions direct_options(int newton_iterations = 2, ParticleJoints joints = ParticleJoints::shared_particle) {
   VerletOptions options;
+  options.verlet.joints = joints;
   options.solver = RelaxationSolver::direct;
   options.newton_iterations = newton_iterations;
   options.warm_start = false;  // set explicitly: the default may change
@@ -86,20 +88,19 @@ std::vector<Eigen::Vector3d> positions(const VerletState<Scalar>& state) {
 
 // Random trees: sizes and branchings from a chain to a wide hub, link masses from 0.2 to 5 kg,
 // pinned and free, both joint kinds.
-std::vector<Model> random_trees() {
+std::vector<std::pair<Model, ParticleJoints>> random_trees() {
   std::mt19937 random(11);
   std::uniform_real_distribution<double> mass(0.2, 5.0);
-  std::vector<Model> trees;
+  std::vector<std::pair<Model, ParticleJoints>> trees;
   for (const ParticleJoints joints : {ParticleJoints::shared_particle, ParticleJoints::zero_length_constraint}) {
     for (const std::size_t links : {1, 2, 7, 20, 60}) {
       for (const std::size_t branching : {1, 2, 3, 6}) {
         TreeSpec spec;
         spec.links = links, spec.branching = branching, spec.link_length = kLinkLength;
         spec.pinned = (links + branching) % 2 == 0 || links == 60;
-        spec.joints = joints;
         Model model = make_tree_model(spec);
         for (Body& body : model.bodies) body.mass = mass(random);
-        trees.push_back(model);
+        trees.emplace_back(model, joints);
       }
     }
   }
@@ -112,8 +113,8 @@ TYPED_TEST(DirectProjection, ConvergedProjectionSatisfiesEveryConstraintOnRandom
   const double tolerance = (this->kFloat ? 1e-5 : 1e-12) * kLinkLength;
   int most_steps = 0;
   unsigned seed = 1;
-  for (const Model& model : random_trees()) {
-    VerletState<TypeParam> state = compile<TypeParam>(model, direct_options());
+  for (const auto& [model, joints] : random_trees()) {
+    VerletState<TypeParam> state = compile<TypeParam>(model, direct_options(2, joints));
     perturb(state, 0.03 * kLinkLength, seed++);
     ASSERT_GT(largest_constraint_error(state), 1e-3 * kLinkLength) << "the perturbation must violate the constraints";
     int steps = 0;
@@ -138,16 +139,17 @@ TEST(DirectProjectionAgreement, GaussSeidelReachesTheSamePointToSecondOrder) {
   for (const ParticleJoints joints : {ParticleJoints::shared_particle, ParticleJoints::zero_length_constraint}) {
     for (const std::size_t links : {3, 6}) {
       TreeSpec spec;
-      spec.links = links, spec.branching = 2, spec.link_length = kLinkLength, spec.joints = joints;
+      spec.links = links, spec.branching = 2, spec.link_length = kLinkLength;
       Model model = make_tree_model(spec);
       for (std::size_t k = 0; k < model.bodies.size(); ++k) model.bodies[k].mass = 0.5 + double(k % 3);
       VerletOptions gauss_seidel;
       gauss_seidel.solver = RelaxationSolver::gauss_seidel;
       gauss_seidel.order = SweepOrder::sequential;
       gauss_seidel.rule = RelaxationRule::weighted;
+      gauss_seidel.verlet.joints = joints;
       std::vector<double> difference, displacement;
       for (const double epsilon : {0.04, 0.02, 0.01, 0.005}) {
-        VerletState<double> direct = compile<double>(model, direct_options());
+        VerletState<double> direct = compile<double>(model, direct_options(2, joints));
         VerletState<double> sequential = compile<double>(model, gauss_seidel);
         perturb(direct, epsilon * kLinkLength, 5);
         perturb(sequential, epsilon * kLinkLength, 5);
@@ -187,14 +189,14 @@ TYPED_TEST(DirectProjection, WeightedProjectionOfAFreeTreeKeepsItsMomentum) {
   const double tolerance = this->kFloat ? 1e-5 : 1e-12;
   for (const ParticleJoints joints : {ParticleJoints::shared_particle, ParticleJoints::zero_length_constraint}) {
     TreeSpec spec;
-    spec.links = 15, spec.branching = 3, spec.link_length = kLinkLength, spec.pinned = false, spec.joints = joints;
+    spec.links = 15, spec.branching = 3, spec.link_length = kLinkLength, spec.pinned = false;
     Model model = make_tree_model(spec);
     std::mt19937 random(4);
     std::uniform_real_distribution<double> mass(0.2, 5.0);
     for (Body& body : model.bodies) body.mass = mass(random);
     for (const RelaxationRule rule : {RelaxationRule::weighted, RelaxationRule::unweighted}) {
       for (const int newton_steps : {1, 10}) {
-        VerletOptions options = direct_options();
+        VerletOptions options = direct_options(2, joints);
         options.rule = rule;
         VerletState<TypeParam> state = compile<TypeParam>(model, options);
         perturb(state, 0.05 * kLinkLength, 9);
@@ -219,7 +221,6 @@ TYPED_TEST(DirectProjection, SpinningFreeTreeConservesMomentumOverManySteps) {
   // or without the warm start (its impulse W·Jᵀ·λ is one more such projection).
   TreeSpec spec;
   spec.links = 13, spec.branching = 3, spec.link_length = kLinkLength, spec.pinned = false;
-  spec.joints = ParticleJoints::zero_length_constraint;
   Model model = make_tree_model(spec);
   model.settings.gravity.setZero();
   std::mt19937 random(8);
@@ -233,7 +234,7 @@ TYPED_TEST(DirectProjection, SpinningFreeTreeConservesMomentumOverManySteps) {
     body.linear_velocity = drift + spin.cross(body.position - centre);
   }
   for (const bool warm_start : {false, true}) {
-    VerletOptions options = direct_options(3);
+    VerletOptions options = direct_options(3, ParticleJoints::zero_length_constraint);
     options.warm_start = warm_start;
     VerletState<TypeParam> state = compile<TypeParam>(model, options);
     step(state);  // turns the initial velocities into ones the constraints allow
@@ -253,7 +254,6 @@ TYPED_TEST(DirectProjection, SpinningFreeTreeConservesMomentumOverManySteps) {
 Model hanging_chain(const std::vector<double>& masses) {
   ChainSpec spec;
   spec.links = masses.size(), spec.link_length = kLinkLength, spec.direction = Vector3(0, 0, -1);
-  spec.joints = ParticleJoints::shared_particle;
   Model model = make_chain_model(spec);
   for (std::size_t k = 0; k < masses.size(); ++k) model.bodies[k].mass = masses[k];
   return model;
@@ -272,9 +272,9 @@ TYPED_TEST(DirectProjection, CompliantLinksStretchByComplianceTimesTheWeightThey
   model.settings.damping = 20;  // settle the bounce in well under the 2 s run
   for (const auto& [warm_start, projection] : {std::pair{false, ProjectionRule::pbd}, std::pair{true, ProjectionRule::pbd},
                                                std::pair{false, ProjectionRule::rattle}}) {
-    model.settings.relaxation.projection = projection;
     for (const double compliance : {alpha, 0.0}) {
       VerletOptions options = direct_options(6);
+      options.relaxation.projection = projection;
       options.compliance = compliance, options.warm_start = warm_start;
       VerletState<TypeParam> state = compile<TypeParam>(model, options);
       for (int s = 0; s < 480; ++s) ASSERT_EQ(step(state).status, StepStatus::ok);
@@ -374,13 +374,14 @@ TYPED_TEST(DirectProjection, LongRangeAttachmentsKeepAChainWithinItsLength) {
   ChainSpec spec;
   spec.links = 20, spec.link_length = kLinkLength, spec.direction = Vector3(1, 0, 0);
   Model model = make_chain_model(spec);
-  model.settings.relaxation.iterations = 2;
   model.settings.time_step = 1.0 / 60;
   for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
-  model.settings.relaxation.projection = projection;
   double overshoot[2] = {0, 0};
   for (const bool attachments : {false, true}) {
     VerletOptions options;
+    options.verlet.joints = ParticleJoints::shared_particle;
+    options.relaxation.iterations = 2;
+    options.relaxation.projection = projection;
     options.solver = RelaxationSolver::gauss_seidel;
     options.long_range_attachments = attachments;
     VerletState<TypeParam> state = compile<TypeParam>(model, options);

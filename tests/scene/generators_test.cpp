@@ -18,6 +18,13 @@
 namespace limber {
 namespace {
 
+// The particle method with each joint one particle: the workloads' usual form.
+VerletOptions shared_joints() {
+  VerletOptions options;
+  options.verlet.joints = ParticleJoints::shared_particle;
+  return options;
+}
+
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
@@ -37,7 +44,7 @@ TEST(ChainModel, SharedParticlesMergeThePinIntoTheFirstHead) {
   EXPECT_EQ(model.joints.front().name, "pin");
   EXPECT_EQ(model.joints.back().name, "joint_49");
 
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   // In shared mode the pin's world slot merges with link_0's head: no particle of its own, and
   // no constraints for joints. One particle per link end: 51.
   EXPECT_EQ(state.particles.size(), 51u);
@@ -49,7 +56,7 @@ TEST(ChainModel, SharedParticlesMergeThePinIntoTheFirstHead) {
 }
 
 TEST(ChainModel, ZeroLengthConstraintsKeepAParticlePerLinkEndAndPin) {
-  const Model model = make_chain_model({.links = 50, .joints = ParticleJoints::zero_length_constraint});
+  const Model model = make_chain_model({.links = 50});
   const auto state = compile<double>(model);
   EXPECT_EQ(state.particles.size(), 2 * 50u + 1);  // head and tail of each link, and the pin
   EXPECT_EQ(state.constraints.size(), 50u + 49u + 1u);  // links, joints between them, the pin
@@ -59,7 +66,7 @@ TEST(ChainModel, ZeroLengthConstraintsKeepAParticlePerLinkEndAndPin) {
 TEST(ChainModel, UnpinnedChainHasNoWorldJoint) {
   const Model model = make_chain_model({.links = 50, .pinned = false});
   EXPECT_EQ(model.joints.size(), 49u);
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   EXPECT_EQ(state.particles.size(), 51u);
   EXPECT_EQ(pinned_particles(state), 0u);
 }
@@ -70,7 +77,7 @@ TEST(ChainModel, EndLinkCarriesTheEndMassRatio) {
   EXPECT_EQ(model.bodies[8].mass, 2.0);
   EXPECT_DOUBLE_EQ(model.body_mass(), 9 * 2.0 + 6.0);
   // The free end particle carries half the end link, the one before it half of each neighbour.
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   const std::uint32_t last = state.body_limb[9];
   EXPECT_DOUBLE_EQ(state.particle_mass[state.limbs.tail[last]], 3.0);
   EXPECT_DOUBLE_EQ(state.particle_mass[state.limbs.head[last]], 1.0 + 3.0);
@@ -113,7 +120,7 @@ TEST(TreeModel, ChildHeadsMeetParentTails) {
 
 TEST(TreeModel, CompilesToOneParticlePerLinkPlusTheRootHead) {
   const Model model = make_tree_model({.links = 40, .branching = 3});
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   EXPECT_EQ(state.particles.size(), 41u);
   EXPECT_EQ(state.constraints.size(), 40u);
   EXPECT_EQ(state.islands.size(), 1u);
@@ -139,9 +146,8 @@ TEST(GridModel, EveryEdgeIsALinkAndEveryNodeOneParticle) {
   EXPECT_EQ(model.bodies.size(), 10u * 9 + 10u * 9);
   // Per node, one joint fewer than the link ends meeting there: 2·180 ends − 100 nodes; 2 pins.
   EXPECT_EQ(model.joints.size(), 2u * 180 - 100 + 2);
-  EXPECT_EQ(model.settings.verlet.joints, ParticleJoints::shared_particle);
 
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   EXPECT_EQ(state.particles.size(), 100u);
   EXPECT_EQ(state.constraints.size(), 180u);
   EXPECT_EQ(state.islands.size(), 1u);
@@ -168,7 +174,7 @@ TEST(GridModel, RectangularUnpinnedGrid) {
   const Model model = make_grid_model({.columns = 5, .rows = 3, .pin_top_corners = false});
   EXPECT_EQ(model.bodies.size(), 3u * 4 + 5u * 2);
   EXPECT_EQ(model.joints.size(), 2u * 22 - 15);
-  const auto state = compile<double>(model);
+  const auto state = compile<double>(model, shared_joints());
   EXPECT_EQ(state.particles.size(), 15u);
   EXPECT_EQ(state.constraints.size(), 22u);
   EXPECT_EQ(pinned_particles(state), 0u);
@@ -177,7 +183,7 @@ TEST(GridModel, RectangularUnpinnedGrid) {
 // ---- humanoid pile ----
 
 TEST(HumanoidPile, CopiesTheHumanoidWithoutTheBall) {
-  Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid");
+  Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid").model;
   humanoid.ball.reset();
   const auto one = compile<double>(humanoid);
 

@@ -251,7 +251,7 @@ TEST(SceneErrors, ErrorsFoundByValidateNameTheSource) {
 // ---- Shipped scenes and what the loader builds
 
 TEST(ShippedScenes, HumanoidHasNineLimbsEightJointsGroundAndBall) {
-  const Model model = load_scene_file(kScenes + "humanoid.json");
+  const Model model = load_scene_file(kScenes + "humanoid.json").model;
   EXPECT_EQ(model.name, "humanoid");
   EXPECT_EQ(model.bodies.size(), 9u);
   EXPECT_EQ(model.joints.size(), 8u);
@@ -276,7 +276,7 @@ TEST(ShippedScenes, HumanoidHasNineLimbsEightJointsGroundAndBall) {
 TEST(ShippedScenes, HumanoidVariantsGiveTheThesisMassesAndRadii) {
   SceneOptions thin;
   thin.variant = "thin";
-  const Model thin_model = load_scene_text(embedded_humanoid_scene(), "humanoid", thin);
+  const Model thin_model = load_scene_text(embedded_humanoid_scene(), "humanoid", thin).model;
   const Body& thin_torso = thin_model.bodies[thin_model.find_body("upper_torso")];
   EXPECT_DOUBLE_EQ(thin_torso.mass, 84 * kPound);
   EXPECT_DOUBLE_EQ(thin_torso.shape.radius, 0.06);
@@ -284,7 +284,7 @@ TEST(ShippedScenes, HumanoidVariantsGiveTheThesisMassesAndRadii) {
 
   SceneOptions wide;
   wide.variant = "wide";
-  const Model wide_model = load_scene_text(embedded_humanoid_scene(), "humanoid", wide);
+  const Model wide_model = load_scene_text(embedded_humanoid_scene(), "humanoid", wide).model;
   const Body& wide_spine = wide_model.bodies[wide_model.find_body("spine")];
   EXPECT_DOUBLE_EQ(wide_spine.mass, 25 * kPound);
   EXPECT_DOUBLE_EQ(wide_spine.shape.radius, 0.02);
@@ -296,7 +296,7 @@ TEST(ShippedScenes, HumanoidStandsAssembledInEveryVariant) {
   for (const char* variant : {"thin", "medium", "wide"}) {
     SceneOptions options;
     options.variant = variant;
-    const Model model = load_scene_text(embedded_humanoid_scene(), "humanoid", options);
+    const Model model = load_scene_text(embedded_humanoid_scene(), "humanoid", options).model;
     for (const Joint& joint : model.joints) {
       const Vector3 inboard = model.bodies[joint.inboard].to_world(joint.inboard_anchor);
       const Vector3 outboard = model.bodies[joint.outboard].to_world(joint.outboard_anchor);
@@ -308,7 +308,7 @@ TEST(ShippedScenes, HumanoidStandsAssembledInEveryVariant) {
 }
 
 TEST(ShippedScenes, ChainHasFiveLinksWithADoubleEndLink) {
-  const Model model = load_scene_file(kScenes + "chain.json");
+  const Model model = load_scene_file(kScenes + "chain.json").model;
   ASSERT_EQ(model.bodies.size(), 5u);
   EXPECT_EQ(model.joints.size(), 5u);
   EXPECT_FALSE(model.ground.has_value());
@@ -319,7 +319,7 @@ TEST(ShippedScenes, ChainHasFiveLinksWithADoubleEndLink) {
 }
 
 TEST(ShippedScenes, StickInBoxHasOneStickInsideItsBounds) {
-  const Model model = load_scene_file(kScenes + "stick_in_box.json");
+  const Model model = load_scene_file(kScenes + "stick_in_box.json").model;
   ASSERT_EQ(model.bodies.size(), 1u);
   EXPECT_TRUE(model.joints.empty());
   ASSERT_TRUE(model.bounds.has_value());
@@ -335,13 +335,13 @@ TEST(ShippedScenes, StickInBoxHasOneStickInsideItsBounds) {
 
 TEST(ShippedScenes, EmbeddedHumanoidIsTheFileAndLoads) {
   EXPECT_EQ(embedded_humanoid_scene(), read_text(kScenes + "humanoid.json"));
-  EXPECT_EQ(load_scene_text(embedded_humanoid_scene(), "embedded").bodies.size(), 9u);
+  EXPECT_EQ(load_scene_text(embedded_humanoid_scene(), "embedded").model.bodies.size(), 9u);
 }
 
 TEST(SceneLoading, LinksOptionBuildsALongChainLaidHeadToTail) {
   SceneOptions options;
   options.links = 100;
-  const Model model = load_scene_file(kScenes + "chain.json", options);
+  const Model model = load_scene_file(kScenes + "chain.json", options).model;
   ASSERT_EQ(model.bodies.size(), 100u);
   ASSERT_EQ(model.joints.size(), 100u);
   EXPECT_EQ(model.bodies[99].name, "link_99");
@@ -377,28 +377,28 @@ constexpr std::string_view kTree = R"({"limber_scene": 1, "name": "tree",
   "tree": {"branching": 2, "depth": 3, "link_length": 0.1, "link_mass": 1, "anchor": [1, 2, 3], "pinned": true}})";
 
 TEST(SceneGenerators, TreeByDepthOrLinksHangsFromItsAnchor) {
-  const Model tree = load_scene_text(kTree, "test.json");
+  const Model tree = load_scene_text(kTree, "test.json").model;
   ASSERT_EQ(tree.bodies.size(), 15u);  // 1 + 2 + 4 + 8
   EXPECT_LT((tree.bodies[0].head() - Vector3(1, 2, 3)).norm(), 1e-12);
   expect_joints_hold(tree);
   SceneOptions options;
   options.links = 40;
-  EXPECT_EQ(load_scene_text(kTree, "test.json", options).bodies.size(), 40u);
-  EXPECT_EQ(load_scene_text(with(kTree, R"("depth": 3)", R"("links": 6)"), "test.json").bodies.size(), 6u);
+  EXPECT_EQ(load_scene_text(kTree, "test.json", options).model.bodies.size(), 40u);
+  EXPECT_EQ(load_scene_text(with(kTree, R"("depth": 3)", R"("links": 6)"), "test.json").model.bodies.size(), 6u);
 }
 
 TEST(SceneGenerators, GridIsASheetOfLinksFromItsAnchor) {
   const Model grid = load_scene_text(with(kTree, R"("tree": {"branching": 2, "depth": 3, "link_length": 0.1, "link_mass": 1, "anchor": [1, 2, 3], "pinned": true})",
                                           R"("grid": {"columns": 4, "rows": 3, "spacing": 0.1, "link_mass": 0.01, "anchor": [0, 0, 2], "pin_top_corners": true})"),
-                                     "test.json");
+                                     "test.json").model;
   EXPECT_EQ(grid.bodies.size(), 3u * 3u + 4u * 2u);  // rows·(columns−1) + columns·(rows−1)
   EXPECT_LT((grid.bodies[0].head() - Vector3(0, 0, 2)).norm(), 1e-12);
   expect_joints_hold(grid);
 }
 
 TEST(SceneGenerators, CopiesRepeatBodiesJointsAndGearsSideBySide) {
-  const Model one = load_scene_text(kPendulum, "test.json");
-  const Model four = load_scene_text(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 4, "spacing": 2},)"), "test.json");
+  const Model one = load_scene_text(kPendulum, "test.json").model;
+  const Model four = load_scene_text(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 4, "spacing": 2},)"), "test.json").model;
   ASSERT_EQ(four.bodies.size(), 4 * one.bodies.size());
   ASSERT_EQ(four.joints.size(), 4 * one.joints.size());
   EXPECT_TRUE(four.ball.has_value());  // one ball, one ground, one set of settings
@@ -410,7 +410,7 @@ TEST(SceneGenerators, CopiesRepeatBodiesJointsAndGearsSideBySide) {
   // --copies on a scene without "copies": side by side beyond the bodies' footprint.
   SceneOptions options;
   options.copies = 3;
-  const Model three = load_scene_text(kPendulum, "test.json", options);
+  const Model three = load_scene_text(kPendulum, "test.json", options).model;
   ASSERT_EQ(three.bodies.size(), 3 * one.bodies.size());
   EXPECT_GE((three.bodies[2].position - three.bodies[0].position).norm(), 1.0);
   expect_joints_hold(three);
@@ -420,7 +420,7 @@ TEST(SceneLoading, InertialGivesCentreOfMassAndInertiaTensorInMuJoCosOrder) {
   const std::string scene = with(kPendulum, R"("mass": 2, "position": [0, 0, 1.3])",
                                  R"("mass": 2, "inertial": {"centre_of_mass": [0, 0.01, -0.05], "inertia": [0.03, 0.025, 0.012, 0.001, 0.002, 0.003]},
                                     "position": [0, 0, 1.3])");
-  const Model model = load_scene_text(scene, "test.json");
+  const Model model = load_scene_text(scene, "test.json").model;
   ASSERT_TRUE(model.bodies[0].inertial.has_value());
   const Inertial& inertial = *model.bodies[0].inertial;
   EXPECT_EQ(inertial.centre_of_mass, Vector3(0, 0.01, -0.05));
@@ -456,7 +456,7 @@ TEST(SceneErrors, BadGeneratorsAndCopiesAreNamed) {
 }
 
 TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {
-  const Model model = load_scene_text(kPendulum, "test.json");
+  const Model model = load_scene_text(kPendulum, "test.json").model;
   const double r = 0.01;
   const double capsule_volume =
       std::numbers::pi * r * r * 0.2 + 4.0 / 3 * std::numbers::pi * r * r * r;
@@ -468,16 +468,16 @@ TEST(SceneLoading, VariantRadiusAppliesBeforeDensityBecomesMass) {
     "fat": {"lower": {"radius": 0.02}}, "heavy": {"lower": {"mass": 7}}},
   "variant": "fat",
   "joints": [)");
-  const Model fat = load_scene_text(scene, "test.json");
+  const Model fat = load_scene_text(scene, "test.json").model;
   EXPECT_DOUBLE_EQ(fat.bodies[1].shape.radius, 0.02);
   EXPECT_DOUBLE_EQ(fat.bodies[1].mass, 1000 * volume(fat.bodies[1].shape));
   SceneOptions heavy;
   heavy.variant = "heavy";
-  EXPECT_DOUBLE_EQ(load_scene_text(scene, "test.json", heavy).bodies[1].mass, 7);
+  EXPECT_DOUBLE_EQ(load_scene_text(scene, "test.json", heavy).model.bodies[1].mass, 7);
 }
 
 TEST(SceneLoading, HeadAndTailAnchorsAreTheAxisEnds) {
-  const Model model = load_scene_text(kPendulum, "test.json");
+  const Model model = load_scene_text(kPendulum, "test.json").model;
   EXPECT_EQ(model.joints[0].outboard_anchor, Vector3(0, 0, 0.2));   // upper's head, length 0.4
   EXPECT_EQ(model.joints[1].inboard_anchor, Vector3(0, 0, -0.2));   // upper's tail
   EXPECT_EQ(model.joints[1].outboard_anchor, Vector3(0, 0, 0.1));   // lower's head, length 0.2
@@ -487,19 +487,20 @@ TEST(SceneLoading, HeadAndTailAnchorsAreTheAxisEnds) {
 }
 
 TEST(SceneLoading, AxisAndBallDirectionAreNormalized) {
-  const Model model = load_scene_text(kPendulum, "test.json");
+  const Model model = load_scene_text(kPendulum, "test.json").model;
   EXPECT_EQ(model.bodies[0].axis, Vector3(0, 0, 1));  // given as [0, 0, 3]
   EXPECT_EQ(model.ball->velocity, Vector3(-6, 0, 0));  // speed 6 along [-2, 0, 0]
 }
 
 TEST(SceneLoading, OmittedOptionalFieldsKeepTheModelDefaults) {
-  const Model model = load_scene_text(kPendulum, "test.json");
+  const Scene scene = load_scene_text(kPendulum, "test.json");
+  const Model& model = scene.model;
   const Settings defaults;
   EXPECT_EQ(model.settings.damping, defaults.damping);
   EXPECT_EQ(model.settings.divergence_speed, defaults.divergence_speed);
-  EXPECT_EQ(model.settings.relaxation.iterations, defaults.relaxation.iterations);
+  EXPECT_EQ(scene.methods.relaxation.iterations, RelaxationSettings{}.iterations);
   EXPECT_EQ(model.settings.sleep.time_to_sleep, defaults.sleep.time_to_sleep);
-  EXPECT_FALSE(model.settings.verlet.drag_factor.has_value());
+  EXPECT_FALSE(scene.methods.verlet.drag_factor.has_value());
   EXPECT_EQ(model.bodies[0].linear_velocity, Vector3::Zero());
 }
 
@@ -508,7 +509,7 @@ constexpr std::string_view kLumps =
     R"("point_masses": [{"position": [0, 0, 0.1], "mass": 1.5, "radius": 0.02}, {"position": [0, 0, -0.15], "mass": 0.5}],)";
 
 TEST(SceneLoading, PointMassesAreReadAndTheirSumIsTheMass) {
-  const Model model = load_scene_text(with(kPendulum, R"("mass": 2,)", kLumps), "test.json");
+  const Model model = load_scene_text(with(kPendulum, R"("mass": 2,)", kLumps), "test.json").model;
   const Body& upper = model.bodies[0];
   ASSERT_EQ(upper.point_masses.size(), 2u);
   EXPECT_EQ(upper.point_masses[0].position, Vector3(0, 0, 0.1));
@@ -553,34 +554,34 @@ TEST(SceneErrors, VariantsCannotChangeTheMassOfABodyWithPointMasses) {
             "test.json: variants.heavy.upper.mass: body \"upper\" gives \"point_masses\", whose sum is its mass; a "
             "variant may change only its \"radius\"");
   const std::string fat_only = with(scene, R"(, "heavy": {"upper": {"mass": 7}})", "");
-  const Model fat = load_scene_text(fat_only, "test.json");
+  const Model fat = load_scene_text(fat_only, "test.json").model;
   EXPECT_EQ(fat.bodies[0].shape.radius, 0.05);
   EXPECT_EQ(fat.bodies[0].mass, 2.0);
 }
 
 TEST(SceneLoading, LimbMassesSettingIsReadAndCheckedByName) {
-  EXPECT_EQ(load_scene_text(kPendulum, "test.json").settings.verlet.limb_masses, LimbMasses::ends);
+  EXPECT_EQ(load_scene_text(kPendulum, "test.json").methods.verlet.limb_masses, LimbMasses::ends);
   const auto with_limb_masses = [](std::string_view value) {
     return with(kPendulum, R"("duration": 1)", R"("duration": 1, "verlet": {"limb_masses": )" + std::string(value) + "}");
   };
-  EXPECT_EQ(load_scene_text(with_limb_masses(R"("inertia")"), "test.json").settings.verlet.limb_masses,
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("inertia")"), "test.json").methods.verlet.limb_masses,
             LimbMasses::inertia);
-  EXPECT_EQ(load_scene_text(with_limb_masses(R"("ends")"), "test.json").settings.verlet.limb_masses, LimbMasses::ends);
-  EXPECT_EQ(load_scene_text(with_limb_masses(R"("lumps")"), "test.json").settings.verlet.limb_masses, LimbMasses::lumps);
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("ends")"), "test.json").methods.verlet.limb_masses, LimbMasses::ends);
+  EXPECT_EQ(load_scene_text(with_limb_masses(R"("lumps")"), "test.json").methods.verlet.limb_masses, LimbMasses::lumps);
   EXPECT_EQ(load_error(with_limb_masses(R"("centre")")),
             "test.json: settings.verlet.limb_masses: must be \"ends\", \"inertia\" or \"lumps\", got \"centre\"");
   EXPECT_EQ(load_error(with_limb_masses("3")), "test.json: settings.verlet.limb_masses: must be a string, got number");
 }
 
 TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {
-  const Settings defaults = load_scene_text(kPendulum, "test.json").settings;
+  const MethodSettings defaults = load_scene_text(kPendulum, "test.json").methods;
   EXPECT_EQ(defaults.relaxation.projection, ProjectionRule::pbd);
   EXPECT_EQ(defaults.relaxation.substeps, 1);
   const auto with_relaxation = [](std::string_view fields) {
     return with(kPendulum, R"("duration": 1)", R"("duration": 1, "relaxation": {)" + std::string(fields) + "}");
   };
-  const Settings rattle =
-      load_scene_text(with_relaxation(R"("projection": "rattle", "substeps": 64, "iterations": 4)"), "test.json").settings;
+  const MethodSettings rattle =
+      load_scene_text(with_relaxation(R"("projection": "rattle", "substeps": 64, "iterations": 4)"), "test.json").methods;
   EXPECT_EQ(rattle.relaxation.projection, ProjectionRule::rattle);
   EXPECT_EQ(rattle.relaxation.substeps, 64);
   EXPECT_EQ(rattle.relaxation.iterations, 4);
@@ -595,14 +596,15 @@ TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {
 // ---- The spring method's settings
 
 TEST(SceneSprings, StiffnessAndDampingAreReadPerSceneAndPerJoint) {
-  const Model model = load_scene_text(
+  const Scene scene = load_scene_text(
       with(with(kPendulum, R"("duration": 1})", R"("duration": 1, "springs": {"stiffness": 5e4, "damping": 7},
                                                    "drag": {"linear": [1, 2, 3], "angular": [0, 0, 0.5]}})"),
            R"("inboard_anchor": "tail", "outboard_anchor": "head"})",
            R"("inboard_anchor": "tail", "outboard_anchor": "head", "stiffness": 9e5, "damping": 0})"),
       "test.json");
-  EXPECT_EQ(model.settings.springs.stiffness, 5e4);
-  EXPECT_EQ(model.settings.springs.damping, 7);
+  const Model& model = scene.model;
+  EXPECT_EQ(scene.methods.springs.stiffness, 5e4);
+  EXPECT_EQ(scene.methods.springs.damping, 7);
   EXPECT_EQ(model.settings.drag.linear, Vector3(1, 2, 3));
   EXPECT_EQ(model.settings.drag.angular, Vector3(0, 0, 0.5));
   EXPECT_FALSE(model.joints[0].stiffness.has_value());
@@ -624,7 +626,7 @@ TEST(SceneJoints, JointTypesAndAxesAreRead) {
       with(with(kPendulum, R"("name": "elbow", "type": "spherical")", R"("name": "elbow", "type": "universal")"),
            R"("inboard_anchor": "tail", "outboard_anchor": "head"})",
            R"("inboard_anchor": "tail", "outboard_anchor": "head", "axis": [2, 0, 0], "second_axis": [0, 1, 0]})"),
-      "test.json");
+      "test.json").model;
   EXPECT_EQ(model.joints[0].type, JointType::spherical);
   EXPECT_EQ(model.joints[1].type, JointType::universal);
   EXPECT_EQ(model.joints[1].axis, Vector3::UnitX());  // normalized
@@ -647,7 +649,7 @@ TEST(SceneJoints, BadJointTypesAndAxesAreNamed) {
 }
 
 TEST(SceneJoints, GearsAreReadAndCheckedByName) {
-  const Model model = load_scene_file(kScenes + "gears.json");
+  const Model model = load_scene_file(kScenes + "gears.json").model;
   ASSERT_EQ(model.gears.size(), 1u);
   EXPECT_EQ(model.gears[0].first, model.find_body("large"));
   EXPECT_EQ(model.gears[0].second, model.find_body("small"));

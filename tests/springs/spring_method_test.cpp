@@ -290,10 +290,10 @@ TEST(SpringAgreement, RigidRodOnAStiffSpringSwingsLikeThePhysicalPendulumAndTheI
   const double spring_period = period([&] { step(springs, 1e-3); }, [&] { return observe(springs).body_centre_of_mass.x(); }, 1e-3);
   EXPECT_NEAR(spring_period, expected, 1e-3 * expected);
 
-  Model particle_model = model;
-  particle_model.settings.verlet.limb_masses = LimbMasses::inertia;
-  particle_model.settings.relaxation.iterations = 50;
-  VerletState<double> verlet = compile<double>(particle_model);
+  VerletOptions options;
+  options.verlet.limb_masses = LimbMasses::inertia;
+  options.relaxation.iterations = 50;
+  VerletState<double> verlet = compile<double>(model, options);
   const double verlet_period = period([&] { step(verlet); }, [&] { return observe(verlet).body_centre_of_mass.x(); }, 1e-3);
   EXPECT_NEAR(verlet_period, spring_period, 1e-3 * expected);
 }

@@ -21,7 +21,7 @@ inline void set_ball_speed(Ball& ball, double speed) { ball.velocity = speed * b
 template <typename Compile, typename BallTouching>
 double humanoid_knock(const std::string& variant, const std::function<void(Ball&)>& adjust_ball, Compile&& compile,
                       BallTouching&& ball_touching) {
-  Model model = load_shipped_scene("humanoid.json", {.variant = variant, .links = {}});
+  Model model = load_shipped_scene("humanoid.json", {.variant = variant, .links = {}, .copies = {}});
   adjust_ball(*model.ball);
   auto state = compile(model);
   KnockMeter meter(model.ball->velocity, observe(state).body_centre_of_mass);

@@ -5,24 +5,39 @@
 #include <vector>
 
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/particles/verlet_state.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber::testing {
 
 inline std::string scene_path(const std::string& file) { return std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file; }
 
-inline Model load_shipped_scene(const std::string& file, const SceneOptions& options = {}) {
+/// A shipped scene file: its Model and the method settings it gives.
+inline Scene shipped_scene(const std::string& file, const SceneOptions& options = {}) {
   return load_scene_file(scene_path(file), options);
 }
 
-/// `model` with the relaxation the thesis ran (settings.relaxation back to its defaults: the pbd
-/// rule in one step), `iterations` sweeps and over-relaxation ω — for tests of pbd's facts on
-/// shipped scenes, whatever rule and substeps the files now choose.
-inline Model with_thesis_relaxation(Model model, int iterations, double over_relaxation) {
-  model.settings.relaxation = RelaxationSettings{};
-  model.settings.relaxation.iterations = iterations;
-  model.settings.relaxation.over_relaxation = over_relaxation;
-  return model;
+/// A shipped scene file's Model alone: for the rigid-body methods, or a test that gives the
+/// particle method its settings itself.
+inline Model load_shipped_scene(const std::string& file, const SceneOptions& options = {}) {
+  return shipped_scene(file, options).model;
+}
+
+/// `options` with the scene's particle settings (relaxation, limb masses, joints).
+inline VerletOptions with_scene_settings(const Scene& scene, VerletOptions options = {}) {
+  options.relaxation = scene.methods.relaxation;
+  options.verlet = scene.methods.verlet;
+  return options;
+}
+
+/// The relaxation the thesis ran (the pbd rule in one step), `iterations` sweeps and
+/// over-relaxation ω — for tests of pbd's facts on shipped scenes, whatever rule and substeps
+/// the files now choose.
+inline RelaxationSettings thesis_relaxation(int iterations, double over_relaxation) {
+  RelaxationSettings relaxation;
+  relaxation.iterations = iterations;
+  relaxation.over_relaxation = over_relaxation;
+  return relaxation;
 }
 
 /// A straight chain along +x of capsule links with the given masses (kg), each `link_length` m,

@@ -33,14 +33,14 @@ TEST(Allocation, StepAllocatesNothingAfterItsFirstCall) {
   // The humanoid wakes, hits the ground and falls asleep again; the box bounces a stick; the
   // chain takes applied forces.
   const Model humanoid = testing::load_shipped_scene("humanoid.json");
-  const Model box = testing::load_shipped_scene("stick_in_box.json");
-  Model chain = testing::load_shipped_scene("chain.json");
-  chain.settings.damping = 3;
-  chain.settings.sleep = {true, false, 0.01, 0.2};  // sleeps, then the pushes wake it
+  const Scene box = testing::shipped_scene("stick_in_box.json");
+  Scene chain = testing::shipped_scene("chain.json");
+  chain.model.settings.damping = 3;
+  chain.model.settings.sleep = {true, false, 0.01, 0.2};  // sleeps, then the pushes wake it
   EXPECT_EQ(allocations_while_stepping<float>(humanoid, 1200, false), 0);
   EXPECT_EQ(allocations_while_stepping<double>(humanoid, 1200, false), 0);
-  EXPECT_EQ(allocations_while_stepping<double>(box, 1200, false), 0);
-  EXPECT_EQ(allocations_while_stepping<double>(chain, 1200, true), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(box.model, 1200, false, testing::with_scene_settings(box)), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(chain.model, 1200, true, testing::with_scene_settings(chain)), 0);
 }
 
 TEST(Allocation, EveryRelaxationPathAllocatesNothing) {
@@ -62,29 +62,30 @@ TEST(Allocation, TheDirectSolverAllocatesNothing) {
   // Its Newton steps over the humanoid (contacts, sleep and wake) and the chain, warm-started
   // and with long-range attachments.
   const Model humanoid = testing::load_shipped_scene("humanoid.json");
-  const Model chain = testing::load_shipped_scene("chain.json");
-  VerletOptions options;
+  const Scene chain = testing::shipped_scene("chain.json");
+  VerletOptions options = testing::with_scene_settings(chain);
   options.solver = RelaxationSolver::direct;
   options.newton_iterations = 3;
   EXPECT_EQ(allocations_while_stepping<float>(humanoid, 600, false, options), 0);
   options.warm_start = true, options.long_range_attachments = true;
-  EXPECT_EQ(allocations_while_stepping<double>(chain, 600, true, options), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(chain.model, 600, true, options), 0);
 }
 
 TEST(Allocation, TheRattleRuleAllocatesNothing) {
   // Substeps, start gradients, velocity sweeps with restitution, fallbacks counted from the
   // threads; every solver and the sequential sweep.
-  Model humanoid = testing::load_shipped_scene("humanoid.json");
-  humanoid.settings.relaxation.projection = ProjectionRule::rattle;
-  humanoid.settings.relaxation.substeps = 3;
-  humanoid.settings.relaxation.iterations = 10;
+  const Model humanoid = testing::load_shipped_scene("humanoid.json");
+  VerletOptions rattle;
+  rattle.relaxation.projection = ProjectionRule::rattle;
+  rattle.relaxation.substeps = 3;
+  rattle.relaxation.iterations = 10;
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi, RelaxationSolver::direct}) {
-    VerletOptions options;
+    VerletOptions options = rattle;
     options.solver = solver;
     options.threads = 2, options.threading = Threading::workers, options.parallel_minimum_slots = 1;
     EXPECT_EQ(allocations_while_stepping<float>(humanoid, 600, false, options), 0) << "solver " << int(solver);
   }
-  VerletOptions sequential;
+  VerletOptions sequential = rattle;
   sequential.order = SweepOrder::sequential;
   EXPECT_EQ(allocations_while_stepping<double>(humanoid, 600, false, sequential), 0);
 }
@@ -108,8 +109,9 @@ TEST(Allocation, AWorldStepWithLoadsAllocatesNothing) {
     EXPECT_EQ(testing::allocation_count() - before, 0) << method_name(method);
   }
   Model rope = testing::make_chain({0.1, 0.1, 0.1}, 0.1, false);
-  rope.settings.verlet.joints = ParticleJoints::shared_particle;
-  World held(rope);
+  WorldOptions shared;
+  shared.particles.verlet.joints = ParticleJoints::shared_particle;
+  World held(rope, shared);
   const PinId hand = held.pin(held.body("link_0"), Eigen::Vector3d(0, 0, 0.05));
   held.move_pin(hand, held.pin_position(hand));
   held.step(1.0 / 60);

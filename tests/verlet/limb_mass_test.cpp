@@ -27,7 +27,7 @@ using testing::make_chain;
 
 using Kind = ParticleOrigin::Kind;
 
-Model one_limb(const Shape& shape, double mass, LimbMasses limb_masses) {
+Model one_limb(const Shape& shape, double mass) {
   Model model;
   model.name = "one_limb";
   Body body;
@@ -35,12 +35,19 @@ Model one_limb(const Shape& shape, double mass, LimbMasses limb_masses) {
   body.shape = shape;
   body.mass = mass;
   model.bodies.push_back(body);
-  model.settings.verlet.limb_masses = limb_masses;
   model.settings.sleep.enabled = false;
   return model;
 }
 
-Model study_chain() { return study::heavy_end_chain(study::ChainRelease::arc); }
+// The particle method putting limbs' mass as `limb_masses`, joints as `joints`.
+VerletOptions placed(LimbMasses limb_masses, ParticleJoints joints = ParticleJoints::zero_length_constraint) {
+  VerletOptions options;
+  options.verlet.limb_masses = limb_masses;
+  options.verlet.joints = joints;
+  return options;
+}
+
+Scene study_chain() { return study::heavy_end_chain(study::ChainRelease::arc); }
 
 /// The particle of `state` that stands for `kind` of body `body`; fails the test if none.
 template <typename Scalar>
@@ -62,14 +69,14 @@ MassProperties particle_mass_properties(const VerletState<double>& state, const 
 
 TEST(LimbMasses, UniformThinRodGetsOneSixthTwoThirdsOneSixth) {
   const double mass = 3.0;
-  const VerletState<double> state = compile<double>(one_limb({ShapeType::cylinder, 0.8, 0.0}, mass, LimbMasses::inertia));
+  const VerletState<double> state = compile<double>(one_limb({ShapeType::cylinder, 0.8, 0.0}, mass), placed(LimbMasses::inertia));
   ASSERT_EQ(state.particles.size(), 3u);
   EXPECT_NEAR(state.particle_mass[particle_of(state, Kind::limb_head)], mass / 6, 1e-15 * mass);
   EXPECT_NEAR(state.particle_mass[particle_of(state, Kind::limb_centre)], 2 * mass / 3, 1e-15 * mass);
   EXPECT_NEAR(state.particle_mass[particle_of(state, Kind::limb_tail)], mass / 6, 1e-15 * mass);
   EXPECT_EQ(state.limbs.centre[0], particle_of(state, Kind::limb_centre));
   // The thesis's placement: two particles, half each, and no centre.
-  const VerletState<double> ends = compile<double>(one_limb({ShapeType::cylinder, 0.8, 0.0}, mass, LimbMasses::ends));
+  const VerletState<double> ends = compile<double>(one_limb({ShapeType::cylinder, 0.8, 0.0}, mass), placed(LimbMasses::ends));
   ASSERT_EQ(ends.particles.size(), 2u);
   EXPECT_EQ(ends.particle_mass[0], mass / 2);
   EXPECT_EQ(ends.particle_mass[1], mass / 2);
@@ -85,8 +92,7 @@ TEST(LimbMasses, ThreeParticlesKeepTheLimbsMassCentreOfMassAndTransverseInertia)
   for (int trial = 0; trial < 60; ++trial) {
     const int kind = trial % 3;
     const double length = 0.1 + 2 * unit(random);
-    Model model = one_limb({kind == 1 ? ShapeType::capsule : ShapeType::cylinder, length, 0.0}, 0.5 + 10 * unit(random),
-                           LimbMasses::inertia);
+    Model model = one_limb({kind == 1 ? ShapeType::capsule : ShapeType::cylinder, length, 0.0}, 0.5 + 10 * unit(random));
     Body& body = model.bodies[0];
     if (kind == 0) body.shape.radius = 0.7 * length * unit(random);  // radius²/4 < length²/6 keeps m_centre > 0
     if (kind == 1) body.shape.radius = 0.3 * length * unit(random);
@@ -103,7 +109,7 @@ TEST(LimbMasses, ThreeParticlesKeepTheLimbsMassCentreOfMassAndTransverseInertia)
     }
     body.axis = Vector3(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5).normalized();
     body.position = Vector3(unit(random), unit(random), unit(random));
-    const VerletState<double> state = compile<double>(model);
+    const VerletState<double> state = compile<double>(model, placed(LimbMasses::inertia));
     ASSERT_EQ(state.particles.size(), 3u);
     const MassProperties particles = particle_mass_properties(state, {0, 1, 2});
     const MassProperties own = body_mass_properties(body);
@@ -122,15 +128,15 @@ TEST(LimbMasses, ThreeParticlesKeepTheLimbsMassCentreOfMassAndTransverseInertia)
 double pendulum_period(LimbMasses limb_masses, ParticleJoints joints, double length) {
   const double angle = 5 * std::numbers::pi / 180;
   const Vector3 pivot(0, 0, 2);
-  Model model = one_limb({ShapeType::cylinder, length, 0.0}, 2.0, limb_masses);
+  Model model = one_limb({ShapeType::cylinder, length, 0.0}, 2.0);
   Body& rod = model.bodies[0];
   rod.axis = Vector3(-std::sin(angle), 0, std::cos(angle));  // tail → head, up towards the pivot
   rod.position = pivot - 0.5 * length * rod.axis;
   model.joints.push_back(spherical_joint("pivot", kWorld, 0, pivot, Vector3(0, 0, 0.5 * length)));
   model.settings.time_step = 1.0 / 1000;
-  model.settings.relaxation.iterations = 50;
-  model.settings.verlet.joints = joints;
-  VerletState<double> state = compile<double>(model);
+  VerletOptions options = placed(limb_masses, joints);
+  options.relaxation.iterations = 50;
+  VerletState<double> state = compile<double>(model, options);
   const std::uint32_t tail = state.limbs.tail[0];
   std::vector<double> crossings;
   double time = 0, previous = state.particles.position(tail).x();
@@ -165,12 +171,12 @@ TEST(LimbMasses, RodLyingOnItsEndsStaysStraightAndFallsAsleep) {
   // collinear constraints alone would let it sag (they resist a sideways offset e only by ~e²/L);
   // the centre projection keeps the rod straight, so it comes to rest as fast as a two-particle one.
   for (const LimbMasses limb_masses : {LimbMasses::ends, LimbMasses::inertia}) {
-    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 2.0, limb_masses);
+    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 2.0);
     model.bodies[0].axis = Vector3::UnitX();
     model.bodies[0].position = Vector3(0, 0, 0.1);
     model.ground = Ground{0, 0.0, 0.6};
     model.settings.sleep.enabled = true;
-    VerletState<double> state = compile<double>(model);
+    VerletState<double> state = compile<double>(model, placed(limb_masses));
     int steps = 0;
     for (; !state.islands[0].sleeping && steps < 240 * 3; ++steps) ASSERT_EQ(step(state).status, StepStatus::ok);
     ASSERT_TRUE(state.islands[0].sleeping) << "limb_masses " << int(limb_masses);
@@ -193,13 +199,14 @@ TEST(LimbMasses, RodDroppedFlatBouncesWithTheGroundsRestitution) {
   const double restitution = 0.5;
   for (const auto& [limb_masses, projection] : {std::pair{LimbMasses::ends, ProjectionRule::pbd}, std::pair{LimbMasses::inertia, ProjectionRule::pbd},
                                                 std::pair{LimbMasses::ends, ProjectionRule::rattle}, std::pair{LimbMasses::inertia, ProjectionRule::rattle}}) {
-    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 2.0, limb_masses);
+    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 2.0);
     model.bodies[0].axis = Vector3::UnitY();
     model.bodies[0].position = Vector3(0, 0, 0.5);
     model.ground = Ground{0, restitution, 0.0};
     model.settings.time_step = 1.0 / 1000;
-    model.settings.relaxation.projection = projection;
-    VerletState<double> state = compile<double>(model);
+    VerletOptions options = placed(limb_masses);
+    options.relaxation.projection = projection;
+    VerletState<double> state = compile<double>(model, options);
     double impact = 0, rebound = 0;
     for (int s = 0; s < 600; ++s) {
       ASSERT_EQ(step(state).status, StepStatus::ok);
@@ -215,13 +222,14 @@ TEST(LimbMasses, RodDroppedFlatBouncesWithTheGroundsRestitution) {
 // Speed of an elastic ball of mass `ball_mass` after striking, at 3 m/s, a free thin rod of mass
 // 2 kg and length 1 m at `height` above the rod's centre, with no gravity.
 double ball_speed_after_strike(LimbMasses limb_masses, double ball_mass, double height, ProjectionRule projection) {
-  Model model = one_limb({ShapeType::cylinder, 1.0, 0.01}, 2.0, limb_masses);
-  model.settings.relaxation.projection = projection;
+  Model model = one_limb({ShapeType::cylinder, 1.0, 0.01}, 2.0);
+  VerletOptions options = placed(limb_masses);
+  options.relaxation.projection = projection;
   model.bodies[0].position = Vector3(0, 0, 1);
   model.ball = Ball{0.05, ball_mass, 1.0, Vector3(0.2, 0, 1 + height), Vector3(-3, 0, 0)};
   model.settings.gravity.setZero();
   model.settings.time_step = 1.0 / 1000;
-  VerletState<double> state = compile<double>(model);
+  VerletState<double> state = compile<double>(model, options);
   const Eigen::Vector3d momentum = observe(state).linear_momentum;
   for (int s = 0; s < 200; ++s) EXPECT_EQ(step(state).status, StepStatus::ok);
   EXPECT_LT((observe(state).linear_momentum - momentum).norm(), 1e-9 * momentum.norm());
@@ -255,12 +263,12 @@ TEST(LimbMasses, ForceMovesAnUnevenLimbWithoutTurningIt) {
   // apply_force acts at the limb's centre of mass: every particle gets the same acceleration.
   // A limb whose lumps put its centre of mass 0.16 m towards the head must not start to turn
   // (pushed at its middle, as half at each end would be, it would).
-  Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 0.0, LimbMasses::inertia);
+  Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 0.0);
   Body& limb = model.bodies[0];
   limb.point_masses = {{Vector3(0, 0, 0.45), 2.0, 0.0}, {Vector3(0, 0, -0.3), 1.0, 0.0}, {Vector3(0, 0, 0.05), 1.0, 0.1}};
   limb.mass = 4.0;
   model.settings.gravity.setZero();
-  VerletState<double> state = compile<double>(model);
+  VerletState<double> state = compile<double>(model, placed(LimbMasses::inertia));
   ASSERT_GT(body_mass_properties(limb).centre_of_mass.z(), 0.15);
   const Eigen::Vector3d force(0, 40, 0);
   apply_force(state, 0, force);
@@ -284,11 +292,9 @@ TYPED_TEST(ThreeParticleChains, WorkInBothJointModesEveryOrderingAndLayout) {
   // joints hold and every centre stays on its link's axis.
   for (const ParticleJoints joints : {ParticleJoints::zero_length_constraint, ParticleJoints::shared_particle}) {
     Model model = make_chain({1.0, 1.0, 1.0, 1.0, 2.0}, 0.2, true);
-    model.settings.verlet.limb_masses = LimbMasses::inertia;
-    model.settings.verlet.joints = joints;
     const auto run = [&](ParticleOrder ordering, ParticleLayout layout,
                          RelaxationSolver solver = RelaxationSolver::gauss_seidel) {
-      VerletOptions options;
+      VerletOptions options = placed(LimbMasses::inertia, joints);
       options.ordering = ordering, options.layout = layout, options.solver = solver;
       options.threads = 2, options.parallel_minimum_slots = 1;
       VerletState<TypeParam> state = compile<TypeParam>(model, options);
@@ -334,13 +340,12 @@ TEST(LimbMasses, LimbsThreeAxisParticlesCannotCarryAreRefusedByName) {
   // Each is fine with half the mass at each end; with three particles on the axis each needs a
   // negative mass or a centre of mass off the axis, and compile must say which body and why.
   const auto refusal = [](const Body& bad) {
-    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 1.0, LimbMasses::inertia);
+    Model model = one_limb({ShapeType::cylinder, 1.0, 0.02}, 1.0);
     model.bodies.push_back(bad);
     try {
-      compile<double>(model);
+      compile<double>(model, placed(LimbMasses::inertia));
     } catch (const ModelError& error) {
-      model.settings.verlet.limb_masses = LimbMasses::ends;
-      EXPECT_NO_THROW(compile<double>(model));
+      EXPECT_NO_THROW(compile<double>(model, placed(LimbMasses::ends)));
       return std::string(error.what());
     }
     ADD_FAILURE() << "compiled";
@@ -374,8 +379,7 @@ TEST(LimbMasses, LumpsAtTheEndsAreExactlyTheChainsPointMasses) {
   // The accuracy studies' chain: five rods whose mass is point masses at their ends. With lumps
   // and shared particles the particle method holds exactly the point-mass system: 1, 1, 1, 1 and
   // 2 kg at the joints and the free end, and the pin.
-  const Model model = study_chain();
-  const VerletState<double> state = compile<double>(model);
+  const VerletState<double> state = compile<double>(study_chain().model, testing::with_scene_settings(study_chain()));
   ASSERT_EQ(state.particles.size(), 6u);
   std::vector<double> free_masses;
   for (std::uint32_t p = 0; p < state.particles.size(); ++p) {
@@ -392,24 +396,24 @@ TEST(LimbMasses, LumpsAtTheEndsAreExactlyTheChainsPointMasses) {
 TEST(LimbMasses, LumpsShareEachPointMassByTheLeverRule) {
   // A lump a quarter of the way from the tail puts 1/4 of its mass on the head, 3/4 on the tail:
   // the pair keeps its mass and centre of mass.
-  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 4.0, LimbMasses::lumps);
+  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 4.0);
   model.bodies[0].point_masses = {{Vector3(0, 0, -0.25), 4.0, 0.0}};
-  const VerletState<double> state = compile<double>(model);
+  const VerletState<double> state = compile<double>(model, placed(LimbMasses::lumps));
   EXPECT_DOUBLE_EQ(state.particle_mass[particle_of(state, Kind::limb_head)], 1.0);
   EXPECT_DOUBLE_EQ(state.particle_mass[particle_of(state, Kind::limb_tail)], 3.0);
 }
 
 TEST(LimbMasses, WhatLumpsCannotCarryIsRefusedByName) {
-  const auto refusal = [](Model model) {
+  const auto refusal = [](const Model& model, ParticleJoints joints = ParticleJoints::zero_length_constraint) {
     try {
-      compile<double>(model);
+      compile<double>(model, placed(LimbMasses::lumps, joints));
     } catch (const ModelError& error) {
       return std::string(error.what());
     }
     ADD_FAILURE() << "compiled";
     return std::string();
   };
-  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 2.0, LimbMasses::lumps);
+  Model model = one_limb({ShapeType::capsule, 1.0, 0.01}, 2.0);
   EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" needs point_masses on every body"));
   model.bodies[0].point_masses = {{Vector3(0, 0.1, 0.5), 2.0, 0.0}};
   EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" needs every point mass on the limb's axis"));
@@ -419,8 +423,7 @@ TEST(LimbMasses, WhatLumpsCannotCarryIsRefusedByName) {
   // pinned particle may be.
   model.bodies[0].point_masses = {{Vector3(0, 0, 0.5), 2.0, 0.0}};
   EXPECT_THAT(refusal(model), HasSubstr("bodies[0] 'rod': limb_masses \"lumps\" leaves its tail without mass"));
-  Model chain = study_chain();
-  chain.settings.verlet.joints = ParticleJoints::zero_length_constraint;
+  Model chain = study_chain().model;
   chain.bodies[0].point_masses.pop_back();  // link_0 only at the pin
   chain.bodies[0].point_masses.push_back({Vector3(0, 0, 0.05), 0.5, 0.0});
   chain.bodies[0].mass = 1.0;

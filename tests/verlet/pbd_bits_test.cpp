@@ -44,19 +44,18 @@ struct Case {
   std::uint64_t float_print, double_print;  // taken before the rattle rule existed
 };
 
-// A shipped scene with the relaxation settings the prints were taken with: the pbd rule, one
-// step, 100 sweeps (the chain over-relaxed by 1.5), whatever the scene files now choose.
-Model pbd_scene(const std::string& file, double over_relaxation) {
-  return testing::with_thesis_relaxation(load_shipped_scene(file), 100, over_relaxation);
+// The relaxation settings the prints were taken with: the pbd rule, one step, 100 sweeps (the
+// chain over-relaxed by 1.5), whatever the scene files now choose; the rods 7 sweeps.
+VerletOptions with_relaxation(VerletOptions options, RelaxationSettings relaxation) {
+  options.relaxation = relaxation;
+  return options;
 }
 
 std::vector<Case> cases() {
   std::vector<Case> out;
-  const Model humanoid = pbd_scene("humanoid.json", 1.0);
-  const Model chain = pbd_scene("chain.json", 1.5);
+  const Model humanoid = load_shipped_scene("humanoid.json");
+  const Model chain = load_shipped_scene("chain.json");
   Model rods = make_chain({1, 1, 2, 1, 3}, 0.2, true);
-  rods.settings.verlet.limb_masses = LimbMasses::inertia;
-  rods.settings.relaxation.iterations = 7;
   rods.ground = Ground{0.5, 0.3, 0.4};
   VerletOptions gauss_seidel, jacobi, direct, sequential, unweighted, attachments;
   jacobi.solver = RelaxationSolver::jacobi;
@@ -64,14 +63,17 @@ std::vector<Case> cases() {
   sequential.order = SweepOrder::sequential;
   unweighted.rule = RelaxationRule::unweighted;
   attachments.long_range_attachments = true;
-  out.push_back({"humanoid gauss-seidel", humanoid, gauss_seidel, 400, 0x12081e55ebefbc8dull, 0x2fb32d49679b29e6ull});
-  out.push_back({"humanoid jacobi", humanoid, jacobi, 400, 0x5c268cd0f4bfc9b0ull, 0xcb4474e5ff78731bull});
-  out.push_back({"humanoid direct", humanoid, direct, 400, 0x4767f7bde942ddffull, 0xb8d5b1669e869b40ull});
-  out.push_back({"chain gauss-seidel", chain, gauss_seidel, 300, 0x737203bc81c5e931ull, 0x9d3e370e8ed86d0eull});
-  out.push_back({"chain sequential", chain, sequential, 300, 0xf20cc64821cfa54dull, 0x010f797ece2253e1ull});
-  out.push_back({"chain unweighted", chain, unweighted, 300, 0x460cecf72a8fe9dfull, 0x3fdeccdc17c528c1ull});
-  out.push_back({"chain long-range attachments", chain, attachments, 300, 0xbb49797b0adf3b21ull, 0x5b5ec05c8e59a2f1ull});
-  out.push_back({"three-particle rods on the ground", rods, gauss_seidel, 500, 0xd209f090862df593ull, 0xf79aedf27bae2230ull});
+  const RelaxationSettings thesis = testing::thesis_relaxation(100, 1.0), over = testing::thesis_relaxation(100, 1.5);
+  VerletOptions rods_options = with_relaxation(gauss_seidel, testing::thesis_relaxation(7, 1.0));
+  rods_options.verlet.limb_masses = LimbMasses::inertia;
+  out.push_back({"humanoid gauss-seidel", humanoid, with_relaxation(gauss_seidel, thesis), 400, 0x12081e55ebefbc8dull, 0x2fb32d49679b29e6ull});
+  out.push_back({"humanoid jacobi", humanoid, with_relaxation(jacobi, thesis), 400, 0x5c268cd0f4bfc9b0ull, 0xcb4474e5ff78731bull});
+  out.push_back({"humanoid direct", humanoid, with_relaxation(direct, thesis), 400, 0x4767f7bde942ddffull, 0xb8d5b1669e869b40ull});
+  out.push_back({"chain gauss-seidel", chain, with_relaxation(gauss_seidel, over), 300, 0x737203bc81c5e931ull, 0x9d3e370e8ed86d0eull});
+  out.push_back({"chain sequential", chain, with_relaxation(sequential, over), 300, 0xf20cc64821cfa54dull, 0x010f797ece2253e1ull});
+  out.push_back({"chain unweighted", chain, with_relaxation(unweighted, over), 300, 0x460cecf72a8fe9dfull, 0x3fdeccdc17c528c1ull});
+  out.push_back({"chain long-range attachments", chain, with_relaxation(attachments, over), 300, 0xbb49797b0adf3b21ull, 0x5b5ec05c8e59a2f1ull});
+  out.push_back({"three-particle rods on the ground", rods, rods_options, 500, 0xd209f090862df593ull, 0xf79aedf27bae2230ull});
   return out;
 }
 

@@ -24,7 +24,8 @@ using testing::make_chain;
 constexpr double kGravity = 9.81;
 
 // A simple pendulum: a massless rod of `length` with a 1 kg point mass at its tail, pinned at the
-// origin, released at rest horizontally along +x (limb_masses "lumps", shared-particle joint).
+// origin, released at rest horizontally along +x; compiled with limb_masses "lumps" and a
+// shared-particle joint (pendulum_options).
 Model simple_pendulum(double length) {
   Model model;
   model.name = "simple pendulum";
@@ -38,9 +39,18 @@ Model simple_pendulum(double length) {
   model.bodies.push_back(rod);
   model.joints.push_back(spherical_joint("pin", kWorld, 0, Vector3::Zero(), Vector3(0, 0, 0.5 * length)));
   model.settings.sleep.enabled = false;
-  model.settings.verlet.joints = ParticleJoints::shared_particle;
-  model.settings.verlet.limb_masses = LimbMasses::lumps;
   return model;
+}
+
+// Options under `projection` in `substeps` substeps of `iterations` sweeps, with the particle
+// settings `verlet` (the scene's).
+VerletOptions relaxation_options(ProjectionRule projection, int substeps, int iterations, VerletSettings verlet = {}) {
+  VerletOptions options;
+  options.relaxation.projection = projection;
+  options.relaxation.substeps = substeps;
+  options.relaxation.iterations = iterations;
+  options.verlet = verlet;
+  return options;
 }
 
 // The known answer: θ'' = −(g/L)·sin θ from θ = π/2 at rest (θ from −z towards +x), by RK4 at
@@ -71,11 +81,9 @@ std::vector<Eigen::Vector3d> pendulum_reference(double length, double duration, 
 double pendulum_error(ProjectionRule projection, int substeps, const std::vector<Eigen::Vector3d>& reference) {
   Model model = simple_pendulum(0.5);
   model.settings.time_step = 1.0 / 60;
-  model.settings.relaxation.projection = projection;
-  model.settings.relaxation.substeps = substeps;
-  model.settings.relaxation.iterations = 50;
-  model.settings.relaxation.tolerance = 1e-15;
-  VerletState<double> state = compile<double>(model);
+  VerletOptions options = relaxation_options(projection, substeps, 50, {.joints = ParticleJoints::shared_particle, .limb_masses = LimbMasses::lumps, .drag_factor = {}});
+  options.relaxation.tolerance = 1e-15;
+  VerletState<double> state = compile<double>(model, options);
   const std::uint32_t bob = state.limbs.tail[0];
   double largest = 0;
   for (std::size_t frame = 1; frame < reference.size(); ++frame) {
@@ -105,8 +113,7 @@ TEST(Rattle, IsSecondOrderOnThePendulumWherePbdIsFirstOrder) {
 TEST(Rattle, IsSecondOrderOnTheThreeParticleDoublePendulum) {
   // Uniform rods as three particles (limb_masses "inertia": the limb centres' constraint and its
   // velocity stage too), against Featherstone with RK4 at 1/24000 s, over 0.5 s.
-  Model model = study::double_pendulum();
-  model.settings.verlet.limb_masses = LimbMasses::inertia;
+  const Scene model = study::double_pendulum();
   study::Method reference_method{.family = study::Family::featherstone, .time_step = 1.0 / 24000};
   study::Simulation reference(model, reference_method);
   const study::Trajectory expected = study::observe_run(reference, 0.5, 1.0 / 60).trajectory;
@@ -118,6 +125,7 @@ TEST(Rattle, IsSecondOrderOnTheThreeParticleDoublePendulum) {
     method.relaxation_tolerance = 1e-14;
     method.projection = ProjectionRule::rattle;
     method.substeps = substeps;
+    method.limb_masses = LimbMasses::inertia;
     study::Simulation simulation(model, method);
     errors.push_back(study::trajectory_error(study::observe_run(simulation, 0.5, 1.0 / 60).trajectory, expected));
   }
@@ -129,15 +137,12 @@ TEST(Rattle, KeepsTheEnergyOfASwingingChainWherePbdLosesIt) {
   // The heavy-end chain released from its arc, 10 s in frames of 1/60 s, 128 substeps of 2
   // sweeps, no contacts: the energy error stays within 10⁻³ of m·g·ΣL at every step (what is
   // lost is the sweeps' unconverged residue, not the integrator); pbd's projection dissipates.
-  const Model chain = study::heavy_end_chain(study::ChainRelease::arc);
-  const double scale = study::energy_scale(chain);
+  const Scene chain = study::heavy_end_chain(study::ChainRelease::arc);
+  const double scale = study::energy_scale(chain.model);
   for (const ProjectionRule projection : {ProjectionRule::rattle, ProjectionRule::pbd}) {
-    Model model = chain;
+    Model model = chain.model;
     model.settings.time_step = 1.0 / 60;
-    model.settings.relaxation.projection = projection;
-    model.settings.relaxation.substeps = 128;
-    model.settings.relaxation.iterations = 2;
-    VerletState<double> state = compile<double>(model);
+    VerletState<double> state = compile<double>(model, relaxation_options(projection, 128, 2, chain.methods.verlet));
     const double start = observe(state).energy();
     double drift = 0;
     for (int s = 0; s < 10 * 60; ++s) {
@@ -171,16 +176,14 @@ TEST(Rattle, KeepsLinearAndAngularMomentumOfAFreeChainToRounding) {
   // momentum changes, converged or not.
   Model model = make_chain({1, 3, 0.5, 2, 1, 4}, 0.2, false);
   model.settings.gravity.setZero();
-  model.settings.verlet.joints = ParticleJoints::shared_particle;
-  model.settings.relaxation.projection = ProjectionRule::rattle;
-  model.settings.relaxation.iterations = 2;
   model.settings.time_step = 1.0 / 60;
   const Vector3 centre(0.6, 0, 1), spin(0.5, 1.0, 6.0), drift(0.3, -0.2, 0.1);
   for (Body& body : model.bodies) {
     body.angular_velocity = spin;
     body.linear_velocity = drift + spin.cross(body.position - centre);
   }
-  VerletState<double> state = compile<double>(model);
+  VerletState<double> state =
+      compile<double>(model, relaxation_options(ProjectionRule::rattle, 1, 2, {.joints = ParticleJoints::shared_particle, .limb_masses = LimbMasses::ends, .drag_factor = {}}));
   const auto [linear, angular] = momenta(state);
   for (int s = 0; s < 600; ++s) ASSERT_EQ(step(state).status, StepStatus::ok);
   const auto [linear_after, angular_after] = momenta(state);
@@ -193,12 +196,11 @@ TEST(Rattle, ForcedFallbackIsCountedAndStaysFinite) {
   // Frames of 1/10 s in one substep: the chain's end links turn more than 60° a step, so their
   // start gradients no longer see the constraint; they must fall back to pbd, be counted, and
   // never produce a non-finite position.
-  Model model = study::heavy_end_chain(study::ChainRelease::arc);
+  const Scene chain = study::heavy_end_chain(study::ChainRelease::arc);
+  Model model = chain.model;
   model.settings.time_step = 0.1;
-  model.settings.relaxation.projection = ProjectionRule::rattle;
-  model.settings.relaxation.iterations = 20;
   for (const RelaxationSolver solver : {RelaxationSolver::gauss_seidel, RelaxationSolver::jacobi, RelaxationSolver::direct}) {
-    VerletOptions options;
+    VerletOptions options = relaxation_options(ProjectionRule::rattle, 1, 20, chain.methods.verlet);
     options.solver = solver;
     VerletState<double> state = compile<double>(model, options);
     std::uint64_t fallbacks = 0;
@@ -215,13 +217,11 @@ TEST(Rattle, ForcedFallbackIsCountedAndStaysFinite) {
 TEST(Substeps, PbdSubstepsAreSmallerStepsBitForBit) {
   // A step of Δt in n substeps is n steps of Δt/n: the same passes on the same numbers.
   Model model = load_shipped_scene("humanoid.json");
-  model.settings.relaxation = RelaxationSettings{};
-  model.settings.relaxation.iterations = 10;
   model.settings.sleep.start_asleep = false;
-  Model split = model, small = model;
-  split.settings.relaxation.substeps = 4;
+  Model small = model;
   small.settings.time_step = model.settings.time_step / 4;
-  VerletState<double> a = compile<double>(split), b = compile<double>(small);
+  VerletState<double> a = compile<double>(model, relaxation_options(ProjectionRule::pbd, 4, 10)),
+                      b = compile<double>(small, relaxation_options(ProjectionRule::pbd, 1, 10));
   for (int s = 0; s < 100; ++s) {
     ASSERT_EQ(step(a).substeps, 4);
     for (int k = 0; k < 4; ++k) step(b);
@@ -237,9 +237,7 @@ TEST(Substeps, ApplyForceActsOverTheWholeStep) {
       Model model = make_chain({2.0}, 0.3, false);
       model.settings.gravity.setZero();
       model.settings.time_step = 0.01;
-      model.settings.relaxation.projection = projection;
-      model.settings.relaxation.substeps = substeps;
-      VerletState<double> state = compile<double>(model);
+      VerletState<double> state = compile<double>(model, relaxation_options(projection, substeps, RelaxationSettings{}.iterations));
       apply_force(state, 0, Eigen::Vector3d(0, 0, 40));
       step(state);
       EXPECT_NEAR(observe(state).linear_momentum.z(), 40 * 0.01, 1e-12) << "substeps " << substeps;
@@ -249,15 +247,14 @@ TEST(Substeps, ApplyForceActsOverTheWholeStep) {
 
 TEST(Rattle, DirectSolverAndGaussSeidelReachTheSameSubsteps) {
   // Converged, both solve the same SHAKE equations: the trajectories agree to the tolerance.
-  Model model = study::heavy_end_chain(study::ChainRelease::small_3d);
+  const Scene chain = study::heavy_end_chain(study::ChainRelease::small_3d);
+  Model model = chain.model;
   model.settings.time_step = 1.0 / 60;
-  model.settings.relaxation.projection = ProjectionRule::rattle;
-  model.settings.relaxation.substeps = 8;
-  model.settings.relaxation.iterations = 500;
-  model.settings.relaxation.tolerance = 1e-14;
-  VerletOptions direct;
+  VerletOptions gauss_seidel = relaxation_options(ProjectionRule::rattle, 8, 500, chain.methods.verlet);
+  gauss_seidel.relaxation.tolerance = 1e-14;
+  VerletOptions direct = gauss_seidel;
   direct.solver = RelaxationSolver::direct, direct.newton_iterations = 50;
-  VerletState<double> a = compile<double>(model), b = compile<double>(model, direct);
+  VerletState<double> a = compile<double>(model, gauss_seidel), b = compile<double>(model, direct);
   double largest = 0;
   for (int s = 0; s < 60; ++s) {
     step(a), step(b);
@@ -268,11 +265,8 @@ TEST(Rattle, DirectSolverAndGaussSeidelReachTheSameSubsteps) {
 
 TEST(Rattle, HumanoidIsKnockedOverAndFallsAsleep) {
   // Contacts (ground, ball), restitution and sleeping under the rattle rule.
-  Model model = load_shipped_scene("humanoid.json");
-  model.settings.relaxation.projection = ProjectionRule::rattle;
-  model.settings.relaxation.substeps = 4;
-  model.settings.relaxation.iterations = 10;
-  VerletState<double> state = compile<double>(model);
+  const Model model = load_shipped_scene("humanoid.json");
+  VerletState<double> state = compile<double>(model, relaxation_options(ProjectionRule::rattle, 4, 10));
   const Eigen::Vector3d start = observe(state).body_centre_of_mass;
   for (int s = 0; s < 1200; ++s) ASSERT_EQ(step(state).status, StepStatus::ok);
   const Observation end = observe(state);
@@ -284,14 +278,13 @@ TEST(Rattle, HumanoidIsKnockedOverAndFallsAsleep) {
 TEST(Rattle, FloatFollowsDouble) {
   // Velocity as state keeps float's rounding out of the velocity (pbd's (x − x*)/Δt divides it by
   // the substep): in float the chain never gains energy and ends within 1% of m·g·ΣL of double.
-  Model model = study::heavy_end_chain(study::ChainRelease::arc);
+  const Scene chain = study::heavy_end_chain(study::ChainRelease::arc);
+  Model model = chain.model;
   model.settings.time_step = 1.0 / 60;
-  model.settings.relaxation.projection = ProjectionRule::rattle;
-  model.settings.relaxation.substeps = 64;
-  model.settings.relaxation.iterations = 2;
+  const VerletOptions options = relaxation_options(ProjectionRule::rattle, 64, 2, chain.methods.verlet);
   const double scale = study::energy_scale(model);
-  VerletState<float> single = compile<float>(model);
-  VerletState<double> twice = compile<double>(model);
+  VerletState<float> single = compile<float>(model, options);
+  VerletState<double> twice = compile<double>(model, options);
   const double start = observe(single).energy();
   for (int s = 0; s < 10 * 60; ++s) {
     ASSERT_EQ(step(single).status, StepStatus::ok);

@@ -37,9 +37,10 @@ VerletState<double> one_particle(const Vector3& position, const Vector3& velocit
   model.bodies.push_back(body);
   model.settings.gravity = gravity;
   model.settings.time_step = dt;
-  model.settings.relaxation.iterations = 1;
   model.settings.sleep.enabled = false;
-  return compile<double>(model);
+  VerletOptions options;
+  options.relaxation.iterations = 1;
+  return compile<double>(model, options);
 }
 
 // Moves x(−Δt) from compile()'s x0 − v0·Δt to the Taylor start x0 − v0·Δt + ½·a0·Δt².
@@ -140,8 +141,10 @@ double end_lead_degrees(const Vector3& end, const Vector3& middle) {
   return (below_horizontal(end) - below_horizontal(middle)) * 180 / std::numbers::pi;
 }
 
-double verlet_lead(const Model& model, RelaxationRule rule) {
-  auto state = compile<double>(model, {.rule = rule});
+double verlet_lead(const Model& model, RelaxationRule rule, const VerletOptions& scene_options) {
+  VerletOptions options = scene_options;
+  options.rule = rule;
+  auto state = compile<double>(model, options);
   for (int n = 0; n < 72; ++n) step(state);  // 0.3 s
   const auto& p = state.particles;
   const std::uint32_t last = state.body_limb.back(), middle = state.body_limb[model.bodies.size() / 2];
@@ -152,11 +155,15 @@ TEST(ThesisExperiments, HeavyEndLeadsUnderTheWeightedRuleOnly) {
   // Thesis 4.4.2: with the weighted rule the heavy end "has more control over the global
   // motion"; with the midpoint rule mass makes no difference at all. The exact rigid chain
   // (Featherstone) says which is right.
-  const Model heavy = load_shipped_scene("chain.json");
+  const Scene chain = testing::shipped_scene("chain.json");
+  const VerletOptions options = testing::with_scene_settings(chain);
+  const Model& heavy = chain.model;
   Model equal = heavy;
   equal.bodies.back().mass = equal.bodies.front().mass;
-  const double weighted_heavy = verlet_lead(heavy, RelaxationRule::weighted), weighted_equal = verlet_lead(equal, RelaxationRule::weighted);
-  const double midpoint_heavy = verlet_lead(heavy, RelaxationRule::unweighted), midpoint_equal = verlet_lead(equal, RelaxationRule::unweighted);
+  const double weighted_heavy = verlet_lead(heavy, RelaxationRule::weighted, options),
+               weighted_equal = verlet_lead(equal, RelaxationRule::weighted, options);
+  const double midpoint_heavy = verlet_lead(heavy, RelaxationRule::unweighted, options),
+               midpoint_equal = verlet_lead(equal, RelaxationRule::unweighted, options);
   EXPECT_GT(weighted_heavy - weighted_equal, 1.0);  // degrees: the heavy end trails its chain less
   EXPECT_EQ(midpoint_heavy, midpoint_equal);        // the midpoint rule never reads a mass
 

@@ -17,6 +17,8 @@ namespace limber {
 namespace {
 
 using testing::load_shipped_scene;
+using testing::shipped_scene;
+using testing::with_scene_settings;
 using testing::make_chain;
 
 template <typename Scalar>
@@ -30,7 +32,10 @@ TYPED_TEST(VerletMethod, FreeChainWithUnequalMassesConservesLinearMomentum) {
   Model model = make_chain({1.0, 3.0, 0.5, 7.0, 2.0, 1.5}, 0.2, false);
   model.settings.gravity.setZero();
   model.settings.time_step = 1.0 / 240;
-  model.settings.relaxation.iterations = 10;
+  VerletOptions weighted_options;
+  weighted_options.relaxation.iterations = 10;
+  VerletOptions unweighted_options = weighted_options;
+  unweighted_options.rule = RelaxationRule::unweighted;
   std::mt19937 random(3);
   std::uniform_real_distribution<double> speed(-2, 2);
   Vector3 momentum = Vector3::Zero();
@@ -42,8 +47,8 @@ TYPED_TEST(VerletMethod, FreeChainWithUnequalMassesConservesLinearMomentum) {
   // A slow drift of the whole chain keeps it near the origin, where float still resolves the
   // per-step displacements (Verlet's velocity is a difference of positions).
   for (Body& body : model.bodies) body.linear_velocity += Vector3(0.1, 0, 0.05) - momentum / model.body_mass();
-  auto weighted = compile<TypeParam>(model, {RelaxationRule::weighted});
-  auto unweighted = compile<TypeParam>(model, {RelaxationRule::unweighted});
+  auto weighted = compile<TypeParam>(model, weighted_options);
+  auto unweighted = compile<TypeParam>(model, unweighted_options);
   // The first step turns the initial (inconsistent) velocities into ones the links allow.
   step(weighted), step(unweighted);
   const Vector3 p0 = observe(weighted).linear_momentum, q0 = observe(unweighted).linear_momentum;
@@ -62,9 +67,10 @@ TYPED_TEST(VerletMethod, FreeChainWithUnequalMassesConservesLinearMomentum) {
 
 TYPED_TEST(VerletMethod, HeavyEndChainKeepsJointsClosedWith100Iterations) {
   // The thesis's 4.4 experiment: five links, the bottom one double mass, released horizontally.
-  Model model = load_shipped_scene("chain.json");
-  model.settings.relaxation.iterations = 100;
-  auto state = compile<TypeParam>(model);
+  const Scene chain = shipped_scene("chain.json");
+  VerletOptions options = with_scene_settings(chain);
+  options.relaxation.iterations = 100;
+  auto state = compile<TypeParam>(chain.model, options);
   double largest_gap = 0, largest_stretch = 0;
   for (int s = 0; s < 1200; ++s) {  // 5 s
     ASSERT_EQ(step(state).status, StepStatus::ok);
@@ -78,16 +84,16 @@ TYPED_TEST(VerletMethod, HeavyEndChainKeepsJointsClosedWith100Iterations) {
 
 // chain.json as the thesis ran it (pbd, one step, 100 sweeps, over-relaxation 1.5): the facts
 // below are the pbd rule's and count sweeps per step.
-Model thesis_chain(long links = 5) {
-  return testing::with_thesis_relaxation(load_shipped_scene("chain.json", {.variant = {}, .links = links, .copies = {}}), 100, 1.5);
+Model thesis_chain(long links = 5) { return load_shipped_scene("chain.json", {.variant = {}, .links = links, .copies = {}}); }
+VerletOptions thesis_options(int sweeps = 100, double over_relaxation = 1.5) {
+  VerletOptions options;
+  options.relaxation = testing::thesis_relaxation(sweeps, over_relaxation);
+  return options;
 }
 
 TYPED_TEST(VerletMethod, OverRelaxationConvergesFasterWithoutGainingEnergy) {
   auto run = [](double omega, int sweeps) {
-    Model model = thesis_chain();
-    model.settings.relaxation.over_relaxation = omega;
-    model.settings.relaxation.iterations = sweeps;
-    auto state = compile<TypeParam>(model);
+    auto state = compile<TypeParam>(thesis_chain(), thesis_options(sweeps, omega));
     const double initial = observe(state).energy();
     double largest_gap = 0, highest = initial;
     for (int s = 0; s < 1200; ++s) {
@@ -106,11 +112,11 @@ TYPED_TEST(VerletMethod, OverRelaxationConvergesFasterWithoutGainingEnergy) {
 TYPED_TEST(VerletMethod, SharedParticleJointsMoveLikeClosedZeroLengthJoints) {
   // Thesis 3.2.5: a spherical joint is two limbs sharing a particle. Converged zero-length
   // constraints are the same joint, so the chains must move together.
-  Model model = thesis_chain();
-  model.settings.relaxation.iterations = 1000;
-  auto constrained = compile<TypeParam>(model);
-  model.settings.verlet.joints = ParticleJoints::shared_particle;
-  auto shared = compile<TypeParam>(model);
+  const Model model = thesis_chain();
+  VerletOptions options = thesis_options(1000);
+  auto constrained = compile<TypeParam>(model, options);
+  options.verlet.joints = ParticleJoints::shared_particle;
+  auto shared = compile<TypeParam>(model, options);
   EXPECT_EQ(shared.particles.size(), 6u);  // a pin and five limb tails
   EXPECT_TRUE(shared.joint_constraints.empty());
   for (int s = 0; s < 120; ++s) step(constrained), step(shared);  // 0.5 s, before chaos sets in
@@ -120,8 +126,11 @@ TYPED_TEST(VerletMethod, SharedParticleJointsMoveLikeClosedZeroLengthJoints) {
 }
 
 TYPED_TEST(VerletMethod, WeightedAndUnweightedDifferOnlyWhenMassesDiffer) {
-  auto run = [](const Model& model, RelaxationRule rule) {
-    auto state = compile<TypeParam>(model, {rule});
+  const VerletOptions scene_options = with_scene_settings(shipped_scene("chain.json"));
+  auto run = [&](const Model& model, RelaxationRule rule) {
+    VerletOptions options = scene_options;
+    options.rule = rule;
+    auto state = compile<TypeParam>(model, options);
     for (int s = 0; s < 480; ++s) step(state);
     return state;
   };
@@ -140,8 +149,9 @@ TYPED_TEST(VerletMethod, WeightedAndUnweightedDifferOnlyWhenMassesDiffer) {
 }
 
 TYPED_TEST(VerletMethod, StickStaysInsideTheBox) {
-  const Model model = load_shipped_scene("stick_in_box.json");
-  auto state = compile<TypeParam>(model);
+  const Scene scene = shipped_scene("stick_in_box.json");
+  const Model& model = scene.model;
+  auto state = compile<TypeParam>(model, with_scene_settings(scene));
   const double slack = std::is_same_v<TypeParam, float> ? 1e-5 : 1e-12;
   int wall_contacts = 0;
   for (int s = 0; s < 2400; ++s) {
@@ -160,9 +170,10 @@ TYPED_TEST(VerletMethod, StickLengthErrorFallsAsIterationsGrow) {
   // Thesis 3.2.3: looping the length and box constraints more often satisfies both better.
   // The length is only disturbed when a wall pushes one end, so measure over wall contacts.
   auto mean_stretch = [](int iterations) {
-    Model model = load_shipped_scene("stick_in_box.json");
-    model.settings.relaxation.iterations = iterations;
-    auto state = compile<TypeParam>(model);
+    const Scene scene = shipped_scene("stick_in_box.json");
+    VerletOptions options = with_scene_settings(scene);
+    options.relaxation.iterations = iterations;
+    auto state = compile<TypeParam>(scene.model, options);
     double total = 0;
     int samples = 0;
     for (int s = 0; s < 1200; ++s) {
@@ -180,7 +191,8 @@ TYPED_TEST(VerletMethod, StickLengthErrorFallsAsIterationsGrow) {
 }
 
 TYPED_TEST(VerletMethod, ScenesWithoutBallOrGroundSkipThoseStages) {
-  auto state = compile<TypeParam>(load_shipped_scene("chain.json"));
+  const Scene chain = shipped_scene("chain.json");
+  auto state = compile<TypeParam>(chain.model, with_scene_settings(chain));
   EXPECT_TRUE(state.planes.empty());
   EXPECT_TRUE(state.features.empty());
   EXPECT_LT(state.ball_particle, 0);
@@ -197,24 +209,23 @@ TYPED_TEST(VerletMethod, SameInputGivesSameBits) {
 }
 
 TYPED_TEST(VerletMethod, RelaxationReportsWhichCriterionStoppedIt) {
-  Model model = thesis_chain();
-  model.settings.relaxation.iterations = 50;
-  auto by_count = compile<TypeParam>(model);
+  const Model model = thesis_chain();
+  VerletOptions options = thesis_options(50);
+  auto by_count = compile<TypeParam>(model, options);
   StepReport report = step(by_count);
   EXPECT_EQ(report.stop, RelaxationStop::iterations);
   EXPECT_EQ(report.iterations, 50);
 
-  model.settings.relaxation.tolerance = 1e-3;  // a chain released at rest converges at once
-  auto by_tolerance = compile<TypeParam>(model);
+  options.relaxation.tolerance = 1e-3;  // a chain released at rest converges at once
+  auto by_tolerance = compile<TypeParam>(model, options);
   report = step(by_tolerance);
   EXPECT_EQ(report.stop, RelaxationStop::tolerance);
   EXPECT_LT(report.iterations, 50);
   EXPECT_LT(report.largest_correction, 1e-3);
 
-  Model long_chain = thesis_chain(2000);
-  long_chain.settings.relaxation.iterations = 1000000;
-  long_chain.settings.relaxation.budget_us = 200;
-  auto by_budget = compile<TypeParam>(long_chain);
+  VerletOptions budget_options = thesis_options(1000000);
+  budget_options.relaxation.budget_us = 200;
+  auto by_budget = compile<TypeParam>(thesis_chain(2000), budget_options);
   report = step(by_budget);
   EXPECT_EQ(report.stop, RelaxationStop::budget);
   EXPECT_LT(report.iterations, 1000000);
@@ -244,10 +255,11 @@ TYPED_TEST(VerletMethod, ThesisDragFactorSlowsWithoutPullingTowardsTheOrigin) {
   // eq. 4.5 alone would drag it towards the origin) and slows a moving one.
   Model model = make_chain({1.0}, 0.5, false, Vector3(30, -20, 10));
   model.settings.gravity.setZero();
-  model.settings.verlet.drag_factor = 1.99;
-  auto resting = compile<TypeParam>(model);
+  VerletOptions options;
+  options.verlet.drag_factor = 1.99;
+  auto resting = compile<TypeParam>(model, options);
   model.bodies[0].linear_velocity = Vector3(0, 0, 1);
-  auto moving = compile<TypeParam>(model);
+  auto moving = compile<TypeParam>(model, options);
   const Eigen::Vector3d start = observe(resting).body_centre_of_mass;
   for (int s = 0; s < 240; ++s) step(resting), step(moving);
   EXPECT_LT((observe(resting).body_centre_of_mass - start).norm(), 1e-5);
@@ -268,7 +280,8 @@ TYPED_TEST(VerletMethod, VelocitySurvivesAChangeOfTimeStep) {
 
 #if defined(__SSE__) || defined(__x86_64__)
 TEST(FloatingPointMode, StepFlushesDenormalsOnlyWhileItRuns) {
-  auto state = compile<float>(load_shipped_scene("chain.json"));
+  const Scene chain = shipped_scene("chain.json");
+  auto state = compile<float>(chain.model, with_scene_settings(chain));
   const unsigned before = _mm_getcsr();
   step(state);
   EXPECT_EQ(_mm_getcsr(), before) << "the caller's MXCSR must be restored";
@@ -301,10 +314,11 @@ TYPED_TEST(VerletMethod, StandingHumanoidCostsNothingUntilTheBallHits) {
 }
 
 TYPED_TEST(VerletMethod, ChainAtRestFallsAsleepAndAForceWakesIt) {
-  Model model = load_shipped_scene("chain.json");
+  Scene chain = shipped_scene("chain.json");
+  Model& model = chain.model;
   model.settings.damping = 2.0;  // settle quickly
   model.settings.sleep = {true, false, 0.01, 0.5};
-  auto state = compile<TypeParam>(model);
+  auto state = compile<TypeParam>(model, with_scene_settings(chain));
   int steps = 0;
   while (!observe(state).body_sleeping && steps < 240 * 60) step(state), ++steps;
   ASSERT_TRUE(observe(state).body_sleeping) << "a damped hanging chain must come to rest";

@@ -108,9 +108,10 @@ TEST(World, APinnedPointStaysPut) {
     for (const ParticleJoints joints : {ParticleJoints::shared_particle, ParticleJoints::zero_length_constraint}) {
       if (method != Method::particles && joints == ParticleJoints::zero_length_constraint) continue;
       Model model = make_chain({1, 1, 1}, 0.2, false);
-      model.settings.verlet.joints = joints;
       model.settings.sleep.enabled = false;
-      World world(model, options_for(method));
+      WorldOptions options = options_for(method);
+      options.particles.verlet.joints = joints;
+      World world(model, options);
       const BodyId end = world.body("link_2");
       const Eigen::Vector3d local(0, 0, -0.1);  // the tail
       const Pose start = world.pose(end);
@@ -172,11 +173,12 @@ TEST(World, AKinematicTargetIsFollowedWithItsVelocity) {
     for (const ProjectionRule projection : {ProjectionRule::pbd, ProjectionRule::rattle}) {
       if (method != Method::particles && projection == ProjectionRule::rattle) continue;
       Model model = make_chain({0.2, 0.2, 0.2, 0.2}, 0.1, false);
-      model.settings.verlet.joints = ParticleJoints::shared_particle;
-      model.settings.relaxation.projection = projection;
-      model.settings.relaxation.substeps = projection == ProjectionRule::rattle ? 4 : 1;
       model.settings.sleep.enabled = false;
-      World world(model, options_for(method));
+      WorldOptions options = options_for(method);
+      options.particles.verlet.joints = ParticleJoints::shared_particle;
+      options.particles.relaxation.projection = projection;
+      options.particles.relaxation.substeps = projection == ProjectionRule::rattle ? 4 : 1;
+      World world(model, options);
       const BodyId first = world.body("link_0");
       const PinId hand = world.pin(first, Eigen::Vector3d(0, 0, 0.05));  // link_0's head
       const Eigen::Vector3d start = world.pin_position(hand);
@@ -310,7 +312,6 @@ Model pendulum_with_given_inertia() {
   model.bodies.push_back(body);
   model.joints.push_back(spherical_joint("pin", kWorld, 0, pivot, Vector3(0, 0, 0.2)));
   model.settings.sleep.enabled = false;
-  model.settings.verlet.limb_masses = LimbMasses::inertia;  // particles: mass placed to match the tensor
   return model;
 }
 
@@ -318,7 +319,9 @@ TEST(World, AGivenInertiaTensorAndCentreOfMassSetTheSwingPeriod) {
   const double m = 2, g = 9.81, d = 0.2 + 0.05, pivot_inertia = 0.02 + m * d * d;
   const double expected = 2 * std::numbers::pi * std::sqrt(pivot_inertia / (m * g * d)) * (1 + 0.05 * 0.05 / 16);
   for (const Method method : kMethods) {
-    World world(pendulum_with_given_inertia(), options_for(method));
+    WorldOptions options = options_for(method);
+    options.particles.verlet.limb_masses = LimbMasses::inertia;  // particles: mass placed to match the tensor
+    World world(pendulum_with_given_inertia(), options);
     const BodyId limb = world.body("limb");
     // Upward zero crossings of the limb's x, interpolated within the step.
     const double dt = 1e-3;
@@ -340,8 +343,10 @@ TEST(World, AGivenInertiaTensorAndCentreOfMassSetTheSwingPeriod) {
 TEST(World, AGivenInertiaIsCheckedAndParticlesRefuseAnOffAxisCentre) {
   Model model = pendulum_with_given_inertia();
   const auto error_of = [](const Model& candidate, Method method) -> std::string {
+    WorldOptions options = options_for(method);
+    options.particles.verlet.limb_masses = LimbMasses::inertia;  // particles: mass placed to match the tensor
     try {
-      World world(candidate, options_for(method));
+      World world(candidate, options);
     } catch (const ModelError& error) {
       return error.what();
     }

@@ -207,10 +207,11 @@ Integrator integrator_of(const std::string& flag) {
 }
 
 // The SpringOptions the flags ask for.
-SpringOptions spring_options(const RunFlags& flags) {
+SpringOptions spring_options(const RunFlags& flags, const SpringSettings& scene) {
   refuse_verlet_flags(flags);
   refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   SpringOptions options;
+  options.defaults = scene;
   const bool implicit = flags.method == "springs-implicit";
   const std::string integrator = flags.integrator_option->count() ? flags.integrator : implicit ? "backward-euler" : "semi-implicit";
   if (implicit != (integrator == "backward-euler")) {
@@ -254,12 +255,42 @@ FeatherstoneOptions featherstone_options(const RunFlags& flags) {
   return options;
 }
 
+// The scene's relaxation settings with the flags' changes (--iterations, --projection, ...).
+RelaxationSettings relaxation_settings(const RunFlags& flags, RelaxationSettings relaxation) {
+  if (given(flags.iterations_option)) {
+    if (flags.iterations < 1) throw InputError(format("--iterations: must be >= 1, got %d", flags.iterations));
+    relaxation.iterations = flags.iterations;
+  }
+  if (given(flags.projection_option)) {
+    relaxation.projection = flags.projection == "rattle" ? ProjectionRule::rattle : ProjectionRule::pbd;
+  }
+  if (given(flags.substeps_option)) {
+    if (flags.substeps < 1 || flags.substeps > kMaxSubsteps) {
+      throw InputError(format("--substeps: must be in [1, %d], got %d", kMaxSubsteps, flags.substeps));
+    }
+    relaxation.substeps = flags.substeps;
+  }
+  if (given(flags.tolerance_option)) {
+    relaxation.tolerance = checked(flags.tolerance_option, flags.tolerance, non_negative, ">= 0");
+  }
+  if (given(flags.budget_option)) {
+    relaxation.budget_us = checked(flags.budget_option, flags.budget_us, non_negative, ">= 0");
+  }
+  if (given(flags.over_relaxation_option)) {
+    relaxation.over_relaxation =
+        checked(flags.over_relaxation_option, flags.over_relaxation, [](double w) { return w > 0 && w < 2; }, "in (0, 2)");
+  }
+  return relaxation;
+}
+
 // The VerletOptions the flags ask for; a combination the sequential sweep cannot run is an error.
-VerletOptions verlet_options(const RunFlags& flags) {
+VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene) {
   refuse({flags.stiffness_option, flags.damping_option, flags.integrator_option, flags.linear_solver_option}, flags,
          "the rigid-body methods (springs-explicit, springs-implicit, lagrange, featherstone)");
   refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   VerletOptions options;
+  options.relaxation = relaxation_settings(flags, scene.relaxation);
+  options.verlet = scene.verlet;
   options.rule = flags.method == "unweighted" ? RelaxationRule::unweighted : RelaxationRule::weighted;
   options.solver = flags.solver == "jacobi"   ? RelaxationSolver::jacobi
                    : flags.solver == "direct" ? RelaxationSolver::direct
@@ -327,29 +358,6 @@ void apply_overrides(Model& model, const RunFlags& flags) {
     model.ground->friction = checked(flags.friction_option, flags.friction, non_negative, ">= 0");
   }
   if (given(flags.dt_option)) model.settings.time_step = checked(flags.dt_option, flags.dt, positive, "> 0");
-  if (given(flags.iterations_option)) {
-    if (flags.iterations < 1) throw InputError(format("--iterations: must be >= 1, got %d", flags.iterations));
-    model.settings.relaxation.iterations = flags.iterations;
-  }
-  if (given(flags.projection_option)) {
-    model.settings.relaxation.projection = flags.projection == "rattle" ? ProjectionRule::rattle : ProjectionRule::pbd;
-  }
-  if (given(flags.substeps_option)) {
-    if (flags.substeps < 1 || flags.substeps > kMaxSubsteps) {
-      throw InputError(format("--substeps: must be in [1, %d], got %d", kMaxSubsteps, flags.substeps));
-    }
-    model.settings.relaxation.substeps = flags.substeps;
-  }
-  if (given(flags.tolerance_option)) {
-    model.settings.relaxation.tolerance = checked(flags.tolerance_option, flags.tolerance, non_negative, ">= 0");
-  }
-  if (given(flags.budget_option)) {
-    model.settings.relaxation.budget_us = checked(flags.budget_option, flags.budget_us, non_negative, ">= 0");
-  }
-  if (given(flags.over_relaxation_option)) {
-    model.settings.relaxation.over_relaxation =
-        checked(flags.over_relaxation_option, flags.over_relaxation, [](double w) { return w > 0 && w < 2; }, "in (0, 2)");
-  }
   if (given(flags.steps_option) && flags.steps < 1) throw InputError(format("--steps: must be >= 1, got %ld", flags.steps));
   validate(model);
 }
@@ -533,7 +541,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
                 model.settings.time_step, state.time, record.wall_seconds,
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
-  const RelaxationSettings& relaxation = model.settings.relaxation;
+  const RelaxationSettings& relaxation = state.options.relaxation;
   const bool rattle = relaxation.projection == ProjectionRule::rattle;
   const std::string per = relaxation.substeps > 1 ? format(" a substep, %d substeps a step", relaxation.substeps) : std::string(" a step");
   if (state.options.solver == RelaxationSolver::direct) {
@@ -659,25 +667,26 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }
 
-// The method and its options the flags ask for (each reader refuses the other methods' flags).
-WorldOptions method_options(const RunFlags& flags) {
+// The method and its options the flags ask for, over the scene's method settings (each reader
+// refuses the other methods' flags).
+WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene) {
   WorldOptions options;
   if (flags.springs()) {
-    options.method = Method::springs, options.springs = spring_options(flags);
+    options.method = Method::springs, options.springs = spring_options(flags, scene.springs);
   } else if (flags.lagrange()) {
     options.method = Method::lagrange, options.lagrange = lagrange_options(flags);
   } else if (flags.featherstone()) {
     options.method = Method::featherstone, options.featherstone = featherstone_options(flags);
   } else {
-    options.method = Method::particles, options.particles = verlet_options(flags);
+    options.method = Method::particles, options.particles = verlet_options(flags, scene);
     options.single_precision = flags.precision == "float";
   }
   return options;
 }
 
-int simulate(const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
-  MethodState state = compile_method(model, method_options(flags));
-  return std::visit([&](auto& compiled) { return simulate(compiled, model, flags, source, out); }, state);
+int simulate(const Scene& scene, const RunFlags& flags, const std::string& source, std::ostream& out) {
+  MethodState state = compile_method(scene.model, method_options(flags, scene.methods));
+  return std::visit([&](auto& compiled) { return simulate(compiled, scene.model, flags, source, out); }, state);
 }
 
 }  // namespace
@@ -704,11 +713,11 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (given(flags.links_option)) scene_options.links = flags.links;
     if (given(flags.copies_option)) scene_options.copies = flags.copies;
     const bool embedded = flags.scene.empty();
-    Model model = embedded ? load_scene_text(embedded_humanoid_scene(), "embedded tools/scenes/humanoid.json", scene_options)
+    Scene scene = embedded ? load_scene_text(embedded_humanoid_scene(), "embedded tools/scenes/humanoid.json", scene_options)
                            : load_scene_file(flags.scene, scene_options);
-    apply_overrides(model, flags);
+    apply_overrides(scene.model, flags);
     const std::string source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
-    return simulate(model, flags, source, out);
+    return simulate(scene, flags, source, out);
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
   } catch (const InputError& error) {

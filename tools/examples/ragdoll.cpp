@@ -12,15 +12,16 @@
 
 int main(int argc, char** argv) {
   const std::string method_name = argc > 1 ? argv[1] : "particles";
-  limber::WorldOptions options;
-  if (method_name == "springs") options.method = limber::Method::springs;
-  else if (method_name == "lagrange") options.method = limber::Method::lagrange;
-  else if (method_name == "featherstone") options.method = limber::Method::featherstone;
+  limber::Method method = limber::Method::particles;
+  if (method_name == "springs") method = limber::Method::springs;
+  else if (method_name == "lagrange") method = limber::Method::lagrange;
+  else if (method_name == "featherstone") method = limber::Method::featherstone;
   else if (method_name != "particles") {
     std::fprintf(stderr, "ragdoll: unknown method '%s' (particles, springs, lagrange or featherstone)\n", method_name.c_str());
     return 2;
   }
-  limber::World world(limber::load_scene_text(limber::embedded_humanoid_scene(), "humanoid"), options);
+  // The scene and the settings it gives the methods (its relaxation sweeps, for one).
+  limber::World world(limber::load_scene_text(limber::embedded_humanoid_scene(), "humanoid"), method);
 
   // Frames of 1/60 s, each as four of the scene's steps of 1/240 s (the stiff springs need them).
   const double dt = 1.0 / 60;

@@ -21,14 +21,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "rope_in_hand: unknown method '%s' (particles or lagrange)\n", method_name.c_str());
     return 2;
   }
-  // 30 links of 2 cm and 10 g hanging from (0, 0, 1); the particle method projects by the rattle
-  // rule in 8 substeps of 2 sweeps a frame.
+  // 30 links of 2 cm and 10 g hanging from (0, 0, 1); the particle method makes each joint one
+  // particle and projects by the rattle rule in 8 substeps of 2 sweeps a frame.
   limber::Model rope = limber::make_chain_model(
       {.links = 30, .link_length = 0.02, .link_mass = 0.01, .anchor = {0, 0, 1}, .direction = {0, 0, -1}, .pinned = false});
-  rope.settings.relaxation.projection = limber::ProjectionRule::rattle;
-  rope.settings.relaxation.substeps = 8;
-  rope.settings.relaxation.iterations = 2;
   rope.settings.damping = 0.2;
+  options.particles.verlet.joints = limber::ParticleJoints::shared_particle;
+  options.particles.relaxation.projection = limber::ProjectionRule::rattle;
+  options.particles.relaxation.substeps = 8;
+  options.particles.relaxation.iterations = 2;
   limber::World world(rope, options);
 
   const limber::BodyId first = world.body("link_0"), last = world.body("link_29");
