@@ -34,7 +34,7 @@ enum class RelaxationStop : std::uint8_t {
 /// fallbacks; `stop` and `largest_correction` are the last substep's.
 struct StepReport {
   StepStatus status = StepStatus::ok;
-  int contacts = 0;  ///< rigid methods: contacts found this step
+  int contacts = 0;  ///< contacts found this step (particles: those of its last substep)
 
   // Particles: the relaxation.
   RelaxationStop stop = RelaxationStop::idle;

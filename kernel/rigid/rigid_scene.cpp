@@ -181,14 +181,18 @@ StepStatus update_sleep(RigidScene& scene, double dt) {
       if (!scene.bodies.state.position[b].allFinite()) speed = std::numeric_limits<double>::quiet_NaN();
       fastest = speed > fastest || std::isnan(speed) ? speed : fastest;
     }
-    if (island.settle(fastest, dt, settings, status)) {
-      for (std::uint32_t b : island.bodies) {
-        scene.bodies.state.linear_momentum[b].setZero();
-        scene.bodies.state.angular_momentum[b].setZero();
-      }
-    }
+    if (island.settle(fastest, dt, settings, status)) rest_island(scene, static_cast<std::size_t>(&island - scene.islands.data()));
   }
   return status;
+}
+
+void rest_island(RigidScene& scene, std::size_t k) {
+  RigidIsland& island = scene.islands[k];
+  island.sleeping = true;
+  for (std::uint32_t b : island.bodies) {
+    scene.bodies.state.linear_momentum[b].setZero();
+    scene.bodies.state.angular_momentum[b].setZero();
+  }
 }
 
 }  // namespace limber

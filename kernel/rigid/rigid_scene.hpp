@@ -124,4 +124,8 @@ void clear_applied_loads(RigidScene& scene);
 /// below settings.sleep.speed_threshold for settings.sleep.time_to_sleep to sleep (zeroing P, L).
 StepStatus update_sleep(RigidScene& scene, double dt);
 
+/// Puts island k to sleep at rest (its bodies' momenta zeroed, so it wakes at rest): what
+/// falling asleep does, and what an engine asks for with World::sleep.
+void rest_island(RigidScene& scene, std::size_t k);
+
 }  // namespace limber

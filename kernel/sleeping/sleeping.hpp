@@ -33,6 +33,19 @@ bool wake_island(VerletState<Scalar>& state, std::uint32_t k) {
   return true;
 }
 
+/// Puts island k to sleep at rest (its particles' velocities zeroed, so it wakes at rest): what
+/// falling asleep does, and what an engine asks for with World::sleep. The caller rebuilds the
+/// awake islands.
+template <typename Scalar>
+void rest_island(VerletState<Scalar>& state, std::uint32_t k) {
+  Island& island = state.islands[k];
+  island.sleeping = true;
+  for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
+    state.particles.set_previous(p, state.particles.position(p));
+    state.particles.set_velocity(p, ParticleBuffer<Scalar>::Vector3::Zero());
+  }
+}
+
 /// After a step of length dt: measures each awake island's fastest particle, reports divergence
 /// (non-finite or faster than settings.divergence_speed), and puts islands that have been still
 /// for long enough to sleep.
@@ -56,10 +69,7 @@ StepStatus update_sleep(VerletState<Scalar>& state, double dt) {
     }
     if (island.settle(std::sqrt(largest_step2) / dt, dt, state.settings, status)) {
       changed = true;
-      for (std::uint32_t p = island.particle_begin; p < island.particle_end; ++p) {
-        state.particles.set_previous(p, state.particles.position(p));
-        state.particles.set_velocity(p, ParticleBuffer<Scalar>::Vector3::Zero());
-      }
+      rest_island(state, k);
     }
   }
   if (changed) rebuild_awake_islands(state);

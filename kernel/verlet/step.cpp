@@ -352,6 +352,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
+    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size());
   });
 }
 

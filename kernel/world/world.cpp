@@ -111,7 +111,11 @@ void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const 
 // --- Stepping
 
 StepStatus World::step(double dt) {
-  if (!valid_time_step(dt)) return StepStatus::invalid_time_step;
+  if (!valid_time_step(dt)) {
+    last_report_ = StepReport{};
+    last_report_.status = StepStatus::invalid_time_step;
+    return last_report_.status;
+  }
   // This step's loads: forces and torques, and impulses as their force over the step.
   for (std::size_t b = 0; b < load_force_.size(); ++b) {
     load_force_[b] += impulse_force_[b] / dt, load_torque_[b] += impulse_torque_[b] / dt;
@@ -127,7 +131,8 @@ StepStatus World::step(double dt) {
         for (const auto& [handle, pin] : pins_) {
           if (pin.target) world_bodies::move_world_anchor(state, model_, index(pin.joint), *pin.target);
         }
-        const StepStatus result = limber::step(state, dt).status;
+        last_report_ = limber::step(state, dt);
+        const StepStatus result = last_report_.status;
         if constexpr (kParticles<State>) {
           for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
         }
@@ -242,6 +247,11 @@ void World::wake(BodyId body) {
 
 void World::wake_all() {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b]});
+}
+
+void World::sleep(BodyId body) {
+  const std::size_t b = index(body);
+  std::visit([&](auto& state) { world_bodies::sleep(state, b); }, state_);
 }
 
 bool World::sleeping(BodyId body) const {

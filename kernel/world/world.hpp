@@ -89,6 +89,9 @@ class World {
   /// or a divergence is the status.
   StepStatus step(double dt);
   StepStatus step() { return step(model_.settings.time_step); }
+  /// The last step's report, whatever the method: status, contacts, the relaxation's sweeps and
+  /// stop (particles), the linear solver's (springs, Lagrange), constraint errors.
+  const StepReport& last_report() const { return last_report_; }
 
   double time() const;
   const Model& model() const { return model_; }
@@ -135,6 +138,9 @@ class World {
   // --- Sleeping ---
   void wake(BodyId body);       ///< wakes the body's island
   void wake_all();
+  /// Puts the body's island to sleep now, at rest (its velocities zeroed), as Box2D's
+  /// b2Body_SetAwake(false); a contact, a load or wake() wakes it.
+  void sleep(BodyId body);
   bool sleeping(BodyId body) const;
 
   // --- Teleport ---
@@ -172,6 +178,7 @@ class World {
   Model model_;
   WorldOptions options_;
   State state_;
+  StepReport last_report_{};
   // Handles ↔ Model indices.
   std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
   std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;

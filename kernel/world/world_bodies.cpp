@@ -51,6 +51,15 @@ void wake(RigidScene& scene, std::size_t body) {
   scene.islands[scene.island_of_body[body]].wake();
 }
 
+void sleep(RigidScene& scene, std::size_t body) { rest_island(scene, scene.island_of_body[body]); }
+
+void sleep(FeatherstoneState& state, std::size_t body) {
+  const std::size_t k = state.island_of_body[body];
+  rest_island(state, k);
+  const auto [first, last] = island_velocities(state, k);
+  state.v.segment(first, last - first).setZero();
+}
+
 bool sleeping(const RigidScene& scene, std::size_t body) { return scene.islands[scene.island_of_body[body]].sleeping; }
 
 void teleport(RigidScene& scene, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,

@@ -136,6 +136,14 @@ void wake(VerletState<Scalar>& state, std::size_t body) {
 }
 
 template <typename Scalar>
+void sleep(VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t k = island_of_limb(state, body);
+  if (state.islands[k].sleeping) return;
+  rest_island(state, k);
+  rebuild_awake_islands(state);
+}
+
+template <typename Scalar>
 bool sleeping(const VerletState<Scalar>& state, std::size_t body) {
   return state.islands[island_of_limb(state, body)].sleeping;
 }
@@ -231,6 +239,8 @@ void move_world_anchor(SpringState& state, const Model& model, std::size_t joint
 void move_world_anchor(LagrangeState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
 void move_world_anchor(FeatherstoneState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
 void wake(RigidScene& scene, std::size_t body);
+void sleep(RigidScene& scene, std::size_t body);
+void sleep(FeatherstoneState& state, std::size_t body);  ///< and its island's joint velocities
 bool sleeping(const RigidScene& scene, std::size_t body);
 void teleport(RigidScene& scene, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
               const Motion& motion);

@@ -276,6 +276,40 @@ TEST(World, WakeAndSleep) {
     EXPECT_TRUE(world.sleeping(head)) << name(method) << ": the humanoid starts asleep";
     world.apply_force(head, Eigen::Vector3d(30, 0, 0), world.pose(head).position);
     EXPECT_FALSE(world.sleeping(head)) << name(method);
+    for (int s = 0; s < 20; ++s) ASSERT_EQ(world.step(), StepStatus::ok) << name(method);
+    ASSERT_GT(world.motion(head).linear.norm(), 1e-3) << name(method) << ": the push must have moved it";
+    // Put to sleep by the engine: at rest at once, and held there however long it is stepped.
+    world.sleep(head);
+    EXPECT_TRUE(world.sleeping(head)) << name(method);
+    EXPECT_EQ(world.motion(head).linear.norm(), 0.0) << name(method);
+    const Pose held = world.pose(head);
+    for (int s = 0; s < 20; ++s) ASSERT_EQ(world.step(), StepStatus::ok) << name(method);
+    EXPECT_TRUE(world.sleeping(head)) << name(method);
+    EXPECT_LT((world.pose(head).position - held.position).norm(), 1e-12) << name(method);
+    world.wake(head);
+    for (int s = 0; s < 20; ++s) ASSERT_EQ(world.step(), StepStatus::ok) << name(method);
+    EXPECT_GT((world.pose(head).position - held.position).norm(), 1e-4) << name(method) << ": awake, the body falls on";
+  }
+}
+
+TEST(World, TheLastStepsReportIsTheMethodsReport) {
+  // The ball reaches the humanoid: every method's report counts the contacts of that step;
+  // the particle method's also its sweeps; a refused Δt is reported too.
+  const Model humanoid = load_shipped_scene("humanoid.json");
+  for (const Method method : kMethods) {
+    World world(humanoid, options_for(method));
+    int most_contacts = 0;
+    for (int s = 0; s < 120; ++s) {
+      ASSERT_EQ(world.step(), StepStatus::ok) << name(method);
+      EXPECT_EQ(world.last_report().status, StepStatus::ok);
+      most_contacts = std::max(most_contacts, world.last_report().contacts);
+    }
+    EXPECT_GT(most_contacts, 0) << name(method) << ": the ball hits";
+    if (method == Method::particles) {
+      EXPECT_EQ(world.last_report().iterations, RelaxationSettings{}.iterations);
+    }
+    EXPECT_EQ(world.step(-1.0), StepStatus::invalid_time_step);
+    EXPECT_EQ(world.last_report().status, StepStatus::invalid_time_step) << name(method);
   }
 }
 
