@@ -141,8 +141,10 @@ void update_constraint_geometry(const ConstraintSet& constraints, const JointAnc
     for (int k = 0; k < rows.slide_rows; ++k, ++row) {
       const Eigen::Vector3d b = in.orientation * rows.slide_normal[k];
       const Eigen::Vector3d outboard_point = out.centre + outboard_lever;
-      inboard.row(row) << b.transpose(), (outboard_point - in.centre).cross(b).transpose();
-      outboard.row(row) << -b.transpose(), -outboard_lever.cross(b).transpose();
+      // Segment by segment: GCC 12 misreads the comma initializer of a Vector3d under AVX
+      // (-Warray-bounds on an unaligned 4-wide load; bug 105593's family).
+      inboard.row(row).head<3>() = b.transpose(), inboard.row(row).tail<3>() = (outboard_point - in.centre).cross(b).transpose();
+      outboard.row(row).head<3>() = -b.transpose(), outboard.row(row).tail<3>() = -outboard_lever.cross(b).transpose();
     }
     for (int k = 0; k < rows.angular_rows; ++k, ++row) {
       const Eigen::Vector3d w = (in.orientation * rows.inboard_direction[k]).cross(out.orientation * rows.outboard_direction[k]);

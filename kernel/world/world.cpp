@@ -111,10 +111,8 @@ void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const 
 // --- Stepping
 
 StepStatus World::step(double dt) {
-  if (!valid_time_step(dt)) {
-    last_report_ = StepReport{};
-    last_report_.status = StepStatus::invalid_time_step;
-    return last_report_.status;
+  if (!valid_time_step(dt)) {  // the method's guard refuses it and records the refusal
+    return std::visit([&](auto& state) { return limber::step(state, dt).status; }, state_);
   }
   // This step's loads: forces and torques, and impulses as their force over the step.
   for (std::size_t b = 0; b < load_force_.size(); ++b) {
@@ -131,8 +129,7 @@ StepStatus World::step(double dt) {
         for (const auto& [handle, pin] : pins_) {
           if (pin.target) world_bodies::move_world_anchor(state, model_, index(pin.joint), *pin.target);
         }
-        last_report_ = limber::step(state, dt);
-        const StepStatus result = last_report_.status;
+        const StepStatus result = limber::step(state, dt).status;
         if constexpr (kParticles<State>) {
           for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
         }
@@ -247,6 +244,10 @@ void World::wake(BodyId body) {
 
 void World::wake_all() {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b]});
+}
+
+const StepReport& World::last_report() const {
+  return std::visit([](const auto& state) -> const StepReport& { return state.last_report; }, state_);
 }
 
 void World::sleep(BodyId body) {

@@ -91,7 +91,7 @@ class World {
   StepStatus step() { return step(model_.settings.time_step); }
   /// The last step's report, whatever the method: status, contacts, the relaxation's sweeps and
   /// stop (particles), the linear solver's (springs, Lagrange), constraint errors.
-  const StepReport& last_report() const { return last_report_; }
+  const StepReport& last_report() const;
 
   double time() const;
   const Model& model() const { return model_; }
@@ -178,7 +178,6 @@ class World {
   Model model_;
   WorldOptions options_;
   State state_;
-  StepReport last_report_{};
   // Handles ↔ Model indices.
   std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
   std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;
