@@ -292,6 +292,29 @@ TEST(World, WakeAndSleep) {
   }
 }
 
+TEST(World, ASceneBringsItsMethodSettings) {
+  // chain.json asks the particle method for the rattle rule in 16 substeps of 2 sweeps: a world
+  // made from the Scene steps so; one made from its Model alone takes the defaults.
+  const Scene chain = testing::shipped_scene("chain.json");
+  World from_scene(chain, Method::particles);
+  World from_model(chain.model);
+  ASSERT_EQ(from_scene.step(), StepStatus::ok);
+  ASSERT_EQ(from_model.step(), StepStatus::ok);
+  EXPECT_EQ(from_scene.last_report().substeps, 16);
+  EXPECT_EQ(from_scene.last_report().iterations, 16 * 2);
+  EXPECT_EQ(from_model.last_report().substeps, 1);
+  EXPECT_EQ(from_model.last_report().iterations, RelaxationSettings{}.iterations);
+  // Bad method settings are refused by name, from a scene or from options.
+  WorldOptions bad;
+  bad.particles.relaxation.substeps = 0;
+  try {
+    World world(chain.model, bad);
+    ADD_FAILURE() << "compiled";
+  } catch (const ModelError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("settings.relaxation.substeps: must be >= 1"));
+  }
+}
+
 TEST(World, TheLastStepsReportIsTheMethodsReport) {
   // The ball reaches the humanoid: every method's report counts the contacts of that step;
   // the particle method's also its sweeps; a refused Δt is reported too.
