@@ -60,8 +60,9 @@ inline double allowed_separation(double start_separation, double recovery) {
 /// constraint on two particles for position-based projection. The feature is a sphere of
 /// `radius` about `point`, or (`is_disk`) the end disk of a cylinder of `radius` centred at
 /// `point` with axis u = (point − partner)/|point − partner|, whose lowest rim point sits
-/// r·√(1 − (n·u)²) below its centre. C is the signed distance of the lowest point (< 0 inside). For a sphere (or a disk with coincident particles) ∇_point C = n and
-/// ∇_partner C = 0. For a disk, with c = n·u and f = √(1 − c²), tilting the axis moves the rim:
+/// r·√(1 − (n·u)²) below its centre. C is the signed distance of the lowest point (< 0
+/// inside). For a sphere (or a disk with coincident particles) ∇_point C = n and ∇_partner C = 0.
+/// For a disk, with c = n·u and f = √(1 − c²), tilting the axis moves the rim:
 ///   ∇_point C = n + (r·c / (f·L))·(n − c·u),   ∇_partner C = −(r·c / (f·L))·(n − c·u),
 /// L = |point − partner|; |n − c·u| = f, so the rim term has magnitude r|c|/L and stays finite
 /// (taken as 0 where the disk lies flat, f → 0, and the rim has no single lowest point).

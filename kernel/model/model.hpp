@@ -133,7 +133,8 @@ struct Joint {
   /// Unit, world frame at the initial poses: universal only, the axis fixed in the outboard body,
   /// perpendicular to `axis`.
   Vector3 second_axis = Vector3::UnitY();
-  /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset: SpringOptions::defaults (kernel/springs/spring_state.hpp).
+  /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset:
+  /// SpringOptions::defaults (kernel/springs/spring_state.hpp).
   std::optional<double> stiffness;  ///< N/m, > 0
   std::optional<double> damping;    ///< N·s/m, ≥ 0
 };

@@ -57,8 +57,8 @@ WorldOptions configure(const MethodSettings& scene, const Method& method);
 /// A compiled Model stepping under one method (double precision).
 class Simulation {
  public:
-  /// Compiles scene.model at `method`'s time step with configure(scene.methods, method). Throws ModelError when the model is invalid for the
-  /// method (as the method's own compile does).
+  /// Compiles scene.model at `method`'s time step with configure(scene.methods, method). Throws
+  /// ModelError when the model is invalid for the method (as the method's own compile does).
   Simulation(const Scene& scene, const Method& method);
   /// A Model without method settings of its own (the methods' defaults).
   Simulation(const Model& model, const Method& method) : Simulation(Scene{model, {}}, method) {}
