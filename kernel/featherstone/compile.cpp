@@ -198,11 +198,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
       case ArticulatedJoint::fixed: break;
     }
   }
-  for (std::size_t k = 0; k < state.islands.size(); ++k) {
-    if (!state.islands[k].sleeping) continue;
-    const auto [first, last] = island_velocities(state, k);
-    state.v.segment(first, last - first).setZero();
-  }
+  zero_sleeping_velocities(state);
 
   // The joint-gap observer's anchors and slide axes.
   state.joints = joint_anchors(state, model);

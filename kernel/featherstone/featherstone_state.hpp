@@ -111,4 +111,13 @@ inline std::pair<int, int> island_positions(const FeatherstoneState& state, std:
   return {state.tree.position_offset(begin), end < state.tree.body_count() ? state.tree.position_offset(end) : state.tree.position_count()};
 }
 
+/// Sleeping islands rest: their joint velocities are zero (as their bodies' momenta are).
+inline void zero_sleeping_velocities(FeatherstoneState& state) {
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) continue;
+    const auto [first, last] = island_velocities(state, k);
+    state.v.segment(first, last - first).setZero();
+  }
+}
+
 }  // namespace limber

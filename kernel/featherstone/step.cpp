@@ -114,12 +114,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     report.status = update_sleep(state, dt);
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
-    // Islands put to sleep had their rigid momenta zeroed; so are their joint velocities.
-    for (std::size_t k = 0; k < state.islands.size(); ++k) {
-      if (!state.islands[k].sleeping) continue;
-      const auto [first, last] = island_velocities(state, k);
-      state.v.segment(first, last - first).setZero();
-    }
+    zero_sleeping_velocities(state);  // islands put to sleep had their rigid momenta zeroed
   });
 }
 

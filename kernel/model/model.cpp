@@ -64,6 +64,29 @@ double Model::body_mass() const {
                          [](double sum, const Body& body) { return sum + body.mass; });
 }
 
+void append_model(Model& model, const Model& other, std::string_view prefix, const Vector3& offset) {
+  const int first = static_cast<int>(model.bodies.size());
+  const std::string lead(prefix);
+  for (Body body : other.bodies) {
+    body.name = lead + body.name, body.position += offset;
+    model.bodies.push_back(std::move(body));
+  }
+  for (Joint joint : other.joints) {
+    joint.name = lead + joint.name;
+    if (joint.inboard == kWorld) {
+      joint.inboard_anchor += offset;
+    } else {
+      joint.inboard += first;
+    }
+    joint.outboard += first;
+    model.joints.push_back(std::move(joint));
+  }
+  for (Gear gear : other.gears) {
+    gear.name = lead + gear.name, gear.first += first, gear.second += first;
+    model.gears.push_back(std::move(gear));
+  }
+}
+
 BodyIslands body_islands(const Model& model) {
   const auto body_count = static_cast<std::uint32_t>(model.bodies.size());
   DisjointSets connected(body_count);

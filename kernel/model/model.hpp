@@ -237,6 +237,11 @@ struct Model {
   double body_mass() const;
 };
 
+/// Appends `other`'s bodies, joints and gears to `model`: names led by `prefix`, moved by
+/// `offset` (m; joints to the world too), body indices renumbered. Settings, ground, bounds and
+/// ball stay `model`'s. (Several ragdolls in one world; copies of a scene on a lattice.)
+void append_model(Model& model, const Model& other, std::string_view prefix, const Vector3& offset);
+
 /// The Model's islands: bodies joined by joints between bodies and by gears (a joint to the world
 /// joins nothing), which every method simulates, puts to sleep and wakes together (thesis
 /// 4.5.3). Islands are numbered in order of their lowest body, so bodies listed in order visit

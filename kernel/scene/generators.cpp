@@ -219,27 +219,8 @@ Model copies_of(const Model& model, std::size_t count, double spacing, std::stri
   copies.joints.reserve(count * model.joints.size());
   copies.gears.reserve(count * model.gears.size());
   for (std::size_t k = 0; k < count; ++k) {
-    const std::string lead = std::string(prefix) + std::to_string(k) + ".";
     const Vector3 offset = spacing * Vector3(double(k % per_row), double(k / per_row), 0);
-    const int first = static_cast<int>(k * model.bodies.size());
-    for (Body body : model.bodies) {
-      body.name = lead + body.name, body.position += offset;
-      copies.bodies.push_back(std::move(body));
-    }
-    for (Joint joint : model.joints) {
-      joint.name = lead + joint.name;
-      if (joint.inboard == kWorld) {
-        joint.inboard_anchor += offset;
-      } else {
-        joint.inboard += first;
-      }
-      joint.outboard += first;
-      copies.joints.push_back(std::move(joint));
-    }
-    for (Gear gear : model.gears) {
-      gear.name = lead + gear.name, gear.first += first, gear.second += first;
-      copies.gears.push_back(std::move(gear));
-    }
+    append_model(copies, model, std::string(prefix) + std::to_string(k) + ".", offset);
   }
   return copies;
 }

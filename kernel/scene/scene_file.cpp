@@ -492,6 +492,17 @@ void require_generated(double bodies, const std::string& path) {
   }
 }
 
+/// A generated Model moved by the generator object's "anchor" (its bodies and its joints to the
+/// world).
+Model moved_to_anchor(Model model, const Object& object) {
+  const Vector3 anchor = object.vector("anchor");
+  for (Body& body : model.bodies) body.position += anchor;
+  for (Joint& joint : model.joints) {
+    if (joint.inboard == kWorld) joint.inboard_anchor += anchor;
+  }
+  return model;
+}
+
 /// The "tree" generator: TreeSpec (generators.hpp) by links or by depth, moved to `anchor`.
 Model read_tree(const Object& object, const SceneOptions& options) {
   object.allow_only({"links", "depth", "branching", "link_length", "link_mass", "anchor", "pinned"});
@@ -521,13 +532,7 @@ Model read_tree(const Object& object, const SceneOptions& options) {
   spec.link_length = object.number("link_length");
   spec.link_mass = object.number("link_mass");
   spec.pinned = object.boolean("pinned");
-  Model tree = make_tree_model(spec);
-  const Vector3 anchor = object.vector("anchor");
-  for (Body& body : tree.bodies) body.position += anchor;
-  for (Joint& joint : tree.joints) {
-    if (joint.inboard == kWorld) joint.inboard_anchor += anchor;
-  }
-  return tree;
+  return moved_to_anchor(make_tree_model(spec), object);
 }
 
 /// The "grid" generator: GridSpec (generators.hpp), its top row's first node at `anchor`.
@@ -542,13 +547,7 @@ Model read_grid(const Object& object) {
   spec.spacing = object.number("spacing");
   spec.link_mass = object.number("link_mass");
   spec.pin_top_corners = object.boolean("pin_top_corners");
-  Model grid = make_grid_model(spec);
-  const Vector3 anchor = object.vector("anchor");
-  for (Body& body : grid.bodies) body.position += anchor;
-  for (Joint& joint : grid.joints) {
-    if (joint.inboard == kWorld) joint.inboard_anchor += anchor;
-  }
-  return grid;
+  return moved_to_anchor(make_grid_model(spec), object);
 }
 
 /// A generated Model's bodies and joints appended to the scene's (its settings are the scene's).

@@ -30,28 +30,36 @@ std::string vector_text(const Eigen::Vector3d& v) {
   return text.str();
 }
 
+// old_body_of_new for an edit that keeps the first `kept` of `count` bodies where they were and
+// adds the rest (−1: new).
+std::vector<std::int64_t> first_bodies_kept(std::size_t count, std::size_t kept) {
+  std::vector<std::int64_t> old_body_of_new(count, -1);
+  for (std::size_t b = 0; b < kept; ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  return old_body_of_new;
+}
+
 }  // namespace
 
 World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_method(model_, options_)) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
-  compile();
+  reset_loads();
+  for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
+  transport_frames();
 }
 
-// Sizes the per-body scratch after a (re)compile and starts every particle limb's frame at its
-// Model orientation.
-void World::compile() {
+// Sizes the per-body loads after a (re)compile, all zero.
+void World::reset_loads() {
   const std::size_t bodies = model_.bodies.size();
-  load_force_.assign(bodies, Eigen::Vector3d::Zero());
-  load_torque_.assign(bodies, Eigen::Vector3d::Zero());
-  impulse_force_.assign(bodies, Eigen::Vector3d::Zero());
-  impulse_torque_.assign(bodies, Eigen::Vector3d::Zero());
-  limb_frame_.resize(bodies);
-  for (std::size_t b = 0; b < bodies; ++b) limb_frame_[b] = model_.bodies[b].orientation();
+  for (auto* loads : {&load_force_, &load_torque_, &impulse_force_, &impulse_torque_}) loads->assign(bodies, Eigen::Vector3d::Zero());
+}
+
+// Turns each particle limb's frame onto its axis now (the rigid methods' bodies carry their own).
+void World::transport_frames() {
   std::visit(
       [&](const auto& state) {
         if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          for (std::size_t b = 0; b < bodies; ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
+          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
         }
       },
       state_);
@@ -121,7 +129,6 @@ StepStatus World::step(double dt) {
   }
   const StepStatus status = std::visit(
       [&](auto& state) {
-        using State = std::decay_t<decltype(state)>;
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
           world_bodies::apply_load(state, b, load_force_[b], load_torque_[b]);
@@ -129,13 +136,10 @@ StepStatus World::step(double dt) {
         for (const auto& [handle, pin] : pins_) {
           if (pin.target) world_bodies::move_world_anchor(state, model_, index(pin.joint), *pin.target);
         }
-        const StepStatus result = limber::step(state, dt).status;
-        if constexpr (kParticles<State>) {
-          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
-        }
-        return result;
+        return limber::step(state, dt).status;
       },
       state_);
+  transport_frames();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
   for (auto& [handle, pin] : pins_) {
     if (pin.target) model_.joints[index(pin.joint)].inboard_anchor = *pin.target;
@@ -166,22 +170,25 @@ Motion World::motion(BodyId body) const {
 
 // --- Loads
 
-void World::apply_force(BodyId body, const Eigen::Vector3d& force, const Eigen::Vector3d& world_point) {
-  check_vector(force, "apply_force"), check_vector(world_point, "apply_force");
+// Adds `amount` at `world_point` to the body's `linear` entry, and its moment about the body's
+// centre of mass to its `angular` entry; wakes the body.
+void World::add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point,
+                         std::vector<Eigen::Vector3d>& linear, std::vector<Eigen::Vector3d>& angular) {
   const std::size_t b = index(body);
   const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, state_);
-  load_force_[b] += force;
-  load_torque_[b] += (world_point - centre).cross(force);
+  linear[b] += amount;
+  angular[b] += (world_point - centre).cross(amount);
   wake(body);
+}
+
+void World::apply_force(BodyId body, const Eigen::Vector3d& force, const Eigen::Vector3d& world_point) {
+  check_vector(force, "apply_force"), check_vector(world_point, "apply_force");
+  add_at_point(body, force, world_point, load_force_, load_torque_);
 }
 
 void World::apply_impulse(BodyId body, const Eigen::Vector3d& impulse, const Eigen::Vector3d& world_point) {
   check_vector(impulse, "apply_impulse"), check_vector(world_point, "apply_impulse");
-  const std::size_t b = index(body);
-  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, state_);
-  impulse_force_[b] += impulse;
-  impulse_torque_[b] += (world_point - centre).cross(impulse);
-  wake(body);
+  add_at_point(body, impulse, world_point, impulse_force_, impulse_torque_);
 }
 
 void World::apply_torque(BodyId body, const Eigen::Vector3d& torque) {
@@ -289,9 +296,7 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
 BodyId World::add_body(const Body& body) {
   Model edited = model_;
   edited.bodies.push_back(body);
-  std::vector<std::int64_t> old_body_of_new(edited.bodies.size(), -1);
-  for (std::size_t b = 0; b < model_.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
-  recompile(edited, old_body_of_new);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()));
   body_handle_.push_back(next_body_handle_);
   body_index_[next_body_handle_] = edited.bodies.size() - 1;
   return BodyId{next_body_handle_++};
@@ -300,9 +305,7 @@ BodyId World::add_body(const Body& body) {
 JointId World::add_joint(const Joint& joint) {
   Model edited = model_;
   edited.joints.push_back(joint);
-  std::vector<std::int64_t> old_body_of_new(edited.bodies.size());
-  for (std::size_t b = 0; b < edited.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
-  recompile(edited, old_body_of_new);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
   joint_handle_.push_back(next_joint_handle_);
   joint_index_[next_joint_handle_] = edited.joints.size() - 1;
   return JointId{next_joint_handle_++};
@@ -312,9 +315,7 @@ void World::remove_joint(JointId joint) {
   const std::size_t j = index(joint);
   Model edited = model_;
   edited.joints.erase(edited.joints.begin() + static_cast<std::ptrdiff_t>(j));
-  std::vector<std::int64_t> old_body_of_new(edited.bodies.size());
-  for (std::size_t b = 0; b < edited.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
-  recompile(edited, old_body_of_new);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
   joint_index_.erase(joint.value);
   joint_handle_.erase(joint_handle_.begin() + static_cast<std::ptrdiff_t>(j));
   for (std::size_t k = j; k < joint_handle_.size(); ++k) joint_index_[joint_handle_[k]] = k;
@@ -355,27 +356,11 @@ void World::remove_body(BodyId body) {
 std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset) {
   check_vector(offset, "add_model");
   Model edited = model_;
-  const int base = static_cast<int>(model_.bodies.size());
-  for (Body body : other.bodies) {
-    body.name = std::string(prefix) + body.name;
-    body.position += offset;
-    edited.bodies.push_back(std::move(body));
-  }
-  for (Joint joint : other.joints) {
-    joint.name = std::string(prefix) + joint.name;
-    if (joint.inboard == kWorld) {
-      joint.inboard_anchor += offset;
-    } else {
-      joint.inboard += base;
-    }
-    joint.outboard += base;
-    edited.joints.push_back(std::move(joint));
-  }
-  std::vector<std::int64_t> old_body_of_new(edited.bodies.size(), -1);
-  for (std::size_t b = 0; b < model_.bodies.size(); ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
-  recompile(edited, old_body_of_new);
+  const std::size_t base = model_.bodies.size();
+  append_model(edited, other, prefix, offset);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()));
   std::vector<BodyId> added;
-  for (std::size_t b = static_cast<std::size_t>(base); b < edited.bodies.size(); ++b) {
+  for (std::size_t b = base; b < edited.bodies.size(); ++b) {
     body_handle_.push_back(next_body_handle_);
     body_index_[next_body_handle_] = b;
     added.push_back(BodyId{next_body_handle_++});
@@ -410,15 +395,9 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
   }
   state_ = std::move(next);
   model_ = edited;
-  compile();
+  reset_loads();
   limb_frame_ = std::move(frames);
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
-        }
-      },
-      state_);
+  transport_frames();
 }
 
 }  // namespace limber

@@ -153,8 +153,8 @@ class World {
   JointId add_joint(const Joint& joint);  ///< inboard/outboard: Model indices of bodies(), or kWorld
   void remove_body(BodyId body);         ///< and its joints
   void remove_joint(JointId joint);
-  /// Adds every body and joint of `other` (another ragdoll), names prefixed with `prefix`, moved
-  /// by `offset` (m). Returns the new bodies' handles in `other`'s order.
+  /// Adds every body, joint and gear of `other` (another ragdoll; append_model), names prefixed
+  /// with `prefix`, moved by `offset` (m). Returns the new bodies' handles in `other`'s order.
   std::vector<BodyId> add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
 
   /// The Model index of a handle (for the state's own arrays); throws WorldError when removed.
@@ -170,7 +170,10 @@ class World {
     JointId joint;
     std::optional<Eigen::Vector3d> target;
   };
-  void compile();
+  void reset_loads();
+  void transport_frames();
+  void add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point, std::vector<Eigen::Vector3d>& linear,
+                    std::vector<Eigen::Vector3d>& angular);
   void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new);
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;

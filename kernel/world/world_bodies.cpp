@@ -54,10 +54,8 @@ void wake(RigidScene& scene, std::size_t body) {
 void sleep(RigidScene& scene, std::size_t body) { rest_island(scene, scene.island_of_body[body]); }
 
 void sleep(FeatherstoneState& state, std::size_t body) {
-  const std::size_t k = state.island_of_body[body];
-  rest_island(state, k);
-  const auto [first, last] = island_velocities(state, k);
-  state.v.segment(first, last - first).setZero();
+  rest_island(state, state.island_of_body[body]);
+  zero_sleeping_velocities(state);
 }
 
 bool sleeping(const RigidScene& scene, std::size_t body) { return scene.islands[scene.island_of_body[body]].sleeping; }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
@@ -168,13 +169,31 @@ void teleport(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3
   if (state.limbs.centre[limb] != kNoCentre) place(state.limbs.centre[limb], position);
 }
 
+/// Island index of every limb (islands are contiguous limb ranges).
+template <typename Scalar>
+std::vector<std::uint32_t> island_of_each_limb(const VerletState<Scalar>& state) {
+  std::vector<std::uint32_t> island(state.limbs.size(), 0);
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    for (std::uint32_t limb = state.islands[k].limb_begin; limb < state.islands[k].limb_end; ++limb) island[limb] = k;
+  }
+  return island;
+}
+
 /// Copies every particle that stands for the same thing in both states (a limb's head, centre
 /// or tail by body, a pin by joint name): positions, previous positions, velocities, and the
 /// clock. An island of surviving bodies sleeps if they all slept, else wakes; one of new bodies
-/// is as compiled.
+/// is as compiled. Linear in the particles and bodies (plus pins × joints).
 template <typename Scalar>
 void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletState<Scalar>& fresh, const Model& new_model,
                  const std::vector<std::int64_t>& old_body_of_new) {
+  // The old particle standing for each (kind, index), the first one as compiled.
+  const auto key = [](ParticleOrigin::Kind kind, std::int64_t index) {
+    return (static_cast<std::uint64_t>(kind) << 40) | static_cast<std::uint64_t>(index);
+  };
+  std::unordered_map<std::uint64_t, std::uint32_t> old_of_origin;
+  for (std::uint32_t p = 0; p < old.particle_origins.size(); ++p) {
+    old_of_origin.emplace(key(old.particle_origins[p].kind, old.particle_origins[p].index), p);
+  }
   const auto old_particle = [&](const ParticleOrigin& origin) -> std::int64_t {
     std::int64_t index = -1;
     if (origin.kind == ParticleOrigin::Kind::ball) return old.ball_particle;
@@ -186,9 +205,7 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
       index = old_body_of_new[origin.index];
     }
     if (index < 0) return -1;
-    for (std::uint32_t p = 0; p < old.particle_origins.size(); ++p) {
-      if (old.particle_origins[p].kind == origin.kind && old.particle_origins[p].index == index) return p;
-    }
+    if (const auto found = old_of_origin.find(key(origin.kind, index)); found != old_of_origin.end()) return found->second;
     if (origin.kind == ParticleOrigin::Kind::world_pin) return -1;
     // A limb end merged into another slot's particle (shared-particle joints): through its limb.
     const std::uint32_t limb = old.body_limb[static_cast<std::size_t>(index)];
@@ -210,16 +227,16 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
   fresh.time = old.time;
   fresh.previous_time_step = old.previous_time_step;
   // An island of surviving bodies sleeps if they all slept; one of new bodies as compiled.
-  for (Island& island : fresh.islands) {
-    bool any_old = false, all_asleep = true;
-    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
-      for (std::size_t b = 0; b < fresh.body_limb.size(); ++b) {
-        if (fresh.body_limb[b] != limb || old_body_of_new[b] < 0) continue;
-        any_old = true;
-        all_asleep = all_asleep && sleeping(old, static_cast<std::size_t>(old_body_of_new[b]));
-      }
-    }
-    if (any_old) island.sleeping = all_asleep, island.still_time = 0;
+  const std::vector<std::uint32_t> old_island = island_of_each_limb(old), fresh_island = island_of_each_limb(fresh);
+  std::vector<char> any_old(fresh.islands.size(), 0), all_asleep(fresh.islands.size(), 1);
+  for (std::size_t b = 0; b < fresh.body_limb.size(); ++b) {
+    if (old_body_of_new[b] < 0) continue;
+    const std::uint32_t k = fresh_island[fresh.body_limb[b]];
+    any_old[k] = 1;
+    all_asleep[k] &= old.islands[old_island[old.body_limb[static_cast<std::size_t>(old_body_of_new[b])]]].sleeping ? 1 : 0;
+  }
+  for (std::size_t k = 0; k < fresh.islands.size(); ++k) {
+    if (any_old[k]) fresh.islands[k].sleeping = all_asleep[k] != 0, fresh.islands[k].still_time = 0;
   }
   rebuild_awake_islands(fresh);
 }
