@@ -88,6 +88,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
   require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::fixed},
                       /*gears_supported=*/false, "featherstone");
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "featherstone");
   refuse_kinematic_loops(model);
   require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");
   state.options = options;
@@ -209,6 +210,19 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
     state.slide_axis[j] = state.shapes.principal_frame[joint.outboard].conjugate() * (model_rotation[joint.outboard].transpose() * joint.axis);
   }
 
+  // The joints' limits, friction and drives, and where the tree holds each joint.
+  state.joint_controls = joint_controls(model);
+  state.tree_joint.assign(model.joints.size(), TreeJoint{});
+  for (std::size_t i = 0; i < tree_size; ++i) {
+    const std::int32_t j = state.model_joint[i];
+    if (j < 0) continue;
+    TreeJoint& held = state.tree_joint[static_cast<std::size_t>(j)];
+    held.body = static_cast<std::int32_t>(i);
+    held.offset = tree.velocity_offset(static_cast<int>(i));
+    held.dofs = joint_velocity_count(tree.body(static_cast<int>(i)).joint);
+    held.sign = model.joints[static_cast<std::size_t>(j)].outboard == state.scene_body[i] ? 1 : -1;
+  }
+
   // Scratch, sized once.
   const int nv = tree.velocity_count();
   state.kinematics.resize(tree);
@@ -225,8 +239,18 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   contact.body_momentum.assign(tree_size, SpatialVector::Zero());
   contact.generalized_momentum.setZero(nv);
   contact.joint_bias.setZero(nv), contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
+  contact.joint_impulse.setZero(nv);
   contact.contact_matrix.reserve(state.contacts.capacity());
   contact.push.reserve(state.contacts.capacity());
+
+  JointControlScratch& controls = state.controls;
+  controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);
+  controls.explicit_force.setZero(nv), controls.acceleration.setZero(nv), controls.predicted.setZero(nv), controls.forces.setZero(nv);
+  controls.friction.reserve(model.joints.size());
+  controls.rows.reserve(3 * model.joints.size());
+  controls.islands.reserve(state.islands.size());
+  controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
+  controls.held.resize(tree);
 
   refresh_rigid_bodies(state);
   return state;

@@ -146,9 +146,13 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
   compose_world_transforms(tree, workspace);
 }
 
-void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
-                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
-                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+namespace {
+
+// Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal.
+void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                                const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                                const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
+                                Eigen::VectorXd& joint_accelerations) {
   require_size(q.size(), tree.position_count(), "forward_dynamics: q");
   require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
   require_size(joint_forces.size(), tree.velocity_count(), "forward_dynamics: joint forces");
@@ -185,7 +189,8 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
       } else {
         const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
         const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
-        const Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
+        Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
+        if (armature) d.diagonal() += Eigen::Matrix<double, k, 1>::Map(armature + offset);
         Eigen::Matrix<double, k, k> d_inverse;
         // D is symmetric positive definite. Eigen's LLT solve against a matrix takes its blocked
         // path (a fifth of a spherical chain's ABA in perf); the closed-form inverse serves up to
@@ -236,6 +241,22 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
       }
     });
   }
+}
+
+}  // namespace
+
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  articulated_body_algorithm(tree, q, v, joint_forces, nullptr, gravity, workspace, joint_accelerations);
+}
+
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Ref<const Eigen::VectorXd>& armature, const Eigen::Vector3d& gravity,
+                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  require_size(armature.size(), tree.velocity_count(), "forward_dynamics: armature");
+  articulated_body_algorithm(tree, q, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations);
 }
 
 void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -69,6 +69,16 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
 
+/// forward_dynamics of (H + diag(armature)) v̇ = τ − C: `armature` (nv, ≥ 0) is added to the
+/// diagonal of each joint's D_i = S_iᵀ I^A_i S_i, which adds it to H's diagonal (a rotor's
+/// reflected inertia; MuJoCo's joint armature). The implicit joint drives use it
+/// (joint_controls.hpp): a drive's k·h² + c·h on the driven coordinates. The workspace's
+/// projected_inertia and joint_inertia_inverse are then those of H + diag(armature).
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Ref<const Eigen::VectorXd>& armature, const Eigen::Vector3d& gravity,
+                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
+
 /// Recursive Newton–Euler (Table 5.1): the joint forces τ (nv, written to `joint_forces`,
 /// resized) that give accelerations v̇ (nv) at q, v under gravity g. With v̇ = 0 it is the bias
 /// force C(q, v). O(n); allocates nothing once sized.

@@ -29,6 +29,7 @@
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/integration.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
@@ -62,6 +63,62 @@ struct JointSpaceContactScratch {
   std::vector<double> push;                      ///< per contact: accumulated push-out "impulse", kg·m
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
+  Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
+};
+
+/// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).
+struct TreeJoint {
+  std::int32_t body = 0;  ///< the tree body it joins to its parent
+  int offset = 0;         ///< where its coordinates start in v
+  int dofs = 0;           ///< 1 (revolute, prismatic), 3 (spherical), 0 (fixed)
+  /// +1 when the tree's child is the Model's outboard body, −1 when the tree turned the joint
+  /// round: the Model's coordinate rates are sign·(rates of v) (rotated into the child's frame
+  /// for a spherical joint).
+  double sign = 1;
+};
+
+/// One row of a joint limit (joint_space_contacts.hpp, "Joint limits"): the coordinate's rate
+/// `direction`·v (over the joint's `dofs` velocities from `offset`) must keep the gap C ≥ 0.
+struct JointLimitRow {
+  std::int32_t island = 0, body = 0;  ///< the joint's island and tree body
+  int offset = 0, dofs = 1;
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< first `dofs` entries: ∂C/∂v
+  double gap = 0;             ///< C: how far inside the limit (< 0: violated), rad or m
+  double inverse_mass = 0;    ///< direction·H⁻¹·direction
+  double impulse = 0, push = 0;  ///< accumulated, ≥ 0
+  // The block solve's scratch: the row's value and target, whether it is held, its impulse's change.
+  double value = 0, target = 0, change = 0;
+  bool active = false;  ///< to be held in the next round
+  bool held = false;    ///< held in the last factorization
+};
+
+/// A joint's friction over a step (joint_space_contacts.hpp, "Drives and friction").
+struct JointFrictionBlock {
+  std::int32_t island = 0, body = 0;
+  int offset = 0, dofs = 1;
+  double bound = 0;                                   ///< friction·h, N·m·s or N·s
+  Eigen::Matrix3d mass = Eigen::Matrix3d::Zero();     ///< its block of (H + h·G)⁻¹, inverted (top-left dofs × dofs)
+  Eigen::Vector3d rate = Eigen::Vector3d::Zero();     ///< the predicted velocity before friction
+  Eigen::Vector3d impulse = Eigen::Vector3d::Zero();  ///< j, |j| ≤ bound
+  bool stuck = true;                                  ///< to be held at rest (else sliding with `impulse`)
+  bool held = true;                                   ///< held in the last factorization
+};
+
+/// Scratch of the joint limits, friction and drives, sized at compile so a step allocates nothing.
+struct JointControlScratch {
+  Eigen::VectorXd drive_force;    ///< nv: a drive's k·(target − x) + c·target_velocity, mapped onto v
+  Eigen::VectorXd drive_gain;     ///< nv: k·h + c on the driven velocities, 0 elsewhere
+  Eigen::VectorXd armature;       ///< nv: h·drive_gain
+  Eigen::VectorXd explicit_force; ///< nv: the loads plus the drive terms known at the step's start
+  Eigen::VectorXd acceleration;   ///< nv
+  Eigen::VectorXd predicted;      ///< nv: v + h·v̇, the velocity the step would end with
+  Eigen::VectorXd forces;         ///< nv: the loads plus the drives' and friction's forces, held over the step
+  std::vector<JointFrictionBlock> friction;  ///< capacity: one per joint
+  std::vector<JointLimitRow> rows;           ///< capacity: three per joint
+  std::vector<std::int32_t> islands;         ///< the islands with rows (or friction); capacity: every island
+  /// Per tree body: the penalty added to its joint's D_i (top-left dofs × dofs) to hold rows.
+  std::vector<Eigen::Matrix3d> penalty;
+  DynamicsWorkspace held;  ///< the articulated inertias with the penalties (U, D⁻¹, parent_to_body)
 };
 
 struct FeatherstoneState : RigidScene {
@@ -90,6 +147,14 @@ struct FeatherstoneState : RigidScene {
   /// Per Model joint: the slide axis of a prismatic joint in its outboard rigid body's frame
   /// (zero for other types); the gap ignores separation along it.
   std::vector<Eigen::Vector3d> slide_axis;
+
+  /// The Model's joints and their frames (kernel/model/joint_coordinates.hpp): their limits,
+  /// friction and drives are read from here every step, so a drive written here between steps
+  /// (World::set_joint_drive) acts from the next step on.
+  JointControls joint_controls;
+  /// Per Model joint: where the tree holds it.
+  std::vector<TreeJoint> tree_joint;
+  JointControlScratch controls;
 
   /// forward_kinematics of the current (q, v): world_to_body and the bodies' spatial velocities.
   DynamicsWorkspace kinematics;

@@ -47,6 +47,40 @@
 // the new pose, in the kinetic-energy metric, v = H⁻¹ Σ J_iᵀ I_i v_i (one inward pass and one
 // ABA): an H-orthogonal projection, which never adds kinetic energy — keeping v instead would
 // swing a limb's fast spin about its axis onto its neighbours. The rigid bodies are refreshed.
+//
+// Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
+// kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
+// joint's cone swing_max − θ ≥ 0. Its row is ∂C/∂v on the joint's own velocities: ±1 for a
+// revolute or prismatic joint (signed by which way the tree holds the joint); for a spherical
+// joint, with ω the outboard's angular velocity relative to the inboard (inboard frame), c the
+// cone axis, a₀ and a the outboard's axis at rest and now, the swing θ = acos(c·a) has
+// θ̇ = ω·(c × a)/|c × a| (the axis turning the cone's axis to the outboard's), and the twist
+// ψ = 2·atan2(D.vec·a₀, D.w) has ψ̇ = ω·(a₀ + a)/(1 + a₀·a) (the outboard's axis plus the swing's
+// turn about it; a at zero swing) — each carried onto the joint's velocity coordinates (ω of
+// the tree child relative to its parent, child frame). A row joins the contacts' passes, after
+// the integrator, when it is violated or within 0.02 (rad or m) plus two steps of its approach of
+// its limit: an accumulated impulse λ ≥ 0 along the row through the articulated inertia keeps
+// row·v ≥ −max(C, 0)/Δt — restitution 0, and a limit not yet reached lets the joint arrive at it
+// exactly at the step's end (Catto's speculative contacts). Then the push-out takes the rows
+// with the contacts: a violation is pushed out in full (it is always the solver's: the Model's
+// poses are inside every limit), and a row inside its limit is not pushed past it. In each pass
+// an island's rows are solved together, after its contacts (joint_space_contacts.cpp, "Holding
+// rows"): the rows held get a penalty 10⁶ times their effective mass on their joint's D_i in the
+// articulated-body factorization, which is exactly the response to joint impulses along them
+// and leaves them within round-off of their targets after one refinement; rows that would pull
+// are released, rows pushed past are held (an active set, at most 8 rounds). One by one,
+// Gauss–Seidel took hundreds of passes on neighbouring joints at their limits.
+//
+// Drives and friction, before the integrator (joint_control_forces), as forces held over the
+// step: a drive is the stable PD of Tan, Liu & Turk (2011, "Stable proportional-derivative
+// controllers", IEEE CG&A): its force k·(target − x − h·ẋ⁺) + c·(target_velocity − ẋ⁺) is
+// taken at the velocity ẋ⁺ the step ends with, found with the dynamics, which adds the
+// armature h·(k·h + c) to the driven coordinates' D_i in the articulated-body algorithm — one
+// ABA, O(n), unconditionally stable in k and c. Friction then gives each joint the impulse j that
+// stops its predicted velocity through that same inertia, clamped to |j| ≤ friction·h (per DOF;
+// a spherical joint's 3-vector by its norm, against the velocity it slides at), an island's
+// joints together as the limit rows (stuck joints held, sliding ones at the bound), and holds
+// j/h over the step — so a joint friction holds does not creep, whatever the integrator.
 #pragma once
 
 #include <vector>
@@ -56,13 +90,37 @@
 namespace limber {
 
 /// Impulses, then push-out, for state.contacts (found by detect_rigid_contacts on the refreshed
-/// rigid bodies); dt is the step's. Leaves (q, v), state.kinematics and the rigid bodies
+/// rigid bodies) and the joint limits' rows; dt is the step's. Leaves (q, v), state.kinematics and the rigid bodies
 /// consistent. Allocates nothing.
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt);
 
 /// Applies only the impulses of resolve_joint_space_contacts (no push-out) and refreshes the
 /// rigid bodies: for tests of the impulses' energy.
 void apply_joint_space_impulses(FeatherstoneState& state, double dt);
+
+/// The response of island `island` (the articulated-body algorithm with v = 0, g = 0) to the
+/// impulses in state.contact.spatial_impulse (as ABA's biases p = −f, body coordinates) and
+/// state.contact.joint_impulse (generalized impulses, nv), which it consumes (zeroes): the joint
+/// velocity changes into contact.joint_change (the island's slice) and the bodies' spatial ones
+/// into contact.body_change. Uses the articulated inertias in contact.articulated, which the
+/// last forward_dynamics into it left (with its armature, if any).
+void impulse_response(FeatherstoneState& state, std::size_t island);
+/// impulse_response through the articulated inertias (U, D⁻¹, parent_to_body) of `inertias`.
+void impulse_response(FeatherstoneState& state, std::size_t island, const DynamicsWorkspace& inertias);
+
+/// The block of H⁻¹ (or of (H + armature)⁻¹, as impulse_response) for the `dofs` velocities of
+/// one joint from `offset`, measured with `dofs` unit impulses; top-left of a zero 3×3.
+Eigen::Matrix3d joint_block_response(FeatherstoneState& state, std::size_t island, int offset, int dofs);
+
+/// The pose of Model body `body`'s frame (joint_coordinates' FramePose) from state.kinematics.
+FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
+
+/// The joint forces (nv) of a step of h seconds from (q, v) into state.controls.forces: `loads`
+/// (nv, the applied loads and drag as joint forces) plus the drives' stable-PD forces and the
+/// joints' friction (see above), read from state.joint_controls. Returns false, writing nothing,
+/// when no awake island has a drive or friction. Refreshes state.kinematics to (q, v).
+/// Allocates nothing.
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h);
 
 /// τ = Σ J_iᵀ f_i: the joint forces (nv) equivalent to spatial forces f_i on the tree bodies
 /// (body coordinates, at the body's origin; `body_forces`, one per tree body, consumed: zeroed),

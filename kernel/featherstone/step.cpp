@@ -66,9 +66,12 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
   if (drag || loads) body_load_joint_forces(state, drag);
   const int substeps = turn_substeps(state, dt);
+  const double h = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
-    integrate(state.tree, state.q, state.v, state.joint_forces, state.settings.gravity, dt / substeps, state.options.integrator,
-              state.integration);
+    // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp).
+    const bool controlled = joint_control_forces(state, state.joint_forces, h);
+    integrate(state.tree, state.q, state.v, controlled ? state.controls.forces : state.joint_forces, state.settings.gravity, h,
+              state.options.integrator, state.integration);
   }
   if (any_asleep) {
     for (std::size_t k = 0; k < state.islands.size(); ++k) {

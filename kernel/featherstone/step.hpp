@@ -14,13 +14,16 @@ namespace limber {
 ///                friction at a thin limb's rim spins it about its axis at v/r, which the explicit
 ///                integrators follow only while hΩ is small). Sleeping islands keep their q and
 ///                v = 0 (the core's algorithms run over the whole tree, so their dynamics are
-///                computed and dropped, not skipped);
+///                computed and dropped, not skipped). Joint drives (stable PD) and joint friction
+///                are found at each substep's start and held over it as joint forces
+///                (joint_control_forces, joint_space_contacts.hpp);
 ///  2. damp       v ← v·exp(−damping·dt) (Settings::damping: speed decays as exp(−damping·t),
 ///                whatever Δt, as in the other methods);
 ///  3. refresh    the rigid bodies from (q, v) (refresh_rigid_bodies);
 ///  4. collide    contacts with the planes and the ball found on the rigid bodies
 ///                (kernel/collision/rigid_contacts.hpp), answered by impulses through the
-///                joint-space inertia and a position push-out (joint_space_contacts.hpp);
+///                joint-space inertia and a position push-out (joint_space_contacts.hpp), with the
+///                joint limits' rows;
 ///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
 /// divergence is reported in the result (also state.last_report). Allocates nothing.

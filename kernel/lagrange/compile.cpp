@@ -7,12 +7,15 @@ namespace limber {
 LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& options) {
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "lagrange");
   require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");
   state.options = options;
   state.time_step = model.settings.time_step;
   state.joints = joint_anchors(state, model);
   state.constraints = compile_constraints(state, model);
   const ConstraintSet& constraints = state.constraints;
+  state.joint_controls = joint_controls(model);
+  state.controls = compile_joint_controls(state, model, constraints);
   prepare_multiplier_solver(state, model);
   const std::size_t body_count = state.bodies.size();
   state.scratch.resize(body_count);
@@ -20,6 +23,9 @@ LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& option
   state.accelerations.assign(body_count, Eigen::Matrix<double, 6, 1>::Zero());
   state.constraint_rhs = state.multipliers;  // zeros, each its constraint's rows
   state.projection_multipliers = state.multipliers;
+  state.compliance = state.multipliers;
+  state.control_body_rhs = state.body_rhs;
+  state.stage_change = state.body_rhs;
   state.geometry.resize(constraints);
   state.world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
   return state;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <Eigen/Geometry>
 
@@ -89,6 +90,7 @@ ConstraintSet compile_constraints(const RigidScene& scene, const Model& model) {
         break;
       }
     }
+    rows.control_rows = static_cast<std::uint8_t>(control_row_count(joint));
     set.inboard.push_back(i), set.outboard.push_back(o), set.rows.push_back(rows);
     set.row_offset.push_back(set.row_offset.back() + rows.rows());
   }
@@ -232,6 +234,236 @@ ConstraintVector velocity_product(const ConstraintSet& constraints, const JointA
     product(row) = (w_i.cross(u).cross(v) + u.cross(w_o.cross(v))).dot(w_i - w_o);
   }
   return product;
+}
+
+
+// --- Joint controls: limits, friction and drives (joint_controls.hpp) ---
+
+int control_row_count(const Joint& joint) {
+  if (!has_joint_controls(joint)) return 0;
+  switch (joint.type) {
+    case JointType::revolute:
+    case JointType::prismatic: return 1;
+    case JointType::spherical:
+      if (joint.drive || joint.friction > 0) return 3;
+      return (joint.limits.swing ? 1 : 0) + (joint.limits.twist ? 1 : 0);
+    case JointType::universal: return joint.friction > 0 ? 2 : 0;
+    case JointType::fixed: return 0;
+  }
+  return 0;
+}
+
+FramePose model_frame_pose(const RigidScene& scene, const RigidBodyState& y, std::int32_t body) {
+  if (body < 0) return {};
+  const auto b = static_cast<std::size_t>(body);
+  const Eigen::Quaterniond orientation = y.orientation[b] * scene.shapes.principal_frame[b].conjugate();
+  return {orientation, y.position[b] - orientation * scene.shapes.centre_offset[b]};
+}
+
+JointControlSet compile_joint_controls(const RigidScene& scene, const Model& model, const ConstraintSet& constraints) {
+  JointControlSet set;
+  const RigidBodyState& y = scene.bodies.state;
+  const auto into = [&](std::int32_t body, const Eigen::Vector3d& world) -> Eigen::Vector3d {
+    return body >= 0 ? Eigen::Vector3d(y.orientation[body].conjugate() * world) : world;
+  };
+  for (std::size_t k = 0; k < constraints.joint_count; ++k) {
+    const ConstraintRows& rows = constraints.rows[k];
+    if (rows.control_rows == 0) continue;
+    const Joint& joint = model.joints[k];
+    ControlledJoint controlled;
+    controlled.joint = static_cast<std::uint32_t>(k);
+    controlled.first_row = static_cast<std::uint32_t>(set.rows.size());
+    controlled.row_offset = static_cast<std::uint8_t>(rows.equality_rows());
+    controlled.count = rows.control_rows;
+    controlled.type = joint.type;
+    const std::int32_t i = joint.inboard, o = joint.outboard;
+    const Eigen::Vector3d& outboard_axis = model.bodies[static_cast<std::size_t>(o)].axis;
+    std::uint8_t directions[3] = {0, 1, 2};
+    switch (joint.type) {
+      case JointType::revolute:
+        controlled.inboard_axis = into(i, joint.axis), controlled.outboard_axis = into(o, joint.axis);
+        break;
+      case JointType::prismatic: controlled.inboard_axis = into(i, joint.axis); break;
+      case JointType::universal:
+        controlled.inboard_axis = into(i, joint.axis), controlled.outboard_axis = into(o, joint.second_axis);
+        break;
+      case JointType::spherical:
+        controlled.outboard_axis = into(o, outboard_axis);
+        controlled.inboard_axis = into(i, outboard_axis);  // a₀, the twist axis at rest
+        controlled.cone_axis = into(i, joint.limits.swing_axis.value_or(outboard_axis));
+        if (rows.control_rows == 3) {
+          if (joint.limits.swing) controlled.swing_row = 0;
+          if (joint.limits.twist) controlled.twist_row = 2;
+        } else {
+          std::int8_t next = 0;
+          if (joint.limits.swing) directions[next] = 0, controlled.swing_row = next++;
+          if (joint.limits.twist) directions[next] = 2, controlled.twist_row = next++;
+        }
+        break;
+      case JointType::fixed: break;
+    }
+    for (int r = 0; r < rows.control_rows; ++r) {
+      ControlRow row;
+      row.direction = directions[r];
+      set.rows.push_back(row);
+    }
+    set.joints.push_back(controlled);
+  }
+  return set;
+}
+
+namespace {
+
+double wrapped_angle(double angle) {
+  constexpr double pi = std::numbers::pi;
+  angle = std::fmod(angle + pi, 2 * pi);
+  if (angle < 0) angle += 2 * pi;
+  return angle - pi;
+}
+
+// The nearer limit of `range` from `value`: its side (+1 lower, −1 upper) and the gap (≥ 0 inside),
+// divided by `scale` (the coordinate's rate per unit of the row's rate).
+void set_nearer_limit(ControlRow& row, double value, const Range& range, double scale = 1) {
+  if (value - range.min < range.max - value) {
+    row.side = 1, row.gap = (value - range.min) / scale;
+  } else {
+    row.side = -1, row.gap = (range.max - value) / scale;
+  }
+}
+
+// An angular row along unit-or-not `n` (rate n·(ω_o − ω_i)), with J̇u as if n turned with the
+// inboard body.
+void set_angular_row(ControlRow& row, const Eigen::Vector3d& n, const Eigen::Vector3d& w_i, const Eigen::Vector3d& w_o) {
+  row.inboard_jacobian << 0, 0, 0, -n.transpose();
+  row.outboard_jacobian << 0, 0, 0, n.transpose();
+  row.rate = n.dot(w_o - w_i);
+  row.velocity_product = (w_o - w_i).dot(w_i.cross(n));
+}
+
+// (a + a₀)/(1 + a·a₀): the gradient of the twist about a₀ of the rotation that took a₀ to a
+// (joint_coordinates.hpp's swing-twist decomposition) with respect to the relative angular velocity.
+Eigen::Vector3d twist_gradient(const Eigen::Vector3d& a, const Eigen::Vector3d& rest) {
+  const double denominator = 1 + a.dot(rest);
+  return denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
+}
+
+// Its rate, with a turning at ω_o and a₀ at ω_i.
+Eigen::Vector3d twist_gradient_rate(const Eigen::Vector3d& a, const Eigen::Vector3d& rest, const Eigen::Vector3d& w_i,
+                                    const Eigen::Vector3d& w_o) {
+  const double denominator = 1 + a.dot(rest);
+  if (!(denominator > 1e-9)) return w_o.cross(a);
+  const Eigen::Vector3d a_rate = w_o.cross(a), rest_rate = w_i.cross(rest);
+  return (a_rate + rest_rate) / denominator - (a + rest) * (a_rate.dot(rest) + a.dot(rest_rate)) / (denominator * denominator);
+}
+
+}  // namespace
+
+void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors, const JointControls& controls,
+                            const RigidBodyState& y, const std::vector<Eigen::Vector3d>& velocity,
+                            const std::vector<Eigen::Vector3d>& angular_velocity, JointControlSet& set) {
+  for (const ControlledJoint& controlled : set.joints) {
+    const std::size_t k = controlled.joint;
+    const Joint& joint = controls.joints[k];
+    const JointFrame& frame = controls.frames[k];
+    const std::int32_t i = anchors.inboard[k], o = anchors.outboard[k];
+    const FramePose inboard = model_frame_pose(scene, y, i), outboard = model_frame_pose(scene, y, o);
+    const JointCoordinates q = joint_coordinates(joint, frame, inboard, outboard);
+    const Side in = side(y, i), out = side(y, o);
+    const Eigen::Vector3d w_i = body_velocity(angular_velocity, i), w_o = angular_velocity[o];
+    ControlRow* rows = &set.rows[controlled.first_row];
+    for (int r = 0; r < controlled.count; ++r) {
+      rows[r].side = 0, rows[r].gap = 0, rows[r].drive_error = 0, rows[r].target_rate = 0;
+    }
+    const JointLimits& limits = joint.limits;
+    const JointDrive* drive = joint.drive ? &*joint.drive : nullptr;
+    switch (controlled.type) {
+      case JointType::revolute: {
+        ControlRow& row = rows[0];
+        const Eigen::Vector3d a = out.orientation * controlled.outboard_axis, rest = in.orientation * controlled.inboard_axis;
+        set_angular_row(row, twist_gradient(a, rest), w_i, w_o);
+        row.velocity_product = twist_gradient_rate(a, rest, w_i, w_o).dot(w_o - w_i);  // exact: w is the angle's rate
+        if (limits.range) set_nearer_limit(row, q.angle, *limits.range);
+        if (drive) row.drive_error = wrapped_angle(drive->target - q.angle), row.target_rate = drive->target_velocity;
+        break;
+      }
+      case JointType::prismatic: {
+        ControlRow& row = rows[0];
+        const Eigen::Vector3d h = in.orientation * controlled.inboard_axis;
+        const Eigen::Vector3d r_o = out.orientation * anchors.outboard_anchor[k];
+        const Eigen::Vector3d r_i = i >= 0 ? Eigen::Vector3d(in.orientation * anchors.inboard_anchor[k]) : Eigen::Vector3d::Zero();
+        const Eigen::Vector3d p_o = out.centre + r_o, p_i = i >= 0 ? Eigen::Vector3d(in.centre + r_i) : anchors.inboard_anchor[k];
+        row.inboard_jacobian.head<3>() = -h.transpose(), row.inboard_jacobian.tail<3>() = -(p_o - in.centre).cross(h).transpose();
+        row.outboard_jacobian.head<3>() = h.transpose(), row.outboard_jacobian.tail<3>() = r_o.cross(h).transpose();
+        const Eigen::Vector3d v_po = velocity[o] + w_o.cross(r_o), v_pi = body_velocity(velocity, i) + w_i.cross(r_i);
+        row.rate = h.dot(v_po - v_pi) + (p_o - p_i).dot(w_i.cross(h));  // h turns with the inboard body
+        const Eigen::Vector3d centripetal = w_o.cross(w_o.cross(r_o)) - w_i.cross(w_i.cross(r_i));
+        row.velocity_product = centripetal.dot(h) + 2 * (v_po - v_pi).dot(w_i.cross(h)) + (p_o - p_i).dot(w_i.cross(w_i.cross(h)));
+        if (limits.range) set_nearer_limit(row, q.slide, *limits.range);
+        if (drive) row.drive_error = drive->target - q.slide, row.target_rate = drive->target_velocity;
+        break;
+      }
+      case JointType::universal: {
+        const Eigen::Vector3d u = in.orientation * controlled.inboard_axis;
+        const Eigen::Vector3d v = out.orientation * controlled.outboard_axis;
+        const Eigen::Vector3d frame_vectors[2] = {u, (v - v.dot(u) * u).normalized()};
+        for (int r = 0; r < controlled.count; ++r) set_angular_row(rows[r], frame_vectors[rows[r].direction], w_i, w_o);
+        break;
+      }
+      case JointType::spherical: {
+        const Eigen::Vector3d a = out.orientation * controlled.outboard_axis;
+        const Eigen::Vector3d rest = in.orientation * controlled.inboard_axis;
+        const Eigen::Vector3d t = twist_gradient(a, rest);
+        // e₁ the swing direction (with a swing limit), e₃ the twist direction across it.
+        Eigen::Vector3d e1, e3;
+        double twist_scale = 1;
+        const Eigen::Vector3d cone = in.orientation * controlled.cone_axis;
+        const Eigen::Vector3d across = cone.cross(a);
+        if (limits.swing && across.norm() > 1e-12) {
+          e1 = across.normalized();
+          const Eigen::Vector3d t_across = t - t.dot(e1) * e1;
+          twist_scale = t_across.norm();
+          if (twist_scale > 1e-12) e3 = t_across / twist_scale;
+          else e3 = a, twist_scale = 1;
+        } else {
+          twist_scale = t.norm();
+          e3 = t / twist_scale;
+          e1 = e3.unitOrthogonal();
+        }
+        const Eigen::Vector3d frame_vectors[3] = {e1, e3.cross(e1), e3};
+        for (int r = 0; r < controlled.count; ++r) set_angular_row(rows[r], frame_vectors[rows[r].direction], w_i, w_o);
+        const Eigen::Vector3d relative = w_o - w_i;
+        if (controlled.swing_row >= 0) {
+          ControlRow& row = rows[controlled.swing_row];
+          row.side = -1, row.gap = *limits.swing - q.swing;
+          // e₁ = m/|m|, m = c×a: its rate (I − e₁e₁ᵀ)·ṁ/|m| (0 where the cone axis and a meet).
+          const double length = across.norm();
+          if (length > 1e-12) {
+            const Eigen::Vector3d m_rate = w_i.cross(cone).cross(a) + cone.cross(w_o.cross(a));
+            row.velocity_product = ((m_rate - e1 * e1.dot(m_rate)) / length).dot(relative);
+          }
+        }
+        if (controlled.twist_row >= 0) {
+          ControlRow& row = rows[controlled.twist_row];
+          set_nearer_limit(row, q.twist, *limits.twist, twist_scale);
+          row.velocity_product = twist_gradient_rate(a, rest, w_i, w_o).dot(relative) / twist_scale;  // in the row's units
+        }
+        if (drive) {
+          // The rotation still to go, E = D_target·D⁻¹ (inboard frame), as a rotation vector in world.
+          Eigen::Quaterniond error = drive_target_rotation(*drive, frame) * Eigen::Quaterniond(rotation_quaternion(q.rotation)).conjugate();
+          if (error.w() < 0) error.coeffs() = -error.coeffs();
+          const Eigen::AngleAxisd turn(error.normalized());
+          const Eigen::Vector3d error_vector = inboard.orientation * (turn.angle() * turn.axis());
+          const Eigen::Vector3d target_rate = inboard.orientation * (frame.inboard_rest.conjugate() * drive->target_angular_velocity);
+          for (int r = 0; r < controlled.count; ++r) {
+            const Eigen::Vector3d& e = frame_vectors[rows[r].direction];
+            rows[r].drive_error = error_vector.dot(e), rows[r].target_rate = target_rate.dot(e);
+          }
+        }
+        break;
+      }
+      case JointType::fixed: break;
+    }
+  }
 }
 
 }  // namespace limber

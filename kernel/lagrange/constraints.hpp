@@ -15,7 +15,9 @@
 // Joint types as rows: spherical 3 point; revolute 3 point + 2 angular (u = b₁, b₂ ⟂ axis,
 // v = axis); universal 3 point + 1 angular (u = axis, v = second axis); fixed 3 point + 3 angular
 // (u, v = the pairs (x, y), (y, z), (z, x) of the world axes at rest); prismatic 2 slide (b₁, b₂ ⟂
-// axis) + 3 angular. Point rows come first, then slide, then angular.
+// axis) + 3 angular. Point rows come first, then slide, then angular, then the joint's control
+// rows (limits, friction, drive: kernel/lagrange/joint_controls.hpp), which are not equations:
+// constraint_error and velocity_product give them 0, and each solve sets them itself.
 #pragma once
 
 #include <array>
@@ -24,6 +26,8 @@
 
 #include <Eigen/Core>
 
+#include "limber/kernel/lagrange/joint_controls.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 
@@ -41,12 +45,14 @@ struct ConstraintRows {
   std::uint8_t point_rows = 0;    ///< 3 (anchors coincide) or 0
   std::uint8_t slide_rows = 0;    ///< 2 (prismatic) or 0
   std::uint8_t angular_rows = 0;  ///< 0…3
+  std::uint8_t control_rows = 0;  ///< 0…3: limits, friction, drive (joint_controls.hpp), after the rest
   bool gear = false;              ///< one gear row instead of all the above
   std::array<Eigen::Vector3d, 2> slide_normal{};        ///< b, inboard frame
   std::array<Eigen::Vector3d, 3> inboard_direction{};   ///< u (angular rows) or n_i (gear), inboard frame
   std::array<Eigen::Vector3d, 3> outboard_direction{};  ///< v (angular rows) or n_o (gear), outboard frame
   double ratio = 0;                                     ///< gear only
-  int rows() const { return gear ? 1 : point_rows + slide_rows + angular_rows; }
+  int rows() const { return gear ? 1 : point_rows + slide_rows + angular_rows + control_rows; }
+  int equality_rows() const { return gear ? 1 : point_rows + slide_rows + angular_rows; }
 };
 
 /// The Model's joints, then its gears, as constraints between pairs of bodies. A gear's
@@ -63,6 +69,18 @@ struct ConstraintSet {
 
 /// The rows of `model`'s joints and gears, from the bodies' poses in `scene` (the joints' zero).
 ConstraintSet compile_constraints(const RigidScene& scene, const Model& model);
+
+/// The control rows of `model`'s joints (those of `constraints` with control_rows > 0), their axes
+/// carried into the bodies' frames from the poses in `scene`.
+JointControlSet compile_joint_controls(const RigidScene& scene, const Model& model, const ConstraintSet& constraints);
+
+/// Measures every controlled joint at state y with velocities (v, ω per body, world; only the
+/// rates and J̇u read them): each row's Jacobian, nearer limit and gap, drive error and target
+/// rate (from `controls`, read afresh: limits, friction and drives may change between steps),
+/// rate and J̇u.
+void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors, const JointControls& controls,
+                            const RigidBodyState& y, const std::vector<Eigen::Vector3d>& velocity,
+                            const std::vector<Eigen::Vector3d>& angular_velocity, JointControlSet& set);
 
 /// Everything about the constraints at one state that the solves read, computed once per state.
 struct ConstraintGeometry {

@@ -15,6 +15,8 @@
 #include <Eigen/SparseCore>
 
 #include "limber/kernel/lagrange/constraints.hpp"
+#include "limber/kernel/lagrange/joint_controls.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
@@ -48,6 +50,12 @@ struct LagrangeOptions {
 struct LagrangeState : RigidScene {
   JointAnchors joints;        ///< the Model's joints' anchors
   ConstraintSet constraints;  ///< the joints' rows, then the gears'
+  /// The Model's joints and frames, read every step for their limits, friction and drives (so a
+  /// drive's target, gains or a joint's friction may change between steps: World::set_joint_drive
+  /// writes joint_controls.joints[k].drive). Which joints have control rows is fixed at compile:
+  /// a drive, limit or friction given later to a joint compiled without them is not applied.
+  JointControls joint_controls;
+  JointControlSet controls;  ///< the controlled joints' rows (joint_controls.hpp)
   LagrangeOptions options;
   bool uses_tree = true;  ///< the solver chosen at compile (tree, or sparse for graphs with loops)
   RigidIntegratorScratch scratch;
@@ -62,6 +70,11 @@ struct LagrangeState : RigidScene {
   std::vector<Eigen::Matrix<double, 6, 1>> body_rhs, accelerations;
   std::vector<ConstraintVector> constraint_rhs;
   std::vector<ConstraintVector> projection_multipliers;  ///< the projections' own multipliers (scratch)
+  /// Per constraint, each row's compliance A (the solve's J·x + A·λ = c): 0 for its equations; a
+  /// control row's is set by its mode (1 when off, its drive's when soft).
+  std::vector<ConstraintVector> compliance;
+  std::vector<Eigen::Matrix<double, 6, 1>> control_body_rhs;  ///< scratch: body_rhs with sliding friction
+  std::vector<Eigen::Matrix<double, 6, 1>> stage_change;      ///< scratch: the impulse pass's x₂ (step.cpp)
   /// The geometry of the state being solved, computed once per evaluation (update_geometry):
   /// the constraints' levers and Jacobian blocks and each body's world inertia tensor.
   ConstraintGeometry geometry;

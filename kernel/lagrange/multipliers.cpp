@@ -2,6 +2,7 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/lagrange/multipliers.hpp"
 
+#include <cmath>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -45,6 +46,11 @@ void solve_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, cons
     tree.diagonal(body_count + c).setZero();  // rigid: no compliance
     tree.work(body_count + c).setZero();
     tree.work(body_count + c).head(constraint_rhs[c].size()) = constraint_rhs[c];
+  }
+  for (const ControlledJoint& controlled : state.controls.joints) {  // −A on the control rows
+    for (int r = controlled.row_offset; r < controlled.row_offset + controlled.count; ++r) {
+      tree.diagonal(body_count + controlled.joint)(r, r) = -state.compliance[controlled.joint](r);
+    }
   }
   const auto edge = [&](std::size_t c, std::int32_t body) -> const ConstraintBlock& {
     return constraints.inboard[c] == body ? state.geometry.inboard_jacobian[c] : state.geometry.outboard_jacobian[c];
@@ -99,6 +105,12 @@ void solve_sparse(LagrangeState& state, const RigidBodyState& y, const std::vect
       }
     }
   }
+  for (const ControlledJoint& controlled : state.controls.joints) {
+    for (int r = controlled.row_offset; r < controlled.row_offset + controlled.count; ++r) {
+      const std::int32_t row = constraints.row_offset[controlled.joint] + r;
+      entries.emplace_back(row, row, state.compliance[controlled.joint](r));
+    }
+  }
   Eigen::SparseMatrix<double> matrix(total_rows, total_rows);
   matrix.setFromTriplets(entries.begin(), entries.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(matrix);
@@ -133,10 +145,197 @@ void prepare_multiplier_solver(LagrangeState& state, const Model& model) {
   state.tree.assign(std::move(ordering), body_count, std::move(rows));
 }
 
+namespace {
+
+// Every control row off: zero Jacobian row, compliance 1.
+void switch_off_controls(LagrangeState& state) {
+  for (const ControlledJoint& controlled : state.controls.joints) {
+    for (int r = controlled.row_offset; r < controlled.row_offset + controlled.count; ++r) {
+      state.geometry.inboard_jacobian[controlled.joint].row(r).setZero();
+      state.geometry.outboard_jacobian[controlled.joint].row(r).setZero();
+      state.compliance[controlled.joint](r) = 1;
+    }
+  }
+}
+
+}  // namespace
+
 void update_geometry(LagrangeState& state, const RigidBodyState& y) {
   update_constraint_geometry(state.constraints, state.joints, y, state.geometry);
   for (std::size_t b = 0; b < state.bodies.size(); ++b) state.world_inertia[b] = state.bodies.world_inertia(y, b);
+  if (state.controls.empty()) return;
+  measure_joint_controls(state, state.joints, state.joint_controls, y, state.velocity, state.angular_velocity, state.controls);
+  switch_off_controls(state);
 }
+
+
+// --- Joint controls: the problem at each level and the active-set loop ---
+
+namespace {
+
+// The mode a row falls back to when its limit is not engaged: friction's (stick, or sliding with
+// or without the drive), the drive's, or none.
+ControlMode free_mode(const ControlledJoint& joint, const ControlRow& row) {
+  if (joint.friction_bound > 0) {
+    if (!joint.sliding) return ControlMode::stick;
+    return row.compliance > 0 ? ControlMode::soft : ControlMode::slide;
+  }
+  return row.compliance > 0 ? ControlMode::soft : ControlMode::off;
+}
+
+// The drive's part of a row's multiplier at rate w (0 without a drive at this level).
+double drive_part(const ControlRow& row, double rate) {
+  return row.compliance > 0 ? (row.drive_rhs - rate) / row.compliance : 0;
+}
+
+// Writes the control rows of the current modes into the Jacobian blocks, compliances and
+// right-hand sides, and sliding friction's known multipliers into `body_rhs` (as Jᵀ·slip).
+void write_control_rows(LagrangeState& state, std::vector<Vector6>& body_rhs) {
+  for (const ControlledJoint& controlled : state.controls.joints) {
+    const std::size_t c = controlled.joint;
+    const std::int32_t i = state.constraints.inboard[c], o = state.constraints.outboard[c];
+    for (int k = 0; k < controlled.count; ++k) {
+      ControlRow& row = state.controls.rows[controlled.first_row + k];
+      const int r = controlled.row_offset + k;
+      auto inboard = state.geometry.inboard_jacobian[c].row(r);
+      auto outboard = state.geometry.outboard_jacobian[c].row(r);
+      double& compliance = state.compliance[c](r);
+      double& rhs = state.constraint_rhs[c](r);
+      const bool present = row.mode != ControlMode::off && row.mode != ControlMode::slide;
+      if (present) inboard = row.inboard_jacobian, outboard = row.outboard_jacobian;
+      else inboard.setZero(), outboard.setZero();
+      switch (row.mode) {
+        case ControlMode::off: compliance = 1, rhs = 0; break;
+        case ControlMode::limit: compliance = 0, rhs = row.limit * row.bound; break;
+        case ControlMode::stick: compliance = 0, rhs = row.stick_rate; break;
+        case ControlMode::soft: compliance = row.compliance, rhs = row.drive_rhs + row.compliance * row.slip; break;
+        case ControlMode::slide:
+          compliance = 1, rhs = 0;
+          body_rhs[o] += row.slip * row.outboard_jacobian.transpose();
+          if (i >= 0) body_rhs[i] += row.slip * row.inboard_jacobian.transpose();
+          break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void set_control_problem(LagrangeState& state, ControlLevel level, double dt, double frequency) {
+  constexpr double kAtLimit = 1e-9;  // rad or m: a limit this close counts as reached
+  // The velocity-level step's rows, on the velocities or on a change of them.
+  const bool step_rows = level == ControlLevel::velocity || level == ControlLevel::velocity_change;
+  const bool change = level == ControlLevel::velocity_change || level == ControlLevel::velocity_stop;
+  const bool stage = level == ControlLevel::stage_change || level == ControlLevel::acceleration;
+  for (ControlledJoint& controlled : state.controls.joints) {
+    const Joint& joint = state.joint_controls.joints[controlled.joint];
+    const bool friction = joint.friction > 0 && (step_rows || (stage && controlled.stuck));
+    controlled.friction_bound = !friction ? 0 : level == ControlLevel::acceleration ? joint.friction : joint.friction * dt;
+    controlled.sliding = false;
+    const JointDrive* drive = joint.drive && step_rows ? &*joint.drive : nullptr;
+    const double drive_gain = drive ? drive->stiffness * dt + drive->damping : 0;  // k·h + c
+    for (int k = 0; k < controlled.count; ++k) {
+      ControlRow& row = state.controls.rows[controlled.first_row + k];
+      const double offset = change ? row.rate : 0;  // the rate before a velocity change
+      row.limit = 0, row.bound = 0, row.compliance = 0, row.drive_rhs = 0, row.slip = 0;
+      row.stick_rate = level == ControlLevel::acceleration ? -row.velocity_product : -offset;  // stop, or keep the rate
+      if (drive_gain > 0) {
+        // τ = k·(e₀ − h·w) + c·(w* − w), implicit in the rate w after the step; its impulse
+        // h·τ = (drive_rhs − w)/A.
+        row.compliance = 1 / (dt * drive_gain);
+        row.drive_rhs = (drive->stiffness * row.drive_error + drive->damping * row.target_rate) / drive_gain - offset;
+      }
+      if (row.side == 0) continue;
+      // At or past the limit; the stages also keep a row the impulse pass engaged (it reaches
+      // the limit within the step) until it releases.
+      const bool reached = row.gap <= kAtLimit || (stage && row.previous == ControlMode::limit);
+      switch (level) {
+        case ControlLevel::velocity:
+        case ControlLevel::velocity_change:  // speculative: reach the limit, do not cross it, within the step
+          row.limit = row.side;
+          row.bound = (row.gap >= 0 ? -row.gap / dt : -frequency * row.gap) - row.side * offset;
+          break;
+        case ControlLevel::stage_change:
+          if (reached) row.limit = row.side, row.bound = 0;
+          break;
+        case ControlLevel::acceleration:
+          if (!reached) break;
+          row.limit = row.side;
+          row.bound = -2 * frequency * row.side * row.rate - frequency * frequency * row.gap - row.side * row.velocity_product;
+          break;
+        case ControlLevel::velocity_stop:
+          if (row.gap <= kAtLimit) row.limit = row.side, row.bound = -row.side * offset;
+          break;
+        case ControlLevel::position:  // every row: the correction of one joint must not push another past
+          row.limit = row.side, row.bound = -row.gap;
+          break;
+      }
+    }
+  }
+}
+
+void solve_with_controls(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
+                         std::vector<Vector6>& x) {
+  JointControlSet& controls = state.controls;
+  for (ControlledJoint& controlled : controls.joints) {
+    for (int k = 0; k < controlled.count; ++k) {
+      ControlRow& row = controls.rows[controlled.first_row + k];
+      const bool engaged = row.limit != 0 && (row.previous == ControlMode::limit || row.gap < 0);
+      row.mode = engaged ? ControlMode::limit : free_mode(controlled, row);
+    }
+  }
+  for (int iteration = 0; iteration < kMaxControlIterations; ++iteration) {
+    std::vector<Vector6>& rhs = state.control_body_rhs;
+    for (std::size_t b = 0; b < rhs.size(); ++b) rhs[b] = body_rhs[b];
+    write_control_rows(state, rhs);
+    solve_constrained(state, y, rhs, state.constraint_rhs, x);
+    bool changed = false;
+    for (ControlledJoint& controlled : controls.joints) {
+      const std::size_t c = controlled.joint;
+      const std::int32_t i = state.constraints.inboard[c], o = state.constraints.outboard[c];
+      double holding_squared = 0;  // |λ − λ_drive|² over the sticking rows: what friction must hold
+      for (int k = 0; k < controlled.count; ++k) {
+        ControlRow& row = controls.rows[controlled.first_row + k];
+        row.solved_rate = row.outboard_jacobian.dot(x[o]) + (i >= 0 ? row.inboard_jacobian.dot(x[i]) : 0.0);
+        row.multiplier = row.mode == ControlMode::slide ? row.slip
+                         : row.mode == ControlMode::off  ? 0.0
+                                                         : state.multipliers[c](controlled.row_offset + k);
+        const double held = row.multiplier - drive_part(row, row.solved_rate);
+        if (row.mode == ControlMode::stick) holding_squared += held * held;
+        if (row.limit == 0) continue;
+        if (row.mode == ControlMode::limit) {
+          // The limit's own part pulls (beyond what friction could hold): release it.
+          const double tolerance = 1e-10 * (std::abs(row.multiplier) + controlled.friction_bound) + 1e-300;
+          if (row.limit * held + controlled.friction_bound < -tolerance) row.mode = free_mode(controlled, row), changed = true;
+        } else if (row.limit * row.solved_rate < row.bound - 1e-10 * (1 + std::abs(row.bound))) {
+          row.mode = ControlMode::limit, changed = true;
+        }
+      }
+      const double bound = controlled.friction_bound;
+      if (bound > 0 && !controlled.sliding && holding_squared > bound * bound * (1 + 1e-9)) {
+        // Friction cannot hold: it slides at its bound, along the multipliers it would need.
+        const double scale = bound / std::sqrt(holding_squared);
+        controlled.sliding = true;
+        for (int k = 0; k < controlled.count; ++k) {
+          ControlRow& row = controls.rows[controlled.first_row + k];
+          if (row.mode != ControlMode::stick) continue;
+          row.slip = scale * (row.multiplier - drive_part(row, row.solved_rate));
+          row.mode = free_mode(controlled, row);
+        }
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  for (const ControlledJoint& controlled : controls.joints) {
+    for (int k = 0; k < controlled.count; ++k) {
+      ControlRow& row = controls.rows[controlled.first_row + k];
+      row.previous = row.mode;
+      state.multipliers[controlled.joint](controlled.row_offset + k) = row.multiplier;
+    }
+  }
+}
+
 
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
                        const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
@@ -175,6 +374,7 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
   if (constraints.size() == 0) return;
   // The right-hand sides: F with the gyroscopic torque; c = −J̇u (− Baumgarte terms).
   update_geometry(state, y);
+  const bool controlled = !state.controls.empty();
   std::vector<Vector6>& body_rhs = state.body_rhs;
   for (std::size_t b = 0; b < body_count; ++b) {
     const Eigen::Vector3d& omega = state.angular_velocity[b];
@@ -190,8 +390,26 @@ void accumulate_constrained_forces(LagrangeState& state, const RigidBodyState& y
                                  frequency * frequency * constraint_error(constraints, state.joints, y, c);
     }
   }
-  solve_constrained(state, y, body_rhs, state.constraint_rhs, state.accelerations);
+  if (controlled) {
+    set_control_problem(state, ControlLevel::acceleration, state.time_step, frequency);
+    solve_with_controls(state, y, body_rhs, state.accelerations);
+  } else {
+    solve_constrained(state, y, body_rhs, state.constraint_rhs, state.accelerations);
+  }
   add_constraint_forces(state, forces, 1.0);
+  if (!controlled) return;
+  for (const ControlledJoint& joint : state.controls.joints) {  // sliding friction: a known force, not a row
+    const std::int32_t i = constraints.inboard[joint.joint], o = constraints.outboard[joint.joint];
+    for (int k = 0; k < joint.count; ++k) {
+      const ControlRow& row = state.controls.rows[joint.first_row + k];
+      if (row.mode != ControlMode::slide || asleep(state, o)) continue;
+      forces.force[o] += row.slip * row.outboard_jacobian.head<3>().transpose();
+      forces.torque[o] += row.slip * row.outboard_jacobian.tail<3>().transpose();
+      if (i < 0) continue;
+      forces.force[i] += row.slip * row.inboard_jacobian.head<3>().transpose();
+      forces.torque[i] += row.slip * row.inboard_jacobian.tail<3>().transpose();
+    }
+  }
 }
 
 }  // namespace limber

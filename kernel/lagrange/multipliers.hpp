@@ -6,7 +6,9 @@
 //   J M⁻¹ Jᵀ λ = −(J M⁻¹ F + J̇u) − 2ω_b·Ċ − ω_b²·C          (thesis 3.1.4; Baumgarte terms optional)
 // F holds the applied forces and, on the rotational rows, the gyroscopic torque −ω × Iω. Solved
 // either by Baraff's tree-ordered factorization of [M Jᵀ; J 0] (kernel/numerics/tree_elimination.hpp;
-// linear time) or, for graphs with loops, by Eigen's sparse LDLᵀ of J M⁻¹ Jᵀ.
+// linear time) or, for graphs with loops, by Eigen's sparse LDLᵀ of J M⁻¹ Jᵀ. Both take a
+// compliance A per row (J u̇ + A λ = c): 0 for the joints' equations, set per mode for their
+// control rows (limits, friction, drives: joint_controls.hpp).
 #pragma once
 
 #include <vector>
@@ -26,8 +28,53 @@ namespace limber {
 void prepare_multiplier_solver(LagrangeState& state, const Model& model);
 
 /// Computes state.geometry (the constraints' levers and Jacobian blocks) and world_inertia for
-/// state y: what the solves below read. Call it whenever y changed.
+/// state y: what the solves below read. Call it whenever y changed. Also measures the joints'
+/// control rows (measure_joint_controls, with state.velocity and angular_velocity: fill them for
+/// y first where rates matter) and leaves every control row off (zero Jacobian row, compliance 1),
+/// so a solve that does not set them (solve_constrained alone) ignores them.
 void update_geometry(LagrangeState& state, const RigidBodyState& y);
+
+/// What the unknowns x of a solve with control rows are, and so what each row asks (s the
+/// side of a row's nearer limit, w its rate, gap its distance inside the limit, w₀ the rate
+/// before a change).
+enum class ControlLevel : std::uint8_t {
+  /// x = u₁, the velocities after the velocity-level step of dt. A limit engages at s·w ≥ −gap/dt
+  /// (speculative: reached, not crossed, within the step) or, past it, s·w ≥ −ω_b·gap; a drive
+  /// is compliant (A = 1/(dt·(k·dt + c))); friction holds up to f·dt, else slides at it.
+  velocity,
+  /// x = Δu, a velocity change, with the rows of `velocity` on the rates w₀ + J·Δu: the impulse
+  /// pass before an acceleration-level step.
+  velocity_change,
+  /// x = Δu over an acceleration-level step as its stages treat the rows (to first order): limits
+  /// at or past their bounds (or engaged by the impulse pass) s·J·Δu ≥ 0, friction that held in
+  /// the impulse pass keeps the rate (up to f·dt), no drive.
+  stage_change,
+  /// x = u̇, an acceleration-level stage. Limits as in stage_change: s·C̈ ≥ −2ω_b·s·Ċ − ω_b²·gap;
+  /// held friction C̈ = 0 up to f; no drive.
+  acceleration,
+  /// x = Δu, a velocity projection: a limit at or past its bound ends with s·w ≥ 0 (a stop, no
+  /// bounce); nothing else.
+  velocity_stop,
+  /// x = Δq, a position projection: a violated limit is pushed back onto its bound, and no
+  /// limit is pushed past it (s·(gap + J·Δq) ≥ 0 on every limit row).
+  position,
+};
+
+/// Sets every control row's problem for a solve at `level` (state.controls measured at its state).
+void set_control_problem(LagrangeState& state, ControlLevel level, double dt, double frequency);
+
+/// solve_constrained with the control rows in the modes of an active-set loop: a limit row joins
+/// when its bound would be violated and leaves when its multiplier pulls (beyond what friction
+/// holds), friction sticks until the multipliers holding it exceed its bound (then slides at the
+/// bound, along the direction of the sticking multipliers), a drive is a compliant row. At most
+/// kMaxControlIterations solves. state.constraint_rhs holds the equality rows' right-hand sides.
+void solve_with_controls(LagrangeState& state, const RigidBodyState& y, const std::vector<Eigen::Matrix<double, 6, 1>>& body_rhs,
+                         std::vector<Eigen::Matrix<double, 6, 1>>& x);
+inline constexpr int kMaxControlIterations = 10;
+
+
+
+
 
 /// The augmented solve at state y (update_geometry(state, y) must have run): given per-body
 /// right-hand sides (force, torque; 6 per body) and per-constraint right-hand sides c (its rows),

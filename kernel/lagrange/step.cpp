@@ -12,25 +12,37 @@ namespace limber {
 namespace {
 
 // Moves positions onto C = 0: solves [M Jᵀ; J 0](Δq, −μ) = (0, −C) and applies Δq (Δx, and the
-// rotation Δθ), a Newton step on the joint equations weighted by the mass matrix.
+// rotation Δθ), a Newton step on the joint equations weighted by the mass matrix. Velocities are
+// left as they were (v and the world ω; L follows the turned inertia): keeping L instead would
+// turn a thin limb's L onto its axis, where the smallest moment makes a fast spin of it.
 void project_positions(LagrangeState& state) {
   RigidBodyState& y = state.bodies.state;
+  body_velocities(state, y);  // ω before, kept in state.angular_velocity (nothing below writes it)
   for (auto& rhs : state.body_rhs) rhs.setZero();
   for (int iteration = 0; iteration < state.options.projection_iterations; ++iteration) {
     update_geometry(state, y);
     for (std::size_t c = 0; c < state.constraints.size(); ++c) {
       state.constraint_rhs[c] = -constraint_error(state.constraints, state.joints, y, c);
     }
-    solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+    if (state.controls.empty()) {
+      solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+    } else {  // violated limits pushed back onto their bounds, one-sided
+      set_control_problem(state, ControlLevel::position, state.time_step, 0);
+      solve_with_controls(state, y, state.body_rhs, state.accelerations);
+    }
     for (std::size_t b = 0; b < state.bodies.size(); ++b) {
       y.position[b] += state.accelerations[b].head<3>();
       y.orientation[b] = (rotation_quaternion(state.accelerations[b].tail<3>()) * y.orientation[b]).normalized();
     }
   }
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    y.angular_momentum[b] = state.bodies.world_inertia(y, b) * state.angular_velocity[b];
+  }
 }
 
-// Moves velocities onto J·u = 0 the same way: (Δu, −μ) with J·Δu = −J·u.
-void project_velocities(LagrangeState& state) {
+// Moves velocities onto J·u = 0 the same way: (Δu, −μ) with J·Δu = −J·u; limits at or past
+// their bounds stop approaching them (one-sided).
+void project_velocities(LagrangeState& state, double dt) {
   RigidBodyState& y = state.bodies.state;
   body_velocities(state, y);
   update_geometry(state, y);
@@ -38,12 +50,50 @@ void project_velocities(LagrangeState& state) {
   for (std::size_t c = 0; c < state.constraints.size(); ++c) {
     state.constraint_rhs[c] = -constraint_rate(state.constraints, state.geometry, state.velocity, state.angular_velocity, c);
   }
-  solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+  if (state.controls.empty()) {
+    solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+  } else {
+    set_control_problem(state, ControlLevel::velocity_stop, dt, 0);
+    solve_with_controls(state, y, state.body_rhs, state.accelerations);
+  }
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     const Eigen::Vector3d velocity = state.velocity[b] + state.accelerations[b].head<3>();
     const Eigen::Vector3d omega = state.angular_velocity[b] + state.accelerations[b].tail<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * velocity;
     y.angular_momentum[b] = state.world_inertia[b] * omega;
+  }
+}
+
+// The joints' limits, friction and drives for an acceleration-level step of dt, as impulses
+// before it. x₁ is the velocity change of a velocity-level step with the step's forces (h·F) and
+// the control rows (speculative limits, friction up to f·dt, compliant drives; J·Δu = 0 on the
+// joints' equations); x₂ the change the step's stages will make themselves with the same forces
+// (they hold reached limits and the friction that held in x₁, and no drive). Δu = x₁ − x₂ is
+// applied now, so that the step ends near x₁: what the velocity-level step would give.
+void control_impulses(LagrangeState& state, double dt) {
+  RigidBodyState& y = state.bodies.state;
+  RigidForces& forces = state.scratch.forces;
+  forces.clear();
+  accumulate_applied_forces(state, y, forces);  // also fills v₀, ω₀
+  update_geometry(state, y);
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    const Eigen::Vector3d& omega = state.angular_velocity[b];
+    state.body_rhs[b].head<3>() = dt * forces.force[b];
+    state.body_rhs[b].tail<3>() = dt * (forces.torque[b] - omega.cross(state.world_inertia[b] * omega));
+  }
+  for (auto& rhs : state.constraint_rhs) rhs.setZero();
+  const double frequency = baumgarte_frequency(state, dt);
+  set_control_problem(state, ControlLevel::velocity_change, dt, frequency);
+  solve_with_controls(state, y, state.body_rhs, state.accelerations);
+  for (ControlledJoint& joint : state.controls.joints) joint.stuck = joint.friction_bound > 0 && !joint.sliding;
+  std::vector<Eigen::Matrix<double, 6, 1>>& stage_change = state.stage_change;  // x₂
+  for (auto& rhs : state.constraint_rhs) rhs.setZero();
+  set_control_problem(state, ControlLevel::stage_change, dt, frequency);
+  solve_with_controls(state, y, state.body_rhs, stage_change);
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    const Eigen::Matrix<double, 6, 1> change = state.accelerations[b] - stage_change[b];
+    y.linear_momentum[b] = state.bodies.mass[b] * (state.velocity[b] + change.head<3>());
+    y.angular_momentum[b] = state.world_inertia[b] * (state.angular_velocity[b] + change.tail<3>());
   }
 }
 
@@ -71,7 +121,12 @@ void velocity_level_step(LagrangeState& state, double dt) {
   for (std::size_t c = 0; c < state.constraints.size(); ++c) {
     state.constraint_rhs[c] = -frequency * constraint_error(state.constraints, state.joints, y, c);
   }
-  solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+  if (state.controls.empty()) {
+    solve_constrained(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
+  } else {  // limits, friction and drives as rows of the same solve (joint_controls.hpp)
+    set_control_problem(state, ControlLevel::velocity, dt, frequency);
+    solve_with_controls(state, y, state.body_rhs, state.accelerations);
+  }
   for (std::size_t b = 0; b < body_count; ++b) {
     if (state.islands[state.island_of_body[b]].sleeping) continue;
     const Eigen::Matrix3d& inertia = state.world_inertia[b];
@@ -91,6 +146,9 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   if (state.options.integrator == Integrator::semi_implicit_euler) {
     velocity_level_step(state, dt);
   } else {
+    // Limits (speculative), friction and drives (implicit) as one velocity change before the
+    // step; within it, limits at their bounds hold at the acceleration level.
+    if (!state.controls.empty()) control_impulses(state, dt);
     integrate_rigid_bodies(state.bodies, dt, state.options.integrator, state.scratch,
                            [&state](const RigidBodyState& y, RigidForces& forces) { accumulate_constrained_forces(state, y, forces); });
   }
@@ -101,7 +159,7 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   resolve_rigid_contacts(state, dt);
   const bool constrained = state.constraints.size() > 0;
   if (projection && constrained) project_positions(state);
-  if ((projection || !state.contacts.empty()) && constrained) project_velocities(state);
+  if ((projection || !state.contacts.empty()) && constrained) project_velocities(state, dt);
   std::swap(state.multipliers, state.projection_multipliers);
   report.contacts = static_cast<int>(state.contacts.size());
   for (std::size_t c = 0; c < state.constraints.joint_count; ++c) {

@@ -5,6 +5,7 @@
 #include "limber/kernel/lagrange/compile.hpp"
 #include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 
@@ -25,6 +26,36 @@ WorldOptions world_options(Method method, const MethodSettings& scene) {
   options.particles.verlet = scene.verlet;
   options.springs.defaults = scene.springs;
   return options;
+}
+
+bool release_drives_after_impact(MethodState& state) {
+  return std::visit(
+      [](auto& s) {
+        using State = std::decay_t<decltype(s)>;
+        constexpr bool particles = std::is_same_v<State, VerletState<double>> || std::is_same_v<State, VerletState<float>>;
+        bool touched = false;
+        if constexpr (particles) {
+          touched = s.ball_touched;
+        } else {
+          touched = s.ball_touching;
+        }
+        if (!s.settings.release_drives_on_impact || !touched) return false;
+        bool released = false;
+        for (std::size_t k = 0; k < s.joint_controls.joints.size(); ++k) {
+          const std::optional<JointDrive>& drive = s.joint_controls.joints[k].drive;
+          if (!drive || !(drive->stiffness + drive->damping > 0)) continue;
+          JointDrive limp = *drive;
+          limp.stiffness = limp.damping = 0;
+          if constexpr (particles) {
+            set_joint_drive(s, k, limp);
+          } else {
+            s.joint_controls.joints[k].drive = limp;
+          }
+          released = true;
+        }
+        return released;
+      },
+      state);
 }
 
 MethodState compile_method(const Model& model, const WorldOptions& options) {

@@ -15,12 +15,23 @@ Observation observe(const VerletState<Scalar>& state) {
   auto position = [&](std::uint32_t p) { return particles.position(p).template cast<double>().eval(); };
 
   double gap_squares = 0;
-  for (const auto& [c, reference] : state.joint_constraints) {
-    const double gap = (position(state.constraints.particle_i[c]) - position(state.constraints.particle_j[c])).norm() / reference;
+  std::size_t gaps = 0;
+  const auto add_gap = [&](double gap) {
     out.max_joint_gap = std::max(out.max_joint_gap, gap);
-    gap_squares += gap * gap;
+    gap_squares += gap * gap, ++gaps;
+  };
+  for (const auto& [c, reference] : state.joint_constraints) {
+    add_gap((position(state.constraints.particle_i[c]) - position(state.constraints.particle_j[c])).norm() / reference);
   }
-  if (!state.joint_constraints.empty()) out.rms_joint_gap = std::sqrt(gap_squares / state.joint_constraints.size());
+  for (const JointRow& row : state.joint_rows.rows) {  // joints held by point rows: anchors off the ends
+    if (row.kind != JointRowKind::point || row.joint < 0) continue;
+    Eigen::Vector3d separation = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < kJointRowParticles; ++k) {
+      if (row.direction[k] != 0) separation += row.direction[k] * position(row.particle[k]);
+    }
+    add_gap(separation.norm() / row.reference);
+  }
+  if (gaps > 0) out.rms_joint_gap = std::sqrt(gap_squares / gaps);
 
   for (std::size_t limb = 0; limb < state.limbs.size(); ++limb) {
     const std::uint32_t c = state.limbs.link_constraint[limb];
@@ -45,6 +56,16 @@ Observation observe(const VerletState<Scalar>& state) {
   }
   if (body_mass > 0) out.body_centre_of_mass /= body_mass;
 
+  // A limb without a frame has no roll: its Model frame's convention, the shortest turn from z
+  // onto its axis (Body::orientation), which only its axis — all a swing reads — depends on.
+  out.joints = measure_joints(state.joint_controls, [&](std::size_t b) -> FramePose {
+    const std::uint32_t limb = state.body_limb[b];
+    const Eigen::Vector3d head = position(state.limbs.head[limb]), tail = position(state.limbs.tail[limb]);
+    const auto framed = framed_orientation(state, b);
+    const Eigen::Quaterniond orientation =
+        framed ? *framed : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), head - tail);
+    return {orientation, 0.5 * (head + tail)};
+  });
   out.islands = static_cast<int>(state.islands.size());
   out.body_sleeping = true;
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
@@ -58,7 +79,7 @@ namespace {
 
 // What every rigid-body method reports alike: momentum, kinetic energy ½ m v² + ½ ω·L, gravity's
 // potential energy, the limbs' centre of mass, sleeping. Joint gaps are the method's to add.
-Observation observe_rigid_scene(const RigidScene& scene) {
+Observation observe_rigid_scene(const RigidScene& scene, const JointControls& scene_controls) {
   Observation out;
   out.time = scene.time;
   const RigidBodyBuffer& bodies = scene.bodies;
@@ -76,6 +97,11 @@ Observation observe_rigid_scene(const RigidScene& scene) {
     }
   }
   if (body_mass > 0) out.body_centre_of_mass /= body_mass;
+  // The Model body frame: a Model point p is at x + q·principal⁻¹·(p − centre_offset).
+  out.joints = measure_joints(scene_controls, [&](std::size_t b) -> FramePose {
+    const Eigen::Quaterniond orientation = (y.orientation[b] * scene.shapes.principal_frame[b].conjugate()).normalized();
+    return {orientation, y.position[b] - orientation * scene.shapes.centre_offset[b]};
+  });
   out.islands = static_cast<int>(scene.islands.size());
   out.body_sleeping = true;
   for (const RigidIsland& island : scene.islands) {
@@ -101,14 +127,14 @@ void add_joint_gaps(Observation& out, const JointAnchors& joints, Gap&& gap) {
 }  // namespace
 
 Observation observe(const SpringState& state) {
-  Observation out = observe_rigid_scene(state);
+  Observation out = observe_rigid_scene(state, state.joint_controls);
   add_joint_gaps(out, state.springs, [&](std::size_t j) { return joint_separation(state.springs, state.bodies.state, j).norm(); });
   out.potential_energy += spring_energy(state);
   return out;
 }
 
 Observation observe(const LagrangeState& state) {
-  Observation out = observe_rigid_scene(state);
+  Observation out = observe_rigid_scene(state, state.joint_controls);
   // The gap is what a joint's position rows leave open (a prismatic joint slides along its axis).
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
     return position_error(state.constraints.rows[j], constraint_error(state.constraints, state.joints, state.bodies.state, j));
@@ -117,7 +143,7 @@ Observation observe(const LagrangeState& state) {
 }
 
 Observation observe(const FeatherstoneState& state) {
-  Observation out = observe_rigid_scene(state);
+  Observation out = observe_rigid_scene(state, state.joint_controls);
   const RigidBodyState& y = state.bodies.state;
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
     Eigen::Vector3d separation = joint_separation(state.joints, y, j);

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include "limber/kernel/model/joint_coordinates.hpp"
+
 #include "limber/kernel/featherstone/featherstone_state.hpp"
 #include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
@@ -24,6 +26,10 @@ struct Observation {
   double potential_energy = 0;  ///< J, −Σ m g·x (zero at the origin)
   int islands = 0, islands_sleeping = 0;
   bool body_sleeping = false;   ///< every limb island asleep
+  /// The joints' limits and drives (joint_coordinates.hpp, measured alike for every method):
+  /// the largest violation of a limit (rad; m for a prismatic range) and the largest distance
+  /// from a drive's target, over the joints that have them.
+  JointMeasures joints;
 
   double energy() const { return kinetic_energy + potential_energy; }
 };

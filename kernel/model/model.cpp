@@ -106,6 +106,8 @@ BodyIslands body_islands(const Model& model) {
 
 namespace {
 
+constexpr double kPi = std::numbers::pi;
+
 // "<collection>[index].<field>", built only when a check fails.
 auto field_path(const char* collection, std::size_t index) {
   return [collection, index](const char* field) {
@@ -168,7 +170,76 @@ void require_body_index(int index, std::size_t body_count, const Path& path) {
   }
 }
 
-void validate_joint(const Joint& joint, std::size_t body_count, std::size_t index) {
+// Limits, friction and drive: each only on the joint types that have the coordinate.
+template <typename Path>
+void validate_joint_controls(const Joint& joint, const Model& model, const Path& path) {
+  const JointLimits& limits = joint.limits;
+  const std::string type(joint_type_name(joint.type));
+  const auto refuse = [&](const char* field, std::string_view uses) {
+    fail(path(field), "is not used by a " + type + " joint (" + std::string(uses) + ")");
+  };
+  const auto require_range = [&](const Range& range, const char* field, double bound) {
+    const std::string at = path_text(path(field));
+    if (bound > 0) {
+      require_in_range(range.min, -bound, 0, at + ".min", /*low_open=*/true);
+      require_in_range(range.max, 0, bound, at + ".max", false, /*high_open=*/true);
+    } else {
+      require_finite(range.min, at + ".min"), require_finite(range.max, at + ".max");
+      if (!(range.min <= 0)) fail(at + ".min", "must be <= 0 (the rest pose is the slide's zero), got " + format_number(range.min));
+      if (!(range.max >= 0)) fail(at + ".max", "must be >= 0 (the rest pose is the slide's zero), got " + format_number(range.max));
+    }
+  };
+  const bool spherical = joint.type == JointType::spherical;
+  if (limits.swing) {
+    if (!spherical) refuse("limits.swing", "swing and twist limit spherical joints");
+    require_in_range(*limits.swing, 0, kPi, path("limits.swing"), /*low_open=*/true, /*high_open=*/true);
+  }
+  if (limits.swing_axis) {
+    if (!limits.swing) fail(path("limits.swing_axis"), "needs limits.swing (the cone's half-angle)");
+    require_unit(*limits.swing_axis, path("limits.swing_axis"));
+    const Vector3 outboard_axis = model.bodies[static_cast<std::size_t>(joint.outboard)].axis;
+    const double rest_swing = std::acos(std::clamp(limits.swing_axis->dot(outboard_axis), -1.0, 1.0));
+    if (rest_swing >= *limits.swing) {
+      fail(path("limits.swing_axis"), "the outboard body's axis at rest is " + format_number(rest_swing) +
+                                          " rad from it, outside the cone of half-angle " + format_number(*limits.swing) + " rad");
+    }
+  }
+  if (limits.twist) {
+    if (!spherical) refuse("limits.twist", "swing and twist limit spherical joints");
+    require_range(*limits.twist, "limits.twist", kPi);
+  }
+  if (limits.range) {
+    if (joint.type != JointType::revolute && joint.type != JointType::prismatic) {
+      refuse("limits.range", "range limits revolute and prismatic joints; spherical joints take swing and twist");
+    }
+    require_range(*limits.range, "limits.range", joint.type == JointType::revolute ? kPi : 0);
+  }
+  require_non_negative(joint.friction, path("friction"));
+  if (joint.friction > 0 && joint.type == JointType::fixed) refuse("friction", "a fixed joint does not move");
+  if (const auto& drive = joint.drive) {
+    if (joint.type != JointType::spherical && joint.type != JointType::revolute && joint.type != JointType::prismatic) {
+      refuse("drive", "drives act on spherical, revolute and prismatic joints");
+    }
+    require_non_negative(drive->stiffness, path("drive.stiffness"));
+    require_non_negative(drive->damping, path("drive.damping"));
+    require_finite(drive->target, path("drive.target"));
+    require_finite(drive->target_velocity, path("drive.target_velocity"));
+    require_finite(drive->target_rotation, path("drive.target_rotation"));
+    require_finite(drive->target_angular_velocity, path("drive.target_angular_velocity"));
+    if (!(drive->target_rotation.norm() < kPi)) {
+      fail(path("drive.target_rotation"), "must turn by less than pi rad, got " + format_number(drive->target_rotation.norm()));
+    }
+    if (!spherical && (drive->target_rotation != Vector3::Zero() || drive->target_angular_velocity != Vector3::Zero())) {
+      fail(path("drive.target_rotation"), "is for spherical joints; a " + type + " joint's drive takes target and target_velocity");
+    }
+    if (spherical && (drive->target != 0 || drive->target_velocity != 0)) {
+      fail(path("drive.target"), "is for revolute and prismatic joints; a spherical joint's drive takes target_rotation");
+    }
+  }
+}
+
+void validate_joint(const Joint& joint, const Model& model, std::size_t index) {
+  const std::size_t body_count = model.bodies.size();
   const auto path = field_path("joints", index);
   require_name(joint.name, path("name"), /*is_body=*/false);
   if (joint.inboard != kWorld) require_body_index(joint.inboard, body_count, path("inboard"));
@@ -180,6 +251,7 @@ void validate_joint(const Joint& joint, std::size_t body_count, std::size_t inde
   require_finite(joint.outboard_anchor, path("outboard_anchor"));
   if (joint.stiffness) require_positive(*joint.stiffness, path("stiffness"));
   if (joint.damping) require_non_negative(*joint.damping, path("damping"));
+  validate_joint_controls(joint, model, path);
   if (joint.type == JointType::spherical || joint.type == JointType::fixed) return;
   require_unit(joint.axis, path("axis"));
   if (joint.type != JointType::universal) return;
@@ -224,7 +296,7 @@ void validate_settings(const Settings& settings) {
 void validate(const Model& model) {
   for (std::size_t i = 0; i < model.bodies.size(); ++i) validate_body(model.bodies[i], i);
   require_unique_names(model.bodies, [](const Body& body) -> std::string_view { return body.name; }, "bodies");
-  for (std::size_t i = 0; i < model.joints.size(); ++i) validate_joint(model.joints[i], model.bodies.size(), i);
+  for (std::size_t i = 0; i < model.joints.size(); ++i) validate_joint(model.joints[i], model, i);
   require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
   for (std::size_t i = 0; i < model.gears.size(); ++i) validate_gear(model.gears[i], model.bodies.size(), i);
   require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
@@ -266,6 +338,20 @@ void require_joint_types(const Model& model, std::initializer_list<JointType> su
   if (!gears_supported && !model.gears.empty()) {
     throw ModelError("gears[0] '" + model.gears[0].name + "': the " + std::string(method) +
                      " method does not support gears (velocity constraints); lagrange does");
+  }
+}
+
+void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method) {
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
+    const char* missing = joint.limits.any() && !supported.limits ? "joint limits"
+                          : joint.friction > 0 && !supported.friction ? "joint friction"
+                          : joint.drive && !supported.drives          ? "joint drives"
+                                                                      : nullptr;
+    if (missing) {
+      throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + std::string(method) +
+                       " method does not apply " + missing);
+    }
   }
 }
 

@@ -111,6 +111,55 @@ std::string_view joint_type_name(JointType type);
 /// Index that stands for the world (a fixed frame) in Joint::inboard.
 inline constexpr int kWorld = -1;
 
+/// A closed interval [min, max] of a joint coordinate (rad or m).
+struct Range {
+  double min = 0, max = 0;
+};
+
+/// Joint limits: inequality constraints on the joint's coordinates, measured from its zero (the
+/// bodies' poses in the Model) by joint_coordinates() (kernel/model/joint_coordinates.hpp).
+/// Every method holds them as one-sided constraints that act only when violated, with
+/// restitution 0 (a limit stops the motion into it; it does not bounce). The swing-twist
+/// decomposition is the one Jolt's SwingTwistConstraint and PhysX's D6 joint document: the
+/// relative rotation from rest is a swing (a turn of the outboard's axis) followed by a twist
+/// about that axis.
+struct JointLimits {
+  /// Spherical: the half-angle of a cone, rad, in (0, π): the outboard body's axis (its local +z,
+  /// tail → head) stays within this angle of `swing_axis`.
+  std::optional<double> swing;
+  /// Spherical, with `swing`: the cone's axis, unit, world frame at the initial poses, fixed in
+  /// the inboard body (the world, for a joint to the world). Unset: the outboard's axis at rest,
+  /// so the cone is centred on the rest pose. The outboard's axis at rest must lie inside the cone.
+  std::optional<Vector3> swing_axis;
+  /// Spherical: the twist of the outboard body about its own axis relative to the inboard, rad,
+  /// with −π < min ≤ 0 ≤ max < π (0 at rest).
+  std::optional<Range> twist;
+  /// Revolute: the hinge angle about `Joint::axis` (right hand, outboard relative to inboard),
+  /// rad, with −π < min ≤ 0 ≤ max < π. Prismatic: the slide along `Joint::axis`, m, with
+  /// min ≤ 0 ≤ max. Both 0 at rest.
+  std::optional<Range> range;
+  bool any() const { return swing || twist || range; }
+};
+
+/// A joint drive (a motor; thesis 5.2's blend of key-framed animation and simulation): a
+/// proportional-derivative pull of the joint's coordinates toward a target,
+///   τ = stiffness·(target − q) + damping·(target_velocity − q̇),
+/// per axis, q the joint's coordinates from its zero (joint_coordinates()). Each method applies
+/// it implicitly where it can (a compliant constraint, XPBD; or a stable PD), so stiff drives do
+/// not make a step unstable. Stiffness 0 with damping > 0 is a velocity motor; both 0 is limp.
+struct JointDrive {
+  double stiffness = 0;  ///< N·m/rad (spherical, revolute) or N/m (prismatic), ≥ 0
+  double damping = 0;    ///< N·m·s/rad or N·s/m, ≥ 0
+  /// Revolute: the target hinge angle, rad; prismatic: the target slide, m.
+  double target = 0;
+  double target_velocity = 0;  ///< rad/s or m/s
+  /// Spherical: the target rotation of the outboard relative to the inboard, from the rest
+  /// poses, as a rotation vector (axis × angle, rad) in world axes at the initial poses (the
+  /// inboard body's frame carries them), |rotation| < π.
+  Vector3 target_rotation = Vector3::Zero();
+  Vector3 target_angular_velocity = Vector3::Zero();  ///< rad/s, the same axes
+};
+
 /// A joint between an inboard and an outboard body, at an anchor fixed in each body's frame.
 /// With inboard == kWorld, inboard_anchor is a world point, m.
 ///
@@ -137,7 +186,19 @@ struct Joint {
   /// SpringOptions::defaults (kernel/springs/spring_state.hpp).
   std::optional<double> stiffness;  ///< N/m, > 0
   std::optional<double> damping;    ///< N·s/m, ≥ 0
+  /// Limits on the joint's coordinates (spherical: swing and twist; revolute: angle range;
+  /// prismatic: travel range).
+  JointLimits limits;
+  /// Joint friction (thesis 5.2: "friction in a revolute joint"): the joint resists relative
+  /// motion with a torque (N·m; spherical, revolute, universal) or force (N; prismatic) of at
+  /// most this magnitude — dry (Coulomb) friction: it holds below it and slides above it. ≥ 0.
+  double friction = 0;
+  /// A drive toward a target (spherical, revolute, prismatic).
+  std::optional<JointDrive> drive;
 };
+
+/// Whether the joint has a limit, friction or a drive: something beyond its type's equality rows.
+inline bool has_joint_controls(const Joint& joint) { return joint.limits.any() || joint.friction > 0 || joint.drive.has_value(); }
 
 /// A spherical joint with the default spring (the common case, without naming every field).
 inline Joint spherical_joint(std::string name, int inboard, int outboard, const Vector3& inboard_anchor,
@@ -218,6 +279,10 @@ struct Settings {
   /// this fast, m/s, so resolving it cannot fling bodies (Box2D's contact push-out limit).
   /// Penetration made by the step's own motion is always resolved in full.
   double contact_recovery_speed = 0.5;
+  /// An active ragdoll's switch (thesis 5.2): once the ball has touched a limb, every joint
+  /// drive goes limp (stiffness and damping 0), so a body that tracked a pose falls like a
+  /// ragdoll. Applied after each step by release_drives_after_impact (methods/method.hpp).
+  bool release_drives_on_impact = false;
 };
 
 /// A whole scene. Build one in C++ or load it with load_scene (kernel/scene/scene_file.hpp).
@@ -262,5 +327,14 @@ void validate(const Model& model);
 /// revolute joints (it supports spherical; lagrange supports every type)".
 void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,
                          std::string_view method);
+
+/// Which joint controls (limits, friction, drives) a method applies.
+struct JointControlSupport {
+  bool limits = false, friction = false, drives = false;
+};
+
+/// Throws ModelError naming the first joint with a limit, friction or drive that `method` does
+/// not apply: "joints[3] 'knee': the <method> method does not apply joint limits".
+void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method);
 
 }  // namespace limber

@@ -14,6 +14,7 @@
 #include "limber/kernel/threading/block_runner.hpp"
 #include "limber/layouts/aligned_array.hpp"
 #include "limber/layouts/constraints/constraint_batches.hpp"
+#include "limber/layouts/constraints/joint_row_batches.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/particles/interleaved_particles.hpp"
 
@@ -107,6 +108,12 @@ struct RelaxationPlan {
   /// direct solver keep it here, per constraint (unit, or 0: a zero-length joint, or fallen back).
   SharedCounter fallbacks;
   std::vector<Eigen::Matrix<Scalar, 3, 1>> constraint_gradient;
+  /// Joint rows (kernel/particles/joint_rows.hpp) of the awake islands, by colour and kind;
+  /// the counting sort's scratch; the substep length the rows are projected with, s.
+  JointRowBatches<Scalar> joint_batches;
+  std::vector<std::uint32_t> joint_row_order, joint_bucket;
+  Scalar joint_step = 0;
+  std::uint64_t joint_built_for = ~std::uint64_t{0};  ///< state.awake_generation the joint batches hold
 };
 
 }  // namespace limber

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -12,9 +13,11 @@
 
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/model/island_sleep.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/particles/joint_rows.hpp"
 #include "limber/kernel/particles/relaxation_plan.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
 #include "limber/layouts/aligned_array.hpp"
@@ -155,7 +158,7 @@ struct BallContact {
 /// What a particle stands for: a limb's head, tail or centre (index: Model body), the world end
 /// of a joint to the world (index: Model joint), or the ball.
 struct ParticleOrigin {
-  enum class Kind : std::uint8_t { limb_head, limb_tail, limb_centre, world_pin, ball };
+  enum class Kind : std::uint8_t { limb_head, limb_tail, limb_centre, world_pin, ball, limb_frame_plus, limb_frame_minus };
   std::uint32_t index = 0;
   Kind kind = Kind::limb_head;
 };
@@ -201,6 +204,11 @@ struct VerletState {
   std::vector<std::uint32_t> body_limb;   ///< Model body index → limb index
   /// Joint constraints and the length the gap is measured against (mean of the two limbs), m.
   std::vector<std::pair<std::uint32_t, double>> joint_constraints;
+  /// Frames, anchors off the limbs' ends, hinges, limits, friction and drives (joint_rows.hpp);
+  /// empty for a scene of spherical joints at limb ends.
+  JointRowSet joint_rows;
+  /// The Model's joints and frames, to measure limits and drives (and where World writes a drive).
+  JointControls joint_controls;
   std::vector<ParticleOrigin> particle_origins;
   /// Colour of each constraint (constraint_colouring.hpp; kNoColour: overflow or never moved)
   /// and the number of colours.
@@ -238,6 +246,24 @@ Eigen::Vector3d particle_velocity(const VerletState<Scalar>& state, std::uint32_
   const auto& particles = state.particles;
   if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
   return (particles.position(p).template cast<double>() - particles.previous(p).template cast<double>()) / state.previous_time_step;
+}
+
+/// The Model body frame's orientation of a limb with a frame (joint_rows.hpp), from its
+/// particles: u = (head − tail)/|·|, v = (F⁺ − F⁻) made orthogonal to u, w = u × v, turned by the
+/// limb's fixed frame_to_body. Empty for a stick, which has no roll of its own.
+template <typename Scalar>
+std::optional<Eigen::Quaterniond> framed_orientation(const VerletState<Scalar>& state, std::size_t body) {
+  const JointRowSet& rows = state.joint_rows;
+  if (rows.frame_plus.empty() || rows.frame_plus[body] == state.particles.null_particle()) return std::nullopt;
+  const std::uint32_t limb = state.body_limb[body];
+  const auto at = [&](std::uint32_t p) -> Eigen::Vector3d { return state.particles.position(p).template cast<double>(); };
+  const Eigen::Vector3d u = (at(state.limbs.head[limb]) - at(state.limbs.tail[limb])).normalized();
+  Eigen::Vector3d v = at(rows.frame_plus[body]) - at(rows.frame_minus[body]);
+  v = (v - v.dot(u) * u).normalized();
+  Eigen::Matrix3d frame;
+  frame.col(0) = v, frame.col(1) = u.cross(v), frame.col(2) = u;
+  if (!frame.allFinite()) return std::nullopt;
+  return (Eigen::Quaterniond(frame) * rows.frame_to_body[body]).normalized();
 }
 
 }  // namespace limber

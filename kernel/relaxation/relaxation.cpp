@@ -17,6 +17,7 @@
 #include "limber/kernel/relaxation/direct_projection.hpp"
 #include "limber/kernel/relaxation/distance_projection.hpp"
 #include "limber/kernel/relaxation/gauss_seidel.hpp"
+#include "limber/kernel/relaxation/joint_relaxation.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
 
@@ -184,6 +185,9 @@ void begin_helpers(RelaxationPlan<Scalar>& plan) {
   for (std::size_t k = 0; k < plan.batches.colour_count(); ++k) {
     parallel = parallel || plan.batches.colour_begin[k + 1] - plan.batches.colour_begin[k] >= plan.parallel_minimum_slots;
   }
+  for (std::size_t k = 0; k < plan.joint_batches.colour_count(); ++k) {
+    parallel = parallel || plan.joint_batches.colour_begin[k + 1] - plan.joint_batches.colour_begin[k] >= plan.parallel_minimum_slots;
+  }
   if (parallel) plan.runner->begin();
 }
 
@@ -245,6 +249,7 @@ template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state) {
   const VerletOptions& options = state.options;
   if (options.threads < 0) throw std::invalid_argument("options: threads must be 0 (automatic) or at least 1");
+  prepare_joint_rows(state);
   if (options.compliance != 0 && options.solver != RelaxationSolver::direct) {
     throw std::invalid_argument("options: compliance needs the direct solver (Gauss-Seidel and Jacobi sweeps treat every constraint as rigid)");
   }
@@ -311,7 +316,10 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   plan.runner.reset(options.threading, threads, options.tasks);
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
   plan.layout = options.layout;
-  if (options.layout == ParticleLayout::automatic) plan.layout = options.long_range_attachments ? ParticleLayout::soa : automatic_layout(state);
+  if (options.layout == ParticleLayout::automatic) {
+    // Joint rows read and write the SoA arrays.
+    plan.layout = options.long_range_attachments || !state.joint_rows.empty() ? ParticleLayout::soa : automatic_layout(state);
+  }
   plan.built_for = ~std::uint64_t{0};
   with_interleaved(state, [&](auto& store) {
     store.resize_for(state.particles);
@@ -334,6 +342,10 @@ void begin_relaxation(VerletState<Scalar>& state, double dt) {
     });
     begin_helpers(plan);
   }
+  if (!state.joint_rows.empty()) {
+    if (plan.joint_built_for != state.awake_generation) build_joint_batches(state), plan.joint_built_for = state.awake_generation;
+    begin_joint_rows(state, dt);
+  }
   if (uses_rattle(state)) store_gradients(state, previous_positions(state.particles));
   if (state.options.solver == RelaxationSolver::direct) begin_direct_projection(state, dt);
 }
@@ -348,10 +360,11 @@ template <typename Scalar>
 double velocity_sweep(VerletState<Scalar>& state) {
   if (state.options.solver == RelaxationSolver::direct) return direct_velocity_projection(state);
   state.counters.constraint_projections += state.plan.awake_constraints;
-  if (state.options.order == SweepOrder::sequential) return gauss_seidel_velocity_sweep(state);
-  return state.options.simd
+  const double largest = state.options.order == SweepOrder::sequential ? gauss_seidel_velocity_sweep(state)
+      : state.options.simd
       ? coloured::coloured_sweep<Scalar, SimdLanes<Scalar>, coloured::Kernel::velocity>(state, velocities(state.particles), Scalar(1))
       : coloured::coloured_sweep<Scalar, ScalarLanes<Scalar>, coloured::Kernel::velocity>(state, velocities(state.particles), Scalar(1));
+  return std::max(largest, joint_velocity_sweep(state));
 }
 
 template <typename Scalar>
@@ -363,10 +376,11 @@ template <typename Scalar>
 double relaxation_sweep(VerletState<Scalar>& state, double over_relaxation) {
   if (state.options.solver == RelaxationSolver::direct) return direct_projection_step(state);
   state.counters.constraint_projections += state.plan.awake_constraints;
-  if (state.options.order == SweepOrder::sequential) return gauss_seidel_sweep(state, over_relaxation);
   const auto omega = static_cast<Scalar>(over_relaxation);
-  return uses_rattle(state) ? coloured_sweep<Scalar, coloured::Kernel::start_gradient>(state, omega)
-                                     : coloured_sweep<Scalar, coloured::Kernel::pbd>(state, omega);
+  const double largest = state.options.order == SweepOrder::sequential ? gauss_seidel_sweep(state, over_relaxation)
+                         : uses_rattle(state) ? coloured_sweep<Scalar, coloured::Kernel::start_gradient>(state, omega)
+                                              : coloured_sweep<Scalar, coloured::Kernel::pbd>(state, omega);
+  return std::max(largest, joint_position_sweep(state));
 }
 
 template <typename Scalar>

@@ -157,11 +157,12 @@ class Object {
 
 Settings read_settings(const Object& object) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
-                     "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag"});
+                     "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact"});
   Settings settings;
   settings.gravity = object.vector("gravity");
   settings.time_step = object.number("time_step");
   require_positive(settings.time_step, object.path("time_step"));
+  object.optional("release_drives_on_impact", settings.release_drives_on_impact);
   settings.duration = object.number("duration");
   require_positive(settings.duration, object.path("duration"));
   object.optional("damping", settings.damping);
@@ -669,10 +670,40 @@ int read_body_name(const Object& object, const std::string& key, const std::unor
   return found->second;
 }
 
+/// [min, max]: two finite numbers (the Model's validation checks their bounds).
+Range read_range(const Json& value, const std::string& path) {
+  if (!value.is_array() || value.size() != 2) fail(path, "must be [min, max], two numbers");
+  Range range{read_number(value[0], path + "[0]"), read_number(value[1], path + "[1]")};
+  if (range.min > range.max) fail(path, "min must be <= max, got [" + format_number(range.min) + ", " + format_number(range.max) + "]");
+  return range;
+}
+
+JointLimits read_limits(const Object& object) {
+  object.allow_only({"swing", "swing_axis", "twist", "range"});
+  JointLimits limits;
+  if (object.find("swing")) limits.swing = object.number("swing");
+  if (object.find("swing_axis")) limits.swing_axis = object.direction("swing_axis");
+  if (const Json* twist = object.find("twist")) limits.twist = read_range(*twist, object.path("twist"));
+  if (const Json* range = object.find("range")) limits.range = read_range(*range, object.path("range"));
+  return limits;
+}
+
+JointDrive read_drive(const Object& object) {
+  object.allow_only({"stiffness", "damping", "target", "target_velocity", "target_rotation", "target_angular_velocity"});
+  JointDrive drive;
+  object.optional("stiffness", drive.stiffness);
+  object.optional("damping", drive.damping);
+  object.optional("target", drive.target);
+  object.optional("target_velocity", drive.target_velocity);
+  object.optional("target_rotation", drive.target_rotation);
+  object.optional("target_angular_velocity", drive.target_angular_velocity);
+  return drive;
+}
+
 Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
                  const std::unordered_map<std::string, int>& body_index) {
   object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor", "axis", "second_axis",
-                     "stiffness", "damping"});
+                     "stiffness", "damping", "limits", "friction", "drive"});
   Joint joint;
   joint.name = object.string("name");
   require_name(joint.name, object.path("name"), /*is_body=*/false);
@@ -714,6 +745,9 @@ Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
     joint.damping = object.number("damping");
     require_non_negative(*joint.damping, object.path("damping"));
   }
+  if (const Json* limits = object.find("limits")) joint.limits = read_limits(Object(*limits, object.path("limits")));
+  object.optional("friction", joint.friction);
+  if (const Json* drive = object.find("drive")) joint.drive = read_drive(Object(*drive, object.path("drive")));
   return joint;
 }
 

@@ -16,6 +16,8 @@
 //     "damping": 0,                            optional (0), 1/s, ≥ 0
 //     "divergence_speed": 1000,                optional (1000), m/s, > 0
 //     "contact_recovery_speed": 0.5,           optional (0.5), m/s, ≥ 0: push-out speed of old penetration
+//     "release_drives_on_impact": false,       optional (false): every joint drive goes limp once the
+//                                              ball has touched a limb (an active ragdoll's switch)
 //     "relaxation": {                          optional; each field optional
 //       "iterations": 100,                     (100) integer ≥ 1
 //       "tolerance": 0,                        (0) m, ≥ 0; 0 disables
@@ -63,12 +65,28 @@
 //       "angular_velocity": [0, 0, 0] } ],     optional ([0,0,0]), rad/s
 //   "joints": [ {                              optional (none)
 //       "name": "head-neck",                   required, unique, non-empty
-//       "type": "spherical",                   required; "spherical" is the only type so far
+//       "type": "spherical",                   required: "spherical" | "revolute" | "prismatic" |
+//                                              "universal" | "fixed" (model.hpp's JointType)
 //       "inboard": "head",                     required: a body name, or "world"
 //       "outboard": "neck",                    required: a body name, different from inboard
 //       "inboard_anchor": "tail",              required: "head" | "tail" (the axis end points,
-//       "outboard_anchor": "head" } ],         local (0,0,±length/2)) or a local [x,y,z] in m;
+//       "outboard_anchor": "head",             local (0,0,±length/2)) or a local [x,y,z] in m;
 //                                              with inboard "world", a world [x,y,z] in m
+//       "axis": [1, 0, 0],                     revolute, prismatic, universal: required, world at rest
+//       "second_axis": [0, 1, 0],              universal: required, perpendicular to axis
+//       "stiffness": 2e4, "damping": 20,       optional: the stiff-spring method's spring (N/m, N·s/m)
+//       "limits": {                            optional; each field optional (model.hpp's JointLimits)
+//         "swing": 1.2,                        spherical: cone half-angle, rad, in (0, pi)
+//         "swing_axis": [0, 0, -1],            spherical: the cone's axis, world at rest, fixed in the
+//                                              inboard body (default: the outboard's axis at rest)
+//         "twist": [-0.5, 0.5],                spherical: twist about the outboard's axis, rad, min <= 0 <= max
+//         "range": [0, 2.6] },                 revolute: hinge angle, rad; prismatic: slide, m; min <= 0 <= max
+//       "friction": 0,                         optional (0): largest resisting torque, N·m (force, N, prismatic)
+//       "drive": {                             optional: a PD drive toward a target (spherical, revolute,
+//         "stiffness": 300, "damping": 30,     prismatic); each field optional (0): N·m/rad, N·m·s/rad
+//         "target": 0.5, "target_velocity": 0, revolute: rad, rad/s; prismatic: m, m/s
+//         "target_rotation": [0, 0.3, 0],      spherical: rotation vector from rest, rad, world axes at rest
+//         "target_angular_velocity": [0, 0, 0] } } ],   spherical: rad/s
 //   "chain": {                                 optional generator of a straight chain of links
 //       "links": 5,                            required integer ≥ 1 (SceneOptions::links overrides)
 //       "shape": "capsule",                    required: "cylinder" | "capsule"

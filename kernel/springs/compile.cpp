@@ -19,7 +19,13 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   SpringState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
   require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "stiff-spring");
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "stiff-spring");
   state.options = options;
+  state.joint_controls = joint_controls(model);
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    if (has_joint_controls(model.joints[k])) state.controlled_joints.push_back(static_cast<std::uint32_t>(k));
+  }
+  state.time_step = model.settings.time_step;
 
   // Springs, one per joint, anchors relative to the centres of mass.
   SpringBuffer& springs = state.springs;

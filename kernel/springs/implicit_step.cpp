@@ -116,6 +116,31 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
     add_block(system.matrix, system.spring_block[s], coupling, false);
   }
 
+  // The drives' and engaged limits' angular springs, implicit the same way on the relative
+  // rotation (J = [0, E] on the outboard body, [0, −E] on the inboard; a limit's along d dᵀ);
+  // friction stays explicit (regularized: spring_forces.hpp).
+  for (const std::uint32_t s : state.controlled_joints) {
+    const std::int32_t i = springs.inboard[s], j = springs.outboard[s];
+    if (state.islands[state.island_of_body[j]].sleeping) continue;
+    const JointControlTorques torques = joint_control_torques(state, y, s);
+    const Eigen::Vector3d relative = state.angular_velocity[j] - (i >= 0 ? state.angular_velocity[i] : Eigen::Vector3d::Zero());
+    Eigen::Matrix3d weight = (h * torques.drive_damping + h * h * torques.drive_stiffness) * Eigen::Matrix3d::Identity();
+    Eigen::Vector3d implicit_torque = -h * h * torques.drive_stiffness * relative;  // on the outboard body
+    for (int l = 0; l < torques.limit_count; ++l) {
+      const Eigen::Vector3d& d = torques.limit_direction[l];
+      weight += (h * torques.limit_damping[l] + h * h * torques.limit_stiffness[l]) * d * d.transpose();
+      implicit_torque -= h * h * torques.limit_stiffness[l] * d.dot(relative) * d;
+    }
+    Block block = Block::Zero();
+    block.bottomRightCorner<3, 3>() = weight;
+    add_block(system.matrix, system.diagonal_block[j], block, true);
+    system.right_hand_side.segment<3>(6 * j + 3) += implicit_torque;
+    if (i < 0) continue;
+    add_block(system.matrix, system.diagonal_block[i], block, true);
+    system.right_hand_side.segment<3>(6 * i + 3) -= implicit_torque;
+    add_block(system.matrix, system.spring_block[s], Block(-block), false);
+  }
+
   auto solve = [&](const Eigen::VectorXd& right_hand_side, Eigen::VectorXd& out, bool factorize) {
     // A right-hand side below ~1e-100 N·s (a spring settled to rounding) needs no solve, and
     // conjugate gradients would divide by its underflowed |b|².

@@ -2,7 +2,81 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/springs/spring_forces.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 namespace limber {
+namespace {
+
+// A body's Model frame (the shape's centre, Model axes) from its rigid state; the world's for −1.
+FramePose model_frame_pose(const SpringState& state, const RigidBodyState& y, std::int32_t body) {
+  if (body < 0) return {};
+  const auto b = static_cast<std::size_t>(body);
+  const Eigen::Quaterniond orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
+  return {orientation, y.position[b] - orientation * state.shapes.centre_offset[b]};
+}
+
+}  // namespace
+
+JointControlTorques joint_control_torques(const SpringState& state, const RigidBodyState& y, std::size_t k) {
+  JointControlTorques out;
+  const Joint& joint = state.joint_controls.joints[k];
+  const JointFrame& frame = state.joint_controls.frames[k];
+  const SpringBuffer& springs = state.springs;
+  const std::int32_t i = springs.inboard[k], o = springs.outboard[k];
+  const FramePose inboard = model_frame_pose(state, y, i), outboard = model_frame_pose(state, y, o);
+  const JointCoordinates q = joint_coordinates(joint, frame, inboard, outboard);
+  const Eigen::Vector3d w_i = i >= 0 ? state.angular_velocity[i] : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d relative = state.angular_velocity[o] - w_i;
+  // The two bodies' inverse inertia (world, about their centres of mass) and reduced mass.
+  Eigen::Matrix3d inverse_inertia = state.bodies.world_inverse_inertia(y, static_cast<std::size_t>(o));
+  if (i >= 0) inverse_inertia += state.bodies.world_inverse_inertia(y, static_cast<std::size_t>(i));
+  const double mass = i >= 0 ? 1 / (state.bodies.inverse_mass[o] + state.bodies.inverse_mass[i]) : state.bodies.mass[o];
+
+  if (joint.drive) {
+    const JointDrive& drive = *joint.drive;
+    Eigen::Quaterniond error = drive_target_rotation(drive, frame) * Eigen::Quaterniond(rotation_quaternion(q.rotation)).conjugate();
+    if (error.w() < 0) error.coeffs() = -error.coeffs();
+    const Eigen::AngleAxisd turn(error.normalized());
+    const Eigen::Vector3d error_vector = inboard.orientation * (turn.angle() * turn.axis());
+    const Eigen::Vector3d target_rate = inboard.orientation * (frame.inboard_rest.conjugate() * drive.target_angular_velocity);
+    out.drive = drive.stiffness * error_vector + drive.damping * (target_rate - relative);
+    out.drive_stiffness = drive.stiffness, out.drive_damping = drive.damping;
+  }
+
+  const JointLimits& limits = joint.limits;
+  const auto add_limit = [&](const Eigen::Vector3d& direction, double excess) {
+    // The coordinate's acceleration per unit of its generalized force is dᵀ(I_o⁻¹ + I_i⁻¹)d.
+    const double scale = 1 / (mass * direction.dot(inverse_inertia * direction));
+    const double stiffness = springs.stiffness[k] * scale, damping = springs.damping[k] * scale;
+    out.limits -= std::max(0.0, stiffness * excess + damping * direction.dot(relative)) * direction;
+    out.limit_direction[out.limit_count] = direction;
+    out.limit_stiffness[out.limit_count] = stiffness, out.limit_damping[out.limit_count] = damping;
+    ++out.limit_count;
+  };
+  const Eigen::Vector3d a = outboard.orientation * Eigen::Vector3d::UnitZ();
+  if (limits.swing && q.swing > *limits.swing) {
+    const Eigen::Vector3d across = (inboard.orientation * frame.cone_axis).cross(a);
+    if (across.norm() > 1e-12) add_limit(across.normalized(), q.swing - *limits.swing);
+  }
+  if (limits.twist && (q.twist > limits.twist->max || q.twist < limits.twist->min)) {
+    // The twist's gradient (a + a₀)/(1 + a·a₀) (joint_coordinates.hpp's decomposition).
+    const Eigen::Vector3d rest = inboard.orientation * frame.twist_axis;
+    const double denominator = 1 + a.dot(rest);
+    const Eigen::Vector3d gradient = denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
+    if (q.twist > limits.twist->max) add_limit(gradient, q.twist - limits.twist->max);
+    else add_limit(-gradient, limits.twist->min - q.twist);
+  }
+
+  if (joint.friction > 0) {
+    // The torque that would stop the relative spin within the step, through the reduced inertia,
+    // clamped to the friction.
+    const Eigen::Vector3d stop = -inverse_inertia.inverse() * relative / state.time_step;
+    const double size = stop.norm();
+    out.friction = size > joint.friction ? Eigen::Vector3d(stop * (joint.friction / size)) : stop;
+  }
+  return out;
+}
 
 SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s) {
   const SpringBuffer& springs = state.springs;
@@ -36,6 +110,14 @@ void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces&
     }
     forces.force[outboard] -= force;
     forces.torque[outboard] -= ends.outboard_lever.cross(force);
+  }
+  for (const std::uint32_t k : state.controlled_joints) {
+    const std::int32_t inboard = springs.inboard[k], outboard = springs.outboard[k];
+    if (state.islands[state.island_of_body[outboard]].sleeping) continue;
+    const JointControlTorques torques = joint_control_torques(state, y, k);
+    const Eigen::Vector3d torque = torques.drive + torques.limits + torques.friction;
+    forces.torque[outboard] += torque;
+    if (inboard >= 0) forces.torque[inboard] -= torque;
   }
 }
 

@@ -19,8 +19,30 @@ SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::s
 
 /// Adds the applied forces at state y (accumulate_applied_forces, kernel/rigid/rigid_scene.hpp)
 /// and every spring's force f = −k·d − c·ḋ on its inboard end and −f on its outboard end, with
-/// torques r × f.
+/// torques r × f; and the joints' limit, friction and drive torques (joint_control_torques).
 void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces& forces);
+
+/// A joint's limit, friction and drive torques at a state, on the relative rotation of its
+/// outboard body (−τ on the inboard), world frame; Ω = ω_o − ω_i, I⁻¹ = I_o⁻¹ + I_i⁻¹ (world,
+/// about the centres of mass), m the reduced mass:
+/// - the drive: τ = k·e + c·(Ω* − Ω), e the rotation vector of D_target·D⁻¹ (isotropic);
+/// - each limit past its bound: τ = −max(0, k_l·x + c_l·(d·Ω))·d, x the excess and d its
+///   gradient (the swing direction c×a/|c×a|; ±(a + a₀)/(1 + a·a₀) for the twist), with
+///   k_l = k/(m·dᵀI⁻¹d) and c_l = c/(m·dᵀI⁻¹d) from the joint's spring (k, c): the excess then
+///   rings at the joint spring's own √(k/m) with its damping ratio, so an integrator that holds
+///   the joint holds the limit;
+/// - friction: the torque that would stop the relative spin within the step, −(I⁻¹)⁻¹·Ω/h,
+///   clamped to |τ| ≤ f: dry friction while that is above f; below, the joint is brought to rest
+///   rather than reversed (so it does not chatter about Ω = 0).
+struct JointControlTorques {
+  Eigen::Vector3d drive = Eigen::Vector3d::Zero(), limits = Eigen::Vector3d::Zero(), friction = Eigen::Vector3d::Zero();
+  double drive_stiffness = 0, drive_damping = 0;  ///< the drive's k, c (N·m/rad, N·m·s/rad)
+  int limit_count = 0;                            ///< limits past their bounds (≤ 2)
+  Eigen::Vector3d limit_direction[2];             ///< their d
+  double limit_stiffness[2] = {0, 0}, limit_damping[2] = {0, 0};
+};
+/// Needs state.velocity and state.angular_velocity filled for y.
+JointControlTorques joint_control_torques(const SpringState& state, const RigidBodyState& y, std::size_t joint);
 
 /// Potential energy stored in the springs at the current state, Σ ½ k |d|², J.
 double spring_energy(const SpringState& state);

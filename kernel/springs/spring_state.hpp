@@ -15,6 +15,7 @@
 #include <Eigen/SparseCore>
 #include <Eigen/IterativeLinearSolvers>
 
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
@@ -72,7 +73,12 @@ struct ImplicitSystem {
 /// The spring method's state: the rigid scene (kernel/rigid/rigid_scene.hpp) and its springs.
 struct SpringState : RigidScene {
   SpringBuffer springs;
+  /// The Model's joints and frames, read every step for their limits, friction and drives (so a
+  /// drive may change between steps: World::set_joint_drive writes joint_controls.joints[k].drive).
+  JointControls joint_controls;
+  std::vector<std::uint32_t> controlled_joints;  ///< joints with a limit, friction or drive
   SpringOptions options;
+  double time_step = 0;  ///< Δt of the step under way (friction's regularization reads it)
   RigidIntegratorScratch scratch;
   std::unique_ptr<ImplicitSystem> implicit;  ///< the backward-Euler integrator only (Eigen's solvers do not move)
   std::vector<Eigen::Matrix3d> scratch_world_inertia;  ///< scratch for the implicit step

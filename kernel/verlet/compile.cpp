@@ -11,29 +11,21 @@
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/verlet/frames.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {
 
-enum class End : std::uint8_t { head, tail };
+using frames::End;
 
-// Which axis end point a joint anchor is; the particle method has particles only there.
+// Which axis end point a joint anchor is (joints held by a point row, off the ends, take the
+// head's slot: they are never merged, since shared particles refuse them).
 End anchor_end(const Model& model, std::size_t joint_index, bool inboard) {
   const Joint& joint = model.joints[joint_index];
   const Body& body = model.bodies[inboard ? joint.inboard : joint.outboard];
-  const Vector3& anchor = inboard ? joint.inboard_anchor : joint.outboard_anchor;
-  const double half = 0.5 * body.shape.length;
-  const double tolerance = 1e-9 * std::max(1.0, body.shape.length);
-  if ((anchor - Vector3(0, 0, half)).norm() <= tolerance) return End::head;
-  if ((anchor - Vector3(0, 0, -half)).norm() <= tolerance) return End::tail;
-  std::ostringstream message;
-  message << "joints[" << joint_index << "] '" << joint.name << "'."
-          << (inboard ? "inboard_anchor" : "outboard_anchor") << ": the particle (Verlet) method joins limbs only "
-          << "at their axis end points, \"head\" (0, 0, " << half << ") or \"tail\" (0, 0, " << -half << ") of body '"
-          << body.name << "'; got (" << anchor.x() << ", " << anchor.y() << ", " << anchor.z() << ")";
-  throw ModelError(message.str());
+  return frames::anchor_end(body, inboard ? joint.inboard_anchor : joint.outboard_anchor).value_or(End::head);
 }
 
 // A limb's own mass at each of its particles, kg.
@@ -175,6 +167,14 @@ void renumber_particles(VerletState<Scalar>& state) {
     feature.particle = new_index[feature.particle], feature.axis_partner = new_index[feature.axis_partner];
   }
   if (state.ball_particle >= 0) state.ball_particle = new_index[static_cast<std::size_t>(state.ball_particle)];
+  const std::uint32_t null_particle = state.particles.null_particle();
+  const auto renumbered = [&](std::uint32_t p) { return p == null_particle ? p : new_index[p]; };
+  for (JointRow& row : state.joint_rows.rows) {
+    for (std::uint32_t& p : row.particle) p = renumbered(p);
+  }
+  for (auto* list : {&state.joint_rows.frame_plus, &state.joint_rows.frame_minus}) {
+    for (std::uint32_t& p : *list) p = renumbered(p);
+  }
 }
 
 }  // namespace
@@ -184,7 +184,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   validate(model);
   validate(options.relaxation);
   validate(options.verlet);
-  require_joint_types(model, {JointType::spherical}, /*gears_supported=*/false, "verlet");
+  require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::universal, JointType::fixed},
+                      /*gears_supported=*/false, "verlet");
+  require_joint_controls(model, {true, true, true}, "verlet");
   const std::size_t body_count = model.bodies.size();
   const std::size_t joint_count = model.joints.size();
   const bool shared = options.verlet.joints == ParticleJoints::shared_particle;
@@ -208,14 +210,22 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       case LimbMasses::lumps: limb_masses[b] = lump_particle_masses(model, b); break;
     }
   }
+  // Frames and joint rows (frames.hpp): a framed limb gives its frame particles their mass.
+  std::vector<std::array<double, 3>> mass_triples(body_count);
+  for (std::size_t b = 0; b < body_count; ++b) mass_triples[b] = {limb_masses[b].head, limb_masses[b].centre, limb_masses[b].tail};
+  const frames::Plan frame_plan = frames::plan(model, shared, mass_triples);
+  for (std::size_t b = 0; b < body_count; ++b) limb_masses[b] = {mass_triples[b][2], mass_triples[b][1], mass_triples[b][0]};
 
   // Slots: every place a particle may sit. Body b has its head at slot s·b, its tail at s·b + 1
   // and, with centre particles (s = 3; else s = 2), its centre at s·b + 2; each joint to the world
   // has a pin slot after them. Shared-particle joints merge slots into one particle.
-  const std::uint32_t slots_per_body = centres ? 3 : 2;
+  // Framed limbs' F⁺ and F⁻ follow at s·b + (2 or 3) and the next.
+  const std::uint32_t frame_slot_offset = centres ? 3 : 2;
+  const std::uint32_t slots_per_body = frame_slot_offset + (frame_plan.any_frames ? 2 : 0);
   const auto head_slot = [&](std::size_t b) { return checked_index(slots_per_body * b); };
   const auto tail_slot = [&](std::size_t b) { return checked_index(slots_per_body * b + 1); };
   const auto centre_slot = [&](std::size_t b) { return checked_index(slots_per_body * b + 2); };
+  const auto frame_slot = [&](std::size_t b, int side) { return checked_index(slots_per_body * b + frame_slot_offset + side); };
   const std::size_t pin_slot_base = slots_per_body * body_count;
   std::vector<std::uint32_t> joint_inboard_slot(joint_count), joint_outboard_slot(joint_count);
   std::vector<std::uint32_t> pin_slot_of_joint(joint_count, 0);
@@ -249,6 +259,14 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       slot_position[centre_slot(b)] = body.position;
       slot_velocity[centre_slot(b)] = body.linear_velocity;
       slot_mass[centre_slot(b)] = limb_masses[b].centre;
+    }
+    if (frame_plan.framed[b]) {
+      for (int side = 0; side < 2; ++side) {
+        const Vector3 local = (side == 0 ? 1.0 : -1.0) * frame_plan.spacing[b] * frame_plan.direction[b];
+        slot_position[frame_slot(b, side)] = body.to_world(local);
+        slot_velocity[frame_slot(b, side)] = body.velocity_at(local);
+        slot_mass[frame_slot(b, side)] = frame_plan.frame_mass[b];
+      }
     }
   }
   for (std::size_t k = 0; k < joint_count; ++k) {
@@ -338,6 +356,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       assign(head_slot(b));
       if (centres) assign(centre_slot(b));
       assign(tail_slot(b));
+      if (frame_plan.framed[b]) assign(frame_slot(b, 0)), assign(frame_slot(b, 1));
     }
     island_particle_end.push_back(checked_index(first_slot_of_particle.size()));
   }
@@ -395,7 +414,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     return checked_index(pairs.size() - 1);
   };
   auto add_joint_constraint = [&](std::size_t k) {
-    if (shared) return;
+    if (shared || frame_plan.point_row[k]) return;  // a point row holds it (frames.hpp)
     const Joint& joint = model.joints[k];
     double reference = model.bodies[joint.outboard].shape.length;
     if (joint.inboard != kWorld) reference = 0.5 * (reference + model.bodies[joint.inboard].shape.length);
@@ -425,6 +444,11 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
       if (centres) {
         add_constraint(head, centre, 0.5 * body.shape.length);
         add_constraint(centre, tail, 0.5 * body.shape.length);
+      }
+      if (frame_plan.framed[b]) {  // the triangle head, tail, F⁺ (F⁻ by the frame's point row)
+        const double diagonal = std::hypot(0.5 * body.shape.length, frame_plan.spacing[b]);
+        add_constraint(head, particle_of(frame_slot(b, 0)), diagonal);
+        add_constraint(tail, particle_of(frame_slot(b, 0)), diagonal);
       }
       state.limbs.head_mass.push_back(limb_masses[b].head);
       state.limbs.centre_mass.push_back(limb_masses[b].centre);
@@ -456,10 +480,14 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.particle_origins.resize(particle_count);
   for (std::size_t p = 0; p < body_particle_count; ++p) {
     const std::uint32_t slot = first_slot_of_particle[p];
-    constexpr ParticleOrigin::Kind kind_of_slot[3] = {ParticleOrigin::Kind::limb_head, ParticleOrigin::Kind::limb_tail,
-                                                      ParticleOrigin::Kind::limb_centre};
+    const std::uint32_t offset = slot % slots_per_body;
+    const ParticleOrigin::Kind kind = offset == 0                      ? ParticleOrigin::Kind::limb_head
+                                      : offset == 1                    ? ParticleOrigin::Kind::limb_tail
+                                      : offset == frame_slot_offset    ? ParticleOrigin::Kind::limb_frame_plus
+                                      : offset == frame_slot_offset + 1 ? ParticleOrigin::Kind::limb_frame_minus
+                                                                       : ParticleOrigin::Kind::limb_centre;
     state.particle_origins[p] = slot < pin_slot_base
-        ? ParticleOrigin{slot / slots_per_body, kind_of_slot[slot % slots_per_body]}
+        ? ParticleOrigin{slot / slots_per_body, kind}
         : ParticleOrigin{joint_of_pin_slot[slot - pin_slot_base], ParticleOrigin::Kind::world_pin};
   }
 
@@ -524,6 +552,23 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     }
     island.sleeping = model.settings.sleep.enabled && model.settings.sleep.start_asleep && at_rest;
   }
+  // Joint rows (frames.hpp), on the particles as numbered so far; renumbering rewrites them.
+  state.joint_controls = joint_controls(model);
+  if (frame_plan.any_rows) {
+    const std::uint32_t null_particle = state.particles.null_particle();
+    state.joint_rows = frames::build_rows(
+        model, frame_plan,
+        [&](std::size_t b) {
+          frames::LimbParticles p;
+          p.fill(null_particle);
+          p[0] = particle_of(head_slot(b)), p[1] = particle_of(tail_slot(b));
+          if (frame_plan.framed[b]) p[2] = particle_of(frame_slot(b, 0)), p[3] = particle_of(frame_slot(b, 1));
+          if (centres) p[4] = particle_of(centre_slot(b));
+          return p;
+        },
+        [&](std::size_t k) { return particle_of(pin_slot_of_joint[k]); },
+        [&](std::size_t b) { return islands.island_of_body[b]; }, null_particle);
+  }
   rebuild_awake_islands(state);
   renumber_particles(state);
   prepare_relaxation_plan(state);
@@ -535,6 +580,8 @@ std::string particle_name(const Model& model, const ParticleOrigin& origin) {
     case ParticleOrigin::Kind::limb_head: return model.bodies[origin.index].name + ".head";
     case ParticleOrigin::Kind::limb_tail: return model.bodies[origin.index].name + ".tail";
     case ParticleOrigin::Kind::limb_centre: return model.bodies[origin.index].name + ".centre";
+    case ParticleOrigin::Kind::limb_frame_plus: return model.bodies[origin.index].name + ".frame+";
+    case ParticleOrigin::Kind::limb_frame_minus: return model.bodies[origin.index].name + ".frame-";
     case ParticleOrigin::Kind::world_pin: return model.joints[origin.index].name + ".pin";
     case ParticleOrigin::Kind::ball: return "ball";
   }

@@ -51,6 +51,21 @@ StepReport step(VerletState<Scalar>& state) {
 template <typename Scalar>
 void apply_force(VerletState<Scalar>& state, int body, const Eigen::Vector3d& force);
 
+/// Sets joint `joint`'s drive (gains and target; Model index) from the next step on, in the
+/// rows compile built for it. Returns false when the joint was compiled without a drive (it has
+/// no drive row: recompile with the drive in the Model).
+template <typename Scalar>
+bool set_joint_drive(VerletState<Scalar>& state, std::size_t joint, const JointDrive& drive) {
+  JointRowSet& rows = state.joint_rows;
+  if (joint >= state.joint_controls.joints.size() || !state.joint_controls.joints[joint].drive) return false;
+  state.joint_controls.joints[joint].drive = drive;
+  for (std::uint32_t r = rows.joint_rows[joint].first; r < rows.joint_rows[joint].second; ++r) {
+    if (rows.rows[r].drive) set_drive_row(rows.rows[r], drive);
+  }
+  state.plan.joint_built_for = ~std::uint64_t{0};  // the batches copy the rows: refill them
+  return true;
+}
+
 extern template StepReport step<float>(VerletState<float>&, double);
 extern template StepReport step<double>(VerletState<double>&, double);
 extern template void apply_force<float>(VerletState<float>&, int, const Eigen::Vector3d&);

@@ -139,6 +139,11 @@ StepStatus World::step(double dt) {
         return limber::step(state, dt).status;
       },
       state_);
+  if (release_drives_after_impact(state_)) {  // keep the Model's drives as the state's, for recompiles
+    for (Joint& joint : model_.joints) {
+      if (joint.drive) joint.drive->stiffness = joint.drive->damping = 0;
+    }
+  }
   transport_frames();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
   for (auto& [handle, pin] : pins_) {
@@ -203,6 +208,36 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
   load_torque_[static_cast<std::size_t>(j.outboard)] += torque;
   wake(BodyId{body_handle_[static_cast<std::size_t>(j.outboard)]});
   if (j.inboard != kWorld) load_torque_[static_cast<std::size_t>(j.inboard)] -= torque;
+}
+
+// --- Drives
+
+void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& drive) {
+  const std::size_t k = index(joint);
+  Model edited = model_;
+  edited.joints[k].drive = drive;
+  try {
+    validate(edited);
+  } catch (const ModelError& error) {
+    throw WorldError(std::string("set_joint_drive: ") + error.what());
+  }
+  const bool structural = model_.joints[k].drive.has_value() != drive.has_value();
+  if (structural) {
+    recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+    return;
+  }
+  model_.joints[k].drive = drive;
+  if (!drive) return;
+  std::visit(
+      [&](auto& state) {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          limber::set_joint_drive(state, k, *drive);
+        } else {
+          state.joint_controls.joints[k].drive = drive;
+        }
+      },
+      state_);
+  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[k].outboard)]});
 }
 
 // --- Held points

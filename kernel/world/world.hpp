@@ -122,6 +122,14 @@ class World {
   /// inboard one (none on the world).
   void apply_joint_torque(JointId joint, const Eigen::Vector3d& torque);
 
+  // --- Drives (Joint::drive: a PD pull toward a target pose; thesis 5.2's blend of animation
+  // and simulation) ---
+  /// Sets the joint's drive from the next step on: new gains (stiffness 0 and damping 0 go limp)
+  /// or a new target each frame to track a key-framed pose. Cheap when the joint already had a
+  /// drive; giving a joint its first drive, or removing one (nullopt), recompiles. Throws
+  /// WorldError on a bad value or a joint type without drives.
+  void set_joint_drive(JointId joint, const std::optional<JointDrive>& drive);
+
   // --- Held points ---
   /// Holds the body's point `local_point` (its Model body frame, m) where it is now: a spherical
   /// joint to the world, added by recompiling. The particle method holds only a limb's head or

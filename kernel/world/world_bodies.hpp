@@ -42,6 +42,7 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> limb_ends(const VerletState<Scalar>&
 /// (parallel transport: the roll a particle limb cannot have stays continuous).
 template <typename Scalar>
 Eigen::Quaterniond transported_frame(const VerletState<Scalar>& state, std::size_t body, const Eigen::Quaterniond& previous) {
+  if (const auto framed = framed_orientation(state, body)) return *framed;  // a limb with a frame has its own roll
   const auto [head, tail] = limb_ends(state, body);
   const Eigen::Vector3d axis = head - tail;
   if (!(axis.norm() > 0) || !axis.allFinite()) return previous;
@@ -62,7 +63,14 @@ Eigen::Vector3d centre_of_mass(const VerletState<Scalar>& state, std::size_t bod
   Eigen::Vector3d sum = limbs.head_mass[limb] * particle_position(state, limbs.head[limb]) +
                         limbs.tail_mass[limb] * particle_position(state, limbs.tail[limb]);
   if (limbs.centre[limb] != kNoCentre) sum += limbs.centre_mass[limb] * particle_position(state, limbs.centre[limb]);
-  return sum / (limbs.head_mass[limb] + limbs.centre_mass[limb] + limbs.tail_mass[limb]);
+  double mass = limbs.head_mass[limb] + limbs.centre_mass[limb] + limbs.tail_mass[limb];
+  const JointRowSet& rows = state.joint_rows;
+  if (!rows.frame_plus.empty() && rows.frame_plus[body] != state.particles.null_particle()) {  // its frame particles
+    for (const std::uint32_t p : {rows.frame_plus[body], rows.frame_minus[body]}) {
+      sum += state.particle_mass[p] * particle_position(state, p), mass += state.particle_mass[p];
+    }
+  }
+  return sum / mass;
 }
 
 /// The velocity of the limb's centre (the mean of its ends') and its angular velocity across
@@ -216,13 +224,36 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
       default: return -1;
     }
   };
+  std::vector<std::uint32_t> new_frame_particles;
   for (std::uint32_t p = 0; p < fresh.particle_origins.size(); ++p) {
     const std::int64_t q = old_particle(fresh.particle_origins[p]);
-    if (q < 0) continue;
+    const ParticleOrigin::Kind kind = fresh.particle_origins[p].kind;
+    if (q < 0) {
+      const bool frame = kind == ParticleOrigin::Kind::limb_frame_plus || kind == ParticleOrigin::Kind::limb_frame_minus;
+      if (frame && old_body_of_new[fresh.particle_origins[p].index] >= 0) new_frame_particles.push_back(p);
+      continue;
+    }
     const auto from = static_cast<std::uint32_t>(q);
     fresh.particles.set_position(p, old.particles.position(from));
     fresh.particles.set_previous(p, old.particles.previous(from));
     fresh.particles.set_velocity(p, old.particles.velocity(from));
+  }
+  // A surviving limb that gains a frame in this edit: its frame particles where the compiled
+  // offset from the centre lands after the shortest turn from the Model's axis to the limb's
+  // axis now, moving with the limb's centre.
+  for (const std::uint32_t p : new_frame_particles) {
+    const std::size_t b = fresh.particle_origins[p].index;
+    const std::uint32_t limb = fresh.body_limb[b];
+    const std::uint32_t head = fresh.limbs.head[limb], tail = fresh.limbs.tail[limb];
+    const auto at = [&](auto get, std::uint32_t q) -> Eigen::Vector3d { return get(q).template cast<double>(); };
+    const auto position = [&](std::uint32_t q) { return fresh.particles.position(q); };
+    const auto previous = [&](std::uint32_t q) { return fresh.particles.previous(q); };
+    const auto velocity = [&](std::uint32_t q) { return fresh.particles.velocity(q); };
+    const Eigen::Vector3d offset = Eigen::Quaterniond::FromTwoVectors(new_model.bodies[b].axis, at(position, head) - at(position, tail)) *
+                                   (at(position, p) - new_model.bodies[b].position);
+    fresh.particles.set_position(p, (0.5 * (at(position, head) + at(position, tail)) + offset).template cast<Scalar>());
+    fresh.particles.set_previous(p, (0.5 * (at(previous, head) + at(previous, tail)) + offset).template cast<Scalar>());
+    fresh.particles.set_velocity(p, (0.5 * (at(velocity, head) + at(velocity, tail))).template cast<Scalar>());
   }
   fresh.time = old.time;
   fresh.previous_time_step = old.previous_time_step;

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <span>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace limber {
@@ -82,6 +83,41 @@ inline ConstraintColouring colour_constraints(std::span<const std::uint32_t> par
     result.colour[c] = static_cast<std::uint8_t>(k);
     if (movable[i]) used[i] |= std::uint64_t{1} << k;
     if (movable[j]) used[j] |= std::uint64_t{1} << k;
+    if (k >= result.batch_size.size()) result.batch_size.resize(k + 1, 0);
+    ++result.batch_size[k];
+  }
+  return result;
+}
+
+/// The same greedy colouring for rows that touch any number of particles (the particle method's
+/// joint rows): row r touches particles_of(r) (a range of indices; fixed particles and repeats
+/// allowed). Rows with no movable particle get kNoColour and are not listed.
+template <typename ParticlesOf>
+ConstraintColouring colour_rows(std::size_t row_count, ParticlesOf&& particles_of, const std::vector<bool>& movable,
+                                std::uint32_t max_colours) {
+  if (max_colours < 1 || max_colours > kMaxColours) throw std::invalid_argument("colour_rows: max_colours must be in [1, 64]");
+  ConstraintColouring result;
+  result.colour.assign(row_count, kNoColour);
+  std::vector<std::uint64_t> used(movable.size(), 0);
+  const std::uint64_t allowed = max_colours == 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << max_colours) - 1;
+  for (std::size_t r = 0; r < row_count; ++r) {
+    std::uint64_t taken = 0;
+    bool moves = false;
+    for (const std::uint32_t p : particles_of(r)) {
+      if (p >= movable.size()) throw std::invalid_argument("colour_rows: row " + std::to_string(r) + " names particle " + std::to_string(p));
+      if (movable[p]) taken |= used[p], moves = true;
+    }
+    if (!moves) continue;
+    const std::uint64_t free = ~taken & allowed;
+    if (free == 0) {
+      result.overflow.push_back(static_cast<std::uint32_t>(r));
+      continue;
+    }
+    const auto k = static_cast<std::uint32_t>(std::countr_zero(free));
+    result.colour[r] = static_cast<std::uint8_t>(k);
+    for (const std::uint32_t p : particles_of(r)) {
+      if (movable[p]) used[p] |= std::uint64_t{1} << k;
+    }
     if (k >= result.batch_size.size()) result.batch_size.resize(k + 1, 0);
     ++result.batch_size[k];
   }
