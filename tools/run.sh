@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # The main job: sets up if needed, then runs `limber`. With no arguments (or only flags) it runs
-# `limber run` on the embedded humanoid scene; otherwise the arguments go to limber unchanged:
+# `limber run tools/scenes/ragdoll.json` with those flags: the thesis's humanoid with arms and
+# human joint ranges, knocked over by the ball. Otherwise the arguments go to limber unchanged
+# (`limber run` without a scene still runs the thesis's own humanoid, compiled into the program):
 #   tools/run.sh
-#   tools/run.sh --body thin --ball-speed 12
+#   tools/run.sh --body thin --ball-speed 12 --method lagrange
+#   tools/run.sh run                                   # the thesis's humanoid, as in the thesis
 #   tools/run.sh run tools/scenes/chain.json --links 100
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,6 +15,6 @@ if ! setup_log=$(tools/setup.sh 2>&1); then
   exit 1
 fi
 if [ $# -eq 0 ] || [[ "$1" == -* && "$1" != "--help" && "$1" != "--version" ]]; then
-  set -- run "$@"
+  set -- run tools/scenes/ragdoll.json "$@"
 fi
 exec "$build_dir/tools/limber" "$@"

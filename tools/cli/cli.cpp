@@ -491,6 +491,8 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
 struct RunRecord {
   Observation start, end;
   double largest_gap = 0, largest_stretch = 0, wall_seconds = 0;
+  double largest_limit_violation = 0;  ///< over the joints with limits, rad (m for a prismatic range)
+  double drives_released_at = -1;      ///< s: when settings.release_drives_on_impact made the drives limp; −1 never
   long steps_done = 0;
   std::array<long, 4> relaxation_stops{};
   std::uint64_t fallbacks = 0;  ///< rattle projections that fell back to pbd
@@ -498,18 +500,21 @@ struct RunRecord {
   StepStatus status = StepStatus::ok;
 };
 
-// Steps `state` `steps` times (stopping at a divergence), observing after every step.
+// Steps `state` `steps` times (stopping at a divergence), observing after every step. `variant`
+// holds `state`: the drives go limp through it when the scene asks (release_drives_on_impact).
 template <typename State>
-RunRecord run_steps(State& state, long steps, std::ofstream& csv, KnockMeter& knock) {
+RunRecord run_steps(State& state, MethodState& variant, long steps, std::ofstream& csv, KnockMeter& knock) {
   RunRecord record;
   record.start = record.end = observe(state);
   record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
+  record.largest_limit_violation = record.start.joints.limit_violation;
   bool body_sleeping = record.start.body_sleeping;
   for (; record.steps_done < steps;) {
     const auto before = std::chrono::steady_clock::now();
     const auto report = step(state);
     record.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++record.steps_done;
+    if (release_drives_after_impact(variant) && record.drives_released_at < 0) record.drives_released_at = state.time;
     if constexpr (requires { report.stop; }) {
       ++record.relaxation_stops[static_cast<int>(report.stop)];
       record.fallbacks += report.fallbacks;
@@ -518,6 +523,7 @@ RunRecord run_steps(State& state, long steps, std::ofstream& csv, KnockMeter& kn
     knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
     record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
     record.largest_stretch = std::max(record.largest_stretch, record.end.max_link_stretch);
+    record.largest_limit_violation = std::max(record.largest_limit_violation, record.end.joints.limit_violation);
     if (record.end.body_sleeping != body_sleeping && record.sleep_events.size() < 8) {
       record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
     }
@@ -619,9 +625,36 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
 }
 
+// The "limits" line: the joints' limits and drives (Observation::joints, measured alike by every
+// method): the largest limit violation in the run and at its end, the drives' tracking error at
+// the end; "none" without limited or driven joints.
+std::string limits_line(const Model& model, const RunRecord& record) {
+  bool limited_rotation = false, limited_slide = false, driven_rotation = false, driven_slide = false;
+  for (const Joint& joint : model.joints) {
+    const bool slide = joint.type == JointType::prismatic;
+    if (joint.limits.any()) (slide ? limited_slide : limited_rotation) = true;
+    if (joint.drive) (slide ? driven_slide : driven_rotation) = true;
+  }
+  const auto unit = [](bool rotation, bool slide) { return rotation && slide ? "rad (m for slides)" : slide ? "m" : "rad"; };
+  const JointMeasures& end = record.end.joints;
+  std::string line;
+  if (end.limited_joints > 0) {
+    line = format("%d limited joint%s: largest violation %.3g %s in run, %.3g at end", end.limited_joints,
+                  end.limited_joints == 1 ? "" : "s", record.largest_limit_violation, unit(limited_rotation, limited_slide),
+                  end.limit_violation);
+  }
+  if (end.driven_joints > 0) {
+    line += format("%s%d drive%s: tracking error %.3g %s at end", line.empty() ? "" : "; ", end.driven_joints,
+                   end.driven_joints == 1 ? "" : "s", end.drive_error, unit(driven_rotation, driven_slide));
+    if (record.drives_released_at >= 0) line += format(" (limp since the ball hit, t = %.3f s)", record.drives_released_at);
+  }
+  return "limits      " + (line.empty() ? std::string("none") : line) + "\n";
+}
+
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
-int simulate(State& state, const Model& model, const RunFlags& flags, const std::string& source, std::ostream& out) {
+int simulate(State& state, MethodState& variant, const Model& model, const RunFlags& flags, const std::string& source,
+             std::ostream& out) {
   const double dt = model.settings.time_step;
   const long steps = given(flags.steps_option) ? flags.steps : std::max(1L, std::lround(model.settings.duration / dt));
   std::ofstream csv;
@@ -633,7 +666,7 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
   }
   const Observation start = observe(state);
   KnockMeter knock(model.ball ? model.ball->velocity : Eigen::Vector3d::UnitX(), start.body_centre_of_mass);
-  const RunRecord record = run_steps(state, steps, csv, knock);
+  const RunRecord record = run_steps(state, variant, steps, csv, knock);
   const Observation& end = record.end;
 
   out << "limber run: " << model.name << " (" << source << ")\n";
@@ -644,6 +677,7 @@ int simulate(State& state, const Model& model, const RunFlags& flags, const std:
   } else {
     out << "joint gap   none (shared-particle joints or no joints)\n";
   }
+  out << limits_line(model, record);
   if (!flags.rigid()) {
     out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
                   record.largest_stretch);
@@ -686,7 +720,7 @@ WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene) 
 
 int simulate(const Scene& scene, const RunFlags& flags, const std::string& source, std::ostream& out) {
   MethodState state = compile_method(scene.model, method_options(flags, scene.methods));
-  return std::visit([&](auto& compiled) { return simulate(compiled, scene.model, flags, source, out); }, state);
+  return std::visit([&](auto& compiled) { return simulate(compiled, state, scene.model, flags, source, out); }, state);
 }
 
 }  // namespace
@@ -721,6 +755,8 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
   } catch (const InputError& error) {
+    err << "limber: " << error.what() << "\n";
+  } catch (const std::invalid_argument& error) {  // options that do not go together (compile's)
     err << "limber: " << error.what() << "\n";
   } catch (const std::exception& error) {
     err << "limber: unexpected error: " << error.what() << "\n";
