@@ -43,6 +43,24 @@ TEST(Allocation, StepAllocatesNothingAfterItsFirstCall) {
   EXPECT_EQ(allocations_while_stepping<double>(chain.model, 1200, true, testing::with_scene_settings(chain)), 0);
 }
 
+TEST(Allocation, JointRowsAllocateNothing) {
+  // The armed ragdoll: frames, hinges, cone-twists and friction rows, batches rebuilt as it
+  // wakes on impact and falls asleep; the active ragdoll's drives, released on impact.
+  const Scene ragdoll = testing::shipped_scene("ragdoll.json");
+  EXPECT_EQ(allocations_while_stepping<float>(ragdoll.model, 1200, false, testing::with_scene_settings(ragdoll)), 0);
+  EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 1200, false, testing::with_scene_settings(ragdoll)), 0);
+  VerletOptions rattle = testing::with_scene_settings(ragdoll);
+  rattle.relaxation.projection = ProjectionRule::rattle, rattle.relaxation.substeps = 2, rattle.threads = 2;
+  rattle.parallel_minimum_slots = 1;
+  EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 600, false, rattle), 0);
+  const Scene active = testing::shipped_scene("active_ragdoll.json");
+  World world(active.model, world_options(Method::particles, active.methods));
+  world.step();
+  const long before = testing::allocation_count();
+  for (int s = 0; s < 240; ++s) world.step();
+  EXPECT_EQ(testing::allocation_count() - before, 0);
+}
+
 TEST(Allocation, EveryRelaxationPathAllocatesNothing) {
   // Threads on every colour, the AoS copy with contacts between sweeps, Jacobi's sums, and
   // batches rebuilt as the humanoid wakes and sleeps.
