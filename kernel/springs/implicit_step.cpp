@@ -96,29 +96,32 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
     system.right_hand_side.segment<3>(6 * b + 3) = h * (forces.torque[b] - omega.cross(world_inertia[b] * omega));
   }
 
-  // Each spring's implicit terms: (h·c + h²·k) JᵀJ into A, −h²·k Jᵀḋ₀ into b.
+  // Each spring's implicit terms: (h·c + h²·k) JᵀJ into A, −h²·k Jᵀḋ₀ into b (a hinge's two
+  // springs each with their own levers, into the same blocks).
   const SpringBuffer& springs = state.springs;
   for (std::size_t s = 0; s < springs.size(); ++s) {
     const std::int32_t i = springs.inboard[s], j = springs.outboard[s];
     if (state.islands[state.island_of_body[j]].sleeping) continue;
-    const SpringEnds ends = spring_ends(state, y, s);
-    const double k = springs.stiffness[s], c = springs.damping[s];
-    const double weight = h * c + h * h * k;
-    const Eigen::Vector3d implicit_force = -h * h * k * ends.separation_rate;  // acts like f: + on i, − on j
-    const AnchorJacobian g_j = anchor_jacobian(ends.outboard_lever);
-    add_block(system.matrix, system.diagonal_block[j], weight * g_j.transpose() * g_j, true);
-    system.right_hand_side.segment<6>(6 * j) -= g_j.transpose() * implicit_force;
-    if (i < 0) continue;
-    const AnchorJacobian g_i = anchor_jacobian(ends.inboard_lever);
-    add_block(system.matrix, system.diagonal_block[i], weight * g_i.transpose() * g_i, true);
-    system.right_hand_side.segment<6>(6 * i) += g_i.transpose() * implicit_force;
-    const Block coupling = i > j ? Block(-weight * g_i.transpose() * g_j) : Block(-weight * g_j.transpose() * g_i);
-    add_block(system.matrix, system.spring_block[s], coupling, false);
+    for (int e = 0; e < springs.count[s]; ++e) {
+      const SpringEnds ends = spring_ends(state, y, s, spring_side(springs, s, e));
+      const double k = springs.stiffness[s], c = springs.damping[s];
+      const double weight = h * c + h * h * k;
+      const Eigen::Vector3d implicit_force = -h * h * k * ends.separation_rate;  // acts like f: + on i, − on j
+      const AnchorJacobian g_j = anchor_jacobian(ends.outboard_lever);
+      add_block(system.matrix, system.diagonal_block[j], weight * g_j.transpose() * g_j, true);
+      system.right_hand_side.segment<6>(6 * j) -= g_j.transpose() * implicit_force;
+      if (i < 0) continue;
+      const AnchorJacobian g_i = anchor_jacobian(ends.inboard_lever);
+      add_block(system.matrix, system.diagonal_block[i], weight * g_i.transpose() * g_i, true);
+      system.right_hand_side.segment<6>(6 * i) += g_i.transpose() * implicit_force;
+      const Block coupling = i > j ? Block(-weight * g_i.transpose() * g_j) : Block(-weight * g_j.transpose() * g_i);
+      add_block(system.matrix, system.spring_block[s], coupling, false);
+    }
   }
 
   // The drives' and engaged limits' angular springs, implicit the same way on the relative
-  // rotation (J = [0, E] on the outboard body, [0, −E] on the inboard; a limit's along d dᵀ);
-  // friction stays explicit (regularized: spring_forces.hpp).
+  // rotation (J = [0, E] on the outboard body, [0, −E] on the inboard; a limit's, and a hinge's
+  // drive, along d dᵀ); friction stays explicit (regularized: spring_forces.hpp).
   for (const std::uint32_t s : state.controlled_joints) {
     const std::int32_t i = springs.inboard[s], j = springs.outboard[s];
     if (state.islands[state.island_of_body[j]].sleeping) continue;
@@ -126,6 +129,11 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
     const Eigen::Vector3d relative = state.angular_velocity[j] - (i >= 0 ? state.angular_velocity[i] : Eigen::Vector3d::Zero());
     Eigen::Matrix3d weight = (h * torques.drive_damping + h * h * torques.drive_stiffness) * Eigen::Matrix3d::Identity();
     Eigen::Vector3d implicit_torque = -h * h * torques.drive_stiffness * relative;  // on the outboard body
+    if (!torques.drive_axis.isZero(0)) {  // a hinge's drive, about its axis alone
+      const Eigen::Vector3d& d = torques.drive_axis;
+      weight = (h * torques.drive_damping + h * h * torques.drive_stiffness) * d * d.transpose();
+      implicit_torque = -h * h * torques.drive_stiffness * d.dot(relative) * d;
+    }
     for (int l = 0; l < torques.limit_count; ++l) {
       const Eigen::Vector3d& d = torques.limit_direction[l];
       weight += (h * torques.limit_damping[l] + h * h * torques.limit_stiffness[l]) * d * d.transpose();

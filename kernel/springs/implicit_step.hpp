@@ -20,8 +20,8 @@
 
 namespace limber {
 
-/// Builds the block pattern of A (one 6×6 block per body and per spring between two bodies,
-/// lower triangle) and analyses it for LDLᵀ once. Called by compile_springs().
+/// Builds the block pattern of A (one 6×6 block per body and per joint between two bodies, which
+/// its springs share; lower triangle) and analyses it for LDLᵀ once. Called by compile_springs().
 void prepare_implicit_system(SpringState& state);
 
 /// One implicit step of h seconds over the awake bodies (sleeping islands' rows get Δu = 0).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace limber {
 namespace {
@@ -33,6 +34,42 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
   if (i >= 0) inverse_inertia += state.bodies.world_inverse_inertia(y, static_cast<std::size_t>(i));
   const double mass = i >= 0 ? 1 / (state.bodies.inverse_mass[o] + state.bodies.inverse_mass[i]) : state.bodies.mass[o];
 
+  const JointLimits& limits = joint.limits;
+  const auto add_limit = [&](const Eigen::Vector3d& direction, double excess) {
+    // The coordinate's acceleration per unit of its generalized force is dᵀ(I_o⁻¹ + I_i⁻¹)d.
+    const double scale = 1 / (mass * direction.dot(inverse_inertia * direction));
+    const double stiffness = springs.stiffness[k] * scale, damping = springs.damping[k] * scale;
+    out.limits -= std::max(0.0, stiffness * excess + damping * direction.dot(relative)) * direction;
+    out.limit_direction[out.limit_count] = direction;
+    out.limit_stiffness[out.limit_count] = stiffness, out.limit_damping[out.limit_count] = damping;
+    ++out.limit_count;
+  };
+
+  if (joint.type == JointType::revolute) {
+    // The hinge axis as each body carries it, h_i = q_i·h and h_o = q_o·R₀⁻¹·h, and the angle's
+    // gradient g = (h_i + h_o)/(1 + h_i·h_o) (the twist formula of joint_coordinates.hpp about h).
+    const Eigen::Vector3d axis_i = inboard.orientation * frame.axis;
+    const Eigen::Vector3d axis_o = outboard.orientation * (frame.rest_relative.conjugate() * frame.axis);
+    const double denominator = 1 + axis_i.dot(axis_o);
+    const Eigen::Vector3d gradient = denominator > 1e-9 ? Eigen::Vector3d((axis_i + axis_o) / denominator) : axis_o;
+    const double rate = gradient.dot(relative);
+    if (joint.drive) {
+      const JointDrive& drive = *joint.drive;
+      const double error = std::remainder(drive.target - q.angle, 2 * std::numbers::pi);
+      out.drive = (drive.stiffness * error + drive.damping * (drive.target_velocity - rate)) * gradient;
+      out.drive_stiffness = drive.stiffness, out.drive_damping = drive.damping;
+      out.drive_axis = gradient;
+    }
+    if (limits.range && q.angle > limits.range->max) add_limit(gradient, q.angle - limits.range->max);
+    if (limits.range && q.angle < limits.range->min) add_limit(-gradient, limits.range->min - q.angle);
+    if (joint.friction > 0) {
+      const Eigen::Vector3d axis = gradient.normalized();
+      const double stop = -axis.dot(relative) / (state.time_step * axis.dot(inverse_inertia * axis));
+      out.friction = std::clamp(stop, -joint.friction, joint.friction) * axis;
+    }
+    return out;
+  }
+
   if (joint.drive) {
     const JointDrive& drive = *joint.drive;
     Eigen::Quaterniond error = drive_target_rotation(drive, frame) * Eigen::Quaterniond(rotation_quaternion(q.rotation)).conjugate();
@@ -44,16 +81,6 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
     out.drive_stiffness = drive.stiffness, out.drive_damping = drive.damping;
   }
 
-  const JointLimits& limits = joint.limits;
-  const auto add_limit = [&](const Eigen::Vector3d& direction, double excess) {
-    // The coordinate's acceleration per unit of its generalized force is dᵀ(I_o⁻¹ + I_i⁻¹)d.
-    const double scale = 1 / (mass * direction.dot(inverse_inertia * direction));
-    const double stiffness = springs.stiffness[k] * scale, damping = springs.damping[k] * scale;
-    out.limits -= std::max(0.0, stiffness * excess + damping * direction.dot(relative)) * direction;
-    out.limit_direction[out.limit_count] = direction;
-    out.limit_stiffness[out.limit_count] = stiffness, out.limit_damping[out.limit_count] = damping;
-    ++out.limit_count;
-  };
   const Eigen::Vector3d a = outboard.orientation * Eigen::Vector3d::UnitZ();
   if (limits.swing && q.swing > *limits.swing) {
     const Eigen::Vector3d across = (inboard.orientation * frame.cone_axis).cross(a);
@@ -78,16 +105,21 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
   return out;
 }
 
-SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s) {
+SpringEnds spring_ends(const SpringState& state, const RigidBodyState& y, std::size_t s, int side) {
   const SpringBuffer& springs = state.springs;
   SpringEnds ends;
   const std::int32_t inboard = springs.inboard[s], outboard = springs.outboard[s];
-  ends.outboard_lever = y.orientation[outboard] * springs.outboard_anchor[s];
+  // The ends in each body's frame (world for a world anchor): the anchors, or a hinge's anchor ± offset.
+  const Eigen::Vector3d inboard_anchor =
+      side == 0 ? springs.inboard_anchor[s] : Eigen::Vector3d(springs.inboard_anchor[s] + side * springs.inboard_offset[s]);
+  const Eigen::Vector3d outboard_anchor =
+      side == 0 ? springs.outboard_anchor[s] : Eigen::Vector3d(springs.outboard_anchor[s] + side * springs.outboard_offset[s]);
+  ends.outboard_lever = y.orientation[outboard] * outboard_anchor;
   const Eigen::Vector3d outboard_point = y.position[outboard] + ends.outboard_lever;
   const Eigen::Vector3d outboard_velocity = state.velocity[outboard] + state.angular_velocity[outboard].cross(ends.outboard_lever);
-  Eigen::Vector3d inboard_point = springs.inboard_anchor[s], inboard_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d inboard_point = inboard_anchor, inboard_velocity = Eigen::Vector3d::Zero();
   if (inboard >= 0) {
-    ends.inboard_lever = y.orientation[inboard] * springs.inboard_anchor[s];
+    ends.inboard_lever = y.orientation[inboard] * inboard_anchor;
     inboard_point = y.position[inboard] + ends.inboard_lever;
     inboard_velocity = state.velocity[inboard] + state.angular_velocity[inboard].cross(ends.inboard_lever);
   }
@@ -102,14 +134,16 @@ void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces&
   for (std::size_t s = 0; s < springs.size(); ++s) {
     const std::int32_t inboard = springs.inboard[s], outboard = springs.outboard[s];
     if (state.islands[state.island_of_body[outboard]].sleeping) continue;  // both ends share an island
-    const SpringEnds ends = spring_ends(state, y, s);
-    const Eigen::Vector3d force = -springs.stiffness[s] * ends.separation - springs.damping[s] * ends.separation_rate;
-    if (inboard >= 0) {
-      forces.force[inboard] += force;
-      forces.torque[inboard] += ends.inboard_lever.cross(force);
+    for (int e = 0; e < springs.count[s]; ++e) {
+      const SpringEnds ends = spring_ends(state, y, s, spring_side(springs, s, e));
+      const Eigen::Vector3d force = -springs.stiffness[s] * ends.separation - springs.damping[s] * ends.separation_rate;
+      if (inboard >= 0) {
+        forces.force[inboard] += force;
+        forces.torque[inboard] += ends.inboard_lever.cross(force);
+      }
+      forces.force[outboard] -= force;
+      forces.torque[outboard] -= ends.outboard_lever.cross(force);
     }
-    forces.force[outboard] -= force;
-    forces.torque[outboard] -= ends.outboard_lever.cross(force);
   }
   for (const std::uint32_t k : state.controlled_joints) {
     const std::int32_t inboard = springs.inboard[k], outboard = springs.outboard[k];
@@ -122,9 +156,21 @@ void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces&
 }
 
 double spring_energy(const SpringState& state) {
+  const SpringBuffer& springs = state.springs;
+  const RigidBodyState& y = state.bodies.state;
   double energy = 0;
-  for (std::size_t s = 0; s < state.springs.size(); ++s) {
-    energy += 0.5 * state.springs.stiffness[s] * joint_separation(state.springs, state.bodies.state, s).squaredNorm();
+  for (std::size_t s = 0; s < springs.size(); ++s) {
+    if (springs.count[s] == 1) {
+      energy += 0.5 * springs.stiffness[s] * joint_separation(springs, y, s).squaredNorm();
+      continue;
+    }
+    // A hinge's two springs: the anchors' separation d and the offsets' turn δ give d ± δ.
+    const std::int32_t inboard = springs.inboard[s], outboard = springs.outboard[s];
+    const Eigen::Vector3d inboard_offset =
+        inboard >= 0 ? Eigen::Vector3d(y.orientation[inboard] * springs.inboard_offset[s]) : springs.inboard_offset[s];
+    const Eigen::Vector3d turn = inboard_offset - y.orientation[outboard] * springs.outboard_offset[s];
+    const Eigen::Vector3d separation = joint_separation(springs, y, s);
+    energy += 0.5 * springs.stiffness[s] * ((separation + turn).squaredNorm() + (separation - turn).squaredNorm());
   }
   return energy;
 }

@@ -185,10 +185,10 @@ TEST(Cli, LagrangeRunsEveryShippedScene) {
   }
 }
 
-TEST(Cli, OnlyLagrangeRunsGearsAndHinges) {
-  // The particle method takes the axles' hinges now, and refuses the gear; springs refuse the hinge.
+TEST(Cli, OnlyLagrangeRunsGears) {
+  // Every method takes the axles' hinges now; only Lagrange takes the gear.
   expect_rejected({"run", scene("gears.json"), "--method", "weighted"}, "gears[0] 'mesh': the ");
-  expect_rejected({"run", scene("gears.json"), "--method", "springs-implicit"}, "joints[0] 'large_axle': the ");
+  expect_rejected({"run", scene("gears.json"), "--method", "springs-implicit"}, "gears[0] 'mesh': the ");
 }
 
 TEST(Cli, RejectsLagrangeFlagsElsewhere) { expect_rejected({"run", "--constraint-solver", "tree"}, "--constraint-solver"); }

@@ -195,17 +195,21 @@ TEST(SpringJointDrives, SphericalDriveTurnsTheLimbToItsTarget) {
 }
 
 TEST(SpringJointControls, OtherJointTypesAreRefusedByName) {
-  // The method is spherical only: a hinge with a range is refused naming the joint and its type.
-  Model model = rod_on_ball_joint();
-  model.joints[0].type = JointType::revolute;
-  model.joints[0].axis = Vector3::UnitY();
-  model.joints[0].limits.range = Range{-0.5, 0.5};
-  try {
-    compile_springs(model);
-    ADD_FAILURE() << "compiled";
-  } catch (const ModelError& error) {
-    EXPECT_NE(std::string(error.what()).find("joints[0] 'ball'"), std::string::npos) << error.what();
-    EXPECT_NE(std::string(error.what()).find("revolute"), std::string::npos) << error.what();
+  // The method takes spherical and revolute joints (spring_hinge_test.cpp): the others are
+  // refused naming the joint and its type.
+  for (const JointType type : {JointType::universal, JointType::prismatic, JointType::fixed}) {
+    Model model = rod_on_ball_joint();
+    model.joints[0].type = type;
+    model.joints[0].axis = Vector3::UnitY();
+    model.joints[0].second_axis = Vector3::UnitZ();
+    const std::string name(joint_type_name(type));
+    try {
+      compile_springs(model);
+      ADD_FAILURE() << name << " compiled";
+    } catch (const ModelError& error) {
+      EXPECT_NE(std::string(error.what()).find("joints[0] 'ball'"), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find("does not support " + name + " joints"), std::string::npos) << error.what();
+    }
   }
 }
 

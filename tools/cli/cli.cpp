@@ -576,9 +576,11 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   const std::string range = state.springs.size() == 0 ? std::string("no springs")
       : k_min == k_max && c_min == c_max ? format("stiffness %g N/m, damping %g N s/m", k_min, c_min)
                                          : format("stiffness %g..%g N/m, damping %g..%g N s/m", k_min, k_max, c_min, c_max);
+  std::size_t spring_count = 0;  // a hinge is two springs
+  for (const std::uint8_t count : state.springs.count) spring_count += count;
   out << format("model       %zu limbs, %zu joints%s%s%s; %zu rigid bodies, %zu springs (%s), %zu island%s\n",
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.bodies.size(), state.springs.size(), range.c_str(), state.islands.size(),
+                model.ball ? ", ball" : "", state.bodies.size(), spring_count, range.c_str(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
   if (state.options.integrator == Integrator::backward_euler) {
     out << format("solver      sparse %s over %zu unknowns\n",
