@@ -323,8 +323,10 @@ Scalar project_joint_rows(JointRowBatches<Scalar>& batches, JointRowKind kind, s
         largest = Lanes::max(largest, Lanes::sqrt(dot(delta, delta)));
       }
       // Written back in reverse so that a particle named twice (never, but the null particle)
-      // keeps one consistent value.
+      // keeps one consistent value. A place no lane moves is not written: the null particle
+      // stands in every empty place, and threads writing its cache line would contend for it.
       for (std::size_t k = kJointRowParticles; k-- > 0;) {
+        if (!Lanes::any(w[k] > zero)) continue;
         Lanes::scatter(x[k].x, fields.x, index[k]), Lanes::scatter(x[k].y, fields.y, index[k]), Lanes::scatter(x[k].z, fields.z, index[k]);
       }
       continue;
@@ -407,6 +409,7 @@ Scalar project_joint_rows(JointRowBatches<Scalar>& batches, JointRowKind kind, s
       const Vec3<V>& spin = side == &a ? spin_a : spin_b;
       for (std::size_t k = 0; k < kJointRowSideParticles; ++k) {
         const auto movable = side->mass[k] > zero;
+        if (!Lanes::any(movable)) continue;  // an empty place in every lane: the null particle, not written
         const Vec3<V> move = cross(spin, side->x[k] - side->centre);
         const Vec3<V> masked{Lanes::select(movable, move.x, zero), Lanes::select(movable, move.y, zero), Lanes::select(movable, move.z, zero)};
         largest = Lanes::max(largest, Lanes::sqrt(dot(masked, masked)));

@@ -333,6 +333,11 @@ void begin_relaxation(VerletState<Scalar>& state, double dt) {
   RelaxationPlan<Scalar>& plan = state.plan;
   plan.awake_constraints = 0;
   for (std::uint32_t k : state.awake_islands) plan.awake_constraints += state.islands[k].constraint_end - state.islands[k].constraint_begin;
+  // Joint rows first: whether to wake the helpers depends on their colours too.
+  if (!state.joint_rows.empty()) {
+    if (plan.joint_built_for != state.awake_generation) build_joint_batches(state), plan.joint_built_for = state.awake_generation;
+    begin_joint_rows(state, dt);
+  }
   if (state.options.solver != RelaxationSolver::direct && state.options.order != SweepOrder::sequential) {
     if (plan.built_for != state.awake_generation) build_batches(state, state.awake_islands);
     with_interleaved(state, [&](auto& store) {
@@ -341,10 +346,6 @@ void begin_relaxation(VerletState<Scalar>& state, double dt) {
       }
     });
     begin_helpers(plan);
-  }
-  if (!state.joint_rows.empty()) {
-    if (plan.joint_built_for != state.awake_generation) build_joint_batches(state), plan.joint_built_for = state.awake_generation;
-    begin_joint_rows(state, dt);
   }
   if (uses_rattle(state)) store_gradients(state, previous_positions(state.particles));
   if (state.options.solver == RelaxationSolver::direct) begin_direct_projection(state, dt);
