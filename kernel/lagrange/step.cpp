@@ -64,6 +64,27 @@ void project_velocities(LagrangeState& state, double dt) {
   }
 }
 
+// Each body's impulse over a step of dt into state.body_rhs, (h·F, h·(τ − ω × Iω)) with the
+// applied forces and the gyroscopic torque, plus its momentum (M·v₀, I·ω₀) when asked; fills
+// v₀, ω₀ and the constraint geometry of the current state first.
+void step_impulses(LagrangeState& state, double dt, bool with_momentum) {
+  RigidBodyState& y = state.bodies.state;
+  RigidForces& forces = state.scratch.forces;
+  forces.clear();
+  accumulate_applied_forces(state, y, forces);  // also fills v₀, ω₀
+  update_geometry(state, y);
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    const Eigen::Matrix3d& inertia = state.world_inertia[b];
+    const Eigen::Vector3d& omega = state.angular_velocity[b];
+    state.body_rhs[b].head<3>() = dt * forces.force[b];
+    state.body_rhs[b].tail<3>() = dt * (forces.torque[b] - omega.cross(inertia * omega));
+    if (with_momentum) {
+      state.body_rhs[b].head<3>() = state.bodies.mass[b] * state.velocity[b] + state.body_rhs[b].head<3>();
+      state.body_rhs[b].tail<3>() = inertia * omega + state.body_rhs[b].tail<3>();
+    }
+  }
+}
+
 // The joints' limits, friction and drives for an acceleration-level step of dt, as impulses
 // before it. x₁ is the velocity change of a velocity-level step with the step's forces (h·F) and
 // the control rows (speculative limits, friction up to f·dt, compliant drives; J·Δu = 0 on the
@@ -72,15 +93,7 @@ void project_velocities(LagrangeState& state, double dt) {
 // applied now, so that the step ends near x₁: what the velocity-level step would give.
 void control_impulses(LagrangeState& state, double dt) {
   RigidBodyState& y = state.bodies.state;
-  RigidForces& forces = state.scratch.forces;
-  forces.clear();
-  accumulate_applied_forces(state, y, forces);  // also fills v₀, ω₀
-  update_geometry(state, y);
-  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
-    const Eigen::Vector3d& omega = state.angular_velocity[b];
-    state.body_rhs[b].head<3>() = dt * forces.force[b];
-    state.body_rhs[b].tail<3>() = dt * (forces.torque[b] - omega.cross(state.world_inertia[b] * omega));
-  }
+  step_impulses(state, dt, /*with_momentum=*/false);
   for (auto& rhs : state.constraint_rhs) rhs.setZero();
   const double frequency = baumgarte_frequency(state, dt);
   set_control_problem(state, ControlLevel::velocity_change, dt, frequency);
@@ -106,17 +119,8 @@ void control_impulses(LagrangeState& state, double dt) {
 // gains energy and diverges on the heavy-end chain within 4 s (measured); this does not.
 void velocity_level_step(LagrangeState& state, double dt) {
   RigidBodyState& y = state.bodies.state;
-  RigidForces& forces = state.scratch.forces;
-  forces.clear();
-  accumulate_applied_forces(state, y, forces);  // also fills v₀, ω₀
-  update_geometry(state, y);
+  step_impulses(state, dt, /*with_momentum=*/true);
   const std::size_t body_count = state.bodies.size();
-  for (std::size_t b = 0; b < body_count; ++b) {
-    const Eigen::Matrix3d& inertia = state.world_inertia[b];
-    const Eigen::Vector3d& omega = state.angular_velocity[b];
-    state.body_rhs[b].head<3>() = state.bodies.mass[b] * state.velocity[b] + dt * forces.force[b];
-    state.body_rhs[b].tail<3>() = inertia * omega + dt * (forces.torque[b] - omega.cross(inertia * omega));
-  }
   const double frequency = baumgarte_frequency(state, dt);
   for (std::size_t c = 0; c < state.constraints.size(); ++c) {
     state.constraint_rhs[c] = -frequency * constraint_error(state.constraints, state.joints, y, c);

@@ -341,6 +341,8 @@ void require_joint_types(const Model& model, std::initializer_list<JointType> su
   }
 }
 
+void validate_joint(const Model& model, std::size_t index) { validate_joint(model.joints.at(index), model, index); }
+
 void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method) {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];

@@ -322,6 +322,10 @@ BodyIslands body_islands(const Model& model);
 /// Throws ModelError naming the first bad field.
 void validate(const Model& model);
 
+/// Checks joint `index` of `model` alone, as validate() does (its bodies must exist). Throws
+/// ModelError naming the field. For a change to one joint between steps (World::set_joint_drive).
+void validate_joint(const Model& model, std::size_t index);
+
 /// Throws ModelError naming the first joint whose type is not in `supported`, or the first gear
 /// when `gears_supported` is false: "joints[3] 'knee': the <method> method does not support
 /// revolute joints (it supports spherical; lagrange supports every type)".

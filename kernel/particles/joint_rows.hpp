@@ -102,13 +102,12 @@ inline void set_drive_row(JointRow& row, const JointDrive& drive) {
 /// The particle method's frames and rows (fixed at compile).
 struct JointRowSet {
   std::vector<JointRow> rows;
-  /// Per limb: its frame particles (the null particle for a stick), the half-spacing δ (m), and
-  /// the rotation from its particle frame (v, w, u) to its Model body frame.
+  /// Per Model body: its frame particles (the null particle for a stick) and the rotation from
+  /// its particle frame (v, w, u) to its Model body frame.
   std::vector<std::uint32_t> frame_plus, frame_minus;
-  std::vector<double> frame_spacing;
   std::vector<Eigen::Quaterniond> frame_to_body;
   /// Per Model joint with controls: its rows [first, last) in `rows` (drive targets are written
-  /// there by World::set_joint_drive through refresh_drive_rows).
+  /// there by set_joint_drive, kernel/verlet/step.hpp).
   std::vector<std::pair<std::uint32_t, std::uint32_t>> joint_rows;
   /// Rows the colouring placed: colour per row (kNoColour: overflow), and the colour count.
   std::vector<std::uint8_t> colour;

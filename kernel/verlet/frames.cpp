@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <string>
 
 #include "limber/kernel/mass/mass_properties.hpp"
@@ -152,7 +151,6 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
   JointRowSet set;
   const std::size_t body_count = model.bodies.size();
   set.frame_plus.assign(body_count, null_particle), set.frame_minus.assign(body_count, null_particle);
-  set.frame_spacing.assign(body_count, 0.0);
   set.frame_to_body.assign(body_count, Eigen::Quaterniond::Identity());
   set.joint_rows.assign(model.joints.size(), {0u, 0u});
   const auto blank = [&](JointRowKind kind, std::uint32_t island) {
@@ -165,7 +163,7 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
   for (std::size_t b = 0; b < body_count; ++b) {
     if (!plan.framed[b]) continue;
     const LimbParticles p = limb_particles(b);
-    set.frame_plus[b] = p[2], set.frame_minus[b] = p[3], set.frame_spacing[b] = plan.spacing[b];
+    set.frame_plus[b] = p[2], set.frame_minus[b] = p[3];
     const Eigen::Quaterniond frame(particle_frame(model.bodies[b], plan.direction[b]));
     set.frame_to_body[b] = frame.conjugate() * model.bodies[b].orientation();
     JointRow row = blank(JointRowKind::point, island_of_body(b));

@@ -214,19 +214,20 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
 
 void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& drive) {
   const std::size_t k = index(joint);
-  Model edited = model_;
-  edited.joints[k].drive = drive;
+  const std::optional<JointDrive> before = model_.joints[k].drive;
+  model_.joints[k].drive = drive;
   try {
-    validate(edited);
+    validate_joint(model_, k);  // this joint alone: a retarget per frame costs O(1)
   } catch (const ModelError& error) {
+    model_.joints[k].drive = before;
     throw WorldError(std::string("set_joint_drive: ") + error.what());
   }
-  const bool structural = model_.joints[k].drive.has_value() != drive.has_value();
-  if (structural) {
+  if (before.has_value() != drive.has_value()) {  // a drive row appears or goes: recompile
+    const Model edited = model_;
+    model_.joints[k].drive = before;  // recompile carries state from the Model as it was
     recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
     return;
   }
-  model_.joints[k].drive = drive;
   if (!drive) return;
   std::visit(
       [&](auto& state) {

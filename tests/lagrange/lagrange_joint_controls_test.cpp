@@ -23,6 +23,7 @@
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "tests/support/allocation_counter.hpp"
 #include "tests/support/models.hpp"
+#include "tests/support/oscillation.hpp"
 
 namespace limber {
 namespace {
@@ -31,23 +32,7 @@ constexpr double kPi = std::numbers::pi;
 
 // One rod (cylinder, 1 kg, 1 m, radius 1 cm) whose head is held at the origin by `type`, lying
 // along +x (so it falls about the y axis).
-Model rod_on(JointType type, const Vector3& axis = Vector3::UnitY()) {
-  Model model;
-  model.name = "rod";
-  Body rod;
-  rod.name = "rod";
-  rod.shape = {ShapeType::cylinder, 1, 0.01};
-  rod.mass = 1;
-  rod.axis = -Vector3::UnitX();  // head at the anchor
-  rod.position = Vector3(0.5, 0, 0);
-  model.bodies.push_back(rod);
-  Joint joint = spherical_joint("hinge", kWorld, 0, Vector3::Zero(), Vector3(0, 0, 0.5));
-  joint.type = type;
-  joint.axis = axis;
-  model.joints.push_back(joint);
-  model.settings.sleep.enabled = false;
-  return model;
-}
+Model rod_on(JointType type, const Vector3& axis = Vector3::UnitY()) { return testing::rod_held_at_head(type, axis); }
 
 // The rod's moment of inertia about an axis across it through its end, kg·m².
 constexpr double kEndInertia = 1.0 / 3 + 0.01 * 0.01 / 4;
@@ -232,15 +217,6 @@ TEST(LagrangeJointFriction, FrictionHoldsBelowItsBoundAndSlidesAbove) {
   }
 }
 
-// Successive maxima of x(t), after the first step.
-std::vector<double> maxima(const std::vector<double>& x) {
-  std::vector<double> peaks;
-  for (std::size_t k = 1; k + 1 < x.size(); ++k) {
-    if (x[k] > x[k - 1] && x[k] >= x[k + 1]) peaks.push_back(x[k]);
-  }
-  return peaks;
-}
-
 TEST(LagrangeJointDrives, HingeDriveSettlesWithItsDampingRatio) {
   // Gravity off; a PD drive of k = 40 N·m/rad, c = 2ζ√(kI) with ζ = 0.2 pulls the rod (I about
   // its hinged end) from 0 to 0.3 rad: the logarithmic decrement of the overshoots gives ζ back.
@@ -257,10 +233,9 @@ TEST(LagrangeJointDrives, HingeDriveSettlesWithItsDampingRatio) {
       step(state, dt);
       error.push_back(coordinates(state, 0).angle - target);
     }
-    const std::vector<double> peaks = maxima(error);
+    const std::vector<double> peaks = testing::maxima(error);
     ASSERT_GE(peaks.size(), 3u) << test.name;
-    const double decrement = std::log(peaks[0] / peaks[1]);
-    const double measured = decrement / std::sqrt(4 * kPi * kPi + decrement * decrement);
+    const double measured = testing::damping_ratio(peaks[0], peaks[1]);
     EXPECT_NEAR(measured, zeta, 0.1 * zeta) << test.name;
     EXPECT_LT(std::abs(error.back()), 1e-4) << test.name;  // settled (e^(−ζω·4 s) ≈ 10⁻⁴ of 0.3)
   }

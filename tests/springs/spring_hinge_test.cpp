@@ -17,6 +17,7 @@
 #include "limber/kernel/springs/spring_forces.hpp"
 #include "limber/kernel/springs/step.hpp"
 #include "tests/support/models.hpp"
+#include "tests/support/oscillation.hpp"
 
 namespace limber {
 namespace {
@@ -28,23 +29,7 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kRadius = 0.05, kSpacing = 0.25;
 constexpr double kEndInertia = 1.0 / 3 + kRadius * kRadius / 4;  // kg·m², across the rod through its end
 
-Model rod_on_hinge() {
-  Model model;
-  model.name = "rod";
-  Body rod;
-  rod.name = "rod";
-  rod.shape = {ShapeType::cylinder, 1, kRadius};
-  rod.mass = 1;
-  rod.axis = -Vector3::UnitX();  // head at the anchor
-  rod.position = Vector3(0.5, 0, 0);
-  model.bodies.push_back(rod);
-  Joint hinge = spherical_joint("hinge", kWorld, 0, Vector3::Zero(), Vector3(0, 0, 0.5));
-  hinge.type = JointType::revolute;
-  hinge.axis = Vector3::UnitY();
-  model.joints.push_back(hinge);
-  model.settings.sleep.enabled = false;
-  return model;
-}
+Model rod_on_hinge() { return testing::rod_held_at_head(JointType::revolute, Vector3::UnitY(), kRadius); }
 
 // The rod turning at ω about the hinge's anchor: its centre's velocity ω × (0.5, 0, 0).
 void spin(Model& model, const Vector3& omega) {
@@ -232,14 +217,6 @@ TEST(SpringHinge, FrictionDeceleratesAtTorqueOverInertiaThenHolds) {
   }
 }
 
-std::vector<double> maxima(const std::vector<double>& x) {
-  std::vector<double> peaks;
-  for (std::size_t k = 1; k + 1 < x.size(); ++k) {
-    if (x[k] > x[k - 1] && x[k] >= x[k + 1]) peaks.push_back(x[k]);
-  }
-  return peaks;
-}
-
 TEST(SpringHinge, DriveSettlesWithItsDampingRatio) {
   // Gravity off; a PD drive (k = 40 N·m/rad, ζ = 0.2 with I about the hinge) turns the rod to
   // 0.3 rad about its hinge: the logarithmic decrement gives ζ back within 10 %, and it settles.
@@ -255,10 +232,9 @@ TEST(SpringHinge, DriveSettlesWithItsDampingRatio) {
       ASSERT_EQ(step(state, dt).status, StepStatus::ok) << test.name;
       angle.push_back(coordinates(state, 0).angle - target);
     }
-    const std::vector<double> peaks = maxima(angle);
+    const std::vector<double> peaks = testing::maxima(angle);
     ASSERT_GE(peaks.size(), 3u) << test.name;
-    const double decrement = std::log(peaks[0] / peaks[1]);
-    const double measured = decrement / std::sqrt(4 * kPi * kPi + decrement * decrement);
+    const double measured = testing::damping_ratio(peaks[0], peaks[1]);
     EXPECT_NEAR(measured, zeta, 0.1 * zeta) << test.name;
     EXPECT_LT(std::abs(angle.back()), 1e-4) << test.name;
     std::cout << "[ hinge    ] " << test.name << ": damping ratio " << measured << " (drive's " << zeta << ")\n";

@@ -13,6 +13,7 @@
 #include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/springs/step.hpp"
 #include "tests/support/models.hpp"
+#include "tests/support/oscillation.hpp"
 
 namespace limber {
 namespace {
@@ -22,17 +23,8 @@ constexpr double kPi = std::numbers::pi;
 // One rod (cylinder, 1 kg, 1 m, radius 1 cm) whose head is held at the origin by a spherical
 // joint, lying along +x.
 Model rod_on_ball_joint() {
-  Model model;
-  model.name = "rod";
-  Body rod;
-  rod.name = "rod";
-  rod.shape = {ShapeType::cylinder, 1, 0.01};
-  rod.mass = 1;
-  rod.axis = -Vector3::UnitX();  // head at the anchor
-  rod.position = Vector3(0.5, 0, 0);
-  model.bodies.push_back(rod);
-  model.joints.push_back(spherical_joint("ball", kWorld, 0, Vector3::Zero(), Vector3(0, 0, 0.5)));
-  model.settings.sleep.enabled = false;
+  Model model = testing::rod_held_at_head(JointType::spherical);
+  model.joints[0].name = "ball";
   return model;
 }
 
@@ -126,14 +118,6 @@ TEST(SpringJointFriction, FrictionDeceleratesAtTorqueOverInertiaThenHolds) {
   }
 }
 
-std::vector<double> maxima(const std::vector<double>& x) {
-  std::vector<double> peaks;
-  for (std::size_t k = 1; k + 1 < x.size(); ++k) {
-    if (x[k] > x[k - 1] && x[k] >= x[k + 1]) peaks.push_back(x[k]);
-  }
-  return peaks;
-}
-
 TEST(SpringJointDrives, DriveSettlesWithItsDampingRatio) {
   // Gravity off; a PD drive (k = 40 N·m/rad, ζ = 0.2 with I about the held end) turns the rod
   // 0.3 rad about y: the logarithmic decrement gives ζ back within 10 %, and it settles.
@@ -149,10 +133,9 @@ TEST(SpringJointDrives, DriveSettlesWithItsDampingRatio) {
       step(state, 1e-3);
       angle.push_back(coordinates(state, 0).rotation.y() - target);
     }
-    const std::vector<double> peaks = maxima(angle);
+    const std::vector<double> peaks = testing::maxima(angle);
     ASSERT_GE(peaks.size(), 3u) << test.name;
-    const double decrement = std::log(peaks[0] / peaks[1]);
-    const double measured = decrement / std::sqrt(4 * kPi * kPi + decrement * decrement);
+    const double measured = testing::damping_ratio(peaks[0], peaks[1]);
     EXPECT_NEAR(measured, zeta, 0.1 * zeta) << test.name;
     EXPECT_LT(std::abs(angle.back()), 1e-4) << test.name;
   }

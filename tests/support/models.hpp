@@ -64,4 +64,24 @@ inline Model make_chain(const std::vector<double>& masses, double link_length, b
   return model;
 }
 
+/// The joint-control tests' pendulum: one rod (cylinder, 1 kg, 1 m, `radius` m) lying along +x,
+/// its head held at the origin by a joint of `type` about `axis` (world), sleep off.
+inline Model rod_held_at_head(JointType type, const Vector3& axis = Vector3::UnitY(), double radius = 0.01) {
+  Model model;
+  model.name = "rod";
+  Body rod;
+  rod.name = "rod";
+  rod.shape = {ShapeType::cylinder, 1, radius};
+  rod.mass = 1;
+  rod.axis = -Vector3::UnitX();  // head at the anchor
+  rod.position = Vector3(0.5, 0, 0);
+  model.bodies.push_back(rod);
+  Joint joint = spherical_joint("hinge", kWorld, 0, Vector3::Zero(), Vector3(0, 0, 0.5));
+  joint.type = type;
+  joint.axis = axis;
+  model.joints.push_back(joint);
+  model.settings.sleep.enabled = false;
+  return model;
+}
+
 }  // namespace limber::testing

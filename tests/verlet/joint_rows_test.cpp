@@ -103,7 +103,6 @@ TYPED_TEST(ParticleJointRows, AHingeKeepsItsAxis) {
     // The start's spin is inconsistent with the hinge; the sweeps take it out over the first
     // steps (faster with more sweeps), then the axis stays in the plane.
     if (s >= 60) out_of_plane = std::max(out_of_plane, std::abs(axis.y()));
-    EXPECT_LT(coordinates(state, model, 0).swing, kPi);  // measures stay defined
   }
   EXPECT_LT(out_of_plane, 1e-4) << "rad off the hinge's plane";
 }
