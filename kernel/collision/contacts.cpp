@@ -226,15 +226,24 @@ bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, Bal
   const SphereLimbContact start = ball_limb_geometry(state, limb, 0.0);
   double time = 0;
   if (start.separation >= 0) {
+    // Samples close enough that the ball cannot cross the limb between two: the relative motion
+    // between samples stays below the thinner of the two diameters' halves (a 100 m/s ball at
+    // 1/60 s against a 4 cm limb: about 80 samples; a resting contact: 4).
+    const auto& particles = state.particles;
+    const auto moved = [&](std::uint32_t p) { return (position_at(particles, p, 1) - position_at(particles, p, 0)).norm(); };
+    const double motion = moved(static_cast<std::uint32_t>(state.ball_particle)) +
+                          std::max(moved(state.limbs.head[limb]), moved(state.limbs.tail[limb]));
+    const double spacing = 0.5 * std::max(std::min(state.ball_radius, state.limbs.radius[limb]), 1e-4);
+    const int samples = static_cast<int>(std::clamp(std::ceil(motion / spacing), 4.0, 1024.0));
     double inside = -1;  // the first sampled time with overlap
-    for (double t : {0.25, 0.5, 0.75, 1.0}) {
-      if (ball_limb_geometry(state, limb, t).separation < 0) {
-        inside = t;
+    for (int k = 1; k <= samples; ++k) {
+      if (ball_limb_geometry(state, limb, double(k) / samples).separation < 0) {
+        inside = double(k) / samples;
         break;
       }
     }
     if (inside < 0) return false;
-    double outside = inside - 0.25;
+    double outside = inside - 1.0 / samples;
     for (int k = 0; k < 24; ++k) {
       const double middle = 0.5 * (outside + inside);
       (ball_limb_geometry(state, limb, middle).separation < 0 ? inside : outside) = middle;

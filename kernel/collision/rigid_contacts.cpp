@@ -4,8 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 
-#include "limber/kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/geometry/bounding_volumes.hpp"
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/collision/impulses.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
@@ -68,6 +69,36 @@ void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body
   y.angular_momentum[b] = state.bodies.world_inertia(y, b) * body.angular_velocity;
 }
 
+// The collision world's contacts (limb–limb, and limbs and the ball against static colliders)
+// among the bodies as they are now, touching or overlapping (margin 0): a rigid method answers
+// a contact only once it overlaps. An awake limb that touches a sleeping one wakes its island.
+void add_collision_world_contacts(RigidScene& state) {
+  const std::size_t body_count = state.bodies.size();
+  for (std::size_t b = 0; b < body_count; ++b) {
+    LimbSegment& segment = state.limb_segments[b];
+    if (state.shapes.is_ball[b]) {
+      segment.head = segment.tail = state.bodies.state.position[b];
+    } else {
+      std::tie(segment.head, segment.tail) = head_and_tail(state, b);
+    }
+    segment.radius = state.shapes.radius[b];
+    state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
+  }
+  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts);
+  for (const LimbContact& contact : state.limb_contacts) {
+    const auto a = static_cast<std::int32_t>(contact.first);
+    RigidContact rigid{a, -1, contact.point, contact.normal, -contact.separation, contact.restitution, contact.friction};
+    if (contact.second == kStaticShape) {
+      if (state.shapes.is_ball[contact.first]) rigid.restitution = std::max(rigid.restitution, state.ball_restitution);
+    } else {
+      rigid.b = static_cast<std::int32_t>(contact.second);
+      state.islands[state.island_of_body[contact.first]].wake();
+      state.islands[state.island_of_body[contact.second]].wake();
+    }
+    state.contacts.push_back(rigid);
+  }
+}
+
 }  // namespace
 
 void detect_rigid_contacts(RigidScene& state) {
@@ -100,6 +131,7 @@ void detect_rigid_contacts(RigidScene& state) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
   }
+  if (state.collisions.active()) add_collision_world_contacts(state);
 }
 
 void resolve_rigid_contacts(RigidScene& state, double dt) {

@@ -1,5 +1,7 @@
 // Contacts of the rigid-body methods (every method on kernel/rigid/rigid_scene.hpp) (thesis 2.3–2.5): limbs and the ball against the ground
-// and the bounds' walls, and the ball against the limbs, answered with impulses.
+// and the bounds' walls, the ball against the limbs, and — through the collision world
+// (kernel/geometry/limb_collisions.hpp) — limbs against limbs and limbs and the ball against the
+// static colliders, answered with impulses.
 //
 // Detection runs after the bodies moved (the thesis's loop, figure 2.5: move, then collide):
 // - a cylinder's end disk touches a plane at its lowest rim point, a capsule's end cap and the
@@ -20,7 +22,8 @@
 namespace limber {
 
 /// Finds the contacts of the awake bodies at the current state into scene.contacts, wakes the
-/// islands the ball touches and sets scene.ball_touching.
+/// islands the ball or an awake limb touches and sets scene.ball_touching. Limb–limb contacts
+/// have a = the lower body index, b = the other, normal from b to a and restitution 0.
 void detect_rigid_contacts(RigidScene& scene);
 
 /// Impulses and position correction for scene.contacts; dt is the step's.

@@ -156,6 +156,53 @@ Observation observe(const FeatherstoneState& state) {
   return out;
 }
 
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments) {
+  segments.resize(state.body_limb.size());
+  for (std::size_t body = 0; body < segments.size(); ++body) {
+    const std::uint32_t limb = state.body_limb[body];
+    segments[body] = {state.particles.position(state.limbs.head[limb]).template cast<double>(),
+                      state.particles.position(state.limbs.tail[limb]).template cast<double>(), state.limbs.radius[limb]};
+  }
+  if (state.ball_particle >= 0) {
+    const Eigen::Vector3d centre = state.particles.position(static_cast<std::uint32_t>(state.ball_particle)).template cast<double>();
+    segments.push_back({centre, centre, state.ball_radius});
+  }
+}
+
+void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments) {
+  segments.resize(model.bodies.size());
+  for (std::size_t body = 0; body < segments.size(); ++body) {
+    const Shape& shape = model.bodies[body].shape;
+    segments[body] = {world_point(scene, body, {0, 0, 0.5 * shape.length}), world_point(scene, body, {0, 0, -0.5 * shape.length}),
+                      shape.radius};
+  }
+  if (scene.ball >= 0) {
+    const auto ball = static_cast<std::size_t>(scene.ball);
+    segments.push_back({scene.bodies.state.position[ball], scene.bodies.state.position[ball], scene.shapes.radius[ball]});
+  }
+}
+
+double ground_penetration(const Model& model, std::span<const LimbSegment> segments) {
+  if (!model.ground) return 0;
+  double deepest = 0;
+  for (std::size_t body = 0; body < segments.size() && body < model.bodies.size(); ++body) {
+    const LimbSegment& segment = segments[body];
+    const Eigen::Vector3d axis = segment.tail - segment.head;
+    const double length = axis.norm();
+    const bool disk = model.bodies[body].shape.type == ShapeType::cylinder && length > 0;
+    const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+    // An end's reach below its centre (end_support, geometry.hpp): the radius for a sphere, the
+    // rim's r·√(1 − (n·u)²) for a disk.
+    const double reach = disk ? end_support(up, axis / length, segment.radius, true).reach : segment.radius;
+    const double lowest = std::min(segment.head.z(), segment.tail.z()) - reach;
+    deepest = std::max(deepest, model.ground->height - lowest);
+  }
+  return deepest;
+}
+
+template void limb_segments<float>(const VerletState<float>&, std::vector<LimbSegment>&);
+template void limb_segments<double>(const VerletState<double>&, std::vector<LimbSegment>&);
 template Observation observe<float>(const VerletState<float>&);
 template Observation observe<double>(const VerletState<double>&);
 

@@ -2,6 +2,9 @@
 // energy, sleeping. Read-only over a state; every method will expose the same quantities.
 #pragma once
 
+#include <span>
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "limber/kernel/model/joint_coordinates.hpp"
@@ -49,6 +52,18 @@ Observation observe(const LagrangeState& state);
 /// gaps between the joints' world anchor points (a prismatic joint's along its slide not
 /// counted), which reduced coordinates keep at 0 to rounding.
 Observation observe(const FeatherstoneState& state);
+
+/// Each Model body's limb as collision sees it now (head → tail and radius; kernel/geometry/
+/// limb_collisions.hpp), then the ball's (head = tail = its centre) when there is one, into
+/// `segments`: what LimbCollisions::deepest_penetration measures every
+/// method with. The stiff-spring, Lagrange and Featherstone states share the rigid scene's.
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments);
+void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments);
+
+/// How far the limbs reach below the ground now (m, ≥ 0; 0 without a ground): the deepest end
+/// sphere of a capsule, or end rim of a cylinder, under the ground plane.
+double ground_penetration(const Model& model, std::span<const LimbSegment> segments);
 
 extern template Observation observe<float>(const VerletState<float>&);
 extern template Observation observe<double>(const VerletState<double>&);

@@ -145,6 +145,33 @@ inline void require_box(const Vector3& min, const Vector3& max, std::string_view
   }
 }
 
+/// A triangle mesh (model.hpp's TriangleMesh): finite vertices, at least one triangle, indices
+/// naming vertices, no degenerate triangle (twice its area, |(v1 − v0) × (v2 − v0)|, must exceed
+/// 1e-10 of its longest edge squared: a sliver has no normal to push along). Fails at
+/// "<vertices_path>[i]" or "<triangles_path>[t]".
+inline void require_triangle_mesh(const TriangleMesh& mesh, std::string_view vertices_path, std::string_view triangles_path) {
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) require_finite(mesh.vertices[i], indexed(vertices_path, i));
+  if (mesh.triangles.empty()) fail(triangles_path, "must list at least one triangle");
+  const std::size_t count = mesh.vertices.size();
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& triangle = mesh.triangles[t];
+    for (const std::uint32_t index : triangle) {
+      if (index >= count) {
+        fail(indexed(triangles_path, t), "vertex index " + std::to_string(index) + " names no vertex (there are " +
+                                             std::to_string(count) + ")");
+      }
+    }
+    const Vector3& a = mesh.vertices[triangle[0]];
+    const Vector3 ab = mesh.vertices[triangle[1]] - a, ac = mesh.vertices[triangle[2]] - a;
+    const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
+    const double twice_area = ab.cross(ac).norm();
+    if (!(twice_area > 1e-10 * longest) || longest == 0) {
+      fail(indexed(triangles_path, t), "is degenerate (area " + format_number(0.5 * twice_area) +
+                                           " m^2): its vertices are repeated or in a line");
+    }
+  }
+}
+
 /// Every item's name differs from the others'. Fails at "<collection>[j].name" for the first j
 /// whose name an earlier item has. Sorts contiguous (hash, index) pairs — no allocation per name,
 /// ~0.1 s for a million — and compares names only where hashes meet.

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <unordered_set>
 
 #include "limber/kernel/model/checks.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
@@ -276,6 +277,54 @@ void validate_gear(const Gear& gear, std::size_t body_count, std::size_t index) 
   if (gear.ratio == 0) fail(path("ratio"), "must not be 0 (the second gear would be held still)");
 }
 
+// A static collider: the fields its type uses, and the surface's coefficients. Fields another
+// type uses are not looked at (a box's radius means nothing).
+void validate_collider(const StaticCollider& collider, std::size_t index) {
+  const auto path = field_path("colliders", index);
+  require_name(collider.name, path("name"), /*is_body=*/false);
+  require_finite(collider.position, path("position"));
+  const Eigen::Vector4d rotation = collider.orientation.coeffs();
+  for (int k = 0; k < 4; ++k) require_finite(rotation[k], [&] { return path("orientation")() + ".coeffs[" + std::to_string(k) + "]"; });
+  if (!(std::abs(rotation.norm() - 1) <= 1e-6)) {
+    fail(path("orientation"), "must be a unit quaternion (normalize it), got norm " + format_number(rotation.norm()));
+  }
+  switch (collider.type) {
+    case ColliderType::box:
+      for (int axis = 0; axis < 3; ++axis) {
+        require_positive(collider.half_extents[axis], [&] { return indexed(path("half_extents")(), static_cast<std::size_t>(axis)); });
+      }
+      break;
+    case ColliderType::capsule:
+      require_non_negative(collider.length, path("length"));
+      require_positive(collider.radius, path("radius"));
+      break;
+    case ColliderType::mesh:
+      require_triangle_mesh(collider.mesh, path("mesh.vertices")(), path("mesh.triangles")());
+      require_positive(collider.thickness, path("thickness"));
+      break;
+    default:
+      fail(path("type"), "is not a collider type (box, capsule or mesh), got " + std::to_string(static_cast<int>(collider.type)));
+  }
+  require_in_range(collider.restitution, 0, 1, path("restitution"));
+  require_non_negative(collider.friction, path("friction"));
+}
+
+// Collider names: unique among the colliders, and no body's name either, so a name in a contact
+// report or a World lookup means one thing.
+void require_collider_names(const Model& model) {
+  const auto name_of = [](const StaticCollider& collider) -> std::string_view { return collider.name; };
+  require_unique_names(model.colliders, name_of, "colliders");
+  if (model.colliders.empty()) return;
+  std::unordered_set<std::string_view> body_names;
+  body_names.reserve(model.bodies.size());
+  for (const Body& body : model.bodies) body_names.insert(body.name);
+  for (std::size_t c = 0; c < model.colliders.size(); ++c) {
+    if (body_names.contains(model.colliders[c].name)) {
+      fail(indexed("colliders", c) + ".name", "\"" + model.colliders[c].name + "\" is also a body's name");
+    }
+  }
+}
+
 void validate_settings(const Settings& settings) {
   require_finite(settings.gravity, "settings.gravity");
   require_positive(settings.time_step, "settings.time_step");
@@ -283,6 +332,7 @@ void validate_settings(const Settings& settings) {
   require_non_negative(settings.damping, "settings.damping");
   require_positive(settings.divergence_speed, "settings.divergence_speed");
   require_non_negative(settings.contact_recovery_speed, "settings.contact_recovery_speed");
+  require_non_negative(settings.limb_friction, "settings.limb_friction");
   for (int axis = 0; axis < 3; ++axis) {
     require_non_negative(settings.drag.linear[axis], [axis] { return indexed("settings.drag.linear", axis); });
     require_non_negative(settings.drag.angular[axis], [axis] { return indexed("settings.drag.angular", axis); });
@@ -320,6 +370,9 @@ void validate(const Model& model) {
     require_finite(ball->position, "ball.position");
     require_finite(ball->velocity, "ball.velocity");
   }
+
+  for (std::size_t i = 0; i < model.colliders.size(); ++i) validate_collider(model.colliders[i], i);
+  require_collider_names(model);
 
   validate_settings(model.settings);
 }

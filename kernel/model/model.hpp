@@ -9,6 +9,7 @@
 // the scene boundary (tools/scenes/*.json are already in SI), never here.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
@@ -65,6 +66,20 @@ struct Inertial {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();        ///< kg·m², about the centre of mass, body frame
 };
 
+/// Which bodies and colliders touch (Box2D's category and mask filter): two collide when each
+/// one's `group` shares a bit with the other's `mask`. Besides the filter, bodies joined by a joint
+/// never collide (their shapes meet at the joint by design), nor do two bodies that overlap in
+/// the Model's poses (a torso and the arm that hangs into it; Jolt's ragdoll does the same).
+struct CollisionFilter {
+  std::uint32_t group = 1;           ///< the categories it belongs to, bits
+  std::uint32_t mask = 0xFFFFFFFFu;  ///< the categories it collides with, bits
+};
+
+/// Whether filters `a` and `b` let their owners collide.
+inline bool filters_collide(const CollisionFilter& a, const CollisionFilter& b) {
+  return (a.group & b.mask) != 0 && (b.group & a.mask) != 0;
+}
+
 /// A rigid limb with distributed mass.
 ///
 /// Its mass is spread uniformly over its shape, unless `point_masses` is given: then the limb's
@@ -83,6 +98,7 @@ struct Body {
   Vector3 axis = Vector3::UnitZ();            ///< unit world direction of local +z (tail → head)
   Vector3 linear_velocity = Vector3::Zero();  ///< of the centre, m/s
   Vector3 angular_velocity = Vector3::Zero(); ///< world frame, rad/s
+  CollisionFilter collision;                  ///< with other limbs and the colliders
 
   /// Rotation from body frame to world: the shortest arc taking local +z onto `axis`.
   Eigen::Quaterniond orientation() const;
@@ -248,6 +264,35 @@ struct Ball {
   Vector3 velocity = Vector3::Zero();   ///< initial, m/s
 };
 
+/// A triangle mesh, world coordinates: each triangle's vertices counter-clockwise seen from
+/// outside, so its normal (v1 − v0) × (v2 − v0) points out of the solid. Triangles are
+/// one-sided: a limb behind a triangle (within its thickness) is pushed out through its front.
+struct TriangleMesh {
+  std::vector<Vector3> vertices;                 ///< m
+  std::vector<std::array<std::uint32_t, 3>> triangles;  ///< indices into vertices, non-degenerate
+};
+
+enum class ColliderType { box, capsule, mesh };
+
+/// Static level geometry (it never moves): limbs and the ball collide with it, with its Coulomb
+/// friction and restitution (the ball's restitution where that is larger, as on the ground).
+struct StaticCollider {
+  std::string name;
+  ColliderType type = ColliderType::box;
+  /// box: its centre; capsule: the middle of its core segment. m, world.
+  Vector3 position = Vector3::Zero();
+  /// box: its orientation (box frame → world); capsule: turns local +z onto the core segment.
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+  Vector3 half_extents = Vector3::Zero();  ///< box: m, > 0 each
+  double length = 0;                       ///< capsule: core segment along local z, m, ≥ 0
+  double radius = 0;                       ///< capsule: m, > 0
+  TriangleMesh mesh;                       ///< mesh: world coordinates
+  double thickness = 0.1;                  ///< mesh: how far behind a triangle still counts as inside, m, > 0
+  double restitution = 0;                  ///< [0, 1]
+  double friction = 0.5;                   ///< Coulomb coefficient, ≥ 0
+  CollisionFilter collision;
+};
+
 /// Bodies at rest are not simulated (thesis 4.5.3): an island sleeps after its particles have
 /// moved slower than `speed_threshold` for `time_to_sleep`, and wakes on contact or force.
 struct SleepSettings {
@@ -283,6 +328,8 @@ struct Settings {
   /// drive goes limp (stiffness and damping 0), so a body that tracked a pose falls like a
   /// ragdoll. Applied after each step by release_drives_after_impact (methods/method.hpp).
   bool release_drives_on_impact = false;
+  /// Coulomb friction between two limbs that touch (limb–limb contacts; restitution 0).
+  double limb_friction = 0.5;
 };
 
 /// A whole scene. Build one in C++ or load it with load_scene (kernel/scene/scene_file.hpp).
@@ -294,6 +341,7 @@ struct Model {
   std::optional<Ground> ground;
   std::optional<Bounds> bounds;
   std::optional<Ball> ball;
+  std::vector<StaticCollider> colliders;  ///< static level geometry
   Settings settings;
 
   /// Index of the body called `name`, or −1.

@@ -14,6 +14,7 @@
 #include "limber/kernel/threading/block_runner.hpp"
 #include "limber/layouts/aligned_array.hpp"
 #include "limber/layouts/constraints/constraint_batches.hpp"
+#include "limber/layouts/constraints/contact_row_batches.hpp"
 #include "limber/layouts/constraints/joint_row_batches.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/particles/interleaved_particles.hpp"
@@ -114,6 +115,8 @@ struct RelaxationPlan {
   std::vector<std::uint32_t> joint_row_order, joint_bucket;
   Scalar joint_step = 0;
   std::uint64_t joint_built_for = ~std::uint64_t{0};  ///< state.awake_generation the joint batches hold
+  /// Contact rows (kernel/particles/contact_rows.hpp), coloured and batched every substep.
+  ContactRowBatches<Scalar> contact_batches;
 };
 
 }  // namespace limber

@@ -11,12 +11,14 @@
 
 #include <Eigen/Core>
 
+#include "limber/kernel/geometry/limb_collisions.hpp"
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/model/island_sleep.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
+#include "limber/kernel/particles/contact_rows.hpp"
 #include "limber/kernel/particles/joint_rows.hpp"
 #include "limber/kernel/particles/relaxation_plan.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
@@ -214,6 +216,8 @@ struct VerletState {
   /// and the number of colours.
   std::vector<std::uint8_t> constraint_colour;
   std::uint32_t colour_count = 0;  ///< names them in outputs (particle_name, compile.hpp)
+  /// Limb–limb and limb–static collision (inactive for a scene with neither).
+  LimbCollisions collisions;
   std::int64_t ball_particle = -1;
   std::int64_t ball_island = -1;
   double ball_radius = 0, ball_restitution = 0;
@@ -232,6 +236,12 @@ struct VerletState {
   std::vector<std::uint32_t> contact_particles;  ///< particles the contacts of this step move
   std::vector<PlaneContact> plane_contacts;
   std::vector<BallContact> ball_contacts;  ///< the last substep's
+  ContactRowSet contact_rows;              ///< limb–limb, limb–static, ball–static: the last substep's
+  // Detection's scratch (limb_contacts.cpp): per Model body (and the ball), its segment and
+  // whether it is awake; per limb, a flag; the contacts found.
+  std::vector<LimbSegment> limb_segments;
+  std::vector<std::uint8_t> limb_awake, limb_island_awake;
+  std::vector<LimbContact> limb_contacts;
   bool ball_touched = false;  ///< the ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
   std::vector<KinematicTarget> kinematic_targets;  ///< pinned particles only; next step, then cleared

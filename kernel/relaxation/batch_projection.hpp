@@ -48,6 +48,9 @@ struct ScalarLanes {
   static value broadcast(Scalar v) { return v; }
   static value gather(const Scalar* base, index offset) { return base[offset]; }
   static void scatter(value v, Scalar* base, index offset) { base[offset] = v; }
+  static void scatter_where(bool m, value v, Scalar* base, index offset) {
+    if (m) base[offset] = v;
+  }
   static value sqrt(value v) { return std::sqrt(v); }
   static value abs(value v) { return std::abs(v); }
   static value max(value a, value b) { return std::max(a, b); }
@@ -88,6 +91,25 @@ struct SimdLanes {
     if constexpr (size == 8 && std::is_same_v<Scalar, double>) return _mm512_i64scatter_pd(base, offset, v, 8);
 #endif
     v.scatter(base, offset);
+  }
+  // Writes only the lanes where `m` holds: no lane writes a particle it did not move (the null
+  // particle, pinned ones), so threads never write the same place.
+  static void scatter_where(typename value::batch_bool_type m, value v, Scalar* base, index offset) {
+#if defined(__AVX512F__)
+    if constexpr (size == 16 && std::is_same_v<Scalar, float>) {
+      return _mm512_mask_i32scatter_ps(base, static_cast<__mmask16>(m), offset, v, 4);
+    }
+    if constexpr (size == 8 && std::is_same_v<Scalar, double>) {
+      return _mm512_mask_i64scatter_pd(base, static_cast<__mmask8>(m), offset, v, 8);
+    }
+#endif
+    alignas(64) Scalar values[size];
+    alignas(64) Index indices[size];
+    bool lanes[size];
+    v.store_aligned(values), offset.store_aligned(indices), m.store_unaligned(lanes);
+    for (std::size_t lane = 0; lane < size; ++lane) {
+      if (lanes[lane]) base[indices[lane]] = values[lane];
+    }
   }
   static value sqrt(value v) { return xsimd::sqrt(v); }
   static value abs(value v) { return xsimd::abs(v); }

@@ -84,8 +84,17 @@ RigidScene compile_rigid_scene(const Model& model) {
   }
 
   scene.planes = scene_planes(model);
-  // Every limb end against every plane, plus the ball against every limb.
-  scene.contacts.reserve(2 * body_count * scene.planes.size() + limb_count);
+  scene.collisions = LimbCollisions(model);
+  // Every limb end against every plane, plus the ball against every limb; with the collision
+  // world, room for a limb pair and two static contacts per body (more grows it once).
+  std::size_t contacts = 2 * body_count * scene.planes.size() + limb_count;
+  if (scene.collisions.active()) {
+    contacts += 3 * body_count;
+    scene.limb_segments.resize(body_count);
+    scene.limb_awake.resize(body_count);
+    scene.limb_contacts.reserve(3 * body_count);
+  }
+  scene.contacts.reserve(contacts);
   scene.velocity.assign(body_count, Eigen::Vector3d::Zero());
   scene.angular_velocity.assign(body_count, Eigen::Vector3d::Zero());
   scene.applied_force.assign(body_count, Eigen::Vector3d::Zero());

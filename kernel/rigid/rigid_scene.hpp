@@ -1,6 +1,6 @@
-// The rigid-body scene every rigid-body method shares (springs now; Lagrange multipliers and
-// Featherstone next): limbs and the ball as rigid bodies with their shapes, islands, the planes
-// they touch, and the contacts of the last step. A method's state derives from it and adds its
+// The rigid-body scene every rigid-body method shares (springs, Lagrange multipliers,
+// Featherstone): limbs and the ball as rigid bodies with their shapes, islands, the planes and
+// static colliders they touch, and the contacts of the last step. A method's state derives from it and adds its
 // joints' representation.
 #pragma once
 
@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/kernel/geometry/limb_collisions.hpp"
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/model/island_sleep.hpp"
 #include "limber/kernel/model/model.hpp"
@@ -75,6 +76,12 @@ struct RigidScene {
   std::vector<RigidContact> contacts;  ///< of the last step
   bool ball_touching = false;          ///< the ball had a contact with a limb in the last step
   std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
+  /// Limbs against limbs and against the static colliders (kernel/geometry/limb_collisions.hpp),
+  /// and its per-step buffers, sized only when it is active (a scene without either pays nothing).
+  LimbCollisions collisions;
+  std::vector<LimbSegment> limb_segments;  ///< per body (the ball last): the Model's head → tail now
+  std::vector<std::uint8_t> limb_awake;    ///< per body: its island is awake
+  std::vector<LimbContact> limb_contacts;  ///< the last detection's, before they became `contacts`
   /// Loads applied from outside over the next step, per body, world frame: a force at the
   /// centre of mass (N) and a torque (N·m). Every method's step adds them to its own forces
   /// (accumulate_applied_forces; Featherstone through its joint forces) and zeroes them at its end.
@@ -89,7 +96,8 @@ struct RigidScene {
 /// - the ball becomes a solid sphere body, the last one;
 /// - bodies joined by joints (not through the world) form islands, which start asleep when the
 ///   scene asks (Settings::sleep.start_asleep) and they are at rest; the ball is its own;
-/// - the ground and the bounds' walls become planes.
+/// - the ground and the bounds' walls become planes;
+/// - limb pairs and static colliders go to `collisions` (LimbCollisions of the Model).
 /// Throws ModelError when the model is invalid.
 RigidScene compile_rigid_scene(const Model& model);
 

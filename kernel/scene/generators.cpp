@@ -45,6 +45,7 @@ Body make_link(std::string name, const Vector3& head, const Vector3& direction, 
   body.mass = mass;
   body.position = head + 0.5 * length * direction;
   body.axis = -direction;  // tail → head
+  body.collision = {kLinkCollisionGroup, ~kLinkCollisionGroup};
   return body;
 }
 
@@ -189,29 +190,52 @@ Model make_grid_model(const GridSpec& spec) {
   return model;
 }
 
-double footprint(const Model& model) {
-  constexpr double infinity = std::numeric_limits<double>::infinity();
-  Vector3 low = Vector3::Constant(infinity), high = Vector3::Constant(-infinity);
+namespace {
+
+/// The bodies' bounding box (capsule axes ± radius), m; empty (low > high) for no bodies.
+Eigen::AlignedBox3d body_bounds(const Model& model) {
+  Eigen::AlignedBox3d box;  // empty
   for (const Body& body : model.bodies) {
     const Vector3 reach = Vector3::Constant(body.shape.radius);
-    low = low.cwiseMin(body.head() - reach).cwiseMin(body.tail() - reach);
-    high = high.cwiseMax(body.head() + reach).cwiseMax(body.tail() + reach);
+    box.extend(body.head() - reach).extend(body.head() + reach).extend(body.tail() - reach).extend(body.tail() + reach);
   }
-  return model.bodies.empty() ? 0.0 : (high - low).head<2>().maxCoeff();
+  return box;
 }
 
-Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path) {
-  require_count(count, 1, std::string(path) + ".count");
-  require_int_indices(double(count) * double(model.bodies.size()), std::string(path) + ".count");
+}  // namespace
+
+double footprint(const Model& model) {
+  return model.bodies.empty() ? 0.0 : body_bounds(model).sizes().head<2>().maxCoeff();
+}
+
+double vertical_extent(const Model& model) { return model.bodies.empty() ? 0.0 : body_bounds(model).sizes().z(); }
+
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                std::size_t layers, double layer_height) {
+  const std::string at(path);
+  require_count(count, 1, at + ".count");
+  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
   const double least = footprint(model);
-  require_finite(spacing, std::string(path) + ".spacing");
+  require_finite(spacing, at + ".spacing");
   if (!(spacing >= least)) {
-    fail(std::string(path) + ".spacing", "must be >= " + format_number(least) +
-                                             " (the bodies' footprint in x and y, m) so copies do not overlap, got " +
-                                             format_number(spacing));
+    fail(at + ".spacing", "must be >= " + format_number(least) +
+                              " (the bodies' footprint in x and y, m) so copies do not overlap, got " + format_number(spacing));
   }
+  require_count(layers, 1, at + ".layers");
+  if (layers > count) {
+    fail(at + ".layers", "must be <= count (" + std::to_string(count) + "), got " + std::to_string(layers));
+  }
+  if (layers > 1) {
+    const double tallest = vertical_extent(model);
+    require_finite(layer_height, at + ".layer_height");
+    if (!(layer_height >= tallest)) {
+      fail(at + ".layer_height", "must be >= " + format_number(tallest) +
+                                     " (the bodies' height, m) so layers do not overlap, got " + format_number(layer_height));
+    }
+  }
+  const std::size_t per_layer = (count + layers - 1) / layers;
   std::size_t per_row = 1;
-  while (per_row * per_row < count) ++per_row;
+  while (per_row * per_row < per_layer) ++per_row;
 
   Model copies = model;
   copies.bodies.clear(), copies.joints.clear(), copies.gears.clear();
@@ -219,10 +243,54 @@ Model copies_of(const Model& model, std::size_t count, double spacing, std::stri
   copies.joints.reserve(count * model.joints.size());
   copies.gears.reserve(count * model.gears.size());
   for (std::size_t k = 0; k < count; ++k) {
-    const Vector3 offset = spacing * Vector3(double(k % per_row), double(k / per_row), 0);
+    const std::size_t layer = k / per_layer, place = k % per_layer;
+    const double stagger = layer % 2 == 1 ? 0.5 : 0.0;  // odd layers fall between the copies below
+    const Vector3 offset(spacing * (double(place % per_row) + stagger), spacing * (double(place / per_row) + stagger),
+                         layer_height * double(layer));
     append_model(copies, model, std::string(prefix) + std::to_string(k) + ".", offset);
   }
   return copies;
+}
+
+TriangleMesh make_stairs_mesh(const StairsSpec& spec) {
+  require_count(spec.steps, 1, "stairs.steps");
+  require_positive(spec.rise, "stairs.rise");
+  require_positive(spec.run, "stairs.run");
+  require_positive(spec.width, "stairs.width");
+  require_positive(spec.landing, "stairs.landing");
+  require_finite(spec.position, "stairs.position");
+  require_non_zero(spec.direction, "stairs.direction");
+  if (!(std::abs(spec.direction.z()) <= 1e-9 * spec.direction.norm())) {
+    fail("stairs.direction", "must be horizontal (z = 0), got " + format_vector(spec.direction));
+  }
+  if (spec.steps > 1'000'000) fail("stairs.steps", "must be <= 1000000, got " + std::to_string(spec.steps));
+
+  // Stairs coordinates: s uphill along d, t to the left along w = z × d, h up; (d, w, z) is
+  // right-handed (d × w = z), so the quad on corner p with edges u, v faces u × v.
+  const Vector3 d = spec.direction.normalized(), up = Vector3::UnitZ(), w = up.cross(d);
+  const auto point = [&](double s, double t, double h) -> Vector3 { return spec.position + s * d + t * w + h * up; };
+  TriangleMesh mesh;
+  mesh.vertices.reserve(4 * (4 * spec.steps + 2));
+  mesh.triangles.reserve(2 * (4 * spec.steps + 2));
+  const auto quad = [&](const Vector3& p, const Vector3& u, const Vector3& v) {
+    const auto first = static_cast<std::uint32_t>(mesh.vertices.size());
+    mesh.vertices.insert(mesh.vertices.end(), {p, p + u, p + u + v, p + v});
+    mesh.triangles.push_back({first, first + 1, first + 2});
+    mesh.triangles.push_back({first, first + 2, first + 3});
+  };
+  const double half = 0.5 * spec.width, top = double(spec.steps) * spec.rise;
+  const double length = double(spec.steps - 1) * spec.run + spec.landing;
+  for (std::size_t k = 0; k < spec.steps; ++k) {
+    const double s0 = double(k) * spec.run, h0 = double(k) * spec.rise, h1 = h0 + spec.rise;
+    const double depth = k + 1 < spec.steps ? spec.run : spec.landing;  // the tread above riser k
+    quad(point(s0, -half, h0), spec.rise * up, spec.width * w);       // riser: z × w = −d
+    quad(point(s0, -half, h1), depth * d, spec.width * w);            // tread: d × w = z
+    quad(point(s0, half, 0), h1 * up, depth * d);                     // left side: z × d = w
+    quad(point(s0, -half, 0), depth * d, h1 * up);                    // right side: d × z = −w
+  }
+  quad(point(length, -half, 0), spec.width * w, top * up);  // back: w × z = d
+  quad(point(0, -half, 0), spec.width * w, length * d);     // bottom: w × d = −z
+  return mesh;
 }
 
 Model make_humanoid_pile(std::size_t count, double spacing) {

@@ -1,5 +1,6 @@
 // Model generators for scalability workloads: chains, trees, cloth-like grids and piles of
-// humanoids of any size, built in C++ (a scene file of a million bodies would be mostly names).
+// humanoids of any size, built in C++ (a scene file of a million bodies would be mostly names);
+// copies of a model side by side or stacked in layers; and level geometry (stairs).
 //
 // Units are SI (m, kg); z is up. Limbs are joined head to tail at their axis end points, the
 // only places the particle (Verlet) method has particles (compile.hpp). Every generator returns
@@ -10,14 +11,22 @@
 // sleeping bodies skip. The particle method joins their links with zero-length constraints
 // unless told VerletSettings::joints = shared_particle (VerletOptions::verlet), which makes each
 // joint one particle: the workloads' usual form.
+//
+// Generated links belong to collision group kLinkCollisionGroup and do not collide with each
+// other (a workload measures relaxation; a rope or cloth that folds onto itself is not what they
+// model), only with static colliders, the ground, the bounds and the ball.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string_view>
 
 #include "limber/kernel/model/model.hpp"
 
 namespace limber {
+
+/// CollisionFilter::group of every generated link; their mask leaves it out.
+inline constexpr std::uint32_t kLinkCollisionGroup = 2;
 
 /// A straight chain of capsule links laid head to tail from `anchor` along `direction`.
 struct ChainSpec {
@@ -71,15 +80,45 @@ struct GridSpec {
 /// constraint (rows·columns particles; the pins add neither).
 Model make_grid_model(const GridSpec& spec);
 
+/// A flight of stairs as a static mesh (StaticCollider::mesh): `steps` risers of `rise`, the
+/// treads between them `run` deep, and a landing `landing` deep at the top. `position` is the
+/// foot of the first riser's front edge, at the middle of its width; `direction` (horizontal)
+/// points uphill. The solid is closed: risers (facing down the stairs, −direction), treads and
+/// the landing (up), the back (+direction), both sides and the bottom (down), every triangle
+/// counter-clockwise seen from outside, each face a quad of two triangles on its own 4 vertices.
+struct StairsSpec {
+  std::size_t steps = 6;            ///< ≥ 1: risers
+  double rise = 0.15;               ///< m, > 0: each riser's height
+  double run = 0.3;                 ///< m, > 0: each tread's depth
+  double width = 2;                 ///< m, > 0
+  double landing = 0.3;             ///< m, > 0: the top's depth beyond the last riser
+  Vector3 position{0, 0, 0};        ///< m: the first riser's foot, mid-width
+  Vector3 direction{1, 0, 0};       ///< horizontal, non-zero (normalized): uphill
+};
+
+/// The stairs' mesh: 4·steps + 2 quads, 8·steps + 4 triangles, world coordinates. Its top is
+/// steps · rise above `position`, its length (steps − 1) · run + landing. Throws ModelError
+/// "stairs.<field>: ..." on a bad spec.
+TriangleMesh make_stairs_mesh(const StairsSpec& spec);
+
 /// The larger of the bodies' extents in x and y (capsule axes ± radius), m; 0 for no bodies.
 double footprint(const Model& model);
 
-/// `count` ≥ 1 copies of `model`'s bodies, joints and gears on a square lattice: copy k shifted
-/// by spacing · (k mod n, k div n, 0), n = ⌈√count⌉ copies per row, names led by
-/// "<prefix><k>.". Everything else (settings, ground, bounds, ball) is the model's, once.
-/// `spacing` (m) must be at least footprint(model) so copies do not overlap. Errors name
-/// `path`.count and `path`.spacing.
-Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path);
+/// The bodies' extent in z (capsule axes ± radius), m; 0 for no bodies.
+double vertical_extent(const Model& model);
+
+/// `count` ≥ 1 copies of `model`'s bodies, joints and gears on square lattices, names led by
+/// "<prefix><k>.". With `layers` = 1 (the default): one lattice, copy k shifted by
+/// spacing · (k mod n, k div n, 0), n = ⌈√count⌉ copies per row. With `layers` = L > 1 (a pile
+/// to drop): the copies fill L lattices of m = ⌈count / L⌉ copies each, lattice l (from the
+/// bottom) `layer_height` · l higher, copy k in lattice k div m at place i = k mod m; odd
+/// lattices are shifted by half a spacing in x and y, so a copy falls between the copies below
+/// it rather than onto one. Everything else (settings, ground, bounds, ball, colliders) is the
+/// model's, once. `spacing` (m) must be at least footprint(model) and, with layers,
+/// `layer_height` (m) at least vertical_extent(model), so copies do not overlap; 1 ≤ layers ≤ count.
+/// Errors name `path`.count, `path`.spacing, `path`.layers and `path`.layer_height.
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                std::size_t layers = 1, double layer_height = 0);
 
 /// copies_of the embedded humanoid scene (scene_file.hpp) with prefix "h", its ball and bounds
 /// left out; `spacing` must be at least the humanoid's footprint (≈ 0.2 m). Its ground and

@@ -14,150 +14,24 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
-#include <nlohmann/json.hpp>
 #include <unordered_map>
 #include <vector>
 
 #include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/scene/scene_json.hpp"
 #include "limber/kernel/scene/generators.hpp"
 
 namespace limber {
 namespace {
 
-// Ordered, so unknown fields and available variants are reported in file order.
-using Json = nlohmann::ordered_json;
-using namespace checks;
-
-std::string child(const std::string& path, const std::string& key) {
-  return path.empty() ? key : path + "." + key;
-}
-
-// Appended rather than `"\"" + std::string(text) + "\""`, which GCC 12 flags with a false
-// -Wrestrict (GCC bug 105329).
-std::string in_quotes(std::string_view text) {
-  std::string quoted(1, '"');
-  quoted.append(text);
-  quoted.push_back('"');
-  return quoted;
-}
-
-// ---- Typed values: each failure names the path and what was found instead.
-
-[[noreturn]] void wrong_type(const Json& value, const std::string& path, std::string_view wanted) {
-  fail(path, "must be " + std::string(wanted) + ", got " + value.type_name());
-}
-
-double read_number(const Json& value, const std::string& path) {
-  if (!value.is_number()) wrong_type(value, path, "a number");
-  const double number = value.get<double>();
-  require_finite(number, path);  // a guard: nlohmann itself refuses 1e999 (ParseErrorLocator)
-  return number;
-}
-
-/// A JSON integer literal that fits an int (body and joint indices are ints).
-int read_int(const Json& value, const std::string& path) {
-  if (value.is_number_float()) fail(path, "must be an integer, got " + value.dump());
-  if (!value.is_number_integer()) wrong_type(value, path, "an integer");
-  if (value.is_number_unsigned() ? value.get<std::uint64_t>() > INT_MAX
-                                 : value.get<std::int64_t>() > INT_MAX) {
-    fail(path, "must be at most " + std::to_string(INT_MAX) + ", got " + value.dump());
-  }
-  if (value.get<std::int64_t>() < INT_MIN) {
-    fail(path, "must be at least " + std::to_string(INT_MIN) + ", got " + value.dump());
-  }
-  return value.get<int>();
-}
-
-std::string read_string(const Json& value, const std::string& path) {
-  if (!value.is_string()) wrong_type(value, path, "a string");
-  return value.get<std::string>();
-}
-
-bool read_bool(const Json& value, const std::string& path) {
-  if (!value.is_boolean()) wrong_type(value, path, "true or false");
-  return value.get<bool>();
-}
-
-Vector3 read_vector(const Json& value, const std::string& path) {
-  if (!value.is_array() || value.size() != 3) {
-    const std::string found = value.is_array() ? "an array of " + std::to_string(value.size())
-                                               : std::string(value.type_name());
-    fail(path, "must be an array of 3 numbers, got " + found);
-  }
-  return {read_number(value[0], indexed(path, 0)), read_number(value[1], indexed(path, 1)),
-          read_number(value[2], indexed(path, 2))};
-}
-
-/// A non-zero vector, normalized (axes and directions).
-Vector3 read_direction(const Json& value, const std::string& path) {
-  const Vector3 direction = read_vector(value, path);
-  require_non_zero(direction, path);
-  return direction.normalized();
-}
-
-ShapeType read_shape_type(const Json& value, const std::string& path) {
-  const std::string type = read_string(value, path);
-  if (type == "cylinder") return ShapeType::cylinder;
-  if (type == "capsule") return ShapeType::capsule;
-  fail(path, "must be \"cylinder\" or \"capsule\", got " + in_quotes(type));
-}
-
-/// A JSON object being read: known fields only, required ones present.
-class Object {
- public:
-  Object(const Json& json, std::string path) : json_(json), path_(std::move(path)) {
-    if (!json.is_object()) wrong_type(json, path_, "an object");
-  }
-
-  void allow_only(std::initializer_list<std::string_view> known) const {
-    for (const auto& [key, value] : json_.items()) {
-      if (std::find(known.begin(), known.end(), key) == known.end()) {
-        fail(path_, "unknown field " + in_quotes(key));
-      }
-    }
-  }
-
-  const std::string& path() const { return path_; }
-  std::string path(const std::string& key) const { return child(path_, key); }
-  const Json& json() const { return json_; }
-
-  const Json* find(const std::string& key) const {
-    const auto it = json_.find(key);
-    return it == json_.end() ? nullptr : &*it;
-  }
-  const Json& at(const std::string& key) const {
-    if (const Json* value = find(key)) return *value;
-    fail(path(key), "missing required field");
-  }
-
-  double number(const std::string& key) const { return read_number(at(key), path(key)); }
-  int integer(const std::string& key) const { return read_int(at(key), path(key)); }
-  std::string string(const std::string& key) const { return read_string(at(key), path(key)); }
-  bool boolean(const std::string& key) const { return read_bool(at(key), path(key)); }
-  Vector3 vector(const std::string& key) const { return read_vector(at(key), path(key)); }
-  Vector3 direction(const std::string& key) const { return read_direction(at(key), path(key)); }
-
-  // Optional fields keep the target's default (model.hpp's member initializers) when absent.
-  void optional(const std::string& key, double& target) const {
-    if (const Json* value = find(key)) target = read_number(*value, path(key));
-  }
-  void optional(const std::string& key, bool& target) const {
-    if (const Json* value = find(key)) target = read_bool(*value, path(key));
-  }
-  void optional(const std::string& key, Vector3& target) const {
-    if (const Json* value = find(key)) target = read_vector(*value, path(key));
-  }
-
- private:
-  const Json& json_;
-  std::string path_;
-};
+using namespace scene_json;
 
 // ---- Sections
 
 Settings read_settings(const Object& object) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
-                     "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact"});
+                     "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact",
+                     "limb_friction"});
   Settings settings;
   settings.gravity = object.vector("gravity");
   settings.time_step = object.number("time_step");
@@ -171,6 +45,8 @@ Settings read_settings(const Object& object) {
   require_positive(settings.divergence_speed, object.path("divergence_speed"));
   object.optional("contact_recovery_speed", settings.contact_recovery_speed);
   require_non_negative(settings.contact_recovery_speed, object.path("contact_recovery_speed"));
+  object.optional("limb_friction", settings.limb_friction);
+  require_non_negative(settings.limb_friction, object.path("limb_friction"));
 
   if (const Json* json = object.find("sleep")) {
     const Object sleep(*json, object.path("sleep"));
@@ -382,7 +258,7 @@ Inertial read_inertial(const Object& object) {
 
 BodySpec read_body(const Object& object) {
   object.allow_only({"name", "shape", "mass", "density", "point_masses", "inertial", "position", "axis", "linear_velocity",
-                     "angular_velocity"});
+                     "angular_velocity", "collision"});
   BodySpec spec;
   Body& body = spec.body;
   body.name = object.string("name");
@@ -415,6 +291,7 @@ BodySpec read_body(const Object& object) {
   body.axis = object.direction("axis");
   object.optional("linear_velocity", body.linear_velocity);
   object.optional("angular_velocity", body.angular_velocity);
+  if (const Json* collision = object.find("collision")) body.collision = read_collision_filter(Object(*collision, object.path("collision")));
   return spec;
 }
 
@@ -464,6 +341,7 @@ void generate_chain(const Chain& chain, std::vector<BodySpec>& bodies, std::vect
     link.mass = k + 1 == chain.links ? chain.end_mass : chain.link_mass;
     link.position = chain.anchor + (k + 0.5) * length * chain.direction;
     link.axis = -chain.direction;  // tail -> head points back towards the anchor
+    link.collision = {kLinkCollisionGroup, ~kLinkCollisionGroup};  // links do not meet links (generators.hpp)
     bodies.push_back(std::move(spec));
 
     Joint joint;
@@ -771,7 +649,7 @@ Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const 
 Scene read_scene(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
-                   "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant"});
+                   "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant", "colliders"});
   const int version = root.integer("limber_scene");
   if (version != 1) {
     fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
@@ -789,6 +667,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
   if (const Json* bounds = root.find("bounds"))
     model.bounds = read_bounds(Object(*bounds, "bounds"));
   if (const Json* ball = root.find("ball")) model.ball = read_ball(Object(*ball, "ball"));
+  if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders");
 
   // Bodies: the explicit ones, then the chain's links.
   const Json* bodies_json = root.find("bodies");
@@ -872,21 +751,32 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
 
   // Copies last, of everything above (generators.hpp's copies_of; the ball and ground stay one).
   // --copies on a scene without "copies" lays them out 1 m apart beyond their footprint.
-  long copies = 1;
-  double spacing = footprint(model) + 1.0;
+  long copies = 1, layers = 1;
+  double spacing = footprint(model) + 1.0, layer_height = 0;
   if (const Json* copies_json = root.find("copies")) {
     const Object object(*copies_json, "copies");
-    object.allow_only({"count", "spacing"});
+    object.allow_only({"count", "spacing", "layers", "layer_height"});
     copies = object.integer("count");
     require_at_least(copies, 1, object.path("count"));
     spacing = object.number("spacing");
+    if (object.find("layers")) {
+      layers = object.integer("layers");
+      require_at_least(layers, 1, object.path("layers"));
+      layer_height = object.number("layer_height");  // required with layers
+    } else if (object.find("layer_height")) {
+      fail(object.path("layer_height"), "is used only with \"layers\"");
+    }
   }
   if (options.copies) {
     require_at_least(*options.copies, 1, "copies.count (SceneOptions::copies)");
     copies = *options.copies;
   }
   require_generated(double(copies) * double(model.bodies.size()), "copies.count");
-  if (copies > 1) model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies");
+  if (copies > 1) {
+    model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies", static_cast<std::size_t>(layers), layer_height);
+  } else if (layers > 1) {
+    fail("copies.layers", "must be <= count (1), got " + std::to_string(layers));
+  }
   return scene;
 }
 

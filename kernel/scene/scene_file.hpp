@@ -18,6 +18,7 @@
 //     "contact_recovery_speed": 0.5,           optional (0.5), m/s, ≥ 0: push-out speed of old penetration
 //     "release_drives_on_impact": false,       optional (false): every joint drive goes limp once the
 //                                              ball has touched a limb (an active ragdoll's switch)
+//     "limb_friction": 0.5,                    optional (0.5), ≥ 0: Coulomb friction between limbs that touch
 //     "relaxation": {                          optional; each field optional
 //       "iterations": 100,                     (100) integer ≥ 1
 //       "tolerance": 0,                        (0) m, ≥ 0; 0 disables
@@ -62,7 +63,12 @@
 //       "position": [0, 0, 1.02],              required, m, centre
 //       "axis": [0, 0, 1],                     required, non-zero (normalized), tail → head
 //       "linear_velocity": [0, 0, 0],          optional ([0,0,0]), m/s
-//       "angular_velocity": [0, 0, 0] } ],     optional ([0,0,0]), rad/s
+//       "angular_velocity": [0, 0, 0],         optional ([0,0,0]), rad/s
+//       "collision": {"group": 1, "mask": 4294967295} } ],
+//                                              optional; each field optional (these defaults): integers
+//                                              in [0, 2^32), bits; two things collide when each one's
+//                                              group shares a bit with the other's mask (model.hpp's
+//                                              CollisionFilter)
 //   "joints": [ {                              optional (none)
 //       "name": "head-neck",                   required, unique, non-empty
 //       "type": "spherical",                   required: "spherical" | "revolute" | "prismatic" |
@@ -111,7 +117,39 @@
 //   "copies": { "count": 16, "spacing": 1.5 }, optional: everything above count times on a square
 //                                              lattice in x, y, spacing m apart, names "c<k>.<name>";
 //                                              SceneOptions::copies (--copies) overrides the count
+//     "layers": 2, "layer_height": 1.4         optional, together: the copies in `layers` (integer in
+//                                              [1, count]) lattices of ⌈count/layers⌉, each layer_height
+//                                              m above the one below (≥ the bodies' height), odd ones
+//                                              half a spacing across (a pile to drop; generators.hpp's
+//                                              copies_of). Colliders, like ground and ball, stay one.
 //     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together).
+//   "colliders": [ {                           optional (none): static level geometry (model.hpp's StaticCollider)
+//       "name": "bar",                         required, unique, non-empty, no body's name
+//       "type": "box",                         required: "box" | "capsule" | "mesh" | "stairs" (a generator
+//                                              of a mesh); a field another type takes is refused
+//       "restitution": 0, "friction": 0.5,     optional (these): in [0, 1]; ≥ 0
+//       "collision": {"group": 1, "mask": 4294967295},   optional, as a body's
+//     box:      "position": [x, y, z],         required, m, its centre
+//               "half_extents": [hx, hy, hz],  required, m, each > 0
+//               "rotation": [rx, ry, rz],      optional ([0,0,0]): rotation vector (axis × angle, rad, as a
+//                                              drive's target_rotation), box frame → world
+//     capsule:  "position", "rotation"         as the box's; position is the middle of its core segment,
+//               "axis": [0, 1, 0],             or instead of rotation: the core's direction (local +z), non-zero
+//               "length": 1, "radius": 0.05,   required, m: the core segment (≥ 0) and the radius (> 0)
+//     mesh:     "vertices": [[x, y, z], ...],  required, m
+//               "triangles": [[0, 1, 2], ...], required, ≥ 1: vertex indices, counter-clockwise seen from
+//                                              outside (the front; one-sided), none degenerate
+//               "position", "rotation",        optional (none): the frame the vertices are given in (the
+//                                              Model holds them in world coordinates)
+//               "thickness": 0.1,              optional (0.1), m, > 0: how far behind a triangle counts as inside
+//     stairs:   "steps": 6,                    required integer ≥ 1: risers (generators.hpp's make_stairs_mesh)
+//               "rise": 0.15, "run": 0.3,      required, m, > 0: each riser's height, each tread's depth
+//               "width": 2,                    required, m, > 0
+//               "landing": 0.3,                optional (run), m, > 0: the top's depth beyond the last riser
+//               "position": [x, y, z],         required: the first riser's foot, mid-width
+//               "direction": [1, 0, 0],        required, horizontal, non-zero (normalized): uphill
+//               "thickness": 0.1 } ],          optional (0.1), as a mesh's
+//     The stairs are a closed mesh: risers, treads, landing, back, sides and bottom, facing out.
 //   "variants": {                              optional: named sets of per-body overrides
 //       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
 //                                              each override may give "radius" and/or "mass" (or
@@ -121,8 +159,9 @@
 // }
 //
 // Errors: ModelError whose what() is one line "<source>: <path>: <problem>", the path in JSON
-// terms (e.g. "bodies[3].shape.radius", "joints[1].outboard", "variants.thin.neck.mass"). A
-// malformed file reports "<source>:<line>:<column>: malformed JSON: <detail>".
+// terms (e.g. "bodies[3].shape.radius", "joints[1].outboard", "colliders[2].triangles[5]",
+// "variants.thin.neck.mass"). A malformed file reports "<source>:<line>:<column>: malformed
+// JSON: <detail>".
 #pragma once
 
 #include <filesystem>

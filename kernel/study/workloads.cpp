@@ -30,6 +30,7 @@ Scene heavy_end_chain(ChainRelease release) {
     body.shape = {ShapeType::capsule, kLength, 0.001};
     body.position = head + 0.5 * kLength * direction;
     body.axis = -direction;
+    body.collision = {kLinkCollisionGroup, ~kLinkCollisionGroup};  // links do not meet links (generators.hpp)
     const double head_mass = k == 0 ? 0.5 : 0.5 * joint_mass[k];
     const double tail_mass = k == kLinks - 1 ? joint_mass[k + 1] : 0.5 * joint_mass[k + 1];
     body.point_masses = {PointMass{Vector3(0, 0, 0.5 * kLength), head_mass, 0}, PointMass{Vector3(0, 0, -0.5 * kLength), tail_mass, 0}};

@@ -179,6 +179,31 @@ void renumber_particles(VerletState<Scalar>& state) {
 
 }  // namespace
 
+namespace {
+
+// The collision world (limb_collisions.hpp) and its scratch at full size, when the scene has
+// limbs that may touch or static geometry: a scene without pays nothing for it.
+template <typename Scalar>
+void prepare_limb_collisions(VerletState<Scalar>& state, const Model& model) {
+  state.collisions = LimbCollisions(model);
+  if (!state.collisions.active()) return;
+  const std::size_t segments = model.bodies.size() + (state.ball_particle >= 0 ? 1 : 0);
+  state.limb_segments.reserve(segments);
+  state.limb_awake.reserve(segments);
+  state.limb_island_awake.assign(state.limbs.size(), 0);
+  state.contact_rows.particle_colours.assign(state.particles.size() + 1, 0);
+  // Room for a few contacts per limb (a pile's are about four): more grows the buffers once.
+  const std::size_t rows = 8 * segments + 64;
+  state.limb_contacts.reserve(rows);
+  state.contact_rows.rows.reserve(rows);
+  state.contact_rows.colour.reserve(rows);
+  state.contact_rows.order.reserve(rows);
+  state.contact_particles.reserve(state.contact_particles.capacity() + kContactRowParticles * rows);
+  state.plan.contact_batches.reserve(rows + (kMaxContactColours + 1) * ContactRowBatches<Scalar>::kBlockLanes, kMaxContactColours);
+}
+
+}  // namespace
+
 template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   validate(model);
@@ -572,6 +597,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   rebuild_awake_islands(state);
   renumber_particles(state);
   prepare_relaxation_plan(state);
+  prepare_limb_collisions(state, model);
   return state;
 }
 

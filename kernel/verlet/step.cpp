@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "limber/kernel/collision/contacts.hpp"
+#include "limber/kernel/collision/limb_contacts.hpp"
+#include "limber/kernel/relaxation/contact_relaxation.hpp"
 #include "limber/kernel/relaxation/direct_projection.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
@@ -139,6 +141,14 @@ void move_kinematic_particles(VerletState<Scalar>& state, int index, int count, 
   }
 }
 
+// Contact rows whose surfaces touch at the end of the substep (the rest are speculative).
+template <typename Scalar>
+std::size_t touching_rows(const VerletState<Scalar>& state) {
+  std::size_t count = 0;
+  for (const auto lambda : state.plan.contact_batches.lambda) count += lambda > 0 ? 1 : 0;
+  return count;
+}
+
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
 // on their axes.
 template <typename Scalar>
@@ -169,6 +179,11 @@ void collect_contact_particles(VerletState<Scalar>& state) {
     state.contact_particles.push_back(static_cast<std::uint32_t>(state.ball_particle));
     state.contact_particles.push_back(state.limbs.head[contact.limb]);
     state.contact_particles.push_back(state.limbs.tail[contact.limb]);
+  }
+  for (const ContactRow& row : state.contact_rows.rows) {
+    for (std::uint32_t p : row.particle) {
+      if (p != state.particles.null_particle()) state.contact_particles.push_back(p);
+    }
   }
 }
 
@@ -240,7 +255,8 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
   const bool interleaved = state.plan.layout != ParticleLayout::soa;
   const auto start = std::chrono::steady_clock::now();
   begin_relaxation(state, dt);
-  const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_centres;
+  const bool has_rows = !state.contact_rows.empty();
+  const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_rows || has_centres;
   const bool direct = state.options.solver == RelaxationSolver::direct;
   const int iterations = direct ? state.options.newton_iterations : relaxation.iterations;
   for (int iteration = 1; iteration <= iterations; ++iteration) {
@@ -252,6 +268,7 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
     if (has_centres) largest = std::max(largest, project_limb_centres(state, PositionField<Scalar>{state.particles}));
     if (has_planes) largest = std::max(largest, project_plane_contacts(state, dt));
     if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
+    if (has_rows) largest = std::max(largest, contact_position_sweep(state));
     if (interleaved && copies) contact_particles_from_buffer(state);
     report.iterations += 1;
     report.largest_correction = largest;
@@ -280,9 +297,11 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
 template <typename Scalar>
 void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
   const bool contacts = state.ball_particle >= 0 || !state.planes.empty();
+  const bool rows = !state.contact_rows.empty();
   if (state.options.compliance > 0) {
     kick_compliant_constraints(state, dt);
     if (contacts) apply_restitution(state, dt);
+    if (rows) apply_contact_row_restitution(state, dt);
     return;
   }
   const bool has_centres = has_limb_centres(state);
@@ -291,6 +310,7 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     double largest = velocity_sweep(state);
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
     if (contacts) apply_restitution(state, dt);
+    if (rows) apply_contact_row_restitution(state, dt);
     if (state.options.relaxation.tolerance > 0 && largest * dt < state.options.relaxation.tolerance) break;
   }
   end_velocity_projection(state);
@@ -314,13 +334,18 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     state.ball_touched = state.ball_touched || !state.ball_contacts.empty();
   }
   if (has_planes) detect_plane_contacts(state, dt);
+  if (state.collisions.active()) {
+    detect_limb_contacts(state, dt);
+    build_contact_batches(state);
+  }
   if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
   if (!state.awake_islands.empty()) relax_positions(state, dt, budget_us, report);
   if (rattle) {
     velocity_from_positions(state, dt);
     if (!state.awake_islands.empty()) project_velocities(state, dt, std::max(1, report.iterations));
-  } else if (has_ball || has_planes) {
-    apply_restitution(state, dt);
+  } else {
+    if (has_ball || has_planes) apply_restitution(state, dt);
+    if (!state.contact_rows.empty()) apply_contact_row_restitution(state, dt);
   }
   report.status = update_sleep(state, dt);
   report.substeps = 1;
@@ -352,7 +377,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
-    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size());
+    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size() + touching_rows(state));
   });
 }
 

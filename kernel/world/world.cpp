@@ -43,6 +43,9 @@ std::vector<std::int64_t> first_bodies_kept(std::size_t count, std::size_t kept)
 World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_method(model_, options_)) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
+  for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
+    collider_handle_.push_back(next_collider_handle_), collider_index_[next_collider_handle_++] = c;
+  }
   reset_loads();
   for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
   transport_frames();
@@ -105,6 +108,21 @@ std::size_t World::index(BodyId body) const {
 std::size_t World::index(JointId joint) const {
   const auto it = joint_index_.find(joint.value);
   if (it == joint_index_.end()) throw WorldError("joint handle " + std::to_string(joint.value) + ": no such joint (removed?)");
+  return it->second;
+}
+
+ColliderId World::collider(std::string_view name) const {
+  for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
+    if (model_.colliders[c].name == name) return ColliderId{collider_handle_[c]};
+  }
+  throw WorldError("collider: no collider called '" + std::string(name) + "'");
+}
+
+std::size_t World::index(ColliderId collider) const {
+  const auto it = collider_index_.find(collider.value);
+  if (it == collider_index_.end()) {
+    throw WorldError("collider handle " + std::to_string(collider.value) + ": no such collider (removed?)");
+  }
   return it->second;
 }
 
@@ -406,6 +424,26 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
     joint_index_[next_joint_handle_++] = j;
   }
   return added;
+}
+
+// Colliders change no body: every body keeps its index and its state.
+ColliderId World::add_collider(const StaticCollider& collider) {
+  Model edited = model_;
+  edited.colliders.push_back(collider);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  collider_handle_.push_back(next_collider_handle_);
+  collider_index_[next_collider_handle_] = edited.colliders.size() - 1;
+  return ColliderId{next_collider_handle_++};
+}
+
+void World::remove_collider(ColliderId collider) {
+  const std::size_t c = index(collider);
+  Model edited = model_;
+  edited.colliders.erase(edited.colliders.begin() + static_cast<std::ptrdiff_t>(c));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  collider_index_.erase(collider.value);
+  collider_handle_.erase(collider_handle_.begin() + static_cast<std::ptrdiff_t>(c));
+  for (std::size_t k = c; k < collider_handle_.size(); ++k) collider_index_[collider_handle_[k]] = k;
 }
 
 // Compiles `edited` and carries across, for every body whose old index is old_body_of_new[b]

@@ -12,7 +12,7 @@
 // lagrange, featherstone), and what a method cannot do is refused with a WorldError naming the
 // method and the call, never done silently wrong. Loads (forces, impulses, torques, joint
 // torques, kinematic targets) act over the next step and are then gone. Structural edits (add or
-// remove a body or a joint, pin or unpin) recompile the state from the edited Model and carry
+// remove a body, a joint or a collider, pin or unpin) recompile the state from the edited Model and carry
 // every surviving body's state across bit for bit (positions, velocities; islands wake).
 //
 // Frames. A body's pose is that of its Model body frame: origin at the centre of its shape,
@@ -56,6 +56,11 @@ struct BodyId {
 struct JointId {
   std::uint32_t value = ~0u;
   friend bool operator==(JointId, JointId) = default;
+};
+/// Static level geometry (Model::colliders; World::add_collider).
+struct ColliderId {
+  std::uint32_t value = ~0u;
+  friend bool operator==(ColliderId, ColliderId) = default;
 };
 /// A point of a body held to the world (World::pin): a spherical joint to the world.
 struct PinId {
@@ -164,10 +169,19 @@ class World {
   /// Adds every body, joint and gear of `other` (another ragdoll; append_model), names prefixed
   /// with `prefix`, moved by `offset` (m). Returns the new bodies' handles in `other`'s order.
   std::vector<BodyId> add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset = Eigen::Vector3d::Zero());
+  /// Adds static level geometry (a wall, a ramp, a mesh; Model::colliders) from the next step
+  /// on. Throws ModelError naming the field ("colliders[3].radius: ...") when it is invalid,
+  /// and nothing changes. A collider that starts inside a limb pushes it out at
+  /// Settings::contact_recovery_speed, as any initial penetration.
+  ColliderId add_collider(const StaticCollider& collider);
+  void remove_collider(ColliderId collider);
+  /// The collider called `name`. Throws WorldError when there is none.
+  ColliderId collider(std::string_view name) const;
 
   /// The Model index of a handle (for the state's own arrays); throws WorldError when removed.
   std::size_t index(BodyId body) const;
   std::size_t index(JointId joint) const;
+  std::size_t index(ColliderId collider) const;
 
   /// The method's state, for what the World does not wrap (observers, counters).
   using State = MethodState;
@@ -193,6 +207,9 @@ class World {
   std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
   std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;
   std::uint32_t next_body_handle_ = 0, next_joint_handle_ = 0, next_pin_ = 0;
+  std::vector<std::uint32_t> collider_handle_;  // per Model collider: its handle
+  std::unordered_map<std::uint32_t, std::size_t> collider_index_;
+  std::uint32_t next_collider_handle_ = 0;
   std::unordered_map<std::uint32_t, Pin> pins_;
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.

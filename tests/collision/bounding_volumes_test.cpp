@@ -10,8 +10,8 @@
 
 #include <gtest/gtest.h>
 
-#include "limber/kernel/collision/bounding_volumes.hpp"
-#include "limber/kernel/collision/broadphase.hpp"
+#include "limber/kernel/geometry/bounding_volumes.hpp"
+#include "limber/kernel/geometry/broadphase.hpp"
 
 namespace limber {
 namespace {

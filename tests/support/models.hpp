@@ -53,6 +53,7 @@ inline Model make_chain(const std::vector<double>& masses, double link_length, b
     body.mass = masses[k];
     body.axis = -Vector3::UnitX();  // tail → head points back towards the start
     body.position = start + Vector3((k + 0.5) * link_length, 0, 0);
+    body.collision = {2, ~2u};  // links do not meet links, as the generators' (generators.hpp)
     model.bodies.push_back(body);
   }
   const Vector3 head(0, 0, 0.5 * link_length), tail(0, 0, -0.5 * link_length);

@@ -498,13 +498,30 @@ struct RunRecord {
   std::uint64_t fallbacks = 0;  ///< rattle projections that fell back to pbd
   std::vector<std::string> sleep_events;
   StepStatus status = StepStatus::ok;
+  int contacts = 0, most_contacts = 0;  ///< StepReport::contacts at the end, and the most in a step
+  double deepest_penetration = 0;      ///< m, over the run: limbs into limbs, colliders, the ground
 };
+
+// The deepest overlap of `state`'s limbs now, measured alike for every method (observers.hpp).
+template <typename State>
+double penetration_now(const State& state, const Model& model, LimbCollisions& collisions, std::vector<LimbSegment>& segments) {
+  if constexpr (requires { state.particles; }) {
+    limb_segments(state, segments);
+  } else {
+    limb_segments(static_cast<const RigidScene&>(state), model, segments);
+  }
+  const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
+  return std::max(between, ground_penetration(model, segments));
+}
 
 // Steps `state` `steps` times (stopping at a divergence), observing after every step. `variant`
 // holds `state`: the drives go limp through it when the scene asks (release_drives_on_impact).
 template <typename State>
-RunRecord run_steps(State& state, MethodState& variant, long steps, std::ofstream& csv, KnockMeter& knock) {
+RunRecord run_steps(State& state, MethodState& variant, const Model& model, long steps, std::ofstream& csv, KnockMeter& knock) {
   RunRecord record;
+  LimbCollisions collisions(model);
+  std::vector<LimbSegment> segments;
+  record.deepest_penetration = penetration_now(state, model, collisions, segments);
   record.start = record.end = observe(state);
   record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
   record.largest_limit_violation = record.start.joints.limit_violation;
@@ -520,6 +537,9 @@ RunRecord run_steps(State& state, MethodState& variant, long steps, std::ofstrea
       record.fallbacks += report.fallbacks;
     }
     record.end = observe(state);
+    record.contacts = report.contacts;
+    record.most_contacts = std::max(record.most_contacts, report.contacts);
+    record.deepest_penetration = std::max(record.deepest_penetration, penetration_now(state, model, collisions, segments));
     knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
     record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
     record.largest_stretch = std::max(record.largest_stretch, record.end.max_link_stretch);
@@ -668,7 +688,7 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   }
   const Observation start = observe(state);
   KnockMeter knock(model.ball ? model.ball->velocity : Eigen::Vector3d::UnitX(), start.body_centre_of_mass);
-  const RunRecord record = run_steps(state, variant, steps, csv, knock);
+  const RunRecord record = run_steps(state, variant, model, steps, csv, knock);
   const Observation& end = record.end;
 
   out << "limber run: " << model.name << " (" << source << ")\n";
@@ -680,6 +700,8 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
     out << "joint gap   none (shared-particle joints or no joints)\n";
   }
   out << limits_line(model, record);
+  out << format("contacts    %d at end, at most %d in a step; penetration %.3g m deepest in run (limbs, colliders, ground)\n",
+                record.contacts, record.most_contacts, record.deepest_penetration);
   if (!flags.rigid()) {
     out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
                   record.largest_stretch);

@@ -1,4 +1,4 @@
-#include "limber/kernel/collision/broadphase.hpp"
+#include "limber/kernel/geometry/broadphase.hpp"
 
 #include <algorithm>
 

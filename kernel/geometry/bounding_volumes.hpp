@@ -7,7 +7,7 @@
 // capsules. The volumes (2.3), from loosest to tightest around a limb:
 // - BoundingSphere: rotation invariant, one comparison; loose around a long thin limb.
 // - UprightCylinder: a sphere stretched along world z (a standing figure); axis fixed to z.
-// - Aabb: what the broadphase sorts (kernel/collision/broadphase.hpp); refitted every step.
+// - Aabb: what the broadphase sorts (kernel/geometry/broadphase.hpp); refitted every step.
 // - Obb: the limb's own box; tight around a cylinder up to its four long edges.
 // - Capsule: exact for a capsule limb, and bounds a cylinder limb with its caps.
 //

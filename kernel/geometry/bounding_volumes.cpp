@@ -1,4 +1,4 @@
-#include "limber/kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/geometry/bounding_volumes.hpp"
 
 #include <algorithm>
 #include <cmath>

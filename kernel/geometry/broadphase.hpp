@@ -1,5 +1,5 @@
 // Broadphase: which pairs of limbs are close enough to be worth the hierarchical test
-// (kernel/collision/bounding_volumes.hpp, thesis 2.4).
+// (kernel/geometry/bounding_volumes.hpp, thesis 2.4).
 //
 // Sweep and prune (Baraff 1992; Cohen et al., I-COLLIDE, 1995): sort the boxes by their lower
 // bound on one axis, then sweep — each box is compared only with the boxes after it whose lower
@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "limber/kernel/collision/bounding_volumes.hpp"
+#include "limber/kernel/geometry/bounding_volumes.hpp"
 
 namespace limber {
 

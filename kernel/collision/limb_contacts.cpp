@@ -1,0 +1,195 @@
+#include "limber/kernel/collision/limb_contacts.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "limber/kernel/sleeping/sleeping.hpp"
+
+namespace limber {
+namespace {
+
+// Surfaces this close after relaxation still touch, m (contacts.cpp's rule).
+constexpr double kTouchingSlop = 1e-4;
+// The speculative margin's floor, m, and its cap (a margin past a limb's size finds nothing new).
+constexpr double kMarginSlop = 0.005, kMaxMargin = 0.5;
+
+template <typename Scalar>
+Eigen::Vector3d at(const Scalar* x, const Scalar* y, const Scalar* z, std::uint32_t p) {
+  return {double(x[p]), double(y[p]), double(z[p])};
+}
+
+// Each Model body's segment at the predicted positions (and the ball's last), whether its
+// island is awake, and the largest displacement of an awake limb end this substep (m).
+template <typename Scalar>
+double gather_segments(VerletState<Scalar>& state) {
+  const auto& p = state.particles;
+  const LimbBuffer& limbs = state.limbs;
+  const std::size_t bodies = state.body_limb.size();
+  state.limb_segments.resize(bodies + (state.ball_particle >= 0 ? 1 : 0));
+  state.limb_awake.assign(state.limb_segments.size(), 0);
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) state.limb_island_awake[limb] = 1;
+  }
+  double largest = 0;
+  for (std::size_t body = 0; body < bodies; ++body) {
+    const std::uint32_t limb = state.body_limb[body], head = limbs.head[limb], tail = limbs.tail[limb];
+    LimbSegment& segment = state.limb_segments[body];
+    segment.head = p.position(head).template cast<double>();
+    segment.tail = p.position(tail).template cast<double>();
+    segment.radius = limbs.radius[limb];
+    state.limb_awake[body] = state.limb_island_awake[limb];
+    if (!state.limb_awake[body]) continue;
+    largest = std::max({largest, (segment.head - p.previous(head).template cast<double>()).norm(),
+                        (segment.tail - p.previous(tail).template cast<double>()).norm()});
+  }
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) state.limb_island_awake[limb] = 0;
+  }
+  if (state.ball_particle >= 0) {
+    const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+    LimbSegment& segment = state.limb_segments.back();
+    segment.head = segment.tail = p.position(ball).template cast<double>();
+    segment.radius = state.ball_radius;
+    state.limb_awake.back() = state.islands[static_cast<std::size_t>(state.ball_island)].sleeping ? 0 : 1;
+    if (state.limb_awake.back()) largest = std::max(largest, (segment.head - p.previous(ball).template cast<double>()).norm());
+  }
+  return largest;
+}
+
+// A Model body's (or the ball's) end particles: head and tail, or the ball's one particle twice.
+template <typename Scalar>
+std::pair<std::uint32_t, std::uint32_t> ends_of(const VerletState<Scalar>& state, std::uint32_t body) {
+  if (body == state.body_limb.size()) {
+    const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+    return {ball, ball};
+  }
+  const std::uint32_t limb = state.body_limb[body];
+  return {state.limbs.head[limb], state.limbs.tail[limb]};
+}
+
+template <typename Scalar>
+void wake_island_of_body(VerletState<Scalar>& state, std::uint32_t body) {
+  const std::uint32_t limb = state.body_limb[body];
+  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+    const Island& island = state.islands[k];
+    if (limb >= island.limb_begin && limb < island.limb_end) {
+      wake_island(state, k);
+      return;
+    }
+  }
+}
+
+// n·Σ c_k x_k over the row's places, at the positions (or previous positions, or velocities) `get` gives.
+template <typename Get>
+double along_normal(const ContactRow& row, Get&& get) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < kContactRowParticles; ++k) {
+    if (row.coefficient[k] != 0) sum += row.coefficient[k] * get(row.particle[k]);
+  }
+  return row.normal.dot(sum);
+}
+
+// Σ w_k c_k², the row's generalized inverse mass, 1/kg.
+template <typename Scalar>
+double row_inverse_mass(const VerletState<Scalar>& state, const ContactRow& row) {
+  double sum = 0;
+  for (std::size_t k = 0; k < kContactRowParticles; ++k) {
+    sum += double(state.particles.inverse_mass[row.particle[k]]) * row.coefficient[k] * row.coefficient[k];
+  }
+  return sum;
+}
+
+template <typename Scalar>
+Eigen::Vector3d velocity_of(const VerletState<Scalar>& state, std::uint32_t p, double dt) {
+  const auto& particles = state.particles;
+  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
+  return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
+}
+
+// The row of one contact, its offset moved by the overlap it may keep this substep.
+template <typename Scalar>
+ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& contact, double dt) {
+  ContactRow row;
+  const std::uint32_t null_particle = state.particles.null_particle();
+  row.particle.fill(null_particle);
+  const auto [head, tail] = ends_of(state, contact.first);
+  row.particle[0] = head, row.coefficient[0] = 1 - contact.axial_first;
+  if (tail != head) row.particle[1] = tail, row.coefficient[1] = contact.axial_first;
+  else row.coefficient[0] = 1;
+  double offset = contact.offset;
+  if (contact.second != kStaticShape) {
+    const auto [second_head, second_tail] = ends_of(state, contact.second);
+    row.particle[2] = second_head, row.coefficient[2] = -(1 - contact.axial_second);
+    row.particle[3] = second_tail, row.coefficient[3] = -contact.axial_second;
+    offset = state.limb_segments[contact.first].radius + state.limb_segments[contact.second].radius;
+  }
+  row.normal = contact.normal;
+  row.friction = contact.friction;
+  row.restitution = std::max(contact.restitution, contact.first == state.body_limb.size() ? state.ball_restitution : 0.0);
+  const auto& particles = state.particles;
+  const double start_separation =
+      along_normal(row, [&](std::uint32_t p) { return particles.previous(p).template cast<double>(); }) - offset;
+  row.offset = offset + allowed_separation(start_separation, state.settings.contact_recovery_speed * dt);
+  row.approach_speed = along_normal(row, [&](std::uint32_t p) { return velocity_of(state, p, dt); });
+  return row;
+}
+
+}  // namespace
+
+template <typename Scalar>
+void detect_limb_contacts(VerletState<Scalar>& state, double dt) {
+  state.contact_rows.rows.clear();
+  if (!state.collisions.active() || state.awake_islands.empty()) return;
+  const double margin = std::min(kMaxMargin, kMarginSlop + 2 * gather_segments(state));
+  state.collisions.find(state.limb_segments, state.limb_awake, margin, state.limb_contacts);
+  const std::size_t bodies = state.body_limb.size();
+  for (const LimbContact& contact : state.limb_contacts) {
+    // An awake limb reaching a sleeping one wakes it (its rows join the next sweep's batches).
+    for (std::uint32_t body : {contact.first, contact.second}) {
+      if (body < bodies && !state.limb_awake[body] && contact.separation < kMarginSlop) wake_island_of_body(state, body);
+    }
+    state.contact_rows.rows.push_back(contact_row(state, contact, dt));
+  }
+}
+
+template <typename Scalar>
+void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
+  const ContactRowBatches<Scalar>& batches = state.plan.contact_batches;
+  const double resting_speed = 2 * state.gravity.template cast<double>().norm() * dt;
+  auto& particles = state.particles;
+  for (std::size_t slot = 0; slot < batches.slot_count(); ++slot) {
+    if (batches.row[slot] == ~std::uint32_t{0}) continue;
+    const ContactRow& row = state.contact_rows.rows[batches.row[slot]];
+    const double separation =
+        along_normal(row, [&](std::uint32_t p) { return particles.position(p).template cast<double>(); }) - row.offset;
+    const double inverse_mass = row_inverse_mass(state, row);
+    if (separation > kTouchingSlop || inverse_mass <= 0) continue;
+    const double target = row.approach_speed < -resting_speed ? -row.restitution * row.approach_speed : 0.0;
+    const double speed = along_normal(row, [&](std::uint32_t p) { return velocity_of(state, p, dt); });
+    // A row relaxation did not push keeps a separating speed of its own.
+    if (speed >= target && batches.lambda[slot] <= 0) continue;
+    const double impulse = (target - speed) / inverse_mass;  // N·s, thesis eq. 2.33
+    for (std::size_t k = 0; k < kContactRowParticles; ++k) {
+      const std::uint32_t p = row.particle[k];
+      const double share = double(particles.inverse_mass[p]) * row.coefficient[k];
+      if (share == 0) continue;
+      const Eigen::Vector3d delta_v = share * impulse * row.normal;
+      if (uses_rattle(state)) {
+        particles.set_velocity(p, particles.velocity(p) + delta_v.cast<Scalar>());
+      } else {
+        particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
+      }
+    }
+  }
+}
+
+#define LIMBER_INSTANTIATE(Scalar)                                                  \
+  template void detect_limb_contacts<Scalar>(VerletState<Scalar>&, double);         \
+  template void apply_contact_row_restitution<Scalar>(VerletState<Scalar>&, double);
+LIMBER_INSTANTIATE(float)
+LIMBER_INSTANTIATE(double)
+#undef LIMBER_INSTANTIATE
+
+}  // namespace limber

@@ -1,0 +1,29 @@
+// The particle method's contacts with other limbs and with static geometry, as contact rows
+// (kernel/particles/contact_rows.hpp): found from the limbs' segments by the shared collision
+// world (kernel/geometry/limb_collisions.hpp), projected in the coloured sweeps
+// (kernel/relaxation/contact_relaxation.hpp), and given their restitution here, in the same
+// velocity pass as the ground's and the ball's contacts (contacts.hpp).
+//
+// Detection runs on the predicted positions with a speculative margin: a pair is kept while its
+// surfaces are closer than the margin — the most the two can close in the substep, twice the
+// largest particle displacement, plus a slop — so a row holds C ≥ 0 before the limbs meet,
+// and thin fast limbs do not pass through each other between detections.
+#pragma once
+
+#include "limber/kernel/particles/verlet_state.hpp"
+
+namespace limber {
+
+/// Finds the substep's limb–limb, limb–static and ball–static contacts into
+/// state.contact_rows, waking a sleeping island an awake limb reaches. Nothing when the scene
+/// has no collision beyond the ground, the bounds and the ball (LimbCollisions::active()).
+template <typename Scalar>
+void detect_limb_contacts(VerletState<Scalar>& state, double dt);
+
+/// The restitution pass over the contact rows (velocities, as apply_restitution in
+/// contacts.hpp): a row still touching leaves with normal speed e·v (v its approach), 0 for
+/// resting approaches; one pushed by relaxation also loses the push-out speed.
+template <typename Scalar>
+void apply_contact_row_restitution(VerletState<Scalar>& state, double dt);
+
+}  // namespace limber

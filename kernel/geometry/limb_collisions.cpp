@@ -1,0 +1,275 @@
+// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#include "limber/kernel/geometry/limb_collisions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace limber {
+namespace {
+
+using Eigen::Vector3d;
+
+// A contact at a segment's middle is only taken this far (axial) from either end: nearer an end,
+// the end sphere already holds that side of the limb.
+constexpr double kEndZone = 0.25;
+// Golden-section steps for the deepest point of a segment in a box: the bracket shrinks by
+// 0.618 per step, so 40 steps leave 4·10⁻⁹ of the segment's length.
+constexpr int kGoldenSteps = 40;
+
+LimbSegment model_segment(const Body& body) { return {body.head(), body.tail(), body.shape.radius}; }
+
+// The segment's box, grown by its radius and `grow` (m).
+Aabb segment_box(const LimbSegment& limb, double grow) {
+  const double reach = limb.radius + grow;
+  return {limb.head.cwiseMin(limb.tail).array() - reach, limb.head.cwiseMax(limb.tail).array() + reach};
+}
+
+BoundingSphere segment_sphere(const LimbSegment& limb) {
+  return {0.5 * (limb.head + limb.tail), 0.5 * (limb.head - limb.tail).norm() + limb.radius};
+}
+
+bool spheres_within(const BoundingSphere& a, const BoundingSphere& b, double margin) {
+  const double reach = a.radius + b.radius + margin;
+  return (a.centre - b.centre).squaredNorm() <= reach * reach;
+}
+
+// The one contact of two limbs, at the closest points of their segments; normal from second to
+// first. Touching axes (distance 0) take the normal across both (any across a parallel pair),
+// oriented from the second's middle towards the first's.
+LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b) {
+  const SegmentClosestPoints closest = closest_points_between_segments(a.head, a.tail, b.head, b.tail);
+  Vector3d normal;
+  if (closest.distance > 0) {
+    normal = (closest.on_first - closest.on_second) / closest.distance;
+  } else {
+    const Vector3d u = a.head - a.tail, v = b.head - b.tail;
+    normal = u.cross(v);
+    if (normal.squaredNorm() <= 1e-24 * u.squaredNorm() * v.squaredNorm() || normal.isZero(0)) {
+      // Parallel (or a point): any direction across the one that is a segment.
+      normal = u.squaredNorm() > 0 ? u.unitOrthogonal() : v.squaredNorm() > 0 ? v.unitOrthogonal() : Vector3d::UnitZ();
+    }
+    normal.normalize();
+    // Segments that truly cross have both midpoints in the plane across the normal (the dot is
+    // 0): then the first nonzero of z, x, y decides, upwards first.
+    double side = normal.dot((a.head + a.tail) - (b.head + b.tail));
+    if (std::abs(side) <= 1e-12 * ((a.head - a.tail).norm() + (b.head - b.tail).norm())) {
+      side = normal.z() != 0 ? normal.z() : normal.x() != 0 ? normal.x() : normal.y();
+    }
+    if (side < 0) normal = -normal;
+  }
+  LimbContact contact;
+  contact.first = first, contact.second = second;
+  contact.normal = normal;
+  contact.separation = closest.distance - a.radius - b.radius;
+  contact.axial_first = closest.s, contact.axial_second = closest.t;
+  // Midway between the surface points on_first − r₁n and on_second + r₂n.
+  contact.point = 0.5 * (closest.on_first - a.radius * normal + closest.on_second + b.radius * normal);
+  return contact;
+}
+
+// The deepest point of the segment in the shape, as an axial parameter: exact for a capsule and
+// a triangle; for a box by golden-section search, as the signed distance to a convex set is
+// convex along a line.
+double deepest_axial(const StaticPrimitive& primitive, const LimbSegment& limb) {
+  switch (primitive.type) {
+    case ColliderType::capsule:
+      return closest_points_between_segments(limb.head, limb.tail, primitive.capsule.a, primitive.capsule.b).s;
+    case ColliderType::mesh:
+      return segment_closest_to_triangle(limb.head, limb.tail, primitive.vertices, primitive.face_normal);
+    case ColliderType::box: break;
+  }
+  const auto depth_at = [&](double s) {
+    return box_surface_point(primitive.box, limb.head + s * (limb.tail - limb.head)).distance;
+  };
+  const double ratio = 0.5 * (std::sqrt(5.0) - 1);
+  double low = 0, high = 1;
+  double left = high - ratio * (high - low), right = low + ratio * (high - low);
+  double f_left = depth_at(left), f_right = depth_at(right);
+  for (int step = 0; step < kGoldenSteps; ++step) {
+    if (f_left <= f_right) {
+      high = right, right = left, f_right = f_left;
+      left = high - ratio * (high - low), f_left = depth_at(left);
+    } else {
+      low = left, left = right, f_left = f_right;
+      right = low + ratio * (high - low), f_right = depth_at(right);
+    }
+  }
+  return 0.5 * (low + high);
+}
+
+// One point of the limb against the shape: at axial a, its sphere's separation.
+struct Candidate {
+  double axial = 0;
+  SurfacePoint surface;
+  double separation = std::numeric_limits<double>::infinity();  // ∞: the shape ignores the point
+};
+
+Candidate candidate_at(const StaticPrimitive& primitive, const LimbSegment& limb, double axial) {
+  Candidate candidate;
+  candidate.axial = axial;
+  const std::optional<SurfacePoint> surface = surface_point(primitive, limb.head + axial * (limb.tail - limb.head));
+  if (surface) candidate.surface = *surface, candidate.separation = surface->distance - limb.radius;
+  return candidate;
+}
+
+// Up to two contacts of the limb and the shape: its end spheres, and the deepest point of its
+// segment when that is deeper than both ends and away from them (a limb across an edge or a
+// capsule) — the two deepest of these within the margin.
+void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, const StaticPrimitive& primitive, double margin,
+                         std::vector<LimbContact>& out) {
+  std::array<Candidate, 3> candidates{candidate_at(primitive, limb, 0), Candidate{}, Candidate{}};
+  std::size_t count = 1;
+  if (limb.head != limb.tail) {
+    candidates[count++] = candidate_at(primitive, limb, 1);
+    const double axial = deepest_axial(primitive, limb);
+    if (axial >= kEndZone && axial <= 1 - kEndZone) {
+      const Candidate middle = candidate_at(primitive, limb, axial);
+      if (middle.separation < std::min(candidates[0].separation, candidates[1].separation)) candidates[count++] = middle;
+    }
+  }
+  // The two deepest: insertion sort, stable (ties keep head before tail before middle) and, unlike
+  // std::stable_sort, without a buffer.
+  for (std::size_t k = 1; k < count; ++k) {
+    for (std::size_t j = k; j > 0 && candidates[j].separation < candidates[j - 1].separation; --j) std::swap(candidates[j], candidates[j - 1]);
+  }
+  for (std::size_t k = 0; k < std::min<std::size_t>(count, 2); ++k) {
+    const Candidate& c = candidates[k];
+    if (!(c.separation <= margin)) continue;
+    LimbContact contact;
+    contact.first = limb_index, contact.second = kStaticShape;
+    contact.collider = primitive.collider, contact.triangle = primitive.triangle;
+    contact.normal = c.surface.normal;
+    contact.separation = c.separation;
+    contact.axial_first = c.axial;
+    // C = n·p(a) − offset = n·(q + d·n) − n·q − r = d − r, the separation.
+    contact.offset = c.surface.normal.dot(c.surface.point) + limb.radius;
+    contact.point = c.surface.point + 0.5 * c.separation * c.surface.normal;
+    contact.friction = primitive.friction, contact.restitution = primitive.restitution;
+    out.push_back(contact);
+  }
+}
+
+// Grows the sweep's pair buffer to about four pairs per limb (a limb among its neighbours in a
+// pile or a fallen figure) by one sweep over a row of boxes each overlapping the next four, so
+// steps that find no more allocate nothing. (SweepAndPrune has no reserve(); this keeps its
+// header, which half the kernel includes, unchanged.)
+void warm_broadphase(SweepAndPrune& broadphase, std::uint32_t count) {
+  std::vector<Aabb> row(count);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    row[i].min = Vector3d(i, 0, 0);
+    row[i].max = Vector3d(i + 4.5, 1, 1);
+  }
+  broadphase.find_pairs(row);
+}
+
+bool contact_before(const LimbContact& a, const LimbContact& b) {
+  if (a.first != b.first) return a.first < b.first;
+  if (a.second != b.second) return a.second < b.second;
+  if (a.collider != b.collider) return a.collider < b.collider;
+  if (a.triangle != b.triangle) return a.triangle < b.triangle;
+  return a.axial_first < b.axial_first;
+}
+
+}  // namespace
+
+LimbCollisions::LimbCollisions(const Model& model)
+    : limb_count_(static_cast<std::uint32_t>(model.bodies.size())),
+      has_ball_(model.ball.has_value()),
+      limb_friction_(model.settings.limb_friction),
+      statics_(model.colliders) {
+  const std::size_t segments = limb_count_ + (has_ball_ ? 1 : 0);
+  std::vector<LimbSegment> limbs;
+  limbs.reserve(segments);
+  for (const Body& body : model.bodies) {
+    limbs.push_back(model_segment(body));
+    filters_.push_back(body.collision);
+  }
+  if (has_ball_) filters_.emplace_back();  // the ball meets every collider its default filter allows
+
+  // Exclusions: joined pairs, and pairs overlapping at the Model's poses (found by the sweep).
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
+    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
+    excluded_.emplace_back(std::min(a, b), std::max(a, b));
+  }
+  boxes_.resize(limb_count_);
+  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], 0);
+  for (const CandidatePair& pair : broadphase_.find_pairs(boxes_)) {
+    if (limb_pair_contact(pair.first, pair.second, limbs[pair.first], limbs[pair.second]).separation < 0) excluded_.push_back(pair);
+  }
+  std::sort(excluded_.begin(), excluded_.end());
+  excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());
+
+  // Whether any limb pair is left to test (O(n²) filter checks once; usually the first pair answers).
+  for (std::uint32_t i = 0; i < limb_count_ && !limb_pairs_; ++i) {
+    for (std::uint32_t j = i + 1; j < limb_count_ && !limb_pairs_; ++j) {
+      limb_pairs_ = filters_collide(filters_[i], filters_[j]) && !excluded(i, j);
+    }
+  }
+  active_ = limb_pairs_ || !statics_.empty();
+  all_awake_.assign(segments, 1);
+  // Warm the buffers: four candidate pairs per limb (a limb among its neighbours in a pile or a
+  // fallen figure), one contact per limb and two per segment against static geometry are a
+  // typical scene's; more grow them once.
+  warm_broadphase(broadphase_, limb_count_);
+  scratch_.reserve(3 * segments);
+}
+
+bool LimbCollisions::excluded(std::uint32_t first, std::uint32_t second) const {
+  return std::binary_search(excluded_.begin(), excluded_.end(), CandidatePair{first, second});
+}
+
+void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                          std::vector<LimbContact>& out) {
+  out.clear();
+  const std::size_t segments = filters_.size();
+  if (limbs.size() != segments || !(awake.size() == segments || (has_ball_ && awake.size() + 1 == segments))) {
+    throw std::invalid_argument("LimbCollisions::find: expected " + std::to_string(segments) + " segments and awake flags, got " +
+                                std::to_string(limbs.size()) + " and " + std::to_string(awake.size()));
+  }
+  if (!active_) return;
+  if (limb_pairs_) find_limb_pairs(limbs, awake, margin, out);
+  if (!statics_.empty()) find_static(limbs, awake, margin, out);
+  std::sort(out.begin(), out.end(), contact_before);
+}
+
+void LimbCollisions::find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                                     std::vector<LimbContact>& out) {
+  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], margin);
+  for (const auto& [i, j] : broadphase_.find_pairs(boxes_)) {
+    if (!awake[i] && !awake[j]) continue;
+    if (!filters_collide(filters_[i], filters_[j]) || excluded(i, j)) continue;
+    if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), margin)) continue;
+    LimbContact contact = limb_pair_contact(i, j, limbs[i], limbs[j]);
+    if (!(contact.separation <= margin)) continue;
+    contact.friction = limb_friction_, contact.restitution = 0;
+    out.push_back(contact);
+  }
+}
+
+void LimbCollisions::find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                                 std::vector<LimbContact>& out) const {
+  for (std::uint32_t s = 0; s < filters_.size(); ++s) {
+    if (s < awake.size() && !awake[s]) continue;  // the ball without a flag counts as awake
+    const LimbSegment& limb = limbs[s];
+    const BoundingSphere sphere = segment_sphere(limb);
+    statics_.query(segment_box(limb, margin), [&](const StaticPrimitive& primitive) {
+      if (!filters_collide(filters_[s], primitive.filter)) return;
+      if (!spheres_within(sphere, primitive.sphere, margin)) return;
+      add_static_contacts(s, limb, primitive, margin, out);
+    });
+  }
+}
+
+double LimbCollisions::deepest_penetration(std::span<const LimbSegment> limbs) {
+  find(limbs, all_awake_, 0, scratch_);
+  double deepest = 0;
+  for (const LimbContact& contact : scratch_) deepest = std::max(deepest, -contact.separation);
+  return deepest;
+}
+
+}  // namespace limber

@@ -1,0 +1,116 @@
+// The collision world every method shares: limbs against limbs and against static level
+// geometry (Model::colliders), found each step from the limbs' segments.
+//
+// Detection is in three levels, what thesis 2.4 calls the hierarchical test:
+// - broadphase: sweep and prune over the limbs' boxes (kernel/geometry/broadphase.hpp), which
+//   keeps last step's order (nearly sorted, so incremental); static geometry sits in a bounding
+//   volume tree built once, queried with each limb's box;
+// - bounding spheres: a pair whose spheres are apart is dropped with one distance;
+// - the exact closest points of the limb's capsule (its segment and radius) and the other shape.
+// Limbs are capsules here, a cylinder by the capsule around it (its caps stick out r past its
+// flat ends; the ground and the bounds still see a cylinder's exact rim, geometry.hpp).
+// Pairs a filter rejects, joined by a joint or overlapping in the Model's poses never reach the
+// broadphase's answer (CollisionFilter, model.hpp).
+//
+// A contact is reported while the surfaces are closer than a margin, not only when they overlap
+// (speculative contacts, as Box2D and Jolt do): a method that holds C ≥ 0 through the step then
+// catches what would pass through between two detections. Its normal points from the second
+// shape to the first, and the separation C = n·(p_first − p_second) − (r_first + r_second) is
+// linear in the limbs' end points at fixed axial parameters — what the particle method
+// projects, and what the rigid methods answer with impulses at `point`.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "limber/kernel/geometry/bounding_volumes.hpp"
+#include "limber/kernel/geometry/broadphase.hpp"
+#include "limber/kernel/geometry/static_geometry.hpp"
+#include "limber/kernel/model/model.hpp"
+
+namespace limber {
+
+/// LimbContact::second for a contact with static geometry.
+inline constexpr std::uint32_t kStaticShape = 0xFFFFFFFFu;
+
+/// A limb as collision sees it this step: the segment head → tail and its radius.
+struct LimbSegment {
+  Eigen::Vector3d head = Eigen::Vector3d::Zero();  ///< m, world
+  Eigen::Vector3d tail = Eigen::Vector3d::Zero();  ///< m, world
+  double radius = 0;                               ///< m
+};
+
+/// Two shapes closer than the margin. For a limb–limb contact, first < second (Model body
+/// indices); against static geometry, second == kStaticShape and `collider` names it.
+struct LimbContact {
+  std::uint32_t first = 0;
+  std::uint32_t second = kStaticShape;
+  std::uint32_t collider = 0;   ///< Model::colliders index (static contacts)
+  std::uint32_t triangle = 0;   ///< the mesh triangle (mesh colliders)
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, from second towards first
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();    ///< m, world: midway between the surfaces
+  double separation = 0;     ///< m, < 0 overlapping (depth −separation)
+  double axial_first = 0;    ///< where on first's segment: 0 at the head, 1 at the tail
+  double axial_second = 0;   ///< the same on second's (limb–limb)
+  /// For static contacts: the static surface's point is fixed, and C = n·p_first − offset with
+  /// offset = n·(static surface point) + r_first (m). Unused for limb–limb.
+  double offset = 0;
+  double friction = 0, restitution = 0;
+};
+
+/// What collides with what, fixed at compile: the bodies' filters, the pairs excluded (joined or
+/// overlapping at the Model's poses), the static geometry in its tree. Holds the broadphase's
+/// buffers, so a step that finds no more pairs than an earlier one allocates nothing.
+class LimbCollisions {
+ public:
+  LimbCollisions() = default;
+  /// Builds from `model` (its bodies, joints, colliders and Settings::limb_friction).
+  explicit LimbCollisions(const Model& model);
+
+  /// Whether the model has anything to collide beyond the ground, the bounds and the ball: a
+  /// limb pair the filters allow, or a static collider. When false, find() does nothing.
+  bool active() const { return active_; }
+
+  /// The contacts within `margin` (m, ≥ 0: separation ≤ margin) among `limbs` — one per Model
+  /// body, in order, then the ball's (head = tail = its centre) when the Model has one: the ball
+  /// meets static geometry here, and limbs through its own path (contacts.hpp,
+  /// rigid_contacts.hpp) — into `out` (cleared first), ordered by (first, second, collider,
+  /// triangle, axial_first): the same list whatever the broadphase's order, so a method's result
+  /// is the same bits run to run. Up to two contacts per limb and static shape (a limb lying on a
+  /// face touches it with both ends); one per limb pair.
+  /// A pair is tested only when at least one of its limbs is `awake` (one flag per segment, the
+  /// ball's last; without the ball's flag the ball counts as awake; static geometry is never
+  /// awake). Throws std::invalid_argument when `limbs` or `awake` has the wrong size.
+  void find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+            std::vector<LimbContact>& out);
+
+  /// The deepest overlap among `limbs` now (m, ≥ 0; 0 when nothing overlaps), between limbs and
+  /// static geometry and between limbs — the run summary's measure (every method alike).
+  double deepest_penetration(std::span<const LimbSegment> limbs);
+
+ private:
+  // A value type (states are copied): no shared buffers.
+  void find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                       std::vector<LimbContact>& out);
+  void find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                   std::vector<LimbContact>& out) const;
+  bool excluded(std::uint32_t first, std::uint32_t second) const;
+
+  bool active_ = false;
+  bool limb_pairs_ = false;                 // some limb pair the filters allow and no exclusion removes
+  std::uint32_t limb_count_ = 0;            // Model bodies; the ball, if any, is segment limb_count_
+  bool has_ball_ = false;
+  double limb_friction_ = 0;
+  std::vector<CollisionFilter> filters_;    // per segment (the ball: the default filter)
+  std::vector<CandidatePair> excluded_;     // sorted: joined, or overlapping at the Model's poses
+  StaticTree statics_;
+  SweepAndPrune broadphase_;
+  std::vector<Aabb> boxes_;                 // per limb, this call's
+  std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
+  std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
+};
+
+}  // namespace limber

@@ -1,0 +1,179 @@
+// GCC 12 false positive in Eigen's AVX-512 reductions (the SVD inside FromTwoVectors, a capsule's
+// "axis"): the pragma must precede the Eigen headers, where the warning is located.
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// The scene loader's static colliders (format in scene_file.hpp): "colliders" entries of type
+// box, capsule, mesh, and the "stairs" generator that becomes a mesh; and the "collision" filter
+// that bodies and colliders share.
+//
+// As in scene_file.cpp, every value is checked as it is read, with paths in the file's own
+// terms ("colliders[2].triangles[5]"), so validate() later finds nothing it must report in the
+// Model's terms ("colliders[2].mesh.triangles[5]").
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/scene/scene_json.hpp"
+
+namespace limber::scene_json {
+
+namespace {
+
+/// The fields each collider type takes besides the common ones (name, type, restitution,
+/// friction, collision). A field of another type is refused: a box given a radius is a mistake.
+struct TypeFields {
+  std::string_view type;
+  std::vector<std::string_view> fields;
+};
+constexpr std::string_view kCommonFields[] = {"name", "type", "restitution", "friction", "collision"};
+const TypeFields kTypeFields[] = {
+    {"box", {"position", "rotation", "half_extents"}},
+    {"capsule", {"position", "rotation", "axis", "length", "radius"}},
+    {"mesh", {"position", "rotation", "vertices", "triangles", "thickness"}},
+    {"stairs", {"position", "direction", "steps", "rise", "run", "width", "landing", "thickness"}},
+};
+
+/// A rotation vector (axis × angle, rad; the drive's target_rotation convention) as a unit
+/// quaternion.
+Eigen::Quaterniond read_rotation(const Object& object) {
+  const Vector3 rotation = object.vector("rotation");
+  const double angle = rotation.norm();
+  if (angle == 0) return Eigen::Quaterniond::Identity();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation / angle));
+}
+
+/// A length that must be > 0.
+double read_positive(const Object& object, const std::string& key) {
+  const double value = object.number(key);
+  require_positive(value, object.path(key));
+  return value;
+}
+
+/// "vertices": an array of [x, y, z]; "triangles": an array of [i, j, k] vertex indices.
+TriangleMesh read_mesh(const Object& object) {
+  TriangleMesh mesh;
+  const Json& vertices = object.at("vertices");
+  const std::string vertices_path = object.path("vertices");
+  if (!vertices.is_array()) wrong_type(vertices, vertices_path, "an array of [x, y, z]");
+  mesh.vertices.reserve(vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i) mesh.vertices.push_back(read_vector(vertices[i], indexed(vertices_path, i)));
+  const Json& triangles = object.at("triangles");
+  const std::string triangles_path = object.path("triangles");
+  if (!triangles.is_array()) wrong_type(triangles, triangles_path, "an array of [i, j, k]");
+  mesh.triangles.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    const Json& triangle = triangles[t];
+    const std::string path = indexed(triangles_path, t);
+    if (!triangle.is_array() || triangle.size() != 3) {
+      const std::string found = triangle.is_array() ? "an array of " + std::to_string(triangle.size()) : std::string(triangle.type_name());
+      fail(path, "must be an array of 3 vertex indices, got " + found);
+    }
+    mesh.triangles.push_back({read_uint32(triangle[0], indexed(path, 0)), read_uint32(triangle[1], indexed(path, 1)),
+                              read_uint32(triangle[2], indexed(path, 2))});
+  }
+  return mesh;
+}
+
+/// The "stairs" generator's fields, checked with their paths, as generators.hpp's StairsSpec.
+StairsSpec read_stairs(const Object& object) {
+  StairsSpec spec;
+  const int steps = object.integer("steps");
+  require_at_least(steps, 1, object.path("steps"));
+  require_at_most(steps, 1'000'000, object.path("steps"));
+  spec.steps = static_cast<std::size_t>(steps);
+  spec.rise = read_positive(object, "rise");
+  spec.run = read_positive(object, "run");
+  spec.width = read_positive(object, "width");
+  spec.landing = object.find("landing") ? read_positive(object, "landing") : spec.run;
+  spec.position = object.vector("position");
+  spec.direction = object.direction("direction");
+  if (!(std::abs(spec.direction.z()) <= 1e-9)) {
+    fail(object.path("direction"), "must be horizontal (z = 0), got " + format_vector(object.vector("direction")));
+  }
+  spec.direction.z() = 0;
+  return spec;
+}
+
+StaticCollider read_collider(const Object& object) {
+  object.allow_only({"name", "type", "position", "rotation", "axis", "half_extents", "length", "radius", "vertices", "triangles",
+                     "thickness", "restitution", "friction", "collision", "steps", "rise", "run", "width", "landing", "direction"});
+  StaticCollider collider;
+  collider.name = object.string("name");
+  require_name(collider.name, object.path("name"), /*is_body=*/false);
+  const std::string type = object.string("type");
+  const auto known = std::find_if(std::begin(kTypeFields), std::end(kTypeFields), [&](const TypeFields& t) { return t.type == type; });
+  if (known == std::end(kTypeFields)) {
+    fail(object.path("type"), "must be \"box\", \"capsule\", \"mesh\" or \"stairs\", got " + in_quotes(type));
+  }
+  for (const auto& [key, value] : object.json().items()) {
+    const bool common = std::find(std::begin(kCommonFields), std::end(kCommonFields), key) != std::end(kCommonFields);
+    if (!common && std::find(known->fields.begin(), known->fields.end(), key) == known->fields.end()) {
+      fail(object.path(key), "is not used by a " + type + " collider");
+    }
+  }
+
+  if (type == "box") {
+    collider.type = ColliderType::box;
+    collider.position = object.vector("position");
+    if (object.find("rotation")) collider.orientation = read_rotation(object);
+    collider.half_extents = object.vector("half_extents");
+    for (int axis = 0; axis < 3; ++axis) {
+      require_positive(collider.half_extents[axis], indexed(object.path("half_extents"), static_cast<std::size_t>(axis)));
+    }
+  } else if (type == "capsule") {
+    collider.type = ColliderType::capsule;
+    collider.position = object.vector("position");
+    if (object.find("rotation") && object.find("axis")) fail(object.path(), "give either \"rotation\" or \"axis\", not both");
+    if (object.find("rotation")) collider.orientation = read_rotation(object);
+    if (object.find("axis")) collider.orientation = Eigen::Quaterniond::FromTwoVectors(Vector3::UnitZ(), object.direction("axis"));
+    collider.length = object.number("length");
+    require_non_negative(collider.length, object.path("length"));
+    collider.radius = read_positive(object, "radius");
+  } else {
+    collider.type = ColliderType::mesh;
+    if (type == "mesh") {
+      collider.mesh = read_mesh(object);
+      // The vertices are in the frame that position and rotation give (both optional); the Model
+      // holds them in world coordinates, so its position and orientation stay unused.
+      const Vector3 position = object.find("position") ? object.vector("position") : Vector3::Zero();
+      const Eigen::Quaterniond rotation = object.find("rotation") ? read_rotation(object) : Eigen::Quaterniond::Identity();
+      for (Vector3& vertex : collider.mesh.vertices) vertex = rotation * vertex + position;
+    } else {
+      collider.mesh = make_stairs_mesh(read_stairs(object));
+    }
+    require_triangle_mesh(collider.mesh, object.path("vertices"), object.path("triangles"));
+    if (object.find("thickness")) collider.thickness = read_positive(object, "thickness");
+  }
+
+  object.optional("restitution", collider.restitution);
+  require_in_range(collider.restitution, 0, 1, object.path("restitution"));
+  object.optional("friction", collider.friction);
+  require_non_negative(collider.friction, object.path("friction"));
+  if (const Json* collision = object.find("collision")) collider.collision = read_collision_filter(Object(*collision, object.path("collision")));
+  return collider;
+}
+
+}  // namespace
+
+CollisionFilter read_collision_filter(const Object& object) {
+  object.allow_only({"group", "mask"});
+  CollisionFilter filter;
+  if (const Json* group = object.find("group")) filter.group = read_uint32(*group, object.path("group"));
+  if (const Json* mask = object.find("mask")) filter.mask = read_uint32(*mask, object.path("mask"));
+  return filter;
+}
+
+std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path) {
+  if (!value.is_array()) wrong_type(value, path, "an array");
+  std::vector<StaticCollider> colliders;
+  colliders.reserve(value.size());
+  for (std::size_t i = 0; i < value.size(); ++i) colliders.push_back(read_collider(Object(value[i], indexed(path, i))));
+  require_unique_names(colliders, [](const StaticCollider& collider) -> std::string_view { return collider.name; }, path);
+  return colliders;
+}
+
+}  // namespace limber::scene_json
