@@ -23,14 +23,6 @@ template <typename Scalar>
 Eigen::Vector3d position_at(const ParticleBuffer<Scalar>& particles, std::uint32_t p, double t) {
   return (1 - t) * position_of(particles, p, true) + t * position_of(particles, p);
 }
-// A particle's velocity: v = (x − x_previous)/Δt under pbd; the state's own v under rattle (during
-// relaxation x − x_previous = v·Δt there too, so detection sees the same speed either way).
-template <typename Scalar>
-Eigen::Vector3d velocity_of(const VerletState<Scalar>& state, std::uint32_t p, double dt) {
-  const auto& particles = state.particles;
-  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
-  return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
-}
 template <typename Scalar>
 void move(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta) {
   particles.set_position(p, particles.position(p) + delta.cast<Scalar>());
@@ -78,9 +70,9 @@ double plane_inverse_mass(const VerletState<Scalar>& state, const ContactFeature
 template <typename Scalar>
 double plane_normal_speed(const VerletState<Scalar>& state, const ContactFeature& feature,
                           const PlaneFeatureConstraint& constraint, double dt) {
-  double speed = constraint.gradient_point.dot(velocity_of(state, feature.particle, dt));
+  double speed = constraint.gradient_point.dot(contact_velocity(state, feature.particle, dt));
   if (feature.axis_partner != feature.particle) {
-    speed += constraint.gradient_partner.dot(velocity_of(state, feature.axis_partner, dt));
+    speed += constraint.gradient_partner.dot(contact_velocity(state, feature.axis_partner, dt));
   }
   return speed;
 }
@@ -113,10 +105,10 @@ double ball_separation(const VerletState<Scalar>& state, const BallContact& cont
 // Relative normal velocity of the ball against the contact's limb point, m/s.
 template <typename Scalar>
 double ball_normal_speed(const VerletState<Scalar>& state, const BallContact& contact, double dt) {
-  const Eigen::Vector3d limb_velocity = (1 - contact.axial) * velocity_of(state, state.limbs.head[contact.limb], dt) +
-                                        contact.axial * velocity_of(state, state.limbs.tail[contact.limb], dt);
+  const Eigen::Vector3d limb_velocity = (1 - contact.axial) * contact_velocity(state, state.limbs.head[contact.limb], dt) +
+                                        contact.axial * contact_velocity(state, state.limbs.tail[contact.limb], dt);
   const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  return contact.normal.dot(velocity_of(state, ball, dt) - limb_velocity);
+  return contact.normal.dot(contact_velocity(state, ball, dt) - limb_velocity);
 }
 
 // Generalized inverse mass of a ball–limb contact (the denominator of thesis eq. 2.33 for a

@@ -30,6 +30,15 @@
 
 namespace limber {
 
+/// A particle's velocity as the contact passes see it, m/s: (x − x_previous)/dt under pbd, the
+/// state's v under rattle (during relaxation x − x_previous = v·dt there too).
+template <typename Scalar>
+Eigen::Vector3d contact_velocity(const VerletState<Scalar>& state, std::uint32_t p, double dt) {
+  const auto& particles = state.particles;
+  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
+  return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
+}
+
 /// Finds the ball's contacts with every limb (asleep or not) and wakes the islands it touches.
 /// Needs the ball's island awake. dt converts displacements to velocities.
 template <typename Scalar>

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "limber/kernel/collision/contacts.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -101,13 +102,6 @@ double row_inverse_mass(const VerletState<Scalar>& state, const ContactRow& row)
   return sum;
 }
 
-template <typename Scalar>
-Eigen::Vector3d velocity_of(const VerletState<Scalar>& state, std::uint32_t p, double dt) {
-  const auto& particles = state.particles;
-  if (uses_rattle(state)) return particles.velocity(p).template cast<double>();
-  return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
-}
-
 // The row of one contact, its offset moved by the overlap it may keep this substep.
 template <typename Scalar>
 ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& contact, double dt) {
@@ -132,7 +126,7 @@ ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& cont
   const double start_separation =
       along_normal(row, [&](std::uint32_t p) { return particles.previous(p).template cast<double>(); }) - offset;
   row.offset = offset + allowed_separation(start_separation, state.settings.contact_recovery_speed * dt);
-  row.approach_speed = along_normal(row, [&](std::uint32_t p) { return velocity_of(state, p, dt); });
+  row.approach_speed = along_normal(row, [&](std::uint32_t p) { return contact_velocity(state, p, dt); });
   return row;
 }
 
@@ -167,7 +161,7 @@ void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
     const double inverse_mass = row_inverse_mass(state, row);
     if (separation > kTouchingSlop || inverse_mass <= 0) continue;
     const double target = row.approach_speed < -resting_speed ? -row.restitution * row.approach_speed : 0.0;
-    const double speed = along_normal(row, [&](std::uint32_t p) { return velocity_of(state, p, dt); });
+    const double speed = along_normal(row, [&](std::uint32_t p) { return contact_velocity(state, p, dt); });
     // A row relaxation did not push keeps a separating speed of its own.
     if (speed >= target && batches.lambda[slot] <= 0) continue;
     const double impulse = (target - speed) / inverse_mass;  // N·s, thesis eq. 2.33
