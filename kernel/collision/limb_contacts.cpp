@@ -124,7 +124,7 @@ ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& cont
   row.restitution = std::max(contact.restitution, contact.first == state.body_limb.size() ? state.ball_restitution : 0.0);
   const auto& particles = state.particles;
   const double start_separation =
-      along_normal(row, [&](std::uint32_t p) { return particles.previous(p).template cast<double>(); }) - offset;
+      along_normal(row, [&](std::uint32_t p) -> Eigen::Vector3d { return particles.previous(p).template cast<double>(); }) - offset;
   row.offset = offset + allowed_separation(start_separation, state.settings.contact_recovery_speed * dt);
   row.approach_speed = along_normal(row, [&](std::uint32_t p) { return contact_velocity(state, p, dt); });
   return row;
@@ -157,7 +157,7 @@ void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
     if (batches.row[slot] == ~std::uint32_t{0}) continue;
     const ContactRow& row = state.contact_rows.rows[batches.row[slot]];
     const double separation =
-        along_normal(row, [&](std::uint32_t p) { return particles.position(p).template cast<double>(); }) - row.offset;
+        along_normal(row, [&](std::uint32_t p) -> Eigen::Vector3d { return particles.position(p).template cast<double>(); }) - row.offset;
     const double inverse_mass = row_inverse_mass(state, row);
     if (separation > kTouchingSlop || inverse_mass <= 0) continue;
     const double target = row.approach_speed < -resting_speed ? -row.restitution * row.approach_speed : 0.0;

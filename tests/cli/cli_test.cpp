@@ -110,6 +110,25 @@ TEST(Cli, EverySolverPathGivesTheSameSummaryOfAChain) {
     EXPECT_EQ(physics(r.out), physics(reference.out)) << variant[0] << " " << variant[1];
   }
 }
+TEST(Cli, ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes) {
+  // 32 self-colliding ragdolls: by step 120 hundreds of contact rows are coloured and swept.
+  const auto trajectory = [](const std::vector<std::string>& variant, const std::string& name) {
+    const std::string csv = ::testing::TempDir() + "/limber_pile_" + name + ".csv";
+    std::vector<std::string> arguments{"run", scene("ragdoll_pile.json"), "--steps", "120", "--out", csv};
+    arguments.insert(arguments.end(), variant.begin(), variant.end());
+    const Result r = run(arguments);
+    EXPECT_EQ(r.code, kSuccess) << r.err;
+    EXPECT_THAT(r.out, Not(HasSubstr("contacts    0 at end")));
+    std::ostringstream text;
+    text << std::ifstream(csv).rdbuf();
+    return text.str();
+  };
+  const std::string one = trajectory({"--threads", "1"}, "one");
+  ASSERT_FALSE(one.empty());
+  EXPECT_EQ(one, trajectory({"--threads", "2"}, "two")) << "two threads";
+  EXPECT_EQ(one, trajectory({"--threads", "1", "--scalar"}, "scalar")) << "scalar lanes";
+}
+
 TEST(Cli, RattleRunsTheChainInSubsteps) {
   const Result r = run({"run", scene("chain.json"), "--projection", "rattle", "--substeps", "16", "--steps", "60"});
   ASSERT_EQ(r.code, kSuccess) << r.err;
