@@ -11,18 +11,20 @@ namespace {
 
 // Surfaces this close after relaxation still touch, m (contacts.cpp's rule).
 constexpr double kTouchingSlop = 1e-4;
-// The speculative margin's floor, m, and its cap (a margin past a limb's size finds nothing new).
-constexpr double kMarginSlop = 0.005, kMaxMargin = 0.5;
+// The speculative margin: every pair's floor, m, plus each segment's own reach — twice how far
+// its ends moved this substep (so it finds what it may meet before the next search), capped
+// (a reach past a limb's size finds nothing new).
+constexpr double kMarginSlop = 0.005, kMaxReach = 0.5;
 
 template <typename Scalar>
 Eigen::Vector3d at(const Scalar* x, const Scalar* y, const Scalar* z, std::uint32_t p) {
   return {double(x[p]), double(y[p]), double(z[p])};
 }
 
-// Each Model body's segment at the predicted positions (and the ball's last), whether its
-// island is awake, and the largest displacement of an awake limb end this substep (m).
+// Each Model body's segment at the predicted positions (and the ball's last), with its reach,
+// and whether its island is awake.
 template <typename Scalar>
-double gather_segments(VerletState<Scalar>& state) {
+void gather_segments(VerletState<Scalar>& state) {
   const auto& p = state.particles;
   const LimbBuffer& limbs = state.limbs;
   const std::size_t bodies = state.body_limb.size();
@@ -32,7 +34,9 @@ double gather_segments(VerletState<Scalar>& state) {
     const Island& island = state.islands[k];
     for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) state.limb_island_awake[limb] = 1;
   }
-  double largest = 0;
+  const auto moved = [&](const Eigen::Vector3d& now, std::uint32_t particle) {
+    return (now - p.previous(particle).template cast<double>()).norm();
+  };
   for (std::size_t body = 0; body < bodies; ++body) {
     const std::uint32_t limb = state.body_limb[body], head = limbs.head[limb], tail = limbs.tail[limb];
     LimbSegment& segment = state.limb_segments[body];
@@ -40,9 +44,7 @@ double gather_segments(VerletState<Scalar>& state) {
     segment.tail = p.position(tail).template cast<double>();
     segment.radius = limbs.radius[limb];
     state.limb_awake[body] = state.limb_island_awake[limb];
-    if (!state.limb_awake[body]) continue;
-    largest = std::max({largest, (segment.head - p.previous(head).template cast<double>()).norm(),
-                        (segment.tail - p.previous(tail).template cast<double>()).norm()});
+    segment.reach = state.limb_awake[body] ? std::min(kMaxReach, 2 * std::max(moved(segment.head, head), moved(segment.tail, tail))) : 0.0;
   }
   for (std::uint32_t k : state.awake_islands) {
     const Island& island = state.islands[k];
@@ -54,9 +56,8 @@ double gather_segments(VerletState<Scalar>& state) {
     segment.head = segment.tail = p.position(ball).template cast<double>();
     segment.radius = state.ball_radius;
     state.limb_awake.back() = state.islands[static_cast<std::size_t>(state.ball_island)].sleeping ? 0 : 1;
-    if (state.limb_awake.back()) largest = std::max(largest, (segment.head - p.previous(ball).template cast<double>()).norm());
+    segment.reach = state.limb_awake.back() ? std::min(kMaxReach, 2 * moved(segment.head, ball)) : 0.0;
   }
-  return largest;
 }
 
 // A Model body's (or the ball's) end particles: head and tail, or the ball's one particle twice.
@@ -136,8 +137,8 @@ template <typename Scalar>
 void detect_limb_contacts(VerletState<Scalar>& state, double dt) {
   state.contact_rows.rows.clear();
   if (!state.collisions.active() || state.awake_islands.empty()) return;
-  const double margin = std::min(kMaxMargin, kMarginSlop + 2 * gather_segments(state));
-  state.collisions.find(state.limb_segments, state.limb_awake, margin, state.limb_contacts);
+  gather_segments(state);
+  state.collisions.find(state.limb_segments, state.limb_awake, kMarginSlop, state.limb_contacts);
   const std::size_t bodies = state.body_limb.size();
   for (const LimbContact& contact : state.limb_contacts) {
     // An awake limb reaching a sleeping one wakes it (its rows join the next sweep's batches).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 
@@ -13,9 +14,9 @@ namespace {
 
 using Eigen::Vector3d;
 
-// A contact at a segment's middle is only taken this far (axial) from either end: nearer an end,
-// the end sphere already holds that side of the limb.
-constexpr double kEndZone = 0.25;
+// The segment's deepest point is a contact of its own only this far (axial) inside either end:
+// nearer, the end sphere's contact holds the same point.
+constexpr double kEndZone = 0.02;
 // Golden-section steps for the deepest point of a segment in a box: the bracket shrinks by
 // 0.618 per step, so 40 steps leave 4·10⁻⁹ of the segment's length.
 constexpr int kGoldenSteps = 40;
@@ -37,11 +38,11 @@ bool spheres_within(const BoundingSphere& a, const BoundingSphere& b, double mar
   return (a.centre - b.centre).squaredNorm() <= reach * reach;
 }
 
-// The one contact of two limbs, at the closest points of their segments; normal from second to
-// first. Touching axes (distance 0) take the normal across both (any across a parallel pair),
+// A contact of two limbs at a pair of points of their segments (the closest, or closest to one
+// of them); normal from second to first. Touching axes (distance 0) take the normal across both (any across a parallel pair),
 // oriented from the second's middle towards the first's.
-LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b) {
-  const SegmentClosestPoints closest = closest_points_between_segments(a.head, a.tail, b.head, b.tail);
+LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b,
+                              const SegmentClosestPoints& closest) {
   Vector3d normal;
   if (closest.distance > 0) {
     normal = (closest.on_first - closest.on_second) / closest.distance;
@@ -69,6 +70,48 @@ LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const L
   // Midway between the surface points on_first − r₁n and on_second + r₂n.
   contact.point = 0.5 * (closest.on_first - a.radius * normal + closest.on_second + b.radius * normal);
   return contact;
+}
+
+LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b) {
+  return limb_pair_contact(first, second, a, b, closest_points_between_segments(a.head, a.tail, b.head, b.tail));
+}
+
+// Limbs within this angle of parallel lying along each other touch along a line, not at a point.
+const double kParallelSine = std::sin(15.0 * std::numbers::pi / 180);
+
+// The point of segment q0–q1 nearest `point`, as a SegmentClosestPoints with `point` first at s.
+SegmentClosestPoints nearest_on(const Vector3d& point, double s, const Vector3d& q0, const Vector3d& q1) {
+  const Vector3d d = q1 - q0;
+  const double length2 = d.squaredNorm();
+  const double t = length2 > 0 ? std::clamp((point - q0).dot(d) / length2, 0.0, 1.0) : 0.0;
+  SegmentClosestPoints closest;
+  closest.on_first = point, closest.on_second = q0 + t * d;
+  closest.s = s, closest.t = t;
+  closest.distance = (closest.on_first - closest.on_second).norm();
+  return closest;
+}
+
+// The contacts of two limbs within `reach`: one at the closest points and, for limbs lying along
+// each other (within kParallelSine of parallel), one at each end of the length they share, away
+// from the first (a contact manifold: one point would let them rock about it, end over end).
+// Ends whose normal disagrees with the closest points' (a pair crossed through) are left out.
+void add_limb_pair_contacts(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b,
+                            double reach, std::vector<LimbContact>& out) {
+  const LimbContact main = limb_pair_contact(first, second, a, b);
+  if (!(main.separation <= reach)) return;
+  out.push_back(main);
+  const Vector3d u = a.tail - a.head, v = b.tail - b.head;
+  const double lengths = u.norm() * v.norm();
+  if (!(lengths > 0) || u.cross(v).norm() > kParallelSine * lengths) return;
+  // b's ends on a's axis: the shared length is [low, high] of a's parameter.
+  const double u2 = u.squaredNorm();
+  const double s0 = std::clamp((b.head - a.head).dot(u) / u2, 0.0, 1.0), s1 = std::clamp((b.tail - a.head).dot(u) / u2, 0.0, 1.0);
+  const double apart = (a.radius + b.radius) / std::sqrt(u2);  // contacts closer than a diameter hold the same point
+  for (const double s : {std::min(s0, s1), std::max(s0, s1)}) {
+    if (std::abs(s - main.axial_first) <= apart) continue;
+    const LimbContact end = limb_pair_contact(first, second, a, b, nearest_on(a.head + s * u, s, b.head, b.tail));
+    if (end.separation <= reach && end.normal.dot(main.normal) > 0) out.push_back(end);
+  }
 }
 
 // The deepest point of the segment in the shape, as an axial parameter: exact for a capsule and
@@ -116,9 +159,10 @@ Candidate candidate_at(const StaticPrimitive& primitive, const LimbSegment& limb
   return candidate;
 }
 
-// Up to two contacts of the limb and the shape: its end spheres, and the deepest point of its
-// segment when that is deeper than both ends and away from them (a limb across an edge or a
-// capsule) — the two deepest of these within the margin.
+// Up to three contacts of the limb and the shape, those within the margin among: its end
+// spheres, and the deepest point of its segment when that is inside the limb and deeper than both
+// ends (a limb across an edge or a capsule, its ends beyond the shape: a triangle's end sphere
+// may find nothing at all). In the order head, tail, middle.
 void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, const StaticPrimitive& primitive, double margin,
                          std::vector<LimbContact>& out) {
   std::array<Candidate, 3> candidates{candidate_at(primitive, limb, 0), Candidate{}, Candidate{}};
@@ -131,12 +175,7 @@ void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, cons
       if (middle.separation < std::min(candidates[0].separation, candidates[1].separation)) candidates[count++] = middle;
     }
   }
-  // The two deepest: insertion sort, stable (ties keep head before tail before middle) and, unlike
-  // std::stable_sort, without a buffer.
-  for (std::size_t k = 1; k < count; ++k) {
-    for (std::size_t j = k; j > 0 && candidates[j].separation < candidates[j - 1].separation; --j) std::swap(candidates[j], candidates[j - 1]);
-  }
-  for (std::size_t k = 0; k < std::min<std::size_t>(count, 2); ++k) {
+  for (std::size_t k = 0; k < count; ++k) {
     const Candidate& c = candidates[k];
     if (!(c.separation <= margin)) continue;
     LimbContact contact;
@@ -239,15 +278,15 @@ void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const st
 
 void LimbCollisions::find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                                      std::vector<LimbContact>& out) {
-  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], margin);
+  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], margin + limbs[i].reach);
   for (const auto& [i, j] : broadphase_.find_pairs(boxes_)) {
     if (!awake[i] && !awake[j]) continue;
     if (!filters_collide(filters_[i], filters_[j]) || excluded(i, j)) continue;
-    if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), margin)) continue;
-    LimbContact contact = limb_pair_contact(i, j, limbs[i], limbs[j]);
-    if (!(contact.separation <= margin)) continue;
-    contact.friction = limb_friction_, contact.restitution = 0;
-    out.push_back(contact);
+    const double reach = margin + limbs[i].reach + limbs[j].reach;
+    if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), reach)) continue;
+    const std::size_t begin = out.size();
+    add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
+    for (std::size_t k = begin; k < out.size(); ++k) out[k].friction = limb_friction_, out[k].restitution = 0;
   }
 }
 
@@ -257,10 +296,11 @@ void LimbCollisions::find_static(std::span<const LimbSegment> limbs, std::span<c
     if (s < awake.size() && !awake[s]) continue;  // the ball without a flag counts as awake
     const LimbSegment& limb = limbs[s];
     const BoundingSphere sphere = segment_sphere(limb);
-    statics_.query(segment_box(limb, margin), [&](const StaticPrimitive& primitive) {
+    const double reach = margin + limb.reach;
+    statics_.query(segment_box(limb, reach), [&](const StaticPrimitive& primitive) {
       if (!filters_collide(filters_[s], primitive.filter)) return;
-      if (!spheres_within(sphere, primitive.sphere, margin)) return;
-      add_static_contacts(s, limb, primitive, margin, out);
+      if (!spheres_within(sphere, primitive.sphere, reach)) return;
+      add_static_contacts(s, limb, primitive, reach, out);
     });
   }
 }

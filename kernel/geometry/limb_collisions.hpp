@@ -41,6 +41,9 @@ struct LimbSegment {
   Eigen::Vector3d head = Eigen::Vector3d::Zero();  ///< m, world
   Eigen::Vector3d tail = Eigen::Vector3d::Zero();  ///< m, world
   double radius = 0;                               ///< m
+  /// m, ≥ 0: its own speculative margin, added to find()'s (how far it may move before the next
+  /// search), so one fast limb widens its own search and not every pair's.
+  double reach = 0;
 };
 
 /// Two shapes closer than the margin. For a limb–limb contact, first < second (Model body
@@ -79,8 +82,9 @@ class LimbCollisions {
   /// meets static geometry here, and limbs through its own path (contacts.hpp,
   /// rigid_contacts.hpp) — into `out` (cleared first), ordered by (first, second, collider,
   /// triangle, axial_first): the same list whatever the broadphase's order, so a method's result
-  /// is the same bits run to run. Up to two contacts per limb and static shape (a limb lying on a
-  /// face touches it with both ends); one per limb pair.
+  /// is the same bits run to run. Up to three contacts per limb and static shape (a limb lying on a
+  /// face touches it with both ends; one across an edge, at the edge too); one per limb pair, or
+  /// two for limbs lying along each other (within 15° of parallel: the ends of their shared length).
   /// A pair is tested only when at least one of its limbs is `awake` (one flag per segment, the
   /// ball's last; without the ball's flag the ball counts as awake; static geometry is never
   /// awake). Throws std::invalid_argument when `limbs` or `awake` has the wrong size.

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <numbers>
 #include <random>
 #include <string>
 #include <tuple>
@@ -42,6 +43,15 @@ std::vector<LimbContact> find_all(LimbCollisions& collisions, const std::vector<
   std::vector<LimbContact> contacts;
   collisions.find(limbs, awake, margin, contacts);
   return contacts;
+}
+
+// The limb pairs that touch, each once (limbs lying along each other touch at up to three points).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> touching_pairs(const std::vector<LimbContact>& contacts) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (const LimbContact& c : contacts) {
+    if (c.second != kStaticShape && (pairs.empty() || pairs.back() != std::make_pair(c.first, c.second))) pairs.emplace_back(c.first, c.second);
+  }
+  return pairs;
 }
 
 StaticCollider box_collider(const Vector3d& centre, const Vector3d& half_extents) {
@@ -99,10 +109,10 @@ TEST(LimbCollisions, FilterBitsDecideWhichLimbsMeet) {
   LimbCollisions collisions(model);
   std::vector<LimbSegment> limbs = segments_of(model);
   for (LimbSegment& limb : limbs) limb.head.z() = limb.tail.z() = 0.05 * (&limb - limbs.data());  // all overlapping
-  const std::vector<LimbContact> contacts = find_all(collisions, limbs);
-  ASSERT_EQ(contacts.size(), 2u);  // (0, 2) and (1, 2); 0 rejects 1
-  EXPECT_EQ(std::tie(contacts[0].first, contacts[0].second), std::make_tuple(0u, 2u));
-  EXPECT_EQ(std::tie(contacts[1].first, contacts[1].second), std::make_tuple(1u, 2u));
+  const auto pairs = touching_pairs(find_all(collisions, limbs));
+  ASSERT_EQ(pairs.size(), 2u);  // (0, 2) and (1, 2); 0 rejects 1
+  EXPECT_EQ(pairs[0], std::make_pair(0u, 2u));
+  EXPECT_EQ(pairs[1], std::make_pair(1u, 2u));
 
   // Filters that reject every pair, and no collider: nothing to do.
   for (Body& body : model.bodies) body.collision = {0b01, 0b10};
@@ -120,10 +130,37 @@ TEST(LimbCollisions, LimbsOverlappingInTheModelNeverCollide) {
   // The third limb moved into the arm does collide with it (and with the torso).
   std::vector<LimbSegment> limbs = segments_of(model);
   limbs[2] = {{0.3, 0, 1.5}, {0.3, 0, 0.5}, 0.2};
-  const std::vector<LimbContact> contacts = find_all(collisions, limbs);
-  ASSERT_EQ(contacts.size(), 2u);
-  EXPECT_EQ(contacts[0].second, 2u);
-  EXPECT_EQ(contacts[1].second, 2u);
+  const auto pairs = touching_pairs(find_all(collisions, limbs));
+  ASSERT_EQ(pairs.size(), 2u);
+  EXPECT_EQ(pairs[0], std::make_pair(0u, 2u));
+  EXPECT_EQ(pairs[1], std::make_pair(1u, 2u));
+}
+
+TEST(LimbCollisions, LimbsLyingAlongEachOtherTouchAlongTheLengthTheyShare) {
+  Model model;
+  model.bodies = {capsule_limb({0, 0, 0}, {1, 0, 0}, 0.05), capsule_limb({5, 0, 0}, {6, 0, 0}, 0.05)};
+  LimbCollisions collisions(model);
+  // The second laid on the first, 10° off parallel and shifted by half a length: they share
+  // x ∈ [0.5, 1] of the first, whose ends hold the contacts (with the nearest points between).
+  const double angle = 10 * std::numbers::pi / 180;
+  std::vector<LimbSegment> limbs = segments_of(model);
+  limbs[1] = {{0.5, 0, 0.09}, {0.5 + std::cos(angle), 0, 0.09 + std::sin(angle)}, 0.05};
+  std::vector<LimbContact> contacts = find_all(collisions, limbs, 0.2);
+  ASSERT_EQ(contacts.size(), 2u) << "the nearest points are at the shared length's near end";
+  EXPECT_NEAR(contacts[0].axial_first, 0.5, 1e-9);
+  EXPECT_NEAR(contacts[1].axial_first, 1.0, 1e-9);
+  for (const LimbContact& c : contacts) EXPECT_LT(c.normal.z(), -0.9) << "from the second (above) towards the first";
+  EXPECT_LT(contacts[0].separation, contacts[1].separation);
+  // Parallel and level: the nearest points mid-way, plus both ends.
+  limbs[1] = {{0.5, 0, 0.09}, {1.5, 0, 0.09}, 0.05};
+  contacts = find_all(collisions, limbs, 0.2);
+  ASSERT_EQ(contacts.size(), 3u);
+  EXPECT_NEAR(contacts[0].axial_first, 0.5, 1e-9);
+  EXPECT_NEAR(contacts[1].axial_first, 0.75, 1e-9);
+  EXPECT_NEAR(contacts[2].axial_first, 1.0, 1e-9);
+  // Crossed at 60°: one contact.
+  limbs[1] = {{0.5, -0.5, 0.09}, {0.5 + 0.5, -0.5 + std::sqrt(3.0) / 2, 0.09}, 0.05};
+  EXPECT_EQ(find_all(collisions, limbs, 0.2).size(), 1u);
 }
 
 TEST(LimbCollisions, LimbPairContactIsAtTheClosestPointsOfTheSegments) {
@@ -365,9 +402,15 @@ TEST(LimbCollisions, TwoHundredLimbsAgreeWithBruteForceOverEveryPair) {
       if (separation <= margin) expected.emplace_back(i, j, separation);
     }
   }
+  // Per pair, its nearest contact (limbs lying along each other get two more, no nearer).
   std::vector<std::tuple<std::uint32_t, std::uint32_t, double>> found;
   for (const LimbContact& c : contacts) {
-    if (c.second != kStaticShape) found.emplace_back(c.first, c.second, c.separation);
+    if (c.second == kStaticShape) continue;
+    if (!found.empty() && std::get<0>(found.back()) == c.first && std::get<1>(found.back()) == c.second) {
+      std::get<2>(found.back()) = std::min(std::get<2>(found.back()), c.separation);
+    } else {
+      found.emplace_back(c.first, c.second, c.separation);
+    }
   }
   ASSERT_GT(expected.size(), 50u);
   ASSERT_EQ(found.size(), expected.size());
