@@ -38,9 +38,10 @@ bool spheres_within(const BoundingSphere& a, const BoundingSphere& b, double mar
   return (a.centre - b.centre).squaredNorm() <= reach * reach;
 }
 
-// A contact of two limbs at a pair of points of their segments (the closest, or closest to one
-// of them); normal from second to first. Touching axes (distance 0) take the normal across both (any across a parallel pair),
-// oriented from the second's middle towards the first's.
+// A contact of two limbs at a pair of points of their segments (the closest, or one point and
+// the other segment's nearest to it); normal from second to first. Touching axes (distance 0)
+// take the normal across both (any across a parallel pair), oriented from the second's middle
+// towards the first's.
 LimbContact limb_pair_contact(std::uint32_t first, std::uint32_t second, const LimbSegment& a, const LimbSegment& b,
                               const SegmentClosestPoints& closest) {
   Vector3d normal;
@@ -252,7 +253,7 @@ LimbCollisions::LimbCollisions(const Model& model)
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
   // Warm the buffers: four candidate pairs per limb (a limb among its neighbours in a pile or a
-  // fallen figure), one contact per limb and two per segment against static geometry are a
+  // fallen figure), one contact per limb and three per segment against static geometry are a
   // typical scene's; more grow them once.
   warm_broadphase(broadphase_, limb_count_);
   scratch_.reserve(3 * segments);
