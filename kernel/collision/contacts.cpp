@@ -27,22 +27,6 @@ template <typename Scalar>
 void move(ParticleBuffer<Scalar>& particles, std::uint32_t p, const Eigen::Vector3d& delta) {
   particles.set_position(p, particles.position(p) + delta.cast<Scalar>());
 }
-// A velocity change: of the previous position under pbd (v = (x − x_previous)/Δt), of v under rattle.
-template <typename Scalar>
-void change_velocity(VerletState<Scalar>& state, std::uint32_t p, const Eigen::Vector3d& delta_v, double dt) {
-  auto& particles = state.particles;
-  if (uses_rattle(state)) {
-    particles.set_velocity(p, particles.velocity(p) + delta_v.cast<Scalar>());
-    return;
-  }
-  particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
-}
-
-// Normal speed a contact must leave with: e·(approach speed), or 0 for slow (resting) approaches.
-double bounce_speed(double approach_speed, double restitution, double resting_speed) {
-  return approach_speed < -resting_speed ? -restitution * approach_speed : 0.0;
-}
-
 // --- Plane contacts ---
 
 // A feature against a plane, at the current or the previous positions.
@@ -356,13 +340,13 @@ namespace {
 // One pass of the restitution impulses over every contact of the step.
 template <typename Scalar>
 void restitution_pass(VerletState<Scalar>& state, double dt) {
-  const double resting_speed = 2 * state.gravity.template cast<double>().norm() * dt;
+  const double resting = resting_speed(state, dt);
   auto& particles = state.particles;
   for (const PlaneContact& contact : state.plane_contacts) {
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
     const double restitution = std::max(state.planes[contact.plane].restitution, feature.restitution);
-    const double target = bounce_speed(contact.approach_speed, restitution, resting_speed);
+    const double target = bounce_speed(contact.approach_speed, restitution, resting);
     if (has_centre(state, feature.limb)) {
       if (constraint.separation > kTouchingSlop) continue;
       const bool at_head = feature.particle == state.limbs.head[feature.limb];
@@ -386,7 +370,7 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
     }
   }
   for (const BallContact& contact : state.ball_contacts) {
-    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting_speed);
+    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting);
     const double normal_speed = ball_normal_speed(state, contact, dt);
     if (has_centre(state, contact.limb)) {
       if (ball_separation(state, contact) > kTouchingSlop) continue;

@@ -39,6 +39,31 @@ Eigen::Vector3d contact_velocity(const VerletState<Scalar>& state, std::uint32_t
   return (particles.position(p) - particles.previous(p)).template cast<double>() / dt;
 }
 
+/// A velocity change of `delta_v` (m/s): of the previous position under pbd (v = (x − x_previous)/dt),
+/// of v under rattle.
+template <typename Scalar>
+void change_velocity(VerletState<Scalar>& state, std::uint32_t p, const Eigen::Vector3d& delta_v, double dt) {
+  auto& particles = state.particles;
+  if (uses_rattle(state)) {
+    particles.set_velocity(p, particles.velocity(p) + delta_v.cast<Scalar>());
+    return;
+  }
+  particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
+}
+
+/// Approaches slower than this do not bounce, m/s: what gravity adds in two steps of dt (a body
+/// resting on a contact approaches it at g·dt each step).
+template <typename Scalar>
+double resting_speed(const VerletState<Scalar>& state, double dt) {
+  return 2 * state.gravity.template cast<double>().norm() * dt;
+}
+
+/// The normal speed a contact must leave with, m/s: e·(approach speed, < 0), or 0 for
+/// approaches slower than `resting_speed` (resting contacts do not bounce).
+inline double bounce_speed(double approach_speed, double restitution, double resting_speed) {
+  return approach_speed < -resting_speed ? -restitution * approach_speed : 0.0;
+}
+
 /// Finds the ball's contacts with every limb (asleep or not) and wakes the islands it touches.
 /// Needs the ball's island awake. dt converts displacements to velocities.
 template <typename Scalar>

@@ -16,11 +16,6 @@ constexpr double kTouchingSlop = 1e-4;
 // (a reach past a limb's size finds nothing new).
 constexpr double kMarginSlop = 0.005, kMaxReach = 0.5;
 
-template <typename Scalar>
-Eigen::Vector3d at(const Scalar* x, const Scalar* y, const Scalar* z, std::uint32_t p) {
-  return {double(x[p]), double(y[p]), double(z[p])};
-}
-
 // Each Model body's segment at the predicted positions (and the ball's last), with its reach,
 // and whether its island is awake.
 template <typename Scalar>
@@ -152,7 +147,7 @@ void detect_limb_contacts(VerletState<Scalar>& state, double dt) {
 template <typename Scalar>
 void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
   const ContactRowBatches<Scalar>& batches = state.plan.contact_batches;
-  const double resting_speed = 2 * state.gravity.template cast<double>().norm() * dt;
+  const double resting = resting_speed(state, dt);
   auto& particles = state.particles;
   for (std::size_t slot = 0; slot < batches.slot_count(); ++slot) {
     if (batches.row[slot] == ~std::uint32_t{0}) continue;
@@ -161,7 +156,7 @@ void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
         along_normal(row, [&](std::uint32_t p) -> Eigen::Vector3d { return particles.position(p).template cast<double>(); }) - row.offset;
     const double inverse_mass = row_inverse_mass(state, row);
     if (separation > kTouchingSlop || inverse_mass <= 0) continue;
-    const double target = row.approach_speed < -resting_speed ? -row.restitution * row.approach_speed : 0.0;
+    const double target = bounce_speed(row.approach_speed, row.restitution, resting);
     const double speed = along_normal(row, [&](std::uint32_t p) { return contact_velocity(state, p, dt); });
     // A row relaxation did not push keeps a separating speed of its own.
     if (speed >= target && batches.lambda[slot] <= 0) continue;
@@ -170,12 +165,7 @@ void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
       const std::uint32_t p = row.particle[k];
       const double share = double(particles.inverse_mass[p]) * row.coefficient[k];
       if (share == 0) continue;
-      const Eigen::Vector3d delta_v = share * impulse * row.normal;
-      if (uses_rattle(state)) {
-        particles.set_velocity(p, particles.velocity(p) + delta_v.cast<Scalar>());
-      } else {
-        particles.set_previous(p, particles.previous(p) - (delta_v * dt).cast<Scalar>());
-      }
+      change_velocity(state, p, share * impulse * row.normal, dt);
     }
   }
 }
