@@ -119,7 +119,7 @@ void move_rigidly(Model& model, std::size_t first_body, std::size_t end_body, st
 Model stack_ragdolls(const Model& one, std::size_t count) {
   const double spacing = std::max(footprint(one), 0.1);
   Model pile = copies_of(one, count, spacing, "r", "stack");
-  pile.ball.reset();
+  pile.balls.clear();
   const std::size_t bodies = one.bodies.size(), joints = one.joints.size();
   const std::size_t per_row = static_cast<std::size_t>(std::ceil(std::sqrt(static_cast<double>(count))));
   // The standing ragdoll's middle (its bodies' centres' extent), which goes to each slot.
@@ -533,8 +533,8 @@ BulletScene::BulletScene(const Model& model, const PairRules& rules, const Bulle
     add_static(shape.get(), pose, collider.friction, collider.restitution, collider.collision);
     shapes_.push_back(std::move(shape));
   }
-  if (model.ball) {
-    const Ball& ball = *model.ball;
+  if (!model.balls.empty()) {  // the first ball (the scenes compared have at most one)
+    const Ball& ball = model.balls.front();
     auto sphere = std::make_unique<btSphereShape>(btScalar(ball.radius));
     const double moment = 0.4 * ball.mass * ball.radius * ball.radius;
     btRigidBody::btRigidBodyConstructionInfo info(btScalar(ball.mass), nullptr, sphere.get(), btVector3(btScalar(moment), btScalar(moment), btScalar(moment)));
@@ -673,7 +673,7 @@ int run(int argc, char** argv) {
   model.settings.sleep.enabled = sleep;
   const double dt = model.settings.time_step;
   const int steps = steps_flag.value_or(static_cast<int>(std::lround(model.settings.duration / dt)));
-  model.ball.reset();  // not measured by deepest_penetration; the piles have none
+  model.balls.clear();  // not measured by deepest_penetration; the piles have none
   const PairRules rules = pair_rules(model);
   LimbCollisions collisions(model);
   const JointControls controls = joint_controls(model);

@@ -65,7 +65,7 @@ void hard_fall(const Scene& scene) {
   for (const MethodChoice& choice : kMethods) {
     for (const double dt : {1.0 / 60, 1.0 / 240}) {
       Model model = scene.model;
-      model.ball.reset();
+      model.balls.clear();
       model.settings.sleep.start_asleep = false;
       model.settings.time_step = dt;
       for (Body& body : model.bodies) body.position.z() += 1.5;
@@ -99,7 +99,7 @@ void knock(const Scene& scene) {
       World world(scene.model, world_options(choice.method, scene.methods));
       const std::vector<JointFrame> frames = joint_frames(scene.model);
       const Observation start = world.observe();
-      KnockMeter meter(scene.model.ball->velocity, start.body_centre_of_mass);
+      KnockMeter meter(scene.model.balls.front().velocity, start.body_centre_of_mass);
       double overbend = 0, worst = 0, gap = 0;
       StepStatus status = StepStatus::ok;
       const int steps = static_cast<int>(std::lround(3 / scene.model.settings.time_step));

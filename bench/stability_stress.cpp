@@ -236,7 +236,7 @@ void impacts(bool quick, Output& out) {
   print_bounds(duration);
   std::printf("# the humanoid (medium body) hit by the %.2f kg ball, dt = 1/%.0f s; the energy bound is taken against"
               " m*g*sum(L) + the ball's kinetic energy; knock: how far the body's centre of mass moved horizontally (m)\n",
-              scene.ball->mass, 1 / dt);
+              scene.balls.front().mass, 1 / dt);
   std::printf("%-34s %-18s", "method", "setting");
   for (const double speed : speeds) std::printf(" %20s", (std::to_string(static_cast<int>(speed)) + " m/s").c_str());
   std::printf("\n");
@@ -245,13 +245,13 @@ void impacts(bool quick, Output& out) {
     std::printf("%-34s %-18s", method.series.c_str(), method.setting.c_str());
     for (const double speed : speeds) {
       Model model = scene;
-      model.ball->velocity = speed * model.ball->velocity.normalized();
+      model.balls.front().velocity = speed * model.balls.front().velocity.normalized();
       Simulation simulation(model, method);
       const Eigen::Vector3d start = simulation.observe().body_centre_of_mass;
       // A diverging step ends the run; energy is judged at the end against the whole scene's
       // energy (the ball brings ½ m v², up to 11 kJ at 100 m/s).
       RunErrors errors = observe_run(simulation, duration).errors;
-      errors.energy_scale += 0.5 * model.ball->mass * speed * speed;
+      errors.energy_scale += 0.5 * model.balls.front().mass * speed * speed;
       const Stability stability = classify(errors, kBounds);
       const double knock = (simulation.observe().body_centre_of_mass - start).head<2>().norm();
       const double gap = std::max(errors.max_joint_gap, errors.max_link_stretch);

@@ -102,10 +102,10 @@ void humanoid_knocks() {
   std::printf("| body | ball | knock | rest |\n|---|---|---|---|\n");
   const auto row = [](const char* body, const char* label, const std::function<void(Ball&)>& adjust) {
     Model model = scene("humanoid.json", {.variant = std::string(body), .links = {}, .copies = {}});
-    adjust(*model.ball);
+    adjust(model.balls.front());
     auto state = compile<double>(model);
     const Eigen::Vector3d start = observe(state).body_centre_of_mass;
-    KnockMeter knock(model.ball->velocity, start);
+    KnockMeter knock(model.balls.front().velocity, start);
     const long steps = std::lround(model.settings.duration / model.settings.time_step);
     for (long s = 0; s < steps; ++s) {
       step(state);

@@ -46,8 +46,8 @@ Model target(double speed, double start_distance) {
   limb.position = Vector3::Zero();
   limb.axis = Vector3::UnitZ();
   model.bodies.push_back(limb);
-  model.ball = Ball{.radius = kBallRadius, .mass = kBallMass, .restitution = kBallRestitution,
-                    .position = Vector3(-start_distance, 0, 0), .velocity = Vector3(speed, 0, 0)};
+  model.balls = {Ball{.radius = kBallRadius, .mass = kBallMass, .restitution = kBallRestitution,
+                    .position = Vector3(-start_distance, 0, 0), .velocity = Vector3(speed, 0, 0)}};
   return model;
 }
 

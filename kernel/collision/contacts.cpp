@@ -64,26 +64,27 @@ double plane_normal_speed(const VerletState<Scalar>& state, const ContactFeature
 // --- Ball–limb contacts ---
 
 template <typename Scalar>
-SphereLimbContact ball_limb_geometry(const VerletState<Scalar>& state, std::uint32_t limb, double t) {
+SphereLimbContact ball_limb_geometry(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, double t) {
   const auto& particles = state.particles;
-  return sphere_limb_contact(position_at(particles, static_cast<std::uint32_t>(state.ball_particle), t),
-                             state.ball_radius, position_at(particles, state.limbs.head[limb], t),
+  return sphere_limb_contact(position_at(particles, ball.particle, t), ball.radius,
+                             position_at(particles, state.limbs.head[limb], t),
                              position_at(particles, state.limbs.tail[limb], t), state.limbs.shape[limb],
                              state.limbs.radius[limb]);
 }
 
 // From the limb's contact point to the ball's centre, at time t of the step.
 template <typename Scalar>
-Eigen::Vector3d ball_from_limb_point(const VerletState<Scalar>& state, std::uint32_t limb, double axial, double t = 1) {
+Eigen::Vector3d ball_from_limb_point(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, double axial,
+                                     double t = 1) {
   const auto& particles = state.particles;
-  return position_at(particles, static_cast<std::uint32_t>(state.ball_particle), t) -
+  return position_at(particles, ball.particle, t) -
          (1 - axial) * position_at(particles, state.limbs.head[limb], t) -
          axial * position_at(particles, state.limbs.tail[limb], t);
 }
 
 template <typename Scalar>
 double ball_separation(const VerletState<Scalar>& state, const BallContact& contact) {
-  return contact.normal.dot(ball_from_limb_point(state, contact.limb, contact.axial)) - contact.offset;
+  return contact.normal.dot(ball_from_limb_point(state, state.balls[contact.ball], contact.limb, contact.axial)) - contact.offset;
 }
 
 // Relative normal velocity of the ball against the contact's limb point, m/s.
@@ -91,27 +92,28 @@ template <typename Scalar>
 double ball_normal_speed(const VerletState<Scalar>& state, const BallContact& contact, double dt) {
   const Eigen::Vector3d limb_velocity = (1 - contact.axial) * contact_velocity(state, state.limbs.head[contact.limb], dt) +
                                         contact.axial * contact_velocity(state, state.limbs.tail[contact.limb], dt);
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  return contact.normal.dot(contact_velocity(state, ball, dt) - limb_velocity);
+  return contact.normal.dot(contact_velocity(state, state.balls[contact.ball].particle, dt) - limb_velocity);
 }
 
 // Generalized inverse mass of a ball–limb contact (the denominator of thesis eq. 2.33 for a
 // point a of the way from the limb's head to its tail).
 template <typename Scalar>
-double ball_limb_inverse_mass(const VerletState<Scalar>& state, std::uint32_t limb, double a) {
+double ball_limb_inverse_mass(const VerletState<Scalar>& state, const BallContact& contact) {
   const auto& w = state.particles.inverse_mass;
-  return w[static_cast<std::uint32_t>(state.ball_particle)] + (1 - a) * (1 - a) * w[state.limbs.head[limb]] +
-         a * a * w[state.limbs.tail[limb]];
+  const double a = contact.axial;
+  return w[state.balls[contact.ball].particle] + (1 - a) * (1 - a) * w[state.limbs.head[contact.limb]] +
+         a * a * w[state.limbs.tail[contact.limb]];
 }
 
 // Shares a position (kg·m) or velocity (N·s) impulse along the contact normal between the ball
 // (+) and the limb's particles (−), each in proportion to its inverse mass and lever.
 template <typename Scalar, typename Apply>
-void share_ball_limb_impulse(const VerletState<Scalar>& state, std::uint32_t limb, double a,
-                             const Eigen::Vector3d& impulse, Apply&& apply) {
+void share_ball_limb_impulse(const VerletState<Scalar>& state, const BallContact& contact, const Eigen::Vector3d& impulse,
+                             Apply&& apply) {
   const auto& w = state.particles.inverse_mass;
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  const std::uint32_t head = state.limbs.head[limb], tail = state.limbs.tail[limb];
+  const std::uint32_t ball = state.balls[contact.ball].particle;
+  const std::uint32_t head = state.limbs.head[contact.limb], tail = state.limbs.tail[contact.limb];
+  const double a = contact.axial;
   apply(ball, Eigen::Vector3d(w[ball] * impulse));
   apply(head, Eigen::Vector3d(-(1 - a) * w[head] * impulse));
   apply(tail, Eigen::Vector3d(-a * w[tail] * impulse));
@@ -198,8 +200,8 @@ void apply_rigid_limb_impulse(VerletState<Scalar>& state, const RigidLimbRespons
 // configuration, as continuous collision detection does. A contact already overlapping at the
 // start of the step keeps that configuration's plane.
 template <typename Scalar>
-bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, BallContact& contact) {
-  const SphereLimbContact start = ball_limb_geometry(state, limb, 0.0);
+bool find_ball_contact(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, BallContact& contact) {
+  const SphereLimbContact start = ball_limb_geometry(state, ball, limb, 0.0);
   double time = 0;
   if (start.separation >= 0) {
     // Samples close enough that the ball cannot cross the limb between two: the relative motion
@@ -207,13 +209,12 @@ bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, Bal
     // 1/60 s against a 4 cm limb: about 80 samples; a resting contact: 4).
     const auto& particles = state.particles;
     const auto moved = [&](std::uint32_t p) { return (position_at(particles, p, 1) - position_at(particles, p, 0)).norm(); };
-    const double motion = moved(static_cast<std::uint32_t>(state.ball_particle)) +
-                          std::max(moved(state.limbs.head[limb]), moved(state.limbs.tail[limb]));
-    const double spacing = 0.5 * std::max(std::min(state.ball_radius, state.limbs.radius[limb]), 1e-4);
+    const double motion = moved(ball.particle) + std::max(moved(state.limbs.head[limb]), moved(state.limbs.tail[limb]));
+    const double spacing = 0.5 * std::max(std::min(ball.radius, state.limbs.radius[limb]), 1e-4);
     const int samples = static_cast<int>(std::clamp(std::ceil(motion / spacing), 4.0, 1024.0));
     double inside = -1;  // the first sampled time with overlap
     for (int k = 1; k <= samples; ++k) {
-      if (ball_limb_geometry(state, limb, double(k) / samples).separation < 0) {
+      if (ball_limb_geometry(state, ball, limb, double(k) / samples).separation < 0) {
         inside = double(k) / samples;
         break;
       }
@@ -222,16 +223,16 @@ bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, Bal
     double outside = inside - 1.0 / samples;
     for (int k = 0; k < 24; ++k) {
       const double middle = 0.5 * (outside + inside);
-      (ball_limb_geometry(state, limb, middle).separation < 0 ? inside : outside) = middle;
+      (ball_limb_geometry(state, ball, limb, middle).separation < 0 ? inside : outside) = middle;
     }
     time = outside;
   }
-  const SphereLimbContact touch = ball_limb_geometry(state, limb, time);
+  const SphereLimbContact touch = ball_limb_geometry(state, ball, limb, time);
   contact.limb = limb;
   contact.normal = touch.normal;
   contact.axial = touch.axial;
   // The plane passes through the surfaces as they were at that time: C(time) = separation(time).
-  contact.offset = touch.normal.dot(ball_from_limb_point(state, limb, touch.axial, time)) - touch.separation;
+  contact.offset = touch.normal.dot(ball_from_limb_point(state, ball, limb, touch.axial, time)) - touch.separation;
   contact.start_separation = start.separation;
   return true;
 }
@@ -241,27 +242,30 @@ bool find_ball_contact(const VerletState<Scalar>& state, std::uint32_t limb, Bal
 template <typename Scalar>
 void detect_ball_contacts(VerletState<Scalar>& state, double dt) {
   state.ball_contacts.clear();
-  if (state.ball_particle < 0 || state.islands[state.ball_island].sleeping) return;
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-  const Eigen::Vector3d from = position_of(state.particles, ball, true), to = position_of(state.particles, ball);
-  const Eigen::Vector3d path = to - from;
-  for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
-    const Island& island = state.islands[k];
-    for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
-      // Bounding spheres first (thesis 2.4), the limb's against the ball's path this step; the
-      // exact test only when they overlap.
-      const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
-      const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
-      const Eigen::Vector3d centre = 0.5 * (head + tail);
-      const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb] + state.ball_radius;
-      const double along =
-          path.squaredNorm() > 0 ? std::clamp((centre - from).dot(path) / path.squaredNorm(), 0.0, 1.0) : 0.0;
-      if ((centre - (from + along * path)).squaredNorm() > reach * reach) continue;
-      BallContact contact;
-      if (!find_ball_contact(state, limb, contact)) continue;
-      wake_island(state, k);
-      contact.approach_speed = ball_normal_speed(state, contact, dt);
-      state.ball_contacts.push_back(contact);
+  for (std::uint32_t b = 0; b < state.balls.size(); ++b) {
+    const BallParticle& ball = state.balls[b];
+    if (state.islands[ball.island].sleeping) continue;
+    const Eigen::Vector3d from = position_of(state.particles, ball.particle, true), to = position_of(state.particles, ball.particle);
+    const Eigen::Vector3d path = to - from;
+    for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
+      const Island& island = state.islands[k];
+      for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
+        // Bounding spheres first (thesis 2.4), the limb's against the ball's path this step; the
+        // exact test only when they overlap.
+        const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
+        const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
+        const Eigen::Vector3d centre = 0.5 * (head + tail);
+        const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb] + ball.radius;
+        const double along =
+            path.squaredNorm() > 0 ? std::clamp((centre - from).dot(path) / path.squaredNorm(), 0.0, 1.0) : 0.0;
+        if ((centre - (from + along * path)).squaredNorm() > reach * reach) continue;
+        BallContact contact;
+        if (!find_ball_contact(state, ball, limb, contact)) continue;
+        wake_island(state, k);
+        contact.ball = b;
+        contact.approach_speed = ball_normal_speed(state, contact, dt);
+        state.ball_contacts.push_back(contact);
+      }
     }
   }
 }
@@ -323,10 +327,10 @@ double project_ball_contacts(VerletState<Scalar>& state, double dt) {
   double largest = 0;
   for (const BallContact& contact : state.ball_contacts) {
     const double error = ball_separation(state, contact) - allowed_separation(contact.start_separation, recovery);
-    const double inverse_mass = ball_limb_inverse_mass(state, contact.limb, contact.axial);
+    const double inverse_mass = ball_limb_inverse_mass(state, contact);
     if (error >= 0 || inverse_mass <= 0) continue;
     const Eigen::Vector3d impulse = (-error / inverse_mass) * contact.normal;  // kg·m
-    share_ball_limb_impulse(state, contact.limb, contact.axial, impulse, [&](std::uint32_t p, const Eigen::Vector3d& d) {
+    share_ball_limb_impulse(state, contact, impulse, [&](std::uint32_t p, const Eigen::Vector3d& d) {
       move(state.particles, p, d);
       largest = std::max(largest, d.norm());
     });
@@ -370,11 +374,11 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
     }
   }
   for (const BallContact& contact : state.ball_contacts) {
-    const double target = bounce_speed(contact.approach_speed, state.ball_restitution, resting);
+    const double target = bounce_speed(contact.approach_speed, state.balls[contact.ball].restitution, resting);
     const double normal_speed = ball_normal_speed(state, contact, dt);
     if (has_centre(state, contact.limb)) {
       if (ball_separation(state, contact) > kTouchingSlop) continue;
-      const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+      const std::uint32_t ball = state.balls[contact.ball].particle;
       const RigidLimbResponse response = rigid_limb_response(state, contact.limb, -(1 - contact.axial) * contact.normal,
                                                              -contact.axial * contact.normal);
       const double inverse_mass = state.particles.inverse_mass[ball] + response.inverse_mass;
@@ -384,11 +388,11 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
       apply_rigid_limb_impulse(state, response, impulse, dt);
       continue;
     }
-    const double inverse_mass = ball_limb_inverse_mass(state, contact.limb, contact.axial);
+    const double inverse_mass = ball_limb_inverse_mass(state, contact);
     if (ball_separation(state, contact) > kTouchingSlop || inverse_mass <= 0) continue;
     // Thesis eq. 2.33: J = Δv_n / (Σ generalized inverse masses), shared like the projection.
     const Eigen::Vector3d impulse = ((target - normal_speed) / inverse_mass) * contact.normal;  // N·s
-    share_ball_limb_impulse(state, contact.limb, contact.axial, impulse,
+    share_ball_limb_impulse(state, contact, impulse,
                             [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(state, p, dv, dt); });
   }
 }

@@ -16,14 +16,14 @@ constexpr double kTouchingSlop = 1e-4;
 // (a reach past a limb's size finds nothing new).
 constexpr double kMarginSlop = 0.005, kMaxReach = 0.5;
 
-// Each Model body's segment at the predicted positions (and the ball's last), with its reach,
+// Each Model body's segment at the predicted positions (then each ball's), with its reach,
 // and whether its island is awake.
 template <typename Scalar>
 void gather_segments(VerletState<Scalar>& state) {
   const auto& p = state.particles;
   const LimbBuffer& limbs = state.limbs;
   const std::size_t bodies = state.body_limb.size();
-  state.limb_segments.resize(bodies + (state.ball_particle >= 0 ? 1 : 0));
+  state.limb_segments.resize(bodies + state.balls.size());
   state.limb_awake.assign(state.limb_segments.size(), 0);
   for (std::uint32_t k : state.awake_islands) {
     const Island& island = state.islands[k];
@@ -45,30 +45,46 @@ void gather_segments(VerletState<Scalar>& state) {
     const Island& island = state.islands[k];
     for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) state.limb_island_awake[limb] = 0;
   }
-  if (state.ball_particle >= 0) {
-    const auto ball = static_cast<std::uint32_t>(state.ball_particle);
-    LimbSegment& segment = state.limb_segments.back();
-    segment.head = segment.tail = p.position(ball).template cast<double>();
-    segment.radius = state.ball_radius;
-    state.limb_awake.back() = state.islands[static_cast<std::size_t>(state.ball_island)].sleeping ? 0 : 1;
-    segment.reach = state.limb_awake.back() ? std::min(kMaxReach, 2 * moved(segment.head, ball)) : 0.0;
+  for (std::size_t b = 0; b < state.balls.size(); ++b) {
+    const BallParticle& ball = state.balls[b];
+    LimbSegment& segment = state.limb_segments[bodies + b];
+    segment.head = segment.tail = p.position(ball.particle).template cast<double>();
+    segment.radius = ball.radius;
+    state.limb_awake[bodies + b] = state.islands[ball.island].sleeping ? 0 : 1;
+    segment.reach = state.limb_awake[bodies + b] ? std::min(kMaxReach, 2 * moved(segment.head, ball.particle)) : 0.0;
   }
 }
 
-// A Model body's (or the ball's) end particles: head and tail, or the ball's one particle twice.
+// A segment's end particles: a Model body's head and tail, or a ball's one particle twice.
 template <typename Scalar>
-std::pair<std::uint32_t, std::uint32_t> ends_of(const VerletState<Scalar>& state, std::uint32_t body) {
-  if (body == state.body_limb.size()) {
-    const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+std::pair<std::uint32_t, std::uint32_t> ends_of(const VerletState<Scalar>& state, std::uint32_t segment) {
+  const std::size_t bodies = state.body_limb.size();
+  if (segment >= bodies) {
+    const std::uint32_t ball = state.balls[segment - bodies].particle;
     return {ball, ball};
   }
-  const std::uint32_t limb = state.body_limb[body];
+  const std::uint32_t limb = state.body_limb[segment];
   return {state.limbs.head[limb], state.limbs.tail[limb]};
 }
 
+// Places `place` and place + 1 of the row: the point `axial` of the way from head to tail,
+// times `sign`; a ball's one particle takes one place (a particle twice in a row would lose
+// one of its two moves when the sweep writes them back).
+inline void set_places(ContactRow& row, std::size_t place, std::pair<std::uint32_t, std::uint32_t> ends, double axial, double sign) {
+  const auto [head, tail] = ends;
+  row.particle[place] = head, row.coefficient[place] = sign * (1 - axial);
+  if (tail != head) row.particle[place + 1] = tail, row.coefficient[place + 1] = sign * axial;
+  else row.coefficient[place] = sign;
+}
+
 template <typename Scalar>
-void wake_island_of_body(VerletState<Scalar>& state, std::uint32_t body) {
-  const std::uint32_t limb = state.body_limb[body];
+void wake_island_of_segment(VerletState<Scalar>& state, std::uint32_t segment) {
+  const std::size_t bodies = state.body_limb.size();
+  if (segment >= bodies) {
+    wake_island(state, state.balls[segment - bodies].island);
+    return;
+  }
+  const std::uint32_t limb = state.body_limb[segment];
   for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
     const Island& island = state.islands[k];
     if (limb >= island.limb_begin && limb < island.limb_end) {
@@ -104,20 +120,15 @@ ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& cont
   ContactRow row;
   const std::uint32_t null_particle = state.particles.null_particle();
   row.particle.fill(null_particle);
-  const auto [head, tail] = ends_of(state, contact.first);
-  row.particle[0] = head, row.coefficient[0] = 1 - contact.axial_first;
-  if (tail != head) row.particle[1] = tail, row.coefficient[1] = contact.axial_first;
-  else row.coefficient[0] = 1;
+  set_places(row, 0, ends_of(state, contact.first), contact.axial_first, 1);
   double offset = contact.offset;
   if (contact.second != kStaticShape) {
-    const auto [second_head, second_tail] = ends_of(state, contact.second);
-    row.particle[2] = second_head, row.coefficient[2] = -(1 - contact.axial_second);
-    row.particle[3] = second_tail, row.coefficient[3] = -contact.axial_second;
+    set_places(row, 2, ends_of(state, contact.second), contact.axial_second, -1);
     offset = state.limb_segments[contact.first].radius + state.limb_segments[contact.second].radius;
   }
   row.normal = contact.normal;
   row.friction = contact.friction;
-  row.restitution = std::max(contact.restitution, contact.first == state.body_limb.size() ? state.ball_restitution : 0.0);
+  row.restitution = contact.restitution;
   const auto& particles = state.particles;
   const double start_separation =
       along_normal(row, [&](std::uint32_t p) -> Eigen::Vector3d { return particles.previous(p).template cast<double>(); }) - offset;
@@ -134,11 +145,10 @@ void detect_limb_contacts(VerletState<Scalar>& state, double dt) {
   if (!state.collisions.active() || state.awake_islands.empty()) return;
   gather_segments(state);
   state.collisions.find(state.limb_segments, state.limb_awake, kMarginSlop, state.limb_contacts);
-  const std::size_t bodies = state.body_limb.size();
   for (const LimbContact& contact : state.limb_contacts) {
-    // An awake limb reaching a sleeping one wakes it (its rows join the next sweep's batches).
-    for (std::uint32_t body : {contact.first, contact.second}) {
-      if (body < bodies && !state.limb_awake[body] && contact.separation < kMarginSlop) wake_island_of_body(state, body);
+    // An awake limb or ball reaching a sleeping one wakes it (its rows join the next sweep's batches).
+    for (std::uint32_t segment : {contact.first, contact.second}) {
+      if (segment != kStaticShape && !state.limb_awake[segment] && contact.separation < kMarginSlop) wake_island_of_segment(state, segment);
     }
     state.contact_rows.rows.push_back(contact_row(state, contact, dt));
   }

@@ -39,7 +39,7 @@ void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_inde
     const Eigen::Vector3d lowest = centre + end_support(plane.normal, u, radius, end_disk).offset;
     const double depth = plane.offset - plane.normal.dot(lowest);
     if (depth <= 0) continue;
-    const double restitution = state.shapes.is_ball[b] ? std::max(plane.restitution, state.ball_restitution) : plane.restitution;
+    const double restitution = std::max(plane.restitution, state.shapes.restitution[b]);
     state.contacts.push_back({static_cast<std::int32_t>(b), -1, lowest + 0.5 * depth * plane.normal, plane.normal, depth,
                               restitution, plane.friction});
   }
@@ -69,7 +69,7 @@ void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body
   y.angular_momentum[b] = state.bodies.world_inertia(y, b) * body.angular_velocity;
 }
 
-// The collision world's contacts (limb–limb, and limbs and the ball against static colliders)
+// The collision world's contacts (limb–limb, ball–ball, and limbs and balls against static colliders)
 // among the bodies as they are now, touching or overlapping (margin 0): a rigid method answers
 // a contact only once it overlaps. An awake limb that touches a sleeping one wakes its island.
 void add_collision_world_contacts(RigidScene& state) {
@@ -88,9 +88,7 @@ void add_collision_world_contacts(RigidScene& state) {
   for (const LimbContact& contact : state.limb_contacts) {
     const auto a = static_cast<std::int32_t>(contact.first);
     RigidContact rigid{a, -1, contact.point, contact.normal, -contact.separation, contact.restitution, contact.friction};
-    if (contact.second == kStaticShape) {
-      if (state.shapes.is_ball[contact.first]) rigid.restitution = std::max(rigid.restitution, state.ball_restitution);
-    } else {
+    if (contact.second != kStaticShape) {
       rigid.b = static_cast<std::int32_t>(contact.second);
       state.islands[state.island_of_body[contact.first]].wake();
       state.islands[state.island_of_body[contact.second]].wake();
@@ -99,35 +97,34 @@ void add_collision_world_contacts(RigidScene& state) {
   }
 }
 
+// A ball against every limb (asleep or not: it wakes what it touches).
+void add_ball_contacts(RigidScene& state, std::size_t ball) {
+  const RigidBodyState& y = state.bodies.state;
+  const Eigen::Vector3d centre = y.position[ball];
+  const double ball_radius = state.shapes.radius[ball];
+  for (std::size_t b = 0; b < state.ball_begin; ++b) {
+    // Bounding spheres first (thesis 2.4); the exact closest point only when they overlap.
+    const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
+    const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
+    if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
+    const auto [head, tail] = head_and_tail(state, b);
+    const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
+    if (contact.separation >= 0) continue;
+    state.islands[state.island_of_body[b]].wake();
+    state.ball_touching = true;
+    const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
+    state.contacts.push_back({static_cast<std::int32_t>(ball), static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
+                              state.shapes.restitution[ball], 0.0});
+  }
+}
+
 }  // namespace
 
 void detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
-  const std::size_t body_count = state.bodies.size();
-  const RigidBodyState& y = state.bodies.state;
-  if (state.ball >= 0) {
-    const std::size_t ball = static_cast<std::size_t>(state.ball);
-    const Eigen::Vector3d centre = y.position[ball];
-    const double ball_radius = state.shapes.radius[ball];
-    for (std::size_t b = 0; b < body_count; ++b) {
-      if (b == ball) continue;
-      // Bounding spheres first (thesis 2.4); the exact closest point only when they overlap.
-      const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
-      const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
-      if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
-      const auto [head, tail] = head_and_tail(state, b);
-      const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
-      if (contact.separation >= 0) continue;
-      const auto island = state.island_of_body[b];
-      state.islands[island].wake();
-      state.ball_touching = true;
-      const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
-      state.contacts.push_back({state.ball, static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
-                                state.ball_restitution, 0.0});
-    }
-  }
-  for (std::size_t b = 0; b < body_count; ++b) {
+  for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) add_ball_contacts(state, ball);
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
   }

@@ -68,7 +68,7 @@ std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& mo
     nodes.push_back(root);
     for (std::size_t next = first; next < nodes.size(); ++next) {
       const TreeNode node = nodes[next];
-      if (static_cast<std::size_t>(node.body) >= limb_count) continue;  // the ball
+      if (static_cast<std::size_t>(node.body) >= limb_count) continue;  // a ball
       for (std::int32_t j : incident[node.body]) {
         if (j == node.joint) continue;
         const Joint& joint = model.joints[j];
@@ -106,7 +106,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
       model_origin[b] = model.bodies[b].position;
     } else {
       model_rotation[b].setIdentity();
-      model_origin[b] = model.ball->position;
+      model_origin[b] = model.balls[b - limb_count].position;
     }
   }
 
@@ -137,7 +137,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
     state.principal_frame[i] = state.shapes.principal_frame[b];
 
     ArticulatedBody body;
-    body.name = static_cast<std::size_t>(b) < limb_count ? model.bodies[b].name : std::string("ball");
+    body.name = static_cast<std::size_t>(b) < limb_count ? model.bodies[b].name : ball_name(model, static_cast<std::size_t>(b) - limb_count);
     body.parent = node.parent;
     // The rigid body's inertia (principal moments, floored as the rigid scene floors them) in the
     // tree body's axes, about the centre of mass.

@@ -218,44 +218,47 @@ bool contact_before(const LimbContact& a, const LimbContact& b) {
 
 LimbCollisions::LimbCollisions(const Model& model)
     : limb_count_(static_cast<std::uint32_t>(model.bodies.size())),
-      has_ball_(model.ball.has_value()),
       limb_friction_(model.settings.limb_friction),
       statics_(model.colliders) {
-  const std::size_t segments = limb_count_ + (has_ball_ ? 1 : 0);
+  const std::size_t segments = limb_count_ + model.balls.size();
   std::vector<LimbSegment> limbs;
   limbs.reserve(segments);
   for (const Body& body : model.bodies) {
     limbs.push_back(model_segment(body));
     filters_.push_back(body.collision);
   }
-  if (has_ball_) filters_.emplace_back();  // the ball meets every collider its default filter allows
+  restitution_.assign(limb_count_, 0.0);
+  for (const Ball& ball : model.balls) {
+    limbs.push_back({ball.position, ball.position, ball.radius});
+    filters_.emplace_back();  // a ball meets everything its default filter allows
+    restitution_.push_back(ball.restitution);
+  }
 
-  // Exclusions: joined pairs, and pairs overlapping at the Model's poses (found by the sweep).
+  // Exclusions: joined pairs, and limb pairs overlapping at the Model's poses (found by the sweep).
   for (const Joint& joint : model.joints) {
     if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
     const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
     excluded_.emplace_back(std::min(a, b), std::max(a, b));
   }
-  boxes_.resize(limb_count_);
+  boxes_.resize(segments);
   for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], 0);
-  for (const CandidatePair& pair : broadphase_.find_pairs(boxes_)) {
+  for (const CandidatePair& pair : broadphase_.find_pairs(std::span<const Aabb>(boxes_).first(limb_count_))) {
     if (limb_pair_contact(pair.first, pair.second, limbs[pair.first], limbs[pair.second]).separation < 0) excluded_.push_back(pair);
   }
   std::sort(excluded_.begin(), excluded_.end());
   excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());
 
-  // Whether any limb pair is left to test (O(n²) filter checks once; usually the first pair answers).
-  for (std::uint32_t i = 0; i < limb_count_ && !limb_pairs_; ++i) {
-    for (std::uint32_t j = i + 1; j < limb_count_ && !limb_pairs_; ++j) {
-      limb_pairs_ = filters_collide(filters_[i], filters_[j]) && !excluded(i, j);
-    }
+  // Whether any pair is left to test (O(n²) filter checks once; usually the first pair answers).
+  // A ball meets limbs through its own path (contacts.hpp, rigid_contacts.hpp), other balls here.
+  for (std::uint32_t i = 0; i < segments && !limb_pairs_; ++i) {
+    for (std::uint32_t j = i + 1; j < segments && !limb_pairs_; ++j) limb_pairs_ = pair_tested(i, j);
   }
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
   // Warm the buffers: four candidate pairs per limb (a limb among its neighbours in a pile or a
   // fallen figure), one contact per limb and three per segment against static geometry are a
   // typical scene's; more grow them once.
-  warm_broadphase(broadphase_, limb_count_);
+  warm_broadphase(broadphase_, static_cast<std::uint32_t>(segments));
   scratch_.reserve(3 * segments);
 }
 
@@ -263,11 +266,17 @@ bool LimbCollisions::excluded(std::uint32_t first, std::uint32_t second) const {
   return std::binary_search(excluded_.begin(), excluded_.end(), CandidatePair{first, second});
 }
 
+bool LimbCollisions::pair_tested(std::uint32_t first, std::uint32_t second) const {
+  const bool first_ball = first >= limb_count_, second_ball = second >= limb_count_;
+  if (first_ball != second_ball) return false;  // ball–limb: the ball's own path
+  return filters_collide(filters_[first], filters_[second]) && !excluded(first, second);
+}
+
 void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                           std::vector<LimbContact>& out) {
   out.clear();
   const std::size_t segments = filters_.size();
-  if (limbs.size() != segments || !(awake.size() == segments || (has_ball_ && awake.size() + 1 == segments))) {
+  if (limbs.size() != segments || awake.size() != segments) {
     throw std::invalid_argument("LimbCollisions::find: expected " + std::to_string(segments) + " segments and awake flags, got " +
                                 std::to_string(limbs.size()) + " and " + std::to_string(awake.size()));
   }
@@ -279,29 +288,35 @@ void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const st
 
 void LimbCollisions::find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                                      std::vector<LimbContact>& out) {
-  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], margin + limbs[i].reach);
+  for (std::size_t i = 0; i < limbs.size(); ++i) boxes_[i] = segment_box(limbs[i], margin + limbs[i].reach);
   for (const auto& [i, j] : broadphase_.find_pairs(boxes_)) {
     if (!awake[i] && !awake[j]) continue;
-    if (!filters_collide(filters_[i], filters_[j]) || excluded(i, j)) continue;
+    if (!pair_tested(i, j)) continue;
     const double reach = margin + limbs[i].reach + limbs[j].reach;
     if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), reach)) continue;
     const std::size_t begin = out.size();
     add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
-    for (std::size_t k = begin; k < out.size(); ++k) out[k].friction = limb_friction_, out[k].restitution = 0;
+    // Limbs have no restitution and rub with the limbs' friction; balls have no friction.
+    const double friction = i < limb_count_ ? limb_friction_ : 0.0;
+    const double restitution = std::max(restitution_[i], restitution_[j]);
+    for (std::size_t k = begin; k < out.size(); ++k) out[k].friction = friction, out[k].restitution = restitution;
   }
 }
 
 void LimbCollisions::find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                                  std::vector<LimbContact>& out) const {
   for (std::uint32_t s = 0; s < filters_.size(); ++s) {
-    if (s < awake.size() && !awake[s]) continue;  // the ball without a flag counts as awake
+    if (!awake[s]) continue;
     const LimbSegment& limb = limbs[s];
     const BoundingSphere sphere = segment_sphere(limb);
     const double reach = margin + limb.reach;
     statics_.query(segment_box(limb, reach), [&](const StaticPrimitive& primitive) {
       if (!filters_collide(filters_[s], primitive.filter)) return;
       if (!spheres_within(sphere, primitive.sphere, reach)) return;
+      const std::size_t begin = out.size();
       add_static_contacts(s, limb, primitive, reach, out);
+      // A ball bounces with the larger of its restitution and the collider's, as on the ground.
+      for (std::size_t k = begin; k < out.size(); ++k) out[k].restitution = std::max(out[k].restitution, restitution_[s]);
     });
   }
 }

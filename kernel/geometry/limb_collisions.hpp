@@ -73,21 +73,23 @@ class LimbCollisions {
   /// Builds from `model` (its bodies, joints, colliders and Settings::limb_friction).
   explicit LimbCollisions(const Model& model);
 
-  /// Whether the model has anything to collide beyond the ground, the bounds and the ball: a
-  /// limb pair the filters allow, or a static collider. When false, find() does nothing.
+  /// Whether the model has anything to collide beyond the ground, the bounds and the balls'
+  /// hits on limbs: a limb pair or a ball pair the filters allow, or a static collider. When
+  /// false, find() does nothing.
   bool active() const { return active_; }
 
   /// The contacts within `margin` (m, ≥ 0: separation ≤ margin) among `limbs` — one per Model
-  /// body, in order, then the ball's (head = tail = its centre) when the Model has one: the ball
-  /// meets static geometry here, and limbs through its own path (contacts.hpp,
+  /// body, in order, then one per ball (head = tail = its centre): a ball meets static geometry
+  /// and the other balls here, and limbs through its own path (contacts.hpp,
   /// rigid_contacts.hpp) — into `out` (cleared first), ordered by (first, second, collider,
   /// triangle, axial_first): the same list whatever the broadphase's order, so a method's result
   /// is the same bits run to run. Up to three contacts per limb and static shape (a limb lying on a
   /// face touches it with both ends; one across an edge, at the edge too); one per limb pair, or
   /// two for limbs lying along each other (within 15° of parallel: the ends of their shared length).
-  /// A pair is tested only when at least one of its limbs is `awake` (one flag per segment, the
-  /// ball's last; without the ball's flag the ball counts as awake; static geometry is never
-  /// awake). Throws std::invalid_argument when `limbs` or `awake` has the wrong size.
+  /// A pair is tested only when at least one of its segments is `awake` (one flag per segment;
+  /// static geometry is never awake). A contact's restitution is the larger of its two sides'
+  /// (a ball's, a collider's; a limb has none). Throws std::invalid_argument when `limbs` or
+  /// `awake` has the wrong size.
   void find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
             std::vector<LimbContact>& out);
 
@@ -102,17 +104,19 @@ class LimbCollisions {
   void find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                    std::vector<LimbContact>& out) const;
   bool excluded(std::uint32_t first, std::uint32_t second) const;
+  // Whether find_limb_pairs tests segments first < second: limb–limb or ball–ball, filters allowing.
+  bool pair_tested(std::uint32_t first, std::uint32_t second) const;
 
   bool active_ = false;
   bool limb_pairs_ = false;                 // some limb pair the filters allow and no exclusion removes
-  std::uint32_t limb_count_ = 0;            // Model bodies; the ball, if any, is segment limb_count_
-  bool has_ball_ = false;
+  std::uint32_t limb_count_ = 0;            // Model bodies; the balls are the segments after them
   double limb_friction_ = 0;
-  std::vector<CollisionFilter> filters_;    // per segment (the ball: the default filter)
+  std::vector<CollisionFilter> filters_;    // per segment (a ball: the default filter)
+  std::vector<double> restitution_;         // per segment: a ball's, 0 for a limb
   std::vector<CandidatePair> excluded_;     // sorted: joined, or overlapping at the Model's poses
   StaticTree statics_;
   SweepAndPrune broadphase_;
-  std::vector<Aabb> boxes_;                 // per limb, this call's
+  std::vector<Aabb> boxes_;                 // per segment, this call's
   std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
 };

@@ -49,7 +49,7 @@ Observation observe(const VerletState<Scalar>& state) {
     out.linear_momentum += mass * velocity;
     out.kinetic_energy += 0.5 * mass * velocity.squaredNorm();
     out.potential_energy -= mass * gravity.dot(x);
-    if (static_cast<std::int64_t>(p) != state.ball_particle) {
+    if (state.particle_origins[p].kind != ParticleOrigin::Kind::ball) {
       out.body_centre_of_mass += mass * x;
       body_mass += mass;
     }
@@ -70,7 +70,8 @@ Observation observe(const VerletState<Scalar>& state) {
   out.body_sleeping = true;
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     out.islands_sleeping += state.islands[k].sleeping;
-    if (static_cast<std::int64_t>(k) != state.ball_island) out.body_sleeping = out.body_sleeping && state.islands[k].sleeping;
+    const bool is_ball = state.particle_origins[state.islands[k].particle_begin].kind == ParticleOrigin::Kind::ball;
+    if (!is_ball) out.body_sleeping = out.body_sleeping && state.islands[k].sleeping;
   }
   return out;
 }
@@ -91,7 +92,7 @@ Observation observe_rigid_scene(const RigidScene& scene, const JointControls& sc
     out.kinetic_energy += 0.5 * y.linear_momentum[b].squaredNorm() / mass +
                           0.5 * bodies.angular_velocity(y, b).dot(y.angular_momentum[b]);
     out.potential_energy -= mass * scene.settings.gravity.dot(y.position[b]);
-    if (static_cast<std::int32_t>(b) != scene.ball) {
+    if (!scene.shapes.is_ball[b]) {
       out.body_centre_of_mass += mass * y.position[b];
       body_mass += mass;
     }
@@ -106,7 +107,7 @@ Observation observe_rigid_scene(const RigidScene& scene, const JointControls& sc
   out.body_sleeping = true;
   for (const RigidIsland& island : scene.islands) {
     out.islands_sleeping += island.sleeping;
-    const bool is_ball = island.bodies.size() == 1 && static_cast<std::int32_t>(island.bodies[0]) == scene.ball;
+    const bool is_ball = island.bodies.size() == 1 && scene.shapes.is_ball[island.bodies[0]];
     if (!is_ball) out.body_sleeping = out.body_sleeping && island.sleeping;
   }
   return out;
@@ -164,9 +165,9 @@ void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& s
     segments[body] = {state.particles.position(state.limbs.head[limb]).template cast<double>(),
                       state.particles.position(state.limbs.tail[limb]).template cast<double>(), state.limbs.radius[limb]};
   }
-  if (state.ball_particle >= 0) {
-    const Eigen::Vector3d centre = state.particles.position(static_cast<std::uint32_t>(state.ball_particle)).template cast<double>();
-    segments.push_back({centre, centre, state.ball_radius});
+  for (const BallParticle& ball : state.balls) {
+    const Eigen::Vector3d centre = state.particles.position(ball.particle).template cast<double>();
+    segments.push_back({centre, centre, ball.radius});
   }
 }
 
@@ -177,8 +178,7 @@ void limb_segments(const RigidScene& scene, const Model& model, std::vector<Limb
     segments[body] = {world_point(scene, body, {0, 0, 0.5 * shape.length}), world_point(scene, body, {0, 0, -0.5 * shape.length}),
                       shape.radius};
   }
-  if (scene.ball >= 0) {
-    const auto ball = static_cast<std::size_t>(scene.ball);
+  for (std::size_t ball = model.bodies.size(); ball < scene.bodies.size(); ++ball) {
     segments.push_back({scene.bodies.state.position[ball], scene.bodies.state.position[ball], scene.shapes.radius[ball]});
   }
 }

@@ -363,18 +363,24 @@ void validate(const Model& model) {
     require_non_negative(bounds->friction, "bounds.friction");
   }
 
-  if (const auto& ball = model.ball) {
-    require_positive(ball->radius, "ball.radius");
-    require_positive(ball->mass, "ball.mass");
-    require_in_range(ball->restitution, 0, 1, "ball.restitution");
-    require_finite(ball->position, "ball.position");
-    require_finite(ball->velocity, "ball.velocity");
+  for (std::size_t i = 0; i < model.balls.size(); ++i) {
+    const Ball& ball = model.balls[i];
+    const std::string field = "balls[" + std::to_string(i) + "].";
+    require_positive(ball.radius, field + "radius");
+    require_positive(ball.mass, field + "mass");
+    require_in_range(ball.restitution, 0, 1, field + "restitution");
+    require_finite(ball.position, field + "position");
+    require_finite(ball.velocity, field + "velocity");
   }
 
   for (std::size_t i = 0; i < model.colliders.size(); ++i) validate_collider(model.colliders[i], i);
   require_collider_names(model);
 
   validate_settings(model.settings);
+}
+
+std::string ball_name(const Model& model, std::size_t index) {
+  return model.balls.size() == 1 ? std::string("ball") : "ball" + std::to_string(index);
 }
 
 void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,

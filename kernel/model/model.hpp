@@ -255,7 +255,10 @@ struct Bounds {
   double friction = 0;
 };
 
-/// A solid sphere thrown at the scene (thesis 4.5): the elastic ball.
+/// A solid sphere thrown at the scene (thesis 4.5: the elastic ball; several make a volley). A
+/// free rigid body of its own island, in every method; it meets limbs, the ground, the bounds,
+/// static colliders and the other balls. (A capsule or cylinder projectile is a Body without
+/// joints.)
 struct Ball {
   double radius = 0;                    ///< m, > 0
   double mass = 0;                      ///< kg, > 0
@@ -340,7 +343,7 @@ struct Model {
   std::vector<Gear> gears;
   std::optional<Ground> ground;
   std::optional<Bounds> bounds;
-  std::optional<Ball> ball;
+  std::vector<Ball> balls;                ///< projectiles, in order (the first: the thesis's ball)
   std::vector<StaticCollider> colliders;  ///< static level geometry
   Settings settings;
 
@@ -350,9 +353,13 @@ struct Model {
   double body_mass() const;
 };
 
+/// The name outputs give ball `index` of model.balls: "ball" when the model has one, else
+/// "ball0", "ball1", …
+std::string ball_name(const Model& model, std::size_t index);
+
 /// Appends `other`'s bodies, joints and gears to `model`: names led by `prefix`, moved by
 /// `offset` (m; joints to the world too), body indices renumbered. Settings, ground, bounds and
-/// ball stay `model`'s. (Several ragdolls in one world; copies of a scene on a lattice.)
+/// balls stay `model`'s. (Several ragdolls in one world; copies of a scene on a lattice.)
 void append_model(Model& model, const Model& other, std::string_view prefix, const Vector3& offset);
 
 /// The Model's islands: bodies joined by joints between bodies and by gears (a joint to the world

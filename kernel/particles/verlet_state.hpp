@@ -108,7 +108,7 @@ struct Island : IslandSleep {
 
 /// LimbBuffer::centre of a limb without a centre particle (LimbMasses::ends).
 inline constexpr std::uint32_t kNoCentre = 0xFFFFFFFF;
-/// ContactFeature::limb of the ball's feature.
+/// ContactFeature::limb of a ball's feature.
 inline constexpr std::uint32_t kNoLimb = 0xFFFFFFFF;
 
 /// Limbs as the particle method sees them (structure of arrays, cold: contact geometry,
@@ -127,7 +127,7 @@ struct LimbBuffer {
   std::size_t size() const { return head.size(); }
 };
 
-/// A point of a limb or of the ball that can touch a plane: a sphere of `radius` about a
+/// A point of a limb or of a ball that can touch a plane: a sphere of `radius` about a
 /// particle (ball, capsule end) or the rim of a cylinder's end disk, whose axis runs from
 /// `axis_partner` to `particle`.
 struct ContactFeature {
@@ -135,8 +135,8 @@ struct ContactFeature {
   std::uint32_t axis_partner = 0;  ///< == particle for a sphere
   double radius = 0;
   bool is_disk = false;
-  double restitution = 0;  ///< the feature's own (the ball's); a contact uses the larger of it and the plane's
-  std::uint32_t limb = kNoLimb;  ///< the limb it belongs to (LimbBuffer index), kNoLimb for the ball
+  double restitution = 0;  ///< the feature's own (a ball's); a contact uses the larger of it and the plane's
+  std::uint32_t limb = kNoLimb;  ///< the limb it belongs to (LimbBuffer index), kNoLimb for a ball
 };
 
 /// Active contacts of the current step (capacity fixed at compile: no allocation in step()).
@@ -145,10 +145,19 @@ struct PlaneContact {
   double approach_speed = 0;    ///< normal velocity before relaxation, m/s (< 0 approaching)
   double start_separation = 0;  ///< at the previous positions, m (< 0: it began the step inside)
 };
+/// A ball as the particle method holds it: one particle, its own island.
+struct BallParticle {
+  std::uint32_t particle = 0;
+  std::uint32_t island = 0;
+  double radius = 0;       ///< m
+  double restitution = 0;  ///< [0, 1]
+};
+
 /// A ball–limb contact as a contact plane fixed when the contact was found: normal n (limb →
 /// ball), the point a of the way from head to tail, and the offset k, so that
 /// C = n·(x_ball − ((1−a)·x_head + a·x_tail)) − k is the separation (< 0 overlapping).
 struct BallContact {
+  std::uint32_t ball = 0;  ///< VerletState::balls index
   std::uint32_t limb = 0;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitX();
   double axial = 0;
@@ -158,7 +167,7 @@ struct BallContact {
 };
 
 /// What a particle stands for: a limb's head, tail or centre (index: Model body), the world end
-/// of a joint to the world (index: Model joint), or the ball.
+/// of a joint to the world (index: Model joint), or a ball (index: Model::balls).
 struct ParticleOrigin {
   enum class Kind : std::uint8_t { limb_head, limb_tail, limb_centre, world_pin, ball, limb_frame_plus, limb_frame_minus };
   std::uint32_t index = 0;
@@ -218,9 +227,7 @@ struct VerletState {
   std::uint32_t colour_count = 0;  ///< names them in outputs (particle_name, compile.hpp)
   /// Limb–limb and limb–static collision (inactive for a scene with neither).
   LimbCollisions collisions;
-  std::int64_t ball_particle = -1;
-  std::int64_t ball_island = -1;
-  double ball_radius = 0, ball_restitution = 0;
+  std::vector<BallParticle> balls;  ///< Model::balls, in order: the last particles and islands
 
   // --- settings, resolved ---
   VerletOptions options;
@@ -237,12 +244,12 @@ struct VerletState {
   std::vector<PlaneContact> plane_contacts;
   std::vector<BallContact> ball_contacts;  ///< the last substep's
   ContactRowSet contact_rows;              ///< limb–limb, limb–static, ball–static: the last substep's
-  // Detection's scratch (limb_contacts.cpp): per Model body (and the ball), its segment and
+  // Detection's scratch (limb_contacts.cpp): per Model body (then per ball), its segment and
   // whether it is awake; per limb, a flag; the contacts found.
   std::vector<LimbSegment> limb_segments;
   std::vector<std::uint8_t> limb_awake, limb_island_awake;
   std::vector<LimbContact> limb_contacts;
-  bool ball_touched = false;  ///< the ball touched a limb in some substep of the last step
+  bool ball_touched = false;  ///< a ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
   std::vector<KinematicTarget> kinematic_targets;  ///< pinned particles only; next step, then cleared
   StepReport last_report;

@@ -29,12 +29,13 @@ RigidScene compile_rigid_scene(const Model& model) {
   RigidScene scene;
   scene.settings = model.settings;
   const std::size_t limb_count = model.bodies.size();
-  const std::size_t body_count = limb_count + (model.ball ? 1 : 0);
+  const std::size_t body_count = limb_count + model.balls.size();
   RigidBodyBuffer& bodies = scene.bodies;
   bodies.resize(body_count);
   RigidShapes& shapes = scene.shapes;
   shapes.shape.resize(body_count), shapes.length.resize(body_count), shapes.radius.resize(body_count);
   shapes.centre_offset.resize(body_count), shapes.principal_frame.resize(body_count), shapes.is_ball.assign(body_count, false);
+  shapes.restitution.assign(body_count, 0.0);
 
   auto set_body = [&](std::size_t b, const MassProperties& mass, const Eigen::Quaterniond& orientation,
                       const Eigen::Vector3d& centre, const Eigen::Vector3d& velocity, const Eigen::Vector3d& angular_velocity) {
@@ -57,11 +58,10 @@ RigidScene compile_rigid_scene(const Model& model) {
     shapes.shape[b] = body.shape.type, shapes.length[b] = body.shape.length, shapes.radius[b] = body.shape.radius;
     shapes.centre_offset[b] = mass.centre_of_mass;
   }
-  if (model.ball) {
-    const Ball& ball = *model.ball;
-    const auto b = static_cast<std::int32_t>(limb_count);
-    scene.ball = b;
-    scene.ball_restitution = ball.restitution;
+  scene.ball_begin = static_cast<std::uint32_t>(limb_count);
+  for (std::size_t b = limb_count; b < body_count; ++b) {
+    const Ball& ball = model.balls[b - limb_count];
+    shapes.restitution[b] = ball.restitution;
     set_body(b, solid_sphere(ball.mass, ball.radius), Eigen::Quaterniond::Identity(), ball.position, ball.velocity,
              Eigen::Vector3d::Zero());
     shapes.shape[b] = ShapeType::capsule, shapes.length[b] = 0, shapes.radius[b] = ball.radius;
@@ -69,11 +69,14 @@ RigidScene compile_rigid_scene(const Model& model) {
     shapes.is_ball[b] = true;
   }
 
-  // The Model's islands (body_islands), and the ball as its own, last.
+  // The Model's islands (body_islands), and each ball as its own, last.
   const BodyIslands islands = body_islands(model);
   scene.island_of_body = islands.island_of_body;
   scene.islands.resize(islands.count);
-  if (model.ball) scene.island_of_body.push_back(static_cast<std::uint32_t>(scene.islands.size())), scene.islands.emplace_back();
+  for (std::size_t b = limb_count; b < body_count; ++b) {
+    scene.island_of_body.push_back(static_cast<std::uint32_t>(scene.islands.size()));
+    scene.islands.emplace_back();
+  }
   for (std::uint32_t b = 0; b < body_count; ++b) scene.islands[scene.island_of_body[b]].bodies.push_back(b);
   for (RigidIsland& island : scene.islands) {
     bool at_rest = true;
@@ -85,9 +88,9 @@ RigidScene compile_rigid_scene(const Model& model) {
 
   scene.planes = scene_planes(model);
   scene.collisions = LimbCollisions(model);
-  // Every limb end against every plane, plus the ball against every limb; with the collision
+  // Every limb end against every plane, plus each ball against every limb; with the collision
   // world, room for a limb pair and two static contacts per body (more grows it once).
-  std::size_t contacts = 2 * body_count * scene.planes.size() + limb_count;
+  std::size_t contacts = 2 * body_count * scene.planes.size() + model.balls.size() * limb_count;
   if (scene.collisions.active()) {
     contacts += 3 * body_count;
     scene.limb_segments.resize(body_count);

@@ -20,15 +20,16 @@
 
 namespace limber {
 
-/// The limbs' geometry for contacts, per body (the ball is the last body when there is one).
+/// The limbs' geometry for contacts, per body (the balls are the last bodies).
 struct RigidShapes {
   std::vector<ShapeType> shape;
-  std::vector<double> length, radius;           ///< m (the ball: length 0, its radius)
+  std::vector<double> length, radius;           ///< m (a ball: length 0, its radius)
   std::vector<Eigen::Vector3d> centre_offset;   ///< centre of mass in the Model's body frame (shape-centred), m
   /// Rotation from the rigid body's frame (its principal axes) to the Model's body frame: a
   /// Model body-frame point p is at x + q·principal_frame⁻¹·(p − centre_offset) in world.
   std::vector<Eigen::Quaterniond> principal_frame;
   std::vector<bool> is_ball;
+  std::vector<double> restitution;              ///< a ball's, [0, 1]; 0 for a limb
 };
 
 /// Bodies joined by joints, simulated, put to sleep and woken together (thesis 4.5.3).
@@ -67,19 +68,18 @@ struct RigidScene {
   std::vector<RigidIsland> islands;
   std::vector<std::uint32_t> island_of_body;
   std::vector<Plane> planes;
-  std::int32_t ball = -1;  ///< body index of the ball, or −1
-  double ball_restitution = 0;
+  std::uint32_t ball_begin = 0;  ///< the balls are bodies ball_begin… (Model::balls, in order), after the limbs
   Settings settings;
   int contact_iterations = 8;  ///< passes of sequential impulses over a step's contacts
 
   double time = 0;                     ///< s
   std::vector<RigidContact> contacts;  ///< of the last step
-  bool ball_touching = false;          ///< the ball had a contact with a limb in the last step
+  bool ball_touching = false;          ///< a ball had a contact with a limb in the last step
   std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
   /// Limbs against limbs and against the static colliders (kernel/geometry/limb_collisions.hpp),
   /// and its per-step buffers, sized only when it is active (a scene without either pays nothing).
   LimbCollisions collisions;
-  std::vector<LimbSegment> limb_segments;  ///< per body (the ball last): the Model's head → tail now
+  std::vector<LimbSegment> limb_segments;  ///< per body (the balls last): the Model's head → tail now
   std::vector<std::uint8_t> limb_awake;    ///< per body: its island is awake
   std::vector<LimbContact> limb_contacts;  ///< the last detection's, before they became `contacts`
   /// Loads applied from outside over the next step, per body, world frame: a force at the
@@ -93,9 +93,9 @@ struct RigidScene {
 ///   body_mass_properties() (kernel/mass/): uniform over its shape, or its point masses; its
 ///   frame is on its principal axes (diagonal inertia), and principal moments below 10⁻⁶ of the
 ///   largest (a limb of zero radius about its axis) are raised to that floor;
-/// - the ball becomes a solid sphere body, the last one;
+/// - each ball becomes a solid sphere body, after the limbs;
 /// - bodies joined by joints (not through the world) form islands, which start asleep when the
-///   scene asks (Settings::sleep.start_asleep) and they are at rest; the ball is its own;
+///   scene asks (Settings::sleep.start_asleep) and they are at rest; each ball is its own;
 /// - the ground and the bounds' walls become planes;
 /// - limb pairs and static colliders go to `collisions` (LimbCollisions of the Model).
 /// Throws ModelError when the model is invalid.

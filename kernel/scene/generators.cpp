@@ -295,7 +295,7 @@ TriangleMesh make_stairs_mesh(const StairsSpec& spec) {
 
 Model make_humanoid_pile(std::size_t count, double spacing) {
   Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid").model;
-  humanoid.ball.reset(), humanoid.bounds.reset();
+  humanoid.balls.clear(), humanoid.bounds.reset();
   Model pile = copies_of(humanoid, count, spacing, "h", "humanoid_pile");
   pile.name = "humanoid_pile";
   return pile;

@@ -14,7 +14,7 @@
 //
 // Generated links belong to collision group kLinkCollisionGroup and do not collide with each
 // other (a workload measures relaxation; a rope or cloth that folds onto itself is not what they
-// model), only with static colliders, the ground, the bounds and the ball.
+// model), only with static colliders, the ground, the bounds and the balls.
 #pragma once
 
 #include <cstddef>
@@ -113,7 +113,7 @@ double vertical_extent(const Model& model);
 /// to drop): the copies fill L lattices of m = ⌈count / L⌉ copies each, lattice l (from the
 /// bottom) `layer_height` · l higher, copy k in lattice k div m at place i = k mod m; odd
 /// lattices are shifted by half a spacing in x and y, so a copy falls between the copies below
-/// it rather than onto one. Everything else (settings, ground, bounds, ball, colliders) is the
+/// it rather than onto one. Everything else (settings, ground, bounds, balls, colliders) is the
 /// model's, once. `spacing` (m) must be at least footprint(model) and, with layers,
 /// `layer_height` (m) at least vertical_extent(model), so copies do not overlap; 1 ≤ layers ≤ count.
 /// Errors name `path`.count, `path`.spacing, `path`.layers and `path`.layer_height.

@@ -191,6 +191,19 @@ Ball read_ball(const Object& object) {
   return ball;
 }
 
+// "ball": one, or "balls": a list (a volley), not both.
+std::vector<Ball> read_balls(const Object& root) {
+  const Json* one = root.find("ball");
+  const Json* list = root.find("balls");
+  if (one && list) fail("balls", "give \"ball\" (one) or \"balls\" (a list), not both");
+  if (one) return {read_ball(Object(*one, "ball"))};
+  std::vector<Ball> balls;
+  if (!list) return balls;
+  if (!list->is_array()) wrong_type(*list, "balls", "an array");
+  for (std::size_t i = 0; i < list->size(); ++i) balls.push_back(read_ball(Object((*list)[i], indexed("balls", i))));
+  return balls;
+}
+
 /// A body as read, before its mass is settled: variants may still change radius and mass, and
 /// a density becomes a mass only afterwards.
 struct BodySpec {
@@ -648,7 +661,7 @@ Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const 
 
 Scene read_scene(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
-  root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball",
+  root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball", "balls",
                    "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant", "colliders"});
   const int version = root.integer("limber_scene");
   if (version != 1) {
@@ -666,7 +679,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
     model.ground = read_ground(Object(*ground, "ground"));
   if (const Json* bounds = root.find("bounds"))
     model.bounds = read_bounds(Object(*bounds, "bounds"));
-  if (const Json* ball = root.find("ball")) model.ball = read_ball(Object(*ball, "ball"));
+  model.balls = read_balls(root);
   if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders");
 
   // Bodies: the explicit ones, then the chain's links.
@@ -749,7 +762,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
   }
   for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));
 
-  // Copies last, of everything above (generators.hpp's copies_of; the ball and ground stay one).
+  // Copies last, of everything above (generators.hpp's copies_of; the balls and ground stay as they are).
   // --copies on a scene without "copies" lays them out 1 m apart beyond their footprint.
   long copies = 1, layers = 1;
   double spacing = footprint(model) + 1.0, layer_height = 0;

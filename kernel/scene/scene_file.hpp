@@ -48,6 +48,7 @@
 //                                              optional object; all required; radius, mass > 0;
 //                                              restitution in [0, 1]; speed ≥ 0; direction non-zero
 //                                              (normalized); velocity = speed · direction
+//   "balls": [ { ...as "ball"... }, ... ]      optional: several balls (a volley), in place of "ball"
 //   "bodies": [ {                              required unless "chain" is given
 //       "name": "neck",                        required, unique, non-empty, not "world"
 //       "shape": { "type": "cylinder", "length": 0.05, "radius": 0.02 },
@@ -121,7 +122,7 @@
 //                                              [1, count]) lattices of ⌈count/layers⌉, each layer_height
 //                                              m above the one below (≥ the bodies' height), odd ones
 //                                              half a spacing across (a pile to drop; generators.hpp's
-//                                              copies_of). Colliders, like ground and ball, stay one.
+//                                              copies_of). Colliders, ground and balls stay as given.
 //     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together).
 //   "colliders": [ {                           optional (none): static level geometry (model.hpp's StaticCollider)
 //       "name": "bar",                         required, unique, non-empty, no body's name

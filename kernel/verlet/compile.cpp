@@ -166,7 +166,7 @@ void renumber_particles(VerletState<Scalar>& state) {
   for (ContactFeature& feature : state.features) {
     feature.particle = new_index[feature.particle], feature.axis_partner = new_index[feature.axis_partner];
   }
-  if (state.ball_particle >= 0) state.ball_particle = new_index[static_cast<std::size_t>(state.ball_particle)];
+  for (BallParticle& ball : state.balls) ball.particle = new_index[ball.particle];
   const std::uint32_t null_particle = state.particles.null_particle();
   const auto renumbered = [&](std::uint32_t p) { return p == null_particle ? p : new_index[p]; };
   for (JointRow& row : state.joint_rows.rows) {
@@ -187,7 +187,7 @@ template <typename Scalar>
 void prepare_limb_collisions(VerletState<Scalar>& state, const Model& model) {
   state.collisions = LimbCollisions(model);
   if (!state.collisions.active()) return;
-  const std::size_t segments = model.bodies.size() + (state.ball_particle >= 0 ? 1 : 0);
+  const std::size_t segments = model.bodies.size() + state.balls.size();
   state.limb_segments.reserve(segments);
   state.limb_awake.reserve(segments);
   state.limb_island_awake.assign(state.limbs.size(), 0);
@@ -388,8 +388,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   auto particle_of = [&](std::uint32_t slot) { return particle_of_root[merged.find(slot)]; };
 
   const std::size_t body_particle_count = first_slot_of_particle.size();
-  const bool has_ball = model.ball.has_value();
-  const std::size_t particle_count = body_particle_count + (has_ball ? 1 : 0);
+  const std::size_t particle_count = body_particle_count + model.balls.size();
   state.particles.resize(particle_count);
   state.particle_mass.assign(particle_count, 0.0);
 
@@ -516,14 +515,12 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
         : ParticleOrigin{joint_of_pin_slot[slot - pin_slot_base], ParticleOrigin::Kind::world_pin};
   }
 
-  // The ball: one particle, its own island.
-  if (has_ball) {
-    const Ball& ball = *model.ball;
-    const std::uint32_t p = checked_index(body_particle_count);
-    state.ball_particle = p;
-    state.particle_origins[p] = {0, ParticleOrigin::Kind::ball};
-    state.ball_radius = ball.radius;
-    state.ball_restitution = ball.restitution;
+  // Each ball: one particle, its own island.
+  for (std::size_t b = 0; b < model.balls.size(); ++b) {
+    const Ball& ball = model.balls[b];
+    const std::uint32_t p = checked_index(body_particle_count + b);
+    state.balls.push_back({p, checked_index(state.islands.size()), ball.radius, ball.restitution});
+    state.particle_origins[p] = {checked_index(b), ParticleOrigin::Kind::ball};
     state.particle_mass[p] = ball.mass;
     state.particles.set_position(p, ball.position.cast<Scalar>());
     state.particles.set_previous(p, (ball.position - ball.velocity * dt).cast<Scalar>());
@@ -534,7 +531,6 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
     island.particle_end = p + 1;
     island.constraint_begin = island.constraint_end = checked_index(pairs.size());
     island.limb_begin = island.limb_end = checked_index(state.limbs.size());
-    state.ball_island = static_cast<std::int64_t>(state.islands.size());
     state.islands.push_back(island);
   }
 
@@ -552,9 +548,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
         state.features.push_back({head, disk ? tail : head, radius, disk, 0.0, limb});
         state.features.push_back({tail, disk ? head : tail, radius, disk, 0.0, limb});
       }
-      if (state.ball_island >= 0 && &island == &state.islands[state.ball_island]) {
-        const auto p = static_cast<std::uint32_t>(state.ball_particle);
-        state.features.push_back({p, p, state.ball_radius, false, state.ball_restitution, kNoLimb});
+      for (const BallParticle& ball : state.balls) {
+        if (&island != &state.islands[ball.island]) continue;
+        state.features.push_back({ball.particle, ball.particle, ball.radius, false, ball.restitution, kNoLimb});
       }
       island.feature_end = checked_index(state.features.size());
     }
@@ -562,7 +558,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
 
   // Scratch with its final capacity: step() never allocates.
   state.plane_contacts.reserve(state.features.size() * state.planes.size());
-  state.ball_contacts.reserve(has_ball ? state.limbs.size() : 0);
+  state.ball_contacts.reserve(state.balls.size() * state.limbs.size());
   state.pending_forces.reserve(3 * 64);  // apply_force: up to 64 forces, each over ≤ 3 particles
   state.kinematic_targets.reserve(64);
   state.awake_islands.reserve(state.islands.size());
@@ -609,7 +605,7 @@ std::string particle_name(const Model& model, const ParticleOrigin& origin) {
     case ParticleOrigin::Kind::limb_frame_plus: return model.bodies[origin.index].name + ".frame+";
     case ParticleOrigin::Kind::limb_frame_minus: return model.bodies[origin.index].name + ".frame-";
     case ParticleOrigin::Kind::world_pin: return model.joints[origin.index].name + ".pin";
-    case ParticleOrigin::Kind::ball: return "ball";
+    case ParticleOrigin::Kind::ball: return ball_name(model, origin.index);
   }
   return "?";
 }

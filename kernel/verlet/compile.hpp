@@ -34,7 +34,7 @@ namespace limber {
 ///   projection rule, the particles' velocities (the rule is fixed at compile: the state is (x, v));
 /// - particles are grouped by island (connected limbs) and ordered breadth-first from the
 ///   island's root (a limb held by the world, else its first limb), so constraints are swept
-///   from the pinned end outwards; the ball is its own island;
+///   from the pinned end outwards; each ball is its own island;
 /// - passes the scene does not need are left out: no contact features without a ground or
 ///   bounds, no ball contacts without a ball.
 /// Throws ModelError when the model is invalid or names something the particle method cannot
@@ -48,7 +48,7 @@ template <typename Scalar>
 VerletState<Scalar> compile(const Model& model, const VerletOptions& options = {});
 
 /// A particle's name for outputs: "<body>.head", "<body>.tail", "<body>.centre", "<joint>.pin"
-/// or "ball".
+/// or a ball's (ball_name, model.hpp).
 /// `model` is the one the state was compiled from.
 std::string particle_name(const Model& model, const ParticleOrigin& origin);
 

@@ -176,7 +176,7 @@ void collect_contact_particles(VerletState<Scalar>& state) {
     state.contact_particles.push_back(state.features[contact.feature].axis_partner);
   }
   for (const BallContact& contact : state.ball_contacts) {
-    state.contact_particles.push_back(static_cast<std::uint32_t>(state.ball_particle));
+    state.contact_particles.push_back(state.balls[contact.ball].particle);
     state.contact_particles.push_back(state.limbs.head[contact.limb]);
     state.contact_particles.push_back(state.limbs.tail[contact.limb]);
   }
@@ -251,7 +251,7 @@ struct VelocityField {
 template <typename Scalar>
 void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, StepReport& report) {
   const RelaxationSettings& relaxation = state.options.relaxation;
-  const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty(), has_centres = has_limb_centres(state);
+  const bool has_ball = !state.balls.empty(), has_planes = !state.planes.empty(), has_centres = has_limb_centres(state);
   const bool interleaved = state.plan.layout != ParticleLayout::soa;
   const auto start = std::chrono::steady_clock::now();
   begin_relaxation(state, dt);
@@ -296,7 +296,7 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
 // second half kick of their force instead (kick_compliant_constraints), then the contacts.
 template <typename Scalar>
 void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
-  const bool contacts = state.ball_particle >= 0 || !state.planes.empty();
+  const bool contacts = !state.balls.empty() || !state.planes.empty();
   const bool rows = !state.contact_rows.empty();
   if (state.options.compliance > 0) {
     kick_compliant_constraints(state, dt);
@@ -322,7 +322,7 @@ template <typename Scalar>
 StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int index, int count) {
   StepReport report;
   const bool rattle = uses_rattle(state);
-  const bool has_ball = state.ball_particle >= 0, has_planes = !state.planes.empty();
+  const bool has_ball = !state.balls.empty(), has_planes = !state.planes.empty();
   if (rattle) {
     kick_and_drift(state, dt);
   } else {

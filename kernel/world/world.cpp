@@ -46,6 +46,7 @@ World::World(Model model, WorldOptions options) : model_(std::move(model)), opti
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
     collider_handle_.push_back(next_collider_handle_), collider_index_[next_collider_handle_++] = c;
   }
+  for (std::size_t k = 0; k < model_.balls.size(); ++k) ball_handle_.push_back(next_ball_handle_), ball_index_[next_ball_handle_++] = k;
   reset_loads();
   for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
   transport_frames();
@@ -446,10 +447,69 @@ void World::remove_collider(ColliderId collider) {
   for (std::size_t k = c; k < collider_handle_.size(); ++k) collider_index_[collider_handle_[k]] = k;
 }
 
+// --- Balls
+
+BallId World::add_ball(const Ball& ball) {
+  Model edited = model_;
+  edited.balls.push_back(ball);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  ball_handle_.push_back(next_ball_handle_);
+  ball_index_[next_ball_handle_] = edited.balls.size() - 1;
+  return BallId{next_ball_handle_++};
+}
+
+void World::remove_ball(BallId ball) {
+  const std::size_t k = index(ball);
+  Model edited = model_;
+  edited.balls.erase(edited.balls.begin() + static_cast<std::ptrdiff_t>(k));
+  std::vector<std::int64_t> old_ball_of_new;
+  for (std::size_t old = 0; old < model_.balls.size(); ++old) {
+    if (old != k) old_ball_of_new.push_back(static_cast<std::int64_t>(old));
+  }
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), std::move(old_ball_of_new));
+  ball_index_.erase(ball.value);
+  ball_handle_.erase(ball_handle_.begin() + static_cast<std::ptrdiff_t>(k));
+  for (std::size_t j = k; j < ball_handle_.size(); ++j) ball_index_[ball_handle_[j]] = j;
+}
+
+std::vector<BallId> World::balls() const {
+  std::vector<BallId> out;
+  for (const std::uint32_t handle : ball_handle_) out.push_back(BallId{handle});
+  return out;
+}
+
+std::size_t World::index(BallId ball) const {
+  const auto it = ball_index_.find(ball.value);
+  if (it == ball_index_.end()) throw WorldError("ball handle " + std::to_string(ball.value) + ": no such ball (removed?)");
+  return it->second;
+}
+
+BallMotion World::ball(BallId ball) const {
+  const std::size_t k = index(ball);
+  return std::visit(
+      [&](const auto& state) -> BallMotion {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          const std::uint32_t p = state.balls[k].particle;
+          return {state.particles.position(p).template cast<double>(), particle_velocity(state, p)};
+        } else {
+          const std::size_t b = state.ball_begin + k;
+          return {state.bodies.state.position[b], state.bodies.linear_velocity(state.bodies.state, b)};
+        }
+      },
+      state_);
+}
+
 // Compiles `edited` and carries across, for every body whose old index is old_body_of_new[b]
 // (−1: new), the state the old one had; then makes `edited` the model. Nothing changes when the
 // compile throws.
-void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new) {
+void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
+                      std::optional<std::vector<std::int64_t>> old_ball_of_new) {
+  world_bodies::Survivors survivors{old_body_of_new, {}};
+  if (old_ball_of_new) {
+    survivors.balls = std::move(*old_ball_of_new);
+  } else {
+    survivors.balls = first_bodies_kept(edited.balls.size(), std::min(edited.balls.size(), model_.balls.size()));
+  }
   State next = compile_method(edited, options_);
   std::visit(
       [&](auto& fresh) {
@@ -457,9 +517,9 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
         const State& old = std::get<State>(state_);
         if constexpr (std::is_same_v<State, FeatherstoneState>) {
           std::string problem;
-          if (!world_bodies::carry_state(old, model_, fresh, edited, old_body_of_new, problem)) refuse("a structural edit", problem);
+          if (!world_bodies::carry_state(old, model_, fresh, edited, survivors, problem)) refuse("a structural edit", problem);
         } else {
-          world_bodies::carry_state(old, model_, fresh, edited, old_body_of_new);
+          world_bodies::carry_state(old, model_, fresh, edited, survivors);
         }
       },
       next);

@@ -12,8 +12,9 @@
 // lagrange, featherstone), and what a method cannot do is refused with a WorldError naming the
 // method and the call, never done silently wrong. Loads (forces, impulses, torques, joint
 // torques, kinematic targets) act over the next step and are then gone. Structural edits (add or
-// remove a body, a joint or a collider, pin or unpin) recompile the state from the edited Model and carry
-// every surviving body's state across bit for bit (positions, velocities; islands wake).
+// remove a body, a joint, a collider or a ball, pin or unpin) recompile the state from the edited
+// Model and carry every surviving body's and ball's state across bit for bit (positions,
+// velocities; islands wake).
 //
 // Frames. A body's pose is that of its Model body frame: origin at the centre of its shape,
 // z along its axis (tail → head). A particle limb has no spin about its axis, so its
@@ -62,6 +63,11 @@ struct ColliderId {
   std::uint32_t value = ~0u;
   friend bool operator==(ColliderId, ColliderId) = default;
 };
+/// A ball (Model::balls; World::add_ball).
+struct BallId {
+  std::uint32_t value = ~0u;
+  friend bool operator==(BallId, BallId) = default;
+};
 /// A point of a body held to the world (World::pin): a spherical joint to the world.
 struct PinId {
   std::uint32_t value = ~0u;
@@ -72,6 +78,12 @@ struct PinId {
 struct Pose {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+/// A ball's centre (m) and velocity (m/s), world.
+struct BallMotion {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
 };
 
 /// A body frame's motion, world: the velocity of its origin (m/s) and its angular velocity (rad/s).
@@ -178,10 +190,19 @@ class World {
   /// The collider called `name`. Throws WorldError when there is none.
   ColliderId collider(std::string_view name) const;
 
+  /// Throws a ball (a projectile: Model::balls) into the world from the next step on; every
+  /// body and ball keeps its state. Throws ModelError naming the field ("balls[2].mass: ...")
+  /// when it is invalid, and nothing changes.
+  BallId add_ball(const Ball& ball);
+  void remove_ball(BallId ball);
+  std::vector<BallId> balls() const;  ///< every ball, in Model order
+  BallMotion ball(BallId ball) const;
+
   /// The Model index of a handle (for the state's own arrays); throws WorldError when removed.
   std::size_t index(BodyId body) const;
   std::size_t index(JointId joint) const;
   std::size_t index(ColliderId collider) const;
+  std::size_t index(BallId ball) const;
 
   /// The method's state, for what the World does not wrap (observers, counters).
   using State = MethodState;
@@ -196,7 +217,9 @@ class World {
   void transport_frames();
   void add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point, std::vector<Eigen::Vector3d>& linear,
                     std::vector<Eigen::Vector3d>& angular);
-  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new);
+  // old_ball_of_new: which old ball each new one continues (−1: new); nullopt: all, in order.
+  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
+                 std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
 
@@ -210,6 +233,9 @@ class World {
   std::vector<std::uint32_t> collider_handle_;  // per Model collider: its handle
   std::unordered_map<std::uint32_t, std::size_t> collider_index_;
   std::uint32_t next_collider_handle_ = 0;
+  std::vector<std::uint32_t> ball_handle_;  // per Model ball: its handle
+  std::unordered_map<std::uint32_t, std::size_t> ball_index_;
+  std::uint32_t next_ball_handle_ = 0;
   std::unordered_map<std::uint32_t, Pin> pins_;
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.

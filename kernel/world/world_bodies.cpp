@@ -87,19 +87,23 @@ bool teleport_floating_root(FeatherstoneState& state, std::size_t body, const Ei
 
 namespace {
 
-// The old index of new body b (−1: new), the ball mapping to the ball.
-std::int64_t old_body(const RigidScene& old, const RigidScene& fresh, const std::vector<std::int64_t>& old_body_of_new, std::size_t b) {
-  if (static_cast<std::int32_t>(b) == fresh.ball) return old.ball;
-  return b < old_body_of_new.size() ? old_body_of_new[b] : -1;
+// The old index of new body b (−1: new): a limb's by survivors.bodies, a ball's by survivors.balls.
+std::int64_t old_body(const RigidScene& old, const RigidScene& fresh, const Survivors& survivors, std::size_t b) {
+  if (b >= fresh.ball_begin) {
+    const std::size_t k = b - fresh.ball_begin;
+    const std::int64_t old_ball = k < survivors.balls.size() ? survivors.balls[k] : -1;
+    return old_ball < 0 ? -1 : static_cast<std::int64_t>(old.ball_begin) + old_ball;
+  }
+  return b < survivors.bodies.size() ? survivors.bodies[b] : -1;
 }
 
 // An island of surviving bodies sleeps if they all slept, else wakes; one of new bodies keeps
 // what compile decided.
-void carry_sleep(const RigidScene& old, RigidScene& fresh, const std::vector<std::int64_t>& old_body_of_new) {
+void carry_sleep(const RigidScene& old, RigidScene& fresh, const Survivors& survivors) {
   for (RigidIsland& island : fresh.islands) {
     bool any_old = false, all_asleep = true;
     for (const std::uint32_t b : island.bodies) {
-      const std::int64_t o = old_body(old, fresh, old_body_of_new, b);
+      const std::int64_t o = old_body(old, fresh, survivors, b);
       if (o < 0) continue;
       any_old = true;
       all_asleep = all_asleep && old.islands[old.island_of_body[static_cast<std::size_t>(o)]].sleeping;
@@ -110,22 +114,22 @@ void carry_sleep(const RigidScene& old, RigidScene& fresh, const std::vector<std
 
 }  // namespace
 
-void carry_state(const RigidScene& old, const Model&, RigidScene& fresh, const Model&, const std::vector<std::int64_t>& old_body_of_new) {
+void carry_state(const RigidScene& old, const Model&, RigidScene& fresh, const Model&, const Survivors& survivors) {
   const RigidBodyState& from = old.bodies.state;
   RigidBodyState& to = fresh.bodies.state;
   for (std::size_t b = 0; b < to.size(); ++b) {
-    const std::int64_t o = old_body(old, fresh, old_body_of_new, b);
+    const std::int64_t o = old_body(old, fresh, survivors, b);
     if (o < 0) continue;
     const auto k = static_cast<std::size_t>(o);
     to.position[b] = from.position[k], to.orientation[b] = from.orientation[k];
     to.linear_momentum[b] = from.linear_momentum[k], to.angular_momentum[b] = from.angular_momentum[k];
   }
   fresh.time = old.time;
-  carry_sleep(old, fresh, old_body_of_new);
+  carry_sleep(old, fresh, survivors);
 }
 
 bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
-                 const std::vector<std::int64_t>& old_body_of_new, std::string& problem) {
+                 const Survivors& survivors, std::string& problem) {
   // The joint a tree body hangs from, by name (empty: floating), and its parent's old index.
   const auto hangs = [](const FeatherstoneState& state, const Model& model, std::int32_t i) {
     const std::int32_t joint = state.model_joint[static_cast<std::size_t>(i)];
@@ -133,16 +137,17 @@ bool carry_state(const FeatherstoneState& old, const Model& old_model, Featherst
   };
   for (std::int32_t i = 0; i < fresh.tree.body_count(); ++i) {
     const std::int32_t b = fresh.scene_body[static_cast<std::size_t>(i)];
-    const std::int64_t o = old_body(old, fresh, old_body_of_new, static_cast<std::size_t>(b));
+    const std::int64_t o = old_body(old, fresh, survivors, static_cast<std::size_t>(b));
     if (o < 0) continue;
     const std::int32_t oi = old.tree_body[static_cast<std::size_t>(o)];
     const std::int32_t parent = fresh.tree.body(i).parent, old_parent = old.tree.body(oi).parent;
     const std::int64_t parent_then =
-        parent < 0 ? -1 : old_body(old, fresh, old_body_of_new, static_cast<std::size_t>(fresh.scene_body[static_cast<std::size_t>(parent)]));
+        parent < 0 ? -1 : old_body(old, fresh, survivors, static_cast<std::size_t>(fresh.scene_body[static_cast<std::size_t>(parent)]));
     const std::int64_t old_parent_body = old_parent < 0 ? -1 : old.scene_body[static_cast<std::size_t>(old_parent)];
     if (hangs(fresh, new_model, i) != hangs(old, old_model, oi) || parent_then != old_parent_body ||
         fresh.tree.body(i).joint != old.tree.body(oi).joint) {
-      const std::string name = static_cast<std::size_t>(b) < new_model.bodies.size() ? new_model.bodies[static_cast<std::size_t>(b)].name : "ball";
+      const std::string name = static_cast<std::size_t>(b) < new_model.bodies.size() ? new_model.bodies[static_cast<std::size_t>(b)].name
+                                                                                    : ball_name(new_model, static_cast<std::size_t>(b) - new_model.bodies.size());
       problem = "keeps a moving body's state only while it hangs from the same joint on the same parent; the edit changes how '" + name +
                 "' hangs (reduced coordinates would re-root it)";
       return false;
@@ -154,7 +159,7 @@ bool carry_state(const FeatherstoneState& old, const Model& old_model, Featherst
         old.v.segment(old.tree.velocity_offset(oi), joint_velocity_count(type));
   }
   fresh.time = old.time;
-  carry_sleep(old, fresh, old_body_of_new);
+  carry_sleep(old, fresh, survivors);
   refresh_rigid_bodies(fresh);
   return true;
 }

@@ -24,6 +24,12 @@
 
 namespace limber::world_bodies {
 
+/// Which old body and ball each new one continues after a structural edit (−1: new): one entry
+/// per new Model body, and one per new ball.
+struct Survivors {
+  std::vector<std::int64_t> bodies, balls;
+};
+
 // ---- Particle limbs
 
 template <typename Scalar>
@@ -193,7 +199,7 @@ std::vector<std::uint32_t> island_of_each_limb(const VerletState<Scalar>& state)
 /// is as compiled. Linear in the particles and bodies (plus pins × joints).
 template <typename Scalar>
 void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletState<Scalar>& fresh, const Model& new_model,
-                 const std::vector<std::int64_t>& old_body_of_new) {
+                 const Survivors& survivors) {
   // The old particle standing for each (kind, index), the first one as compiled.
   const auto key = [](ParticleOrigin::Kind kind, std::int64_t index) {
     return (static_cast<std::uint64_t>(kind) << 40) | static_cast<std::uint64_t>(index);
@@ -204,13 +210,17 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
   }
   const auto old_particle = [&](const ParticleOrigin& origin) -> std::int64_t {
     std::int64_t index = -1;
-    if (origin.kind == ParticleOrigin::Kind::ball) return old.ball_particle;
+    if (origin.kind == ParticleOrigin::Kind::ball) {
+      const std::int64_t old_ball = origin.index < survivors.balls.size() ? survivors.balls[origin.index] : -1;
+      const auto found = old_ball < 0 ? old_of_origin.end() : old_of_origin.find(key(origin.kind, old_ball));
+      return found == old_of_origin.end() ? -1 : static_cast<std::int64_t>(found->second);
+    }
     if (origin.kind == ParticleOrigin::Kind::world_pin) {
       for (std::size_t j = 0; j < old_model.joints.size(); ++j) {
         if (old_model.joints[j].name == new_model.joints[origin.index].name) index = static_cast<std::int64_t>(j);
       }
     } else {
-      index = old_body_of_new[origin.index];
+      index = survivors.bodies[origin.index];
     }
     if (index < 0) return -1;
     if (const auto found = old_of_origin.find(key(origin.kind, index)); found != old_of_origin.end()) return found->second;
@@ -230,7 +240,7 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
     const ParticleOrigin::Kind kind = fresh.particle_origins[p].kind;
     if (q < 0) {
       const bool frame = kind == ParticleOrigin::Kind::limb_frame_plus || kind == ParticleOrigin::Kind::limb_frame_minus;
-      if (frame && old_body_of_new[fresh.particle_origins[p].index] >= 0) new_frame_particles.push_back(p);
+      if (frame && survivors.bodies[fresh.particle_origins[p].index] >= 0) new_frame_particles.push_back(p);
       continue;
     }
     const auto from = static_cast<std::uint32_t>(q);
@@ -261,10 +271,10 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
   const std::vector<std::uint32_t> old_island = island_of_each_limb(old), fresh_island = island_of_each_limb(fresh);
   std::vector<char> any_old(fresh.islands.size(), 0), all_asleep(fresh.islands.size(), 1);
   for (std::size_t b = 0; b < fresh.body_limb.size(); ++b) {
-    if (old_body_of_new[b] < 0) continue;
+    if (survivors.bodies[b] < 0) continue;
     const std::uint32_t k = fresh_island[fresh.body_limb[b]];
     any_old[k] = 1;
-    all_asleep[k] &= old.islands[old_island[old.body_limb[static_cast<std::size_t>(old_body_of_new[b])]]].sleeping ? 1 : 0;
+    all_asleep[k] &= old.islands[old_island[old.body_limb[static_cast<std::size_t>(survivors.bodies[b])]]].sleeping ? 1 : 0;
   }
   for (std::size_t k = 0; k < fresh.islands.size(); ++k) {
     if (any_old[k]) fresh.islands[k].sleeping = all_asleep[k] != 0, fresh.islands[k].still_time = 0;
@@ -295,14 +305,14 @@ void teleport(RigidScene& scene, std::size_t body, const Eigen::Vector3d& positi
 /// Featherstone: moves a floating root (and what hangs from it); false for any other body.
 bool teleport_floating_root(FeatherstoneState& state, std::size_t body, const Eigen::Vector3d& position,
                             const Eigen::Quaterniond& orientation, const Motion& motion);
-/// Copies every surviving body's x, q, P, L (and the ball's) and the clock; islands sleep as
+/// Copies every surviving body's x, q, P, L (and the balls') and the clock; islands sleep as
 /// for the particle method.
 void carry_state(const RigidScene& old, const Model& old_model, RigidScene& fresh, const Model& new_model,
-                 const std::vector<std::int64_t>& old_body_of_new);
+                 const Survivors& survivors);
 /// Featherstone: copies each surviving body's joint coordinates and velocities when it hangs
 /// from the same joint on the same parent (or floats) in both; false, with `problem` naming
 /// the body, when an edit changes how a surviving body hangs.
 bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
-                 const std::vector<std::int64_t>& old_body_of_new, std::string& problem);
+                 const Survivors& survivors, std::string& problem);
 
 }  // namespace limber::world_bodies

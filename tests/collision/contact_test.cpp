@@ -88,7 +88,7 @@ Model ball_meets_limb(double ball_mass, double restitution, double hit_offset) {
   limb.mass = 2.0;
   limb.axis = Vector3::UnitY();
   model.bodies.push_back(limb);
-  model.ball = Ball{0.05, ball_mass, restitution, Vector3(0.3, hit_offset, 0), Vector3(-2, 0, 0)};
+  model.balls = {Ball{0.05, ball_mass, restitution, Vector3(0.3, hit_offset, 0), Vector3(-2, 0, 0)}};
   model.settings.gravity.setZero();
   model.settings.sleep.enabled = false;
   return model;
@@ -111,7 +111,7 @@ TEST(BallContact, ElasticHitOnTheMiddleOfAnEqualMassLimbExchangesVelocities) {
   auto state = compile<double>(ball_meets_limb(2.0, 1.0, 0.0), twenty_sweeps());
   const Eigen::Vector3d momentum = observe(state).linear_momentum;
   for (int s = 0; s < 120; ++s) step(state);
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+  const auto ball = state.balls.front().particle;
   EXPECT_NEAR(velocity(state, ball).norm(), 0.0, 1e-9);
   EXPECT_NEAR(velocity(state, 0).x(), -2.0, 1e-9);
   EXPECT_NEAR(velocity(state, 1).x(), -2.0, 1e-9);
@@ -121,7 +121,7 @@ TEST(BallContact, ElasticHitOnTheMiddleOfAnEqualMassLimbExchangesVelocities) {
 TEST(BallContact, InelasticHitLeavesBothAtTheCommonVelocity) {
   auto state = compile<double>(ball_meets_limb(2.0, 0.0, 0.0), twenty_sweeps());
   for (int s = 0; s < 120; ++s) step(state);
-  const auto ball = static_cast<std::uint32_t>(state.ball_particle);
+  const auto ball = state.balls.front().particle;
   EXPECT_NEAR(velocity(state, ball).x(), -1.0, 1e-9);
   EXPECT_NEAR(0.5 * (velocity(state, 0).x() + velocity(state, 1).x()), -1.0, 1e-9);
 }
@@ -140,7 +140,7 @@ TEST(BallContact, OffCentreHitConservesMomentumAndSpinsTheLimb) {
 Model ball_over_ground(double height, double restitution) {
   Model model;
   model.name = "ball_over_ground";
-  model.ball = Ball{0.05, 1.0, restitution, Vector3(0, 0, height), Vector3::Zero()};
+  model.balls = {Ball{0.05, 1.0, restitution, Vector3(0, 0, height), Vector3::Zero()}};
   model.ground = Ground{0.0, restitution, 0.0};
   model.settings.time_step = 1.0 / 1000;
   model.settings.sleep.enabled = false;

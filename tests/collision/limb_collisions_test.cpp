@@ -34,7 +34,7 @@ Body capsule_limb(const Vector3d& head, const Vector3d& tail, double radius) {
 std::vector<LimbSegment> segments_of(const Model& model) {
   std::vector<LimbSegment> limbs;
   for (const Body& body : model.bodies) limbs.push_back({body.head(), body.tail(), body.shape.radius});
-  if (model.ball) limbs.push_back({model.ball->position, model.ball->position, model.ball->radius});
+  for (const Ball& ball : model.balls) limbs.push_back({ball.position, ball.position, ball.radius});
   return limbs;
 }
 
@@ -311,7 +311,7 @@ TEST(LimbCollisions, LimbPiercingATriangleIsPushedOutAtItsDeeperEnd) {
 TEST(LimbCollisions, BallMeetsStaticGeometryButNotLimbs) {
   Model model;
   model.bodies = {capsule_limb({0.5, 0, 5}, {-0.5, 0, 5}, 0.1)};
-  model.ball = Ball{0.2, 1, 0.5, {3, 0, 5}, {0, 0, 0}};
+  model.balls = {Ball{0.2, 1, 0.5, {3, 0, 5}, {0, 0, 0}}};
   model.colliders = {box_collider({0, 0, -0.5}, {5, 5, 0.5})};
   LimbCollisions collisions(model);
   // The ball rests 0.05 into the box's top; the limb lies into the ball, clear of the box.

@@ -96,7 +96,7 @@ double largest_joint_gap(const Model& model) {
 // filter), but for the pairs the collision world excludes: joined, or overlapping at rest.
 Model limp_ragdoll() {
   Model model = testing::load_shipped_scene("ragdoll.json");
-  model.ball.reset();
+  model.balls.clear();
   model.settings.sleep.enabled = false;
   model.settings.sleep.start_asleep = false;
   return model;
@@ -330,7 +330,7 @@ Shot fire_ball(Method method, double dt, double aside, double start) {
   limb.shape = {ShapeType::capsule, kLimbLength, kLimbRadius};
   limb.mass = kLimbMass;
   model.bodies.push_back(limb);
-  model.ball = Ball{kBallRadius, kBallMass, kBallRestitution, Vector3d(start, aside, 0), Vector3d(-kBallSpeed, 0, 0)};
+  model.balls = {Ball{kBallRadius, kBallMass, kBallRestitution, Vector3d(start, aside, 0), Vector3d(-kBallSpeed, 0, 0)}};
   World world(model, WorldOptions{.method = method});
   std::vector<LimbSegment> segments;
   const int steps = static_cast<int>(std::ceil((start + 1) / (kBallSpeed * dt))) + 2;

@@ -294,7 +294,7 @@ std::pair<double, double> momentum_drift(const char* scene, double dt) {
   Model model = load_shipped_scene(scene);
   model.settings.gravity.setZero();
   model.settings.sleep.enabled = false;
-  model.bounds.reset(), model.ground.reset(), model.ball.reset();
+  model.bounds.reset(), model.ground.reset(), model.balls.clear();
   std::mt19937 random(11);
   std::uniform_real_distribution<double> unit(-1, 1);
   for (Body& body : model.bodies) {  // inconsistent on purpose: compile projects them

@@ -47,7 +47,7 @@ Model good_model() {
 
   model.ground = Ground{0, 0.1, 0.6};
   model.bounds = Bounds{{-5, -5, 0}, {5, 5, 5}, 0.5, 0.2};
-  model.ball = Ball{0.05, 2.27, 0.8, {0.8, 0, 0.25}, {-6, 0, 0}};
+  model.balls = {Ball{0.05, 2.27, 0.8, {0.8, 0, 0.25}, {-6, 0, 0}}};
   return model;
 }
 
@@ -152,8 +152,8 @@ TEST(ModelValidation, ValidateRejectsNonPositiveTimeStep) {
 TEST(ModelValidation, ValidateRejectsRestitutionAboveOne) {
   EXPECT_EQ(error_after([](Model& m) { m.ground->restitution = 1.5; }),
             "ground.restitution: must be in [0, 1], got 1.5");
-  EXPECT_EQ(error_after([](Model& m) { m.ball->restitution = 1.5; }),
-            "ball.restitution: must be in [0, 1], got 1.5");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().restitution = 1.5; }),
+            "balls[0].restitution: must be in [0, 1], got 1.5");
 }
 
 TEST(ModelValidation, ValidateRejectsBoundsWhoseMaxIsNotAboveMin) {
@@ -185,8 +185,8 @@ TEST(ModelValidation, ValidateRejectsZeroRelaxationIterations) {
 }
 
 TEST(ModelValidation, ValidateRejectsBallWithoutSizeOrMass) {
-  EXPECT_EQ(error_after([](Model& m) { m.ball->radius = 0; }), "ball.radius: must be > 0, got 0");
-  EXPECT_EQ(error_after([](Model& m) { m.ball->mass = -2; }), "ball.mass: must be > 0, got -2");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().radius = 0; }), "balls[0].radius: must be > 0, got 0");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().mass = -2; }), "balls[0].mass: must be > 0, got -2");
 }
 
 TEST(ModelValidation, ValidateChecksDragFactorOnlyWhenSet) {

@@ -184,14 +184,14 @@ TEST(GridModel, RectangularUnpinnedGrid) {
 
 TEST(HumanoidPile, CopiesTheHumanoidWithoutTheBall) {
   Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid").model;
-  humanoid.ball.reset();
+  humanoid.balls.clear();
   const auto one = compile<double>(humanoid);
 
   const Model pile = make_humanoid_pile(5, 1.5);
   EXPECT_NO_THROW(validate(pile));
   EXPECT_EQ(pile.bodies.size(), 5 * humanoid.bodies.size());
   EXPECT_EQ(pile.joints.size(), 5 * humanoid.joints.size());
-  EXPECT_FALSE(pile.ball.has_value());
+  EXPECT_TRUE(pile.balls.empty());
   ASSERT_TRUE(pile.ground.has_value());
   EXPECT_EQ(pile.ground->friction, humanoid.ground->friction);
   EXPECT_EQ(pile.settings.time_step, humanoid.settings.time_step);

@@ -93,7 +93,7 @@ TEST(RagdollScene, LoadsAndValidatesInEveryVariantWithWintersArmMasses) {
       EXPECT_NO_THROW(validate(model)) << file << " " << variant;
       EXPECT_EQ(model.bodies.size(), 13u) << file;
       EXPECT_EQ(model.joints.size(), 12u) << file;
-      ASSERT_TRUE(model.ball) << file;
+      ASSERT_EQ(model.balls.size(), 1u) << file;
       // The thesis's nine limbs are the body without arms, 90 % of it (Winter, table 4.1): an upper
       // arm is 0.028 and a forearm with its hand 0.022 of the whole.
       double nine = 0;
@@ -217,7 +217,7 @@ RunResult run(const Model& model, MethodState& variant, double seconds) {
   const std::vector<JointFrame> frames = joint_frames(model);
   return std::visit(
       [&](auto& state) {
-        RunResult result(KnockMeter(model.ball->velocity, observe(state).body_centre_of_mass));
+        RunResult result(KnockMeter(model.balls.front().velocity, observe(state).body_centre_of_mass));
         const long steps = std::lround(seconds / model.settings.time_step);
         for (long n = 0; n < steps && result.ok; ++n) {
           const auto report = step(state);

@@ -298,7 +298,7 @@ TEST(PileScene, ThirtyTwoRagdollsStartApartAboveTheStairsInEveryVariant) {
     EXPECT_THAT(model.name, HasSubstr("pile"));
     ASSERT_EQ(model.bodies.size(), 32 * ragdoll.bodies.size()) << variant;
     EXPECT_EQ(model.joints.size(), 32 * ragdoll.joints.size());
-    EXPECT_FALSE(model.ball.has_value());
+    EXPECT_TRUE(model.balls.empty());
     EXPECT_TRUE(model.settings.sleep.enabled);
     EXPECT_FALSE(model.settings.sleep.start_asleep);
     EXPECT_EQ(model.settings.duration, 3);
@@ -341,7 +341,7 @@ TEST(RopeScene, AnUnpinnedRopeStartsAboveABarAndASlab) {
   EXPECT_EQ(bar.type, ColliderType::capsule);
   EXPECT_EQ(model.colliders[1].type, ColliderType::box);
   ASSERT_TRUE(model.ground.has_value());
-  EXPECT_FALSE(model.ball.has_value());
+  EXPECT_TRUE(model.balls.empty());
   // The bar's core spans y; the rope lies across it, above it.
   const Vector3 core = bar.orientation * Vector3::UnitZ();
   EXPECT_NEAR(std::abs(core.dot(Vector3::UnitY())), 1, 1e-12);

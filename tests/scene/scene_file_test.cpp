@@ -210,6 +210,33 @@ TEST(SceneErrors, ZeroBallDirectionIsRejected) {
             "test.json: ball.direction: must be a non-zero vector, got [0, 0, 0]");
 }
 
+// "balls" is a list of "ball"s; a scene gives one form or the other, and a bad ball is named by
+// its place in the list.
+constexpr std::string_view kOneBall = R"("ball": {"radius": 0.05, "mass": 2.5, "restitution": 0.8, "position": [1, 0, 0.5],
+           "speed": 6, "direction": [-2, 0, 0]},)";
+constexpr std::string_view kTwoBalls = R"("balls": [{"radius": 0.05, "mass": 2.5, "restitution": 0.8, "position": [1, 0, 0.5],
+           "speed": 6, "direction": [-2, 0, 0]}, {"radius": 0.1, "mass": 1, "restitution": 0.5, "position": [-1, 0, 0.5],
+           "speed": 3, "direction": [1, 0, 0]}],)";
+
+TEST(SceneLoading, BallsAreReadInOrder) {
+  const Model model = load_scene_text(with(kPendulum, kOneBall, kTwoBalls), "test.json").model;
+  ASSERT_EQ(model.balls.size(), 2u);
+  EXPECT_EQ(model.balls[0].velocity, Vector3(-6, 0, 0));
+  EXPECT_EQ(model.balls[1].radius, 0.1);
+  EXPECT_EQ(model.balls[1].velocity, Vector3(3, 0, 0));
+}
+
+TEST(SceneErrors, BallAndBallsTogetherAreRejected) {
+  EXPECT_EQ(load_error(with(kPendulum, kOneBall, std::string(kOneBall) + std::string(kTwoBalls))),
+            "test.json: balls: give \"ball\" (one) or \"balls\" (a list), not both");
+}
+
+TEST(SceneErrors, ABadBallIsNamedByItsPlaceInTheList) {
+  EXPECT_EQ(load_error(with(with(kPendulum, kOneBall, kTwoBalls), R"("radius": 0.1)", R"("radius": -0.1)")),
+            "test.json: balls[1].radius: must be > 0, got -0.1");
+  EXPECT_EQ(load_error(with(kPendulum, kOneBall, R"("balls": {},)")), "test.json: balls: must be an array, got object");
+}
+
 TEST(SceneErrors, RestitutionOutOfRangeIsRejected) {
   EXPECT_EQ(pendulum_error(R"("restitution": 0.1)", R"("restitution": 1.5)"),
             "test.json: ground.restitution: must be in [0, 1], got 1.5");
@@ -256,16 +283,16 @@ TEST(ShippedScenes, HumanoidHasNineLimbsEightJointsGroundAndBall) {
   EXPECT_EQ(model.bodies.size(), 9u);
   EXPECT_EQ(model.joints.size(), 8u);
   ASSERT_TRUE(model.ground.has_value());
-  ASSERT_TRUE(model.ball.has_value());
+  ASSERT_EQ(model.balls.size(), 1u);
   EXPECT_FALSE(model.bounds.has_value());
   // Thesis 4.5: a 5 lb ball of radius 5 cm, 80 cm from the body, level with the spine's centre
   // (the thesis's code puts both at height 25 cm), thrown at the body.
-  EXPECT_DOUBLE_EQ(model.ball->mass, 5 * kPound);
-  EXPECT_DOUBLE_EQ(model.ball->radius, 0.05);
+  EXPECT_DOUBLE_EQ(model.balls.front().mass, 5 * kPound);
+  EXPECT_DOUBLE_EQ(model.balls.front().radius, 0.05);
   const Body& spine = model.bodies[model.find_body("spine")];
-  EXPECT_NEAR(model.ball->position.z(), spine.position.z(), 1e-9);
-  EXPECT_NEAR((model.ball->position - spine.position).norm(), 0.8, 1e-9);
-  EXPECT_GT(model.ball->velocity.dot(spine.position - model.ball->position), 0) << "thrown towards the body";
+  EXPECT_NEAR(model.balls.front().position.z(), spine.position.z(), 1e-9);
+  EXPECT_NEAR((model.balls.front().position - spine.position).norm(), 0.8, 1e-9);
+  EXPECT_GT(model.balls.front().velocity.dot(spine.position - model.balls.front().position), 0) << "thrown towards the body";
   EXPECT_TRUE(model.settings.sleep.start_asleep);
   // The default variant is medium: a 140 lb torso of radius 10 cm.
   const Body& torso = model.bodies[model.find_body("upper_torso")];
@@ -312,7 +339,7 @@ TEST(ShippedScenes, ChainHasFiveLinksWithADoubleEndLink) {
   ASSERT_EQ(model.bodies.size(), 5u);
   EXPECT_EQ(model.joints.size(), 5u);
   EXPECT_FALSE(model.ground.has_value());
-  EXPECT_FALSE(model.ball.has_value());
+  EXPECT_TRUE(model.balls.empty());
   EXPECT_EQ(model.bodies[0].shape.type, ShapeType::capsule);
   EXPECT_DOUBLE_EQ(model.bodies[4].mass, 2 * model.bodies[3].mass);
   EXPECT_DOUBLE_EQ(model.bodies[0].mass, 5 * kPound);
@@ -401,7 +428,7 @@ TEST(SceneGenerators, CopiesRepeatBodiesJointsAndGearsSideBySide) {
   const Model four = load_scene_text(with(kPendulum, R"("name": "pendulum",)", R"("name": "pendulum", "copies": {"count": 4, "spacing": 2},)"), "test.json").model;
   ASSERT_EQ(four.bodies.size(), 4 * one.bodies.size());
   ASSERT_EQ(four.joints.size(), 4 * one.joints.size());
-  EXPECT_TRUE(four.ball.has_value());  // one ball, one ground, one set of settings
+  EXPECT_EQ(four.balls.size(), 1u);  // one ball, one ground, one set of settings
   // Copy 3 of 4 (two per row) sits at spacing · (1, 1, 0), its names led by "c3.".
   EXPECT_EQ(four.bodies[7].name, "c3.lower");
   EXPECT_LT((four.bodies[7].position - one.bodies[1].position - Vector3(2, 2, 0)).norm(), 1e-12);
@@ -489,7 +516,7 @@ TEST(SceneLoading, HeadAndTailAnchorsAreTheAxisEnds) {
 TEST(SceneLoading, AxisAndBallDirectionAreNormalized) {
   const Model model = load_scene_text(kPendulum, "test.json").model;
   EXPECT_EQ(model.bodies[0].axis, Vector3(0, 0, 1));  // given as [0, 0, 3]
-  EXPECT_EQ(model.ball->velocity, Vector3(-6, 0, 0));  // speed 6 along [-2, 0, 0]
+  EXPECT_EQ(model.balls.front().velocity, Vector3(-6, 0, 0));  // speed 6 along [-2, 0, 0]
 }
 
 TEST(SceneLoading, OmittedOptionalFieldsKeepTheModelDefaults) {

@@ -125,7 +125,7 @@ TEST(StairsMesh, ANonsenseSpecIsOneLine) {
 
 TEST(CopiesInLayers, StackedCopiesStartApartAndKeepOneSetOfColliders) {
   Model humanoid = load_scene_text(embedded_humanoid_scene(), "humanoid").model;
-  humanoid.ball.reset(), humanoid.bounds.reset();
+  humanoid.balls.clear(), humanoid.bounds.reset();
   StaticCollider ramp;
   ramp.name = "ramp", ramp.type = ColliderType::box, ramp.half_extents = {2, 2, 0.1}, ramp.position = {0, 0, -0.2};
   humanoid.colliders.push_back(ramp);

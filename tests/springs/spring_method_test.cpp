@@ -187,7 +187,7 @@ Model ball_over_ground(double restitution) {
   Model model;
   model.name = "ball_drop";
   model.ground = Ground{0.0, 0.0, 0.5};
-  model.ball = Ball{0.1, 2.0, restitution, Vector3(0, 0, 1.1), Vector3::Zero()};
+  model.balls = {Ball{0.1, 2.0, restitution, Vector3(0, 0, 1.1), Vector3::Zero()}};
   model.settings.sleep.enabled = false;
   return model;
 }

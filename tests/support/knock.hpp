@@ -22,9 +22,9 @@ template <typename Compile, typename BallTouching>
 double humanoid_knock(const std::string& variant, const std::function<void(Ball&)>& adjust_ball, Compile&& compile,
                       BallTouching&& ball_touching) {
   Model model = load_shipped_scene("humanoid.json", {.variant = variant, .links = {}, .copies = {}});
-  adjust_ball(*model.ball);
+  adjust_ball(model.balls.front());
   auto state = compile(model);
-  KnockMeter meter(model.ball->velocity, observe(state).body_centre_of_mass);
+  KnockMeter meter(model.balls.front().velocity, observe(state).body_centre_of_mass);
   while (!meter.finished(state.time)) {
     EXPECT_EQ(step(state).status, StepStatus::ok);
     meter.update(state.time, ball_touching(state), observe(state).body_centre_of_mass);

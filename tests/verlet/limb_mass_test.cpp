@@ -226,14 +226,14 @@ double ball_speed_after_strike(LimbMasses limb_masses, double ball_mass, double 
   VerletOptions options = placed(limb_masses);
   options.relaxation.projection = projection;
   model.bodies[0].position = Vector3(0, 0, 1);
-  model.ball = Ball{0.05, ball_mass, 1.0, Vector3(0.2, 0, 1 + height), Vector3(-3, 0, 0)};
+  model.balls = {Ball{0.05, ball_mass, 1.0, Vector3(0.2, 0, 1 + height), Vector3(-3, 0, 0)}};
   model.settings.gravity.setZero();
   model.settings.time_step = 1.0 / 1000;
   VerletState<double> state = compile<double>(model, options);
   const Eigen::Vector3d momentum = observe(state).linear_momentum;
   for (int s = 0; s < 200; ++s) EXPECT_EQ(step(state).status, StepStatus::ok);
   EXPECT_LT((observe(state).linear_momentum - momentum).norm(), 1e-9 * momentum.norm());
-  return particle_velocity(state, static_cast<std::uint32_t>(state.ball_particle)).x();
+  return particle_velocity(state, state.balls.front().particle).x();
 }
 
 TEST(LimbMasses, BallBouncesOffTheRodAsOffTheRigidRod) {

@@ -28,8 +28,8 @@ void expect_stable(const Model& model, int steps, double allowance, const Verlet
 
 TEST(Stability, HumanoidRuns100000StepsWithoutDivergenceOrEnergyGain) {
   Model model = testing::load_shipped_scene("humanoid.json");
-  model.ball->velocity *= 3;  // a hard hit: 18 m/s
-  const double ball_energy = 0.5 * model.ball->mass * model.ball->velocity.squaredNorm();
+  model.balls.front().velocity *= 3;  // a hard hit: 18 m/s
+  const double ball_energy = 0.5 * model.balls.front().mass * model.balls.front().velocity.squaredNorm();
   expect_stable<float>(model, 100000, 0.01 * ball_energy);
   expect_stable<double>(model, 100000, 0.01 * ball_energy);
 }

@@ -70,7 +70,7 @@ TEST_P(WorldDrives, DrivesGoLimpWhenTheBallHits) {
   Ball ball;
   ball.radius = 0.05, ball.mass = 1, ball.restitution = 0.5;
   ball.position = Vector3(0.4, 0, 1.5), ball.velocity = Vector3(0, 0, -6);
-  model.ball = ball;
+  model.balls = {ball};
   World world(model, WorldOptions{.method = GetParam()});
   double lowest = centre_height(world);
   for (int s = 0; s < 480; ++s) {

@@ -269,7 +269,7 @@ TEST(World, SeveralRagdollsShareAWorld) {
 
 TEST(World, WakeAndSleep) {
   Model model = load_shipped_scene("humanoid.json");
-  model.ball.reset();
+  model.balls.clear();
   for (const Method method : kMethods) {
     World world(model, options_for(method));
     const BodyId head = world.body("head");

@@ -119,13 +119,13 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   flags.body_option = run.add_option("--body", flags.body, "Body variant of the scene (humanoid: thin, medium, wide)");
-  flags.ball_speed_option = run.add_option("--ball-speed", flags.ball_speed, "Ball launch speed, m/s");
-  flags.ball_direction_option = run.add_option("--ball-direction", flags.ball_direction, "Ball launch direction X,Y,Z")
+  flags.ball_speed_option = run.add_option("--ball-speed", flags.ball_speed, "Ball launch speed (every ball's), m/s");
+  flags.ball_direction_option = run.add_option("--ball-direction", flags.ball_direction, "Ball launch direction X,Y,Z (every ball's)")
                                     ->delimiter(',')
                                     ->expected(3);
-  flags.ball_radius_option = run.add_option("--ball-radius", flags.ball_radius, "Ball radius, m");
-  flags.ball_mass_option = run.add_option("--ball-mass", flags.ball_mass, "Ball mass, kg");
-  flags.ball_restitution_option = run.add_option("--ball-restitution", flags.ball_restitution, "Ball restitution, 0..1");
+  flags.ball_radius_option = run.add_option("--ball-radius", flags.ball_radius, "Ball radius (every ball's), m");
+  flags.ball_mass_option = run.add_option("--ball-mass", flags.ball_mass, "Ball mass (every ball's), kg");
+  flags.ball_restitution_option = run.add_option("--ball-restitution", flags.ball_restitution, "Ball restitution (every ball's), 0..1");
   flags.friction_option = run.add_option("--friction", flags.friction, "Ground Coulomb friction coefficient");
   flags.links_option = run.add_option("--links", flags.links, "Number of links of a chain or tree scene");
   flags.copies_option = run.add_option("--copies", flags.copies, "Copies of the scene's bodies, side by side");
@@ -329,20 +329,16 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
   return options;
 }
 
-// Applies the flags that change the model, each checked and named in its error.
-void apply_overrides(Model& model, const RunFlags& flags) {
-  const bool ball_flag = given(flags.ball_speed_option) || given(flags.ball_direction_option) ||
-                         given(flags.ball_radius_option) || given(flags.ball_mass_option) ||
-                         given(flags.ball_restitution_option);
-  if (ball_flag && !model.ball) throw InputError(format("--ball-*: the scene '%s' has no ball", model.name.c_str()));
-  if (given(flags.ball_radius_option)) model.ball->radius = checked(flags.ball_radius_option, flags.ball_radius, positive, "> 0");
-  if (given(flags.ball_mass_option)) model.ball->mass = checked(flags.ball_mass_option, flags.ball_mass, positive, "> 0");
+// The --ball-* flags, on one ball (a volley's balls all take them).
+void apply_ball_overrides(Ball& ball, const RunFlags& flags) {
+  if (given(flags.ball_radius_option)) ball.radius = checked(flags.ball_radius_option, flags.ball_radius, positive, "> 0");
+  if (given(flags.ball_mass_option)) ball.mass = checked(flags.ball_mass_option, flags.ball_mass, positive, "> 0");
   if (given(flags.ball_restitution_option)) {
-    model.ball->restitution = checked(flags.ball_restitution_option, flags.ball_restitution, unit_interval, "in [0, 1]");
+    ball.restitution = checked(flags.ball_restitution_option, flags.ball_restitution, unit_interval, "in [0, 1]");
   }
   if (given(flags.ball_speed_option) || given(flags.ball_direction_option)) {
-    double speed = model.ball->velocity.norm();
-    Vector3 direction = speed > 0 ? Vector3(model.ball->velocity / speed) : Vector3(-1, 0, 0);
+    double speed = ball.velocity.norm();
+    Vector3 direction = speed > 0 ? Vector3(ball.velocity / speed) : Vector3(-1, 0, 0);
     if (given(flags.ball_speed_option)) speed = checked(flags.ball_speed_option, flags.ball_speed, non_negative, ">= 0");
     if (given(flags.ball_direction_option)) {
       const Vector3 d(flags.ball_direction[0], flags.ball_direction[1], flags.ball_direction[2]);
@@ -351,8 +347,17 @@ void apply_overrides(Model& model, const RunFlags& flags) {
       }
       direction = d.normalized();
     }
-    model.ball->velocity = speed * direction;
+    ball.velocity = speed * direction;
   }
+}
+
+// Applies the flags that change the model, each checked and named in its error.
+void apply_overrides(Model& model, const RunFlags& flags) {
+  const bool ball_flag = given(flags.ball_speed_option) || given(flags.ball_direction_option) ||
+                         given(flags.ball_radius_option) || given(flags.ball_mass_option) ||
+                         given(flags.ball_restitution_option);
+  if (ball_flag && model.balls.empty()) throw InputError(format("--ball-*: the scene '%s' has no ball", model.name.c_str()));
+  for (Ball& ball : model.balls) apply_ball_overrides(ball, flags);
   if (given(flags.friction_option)) {
     if (!model.ground) throw InputError(format("--friction: the scene '%s' has no ground", model.name.c_str()));
     model.ground->friction = checked(flags.friction_option, flags.friction, non_negative, ">= 0");
@@ -406,13 +411,16 @@ void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
   csv << '\n';
 }
 
-// The spring methods write each limb's head and tail (the particle methods' names) and the ball.
+// The rigid methods write each limb's head and tail (the particle methods' names) and the balls.
 void write_csv_header(std::ostream& csv, const Model& model, const RigidScene&) {
   csv << "time";
   for (const Body& body : model.bodies) {
     for (const char* end : {".head", ".tail"}) csv << ',' << body.name << end << "_x," << body.name << end << "_y," << body.name << end << "_z";
   }
-  if (model.ball) csv << ",ball_x,ball_y,ball_z";
+  for (std::size_t k = 0; k < model.balls.size(); ++k) {
+    const std::string name = ball_name(model, k);
+    csv << ',' << name << "_x," << name << "_y," << name << "_z";
+  }
   csv << '\n';
 }
 void write_csv_row(std::ostream& csv, const RigidScene& state) {
@@ -423,13 +431,12 @@ void write_csv_row(std::ostream& csv, const RigidScene& state) {
     std::snprintf(cell, sizeof cell, ",%.9g,%.9g,%.9g", x.x(), x.y(), x.z());
     csv << cell;
   };
-  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
-    if (state.shapes.is_ball[b]) continue;
+  for (std::size_t b = 0; b < state.ball_begin; ++b) {
     const double half = 0.5 * state.shapes.length[b];
     write(world_point(state, b, Eigen::Vector3d(0, 0, half)));
     write(world_point(state, b, Eigen::Vector3d(0, 0, -half)));
   }
-  if (state.ball >= 0) write(state.bodies.state.position[state.ball]);
+  for (std::size_t b = state.ball_begin; b < state.bodies.size(); ++b) write(state.bodies.state.position[b]);
   csv << '\n';
 }
 
@@ -555,13 +562,19 @@ RunRecord run_steps(State& state, MethodState& variant, const Model& model, long
   return record;
 }
 
+// The model line's balls: "", ", ball" or ", 5 balls".
+std::string balls_clause(const Model& model) {
+  const std::size_t count = model.balls.size();
+  return count == 0 ? "" : count == 1 ? ", ball" : format(", %zu balls", count);
+}
+
 // The method's own lines: what it is, how the model became its state, how it solved.
 template <typename Scalar>
 void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, const VerletState<Scalar>& state, const RunRecord& record) {
   out << format("method      %s relaxation (Verlet), %s precision\n", flags.method.c_str(), flags.precision.c_str());
   out << format("model       %zu limbs, %zu joints%s%s%s; %zu particles, %zu constraints, %zu island%s\n",
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.particles.size(), state.constraints.size(), state.islands.size(),
+                balls_clause(model).c_str(), state.particles.size(), state.constraints.size(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
   out << solver_line(flags, state);
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
@@ -600,7 +613,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags& flags, 
   for (const std::uint8_t count : state.springs.count) spring_count += count;
   out << format("model       %zu limbs, %zu joints%s%s%s; %zu rigid bodies, %zu springs (%s), %zu island%s\n",
                 model.bodies.size(), model.joints.size(), model.ground ? ", ground" : "", model.bounds ? ", bounds" : "",
-                model.ball ? ", ball" : "", state.bodies.size(), spring_count, range.c_str(), state.islands.size(),
+                balls_clause(model).c_str(), state.bodies.size(), spring_count, range.c_str(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
   if (state.options.integrator == Integrator::backward_euler) {
     out << format("solver      sparse %s over %zu unknowns\n",
@@ -620,7 +633,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
   const std::string gears = model.gears.empty() ? "" : format(", %zu gear%s", model.gears.size(), model.gears.size() == 1 ? "" : "s");
   out << format("model       %zu limbs, %zu joints%s%s%s%s; %zu rigid bodies, %zu constraint rows, %zu island%s\n",
                 model.bodies.size(), model.joints.size(), gears.c_str(), model.ground ? ", ground" : "",
-                model.bounds ? ", bounds" : "", model.ball ? ", ball" : "", state.bodies.size(), state.constraints.total_rows(),
+                model.bounds ? ", bounds" : "", balls_clause(model).c_str(), state.bodies.size(), state.constraints.total_rows(),
                 state.islands.size(), state.islands.size() == 1 ? "" : "s");
   out << format("solver      %s\n", state.uses_tree ? "Baraff's tree-ordered block LDLT (linear time)"
                                                       : "sparse LDLT of J M^-1 J^T (the constraints close a loop, or asked for)");
@@ -633,7 +646,7 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
   out << format("method      featherstone: rigid limbs in reduced coordinates (articulated-body algorithm), %s, double precision\n",
                 state.options.integrator == Integrator::rk4 ? "RK4" : "semi-implicit Euler");
   out << format("model       %zu limbs, %zu joints%s%s%s; %zu island%s\n", model.bodies.size(), model.joints.size(),
-                model.ground ? ", ground" : "", model.bounds ? ", bounds" : "", model.ball ? ", ball" : "", state.islands.size(),
+                model.ground ? ", ground" : "", model.bounds ? ", bounds" : "", balls_clause(model).c_str(), state.islands.size(),
                 state.islands.size() == 1 ? "" : "s");
   std::string roots;
   for (std::int32_t i : state.floating_roots) roots += (roots.empty() ? "" : ", ") + state.tree.body(i).name;
@@ -687,7 +700,7 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
     write_csv_row(csv, state);
   }
   const Observation start = observe(state);
-  KnockMeter knock(model.ball ? model.ball->velocity : Eigen::Vector3d::UnitX(), start.body_centre_of_mass);
+  KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);
   const RunRecord record = run_steps(state, variant, model, steps, csv, knock);
   const Observation& end = record.end;
 
