@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "limber/kernel/collision/contacts.hpp"
+#include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -52,6 +53,12 @@ void gather_segments(VerletState<Scalar>& state) {
     segment.radius = state.ball_radius;
     state.limb_awake.back() = state.islands[static_cast<std::size_t>(state.ball_island)].sleeping ? 0 : 1;
     segment.reach = state.limb_awake.back() ? std::min(kMaxReach, 2 * moved(segment.head, ball)) : 0.0;
+    // Where its path first touched static geometry that the end would not answer (limb_contacts.hpp).
+    const Eigen::Vector3d from = p.previous(ball).template cast<double>(), path = segment.head - from;
+    if (segment.reach > 0 && path.norm() > kSweptSlop * segment.radius) {
+      const SweptTouch touch = state.collisions.first_static_touch(static_cast<std::uint32_t>(bodies), from, segment.head, segment.radius);
+      if (touch.found()) segment.head = segment.tail = from + touch.time * path;
+    }
   }
 }
 

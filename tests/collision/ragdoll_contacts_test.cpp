@@ -474,7 +474,8 @@ TEST_P(BallOnWall, BallAt100MetresPerSecondBouncesOffAThinPlateAndAMeshAt60Hz) {
 INSTANTIATE_TEST_SUITE_P(Methods, RagdollStack, ::testing::Values(Method::particles), param_name);
 INSTANTIATE_TEST_SUITE_P(Methods, BallOnLimb, ::testing::Values(Method::particles, Method::springs, Method::lagrange, Method::featherstone),
                          param_name);
-INSTANTIATE_TEST_SUITE_P(Methods, BallOnWall, ::testing::Values(Method::springs, Method::lagrange, Method::featherstone), param_name);
+INSTANTIATE_TEST_SUITE_P(Methods, BallOnWall, ::testing::Values(Method::particles, Method::springs, Method::lagrange, Method::featherstone),
+                         param_name);
 
 // Known failures, kept to reproduce them (--gtest_also_run_disabled_tests); measured at 240 Hz:
 // - the side landing: every method lets a pair of limbs overlap past 1 cm at some of the four
