@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "limber/kernel/collision/contacts.hpp"
+#include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -47,11 +48,18 @@ void gather_segments(VerletState<Scalar>& state) {
   }
   for (std::size_t b = 0; b < state.balls.size(); ++b) {
     const BallParticle& ball = state.balls[b];
-    LimbSegment& segment = state.limb_segments[bodies + b];
+    const auto index = static_cast<std::uint32_t>(bodies + b);
+    LimbSegment& segment = state.limb_segments[index];
     segment.head = segment.tail = p.position(ball.particle).template cast<double>();
     segment.radius = ball.radius;
-    state.limb_awake[bodies + b] = state.islands[ball.island].sleeping ? 0 : 1;
-    segment.reach = state.limb_awake[bodies + b] ? std::min(kMaxReach, 2 * moved(segment.head, ball.particle)) : 0.0;
+    state.limb_awake[index] = state.islands[ball.island].sleeping ? 0 : 1;
+    segment.reach = state.limb_awake[index] ? std::min(kMaxReach, 2 * moved(segment.head, ball.particle)) : 0.0;
+    // Where its path first touched static geometry that the end would not answer (limb_contacts.hpp).
+    const Eigen::Vector3d from = p.previous(ball.particle).template cast<double>(), path = segment.head - from;
+    if (segment.reach > 0 && path.norm() > kSweptSlop * segment.radius) {
+      const SweptTouch touch = state.collisions.first_static_touch(index, from, segment.head, segment.radius);
+      if (touch.found()) segment.head = segment.tail = from + touch.time * path;
+    }
   }
 }
 

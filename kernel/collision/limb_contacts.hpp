@@ -7,7 +7,12 @@
 // Detection runs on the predicted positions with a speculative margin: a pair is kept while its
 // surfaces are closer than the margin — the most the two can close in the substep, twice the
 // largest particle displacement, plus a slop — so a row holds C ≥ 0 before the limbs meet,
-// and thin fast limbs do not pass through each other between detections.
+// and thin fast limbs do not pass through each other between detections. The margin is capped
+// (0.5 m), so the ball is swept besides (continuous collision, kernel/geometry/time_of_impact.hpp):
+// where its path from its previous position first touches static geometry that a search at its
+// end would not answer (it passed through, or ends deep or beyond the middle: answer_at_touch),
+// the search sees the ball there, so its row holds the surface it met at the normal it met it
+// with (a plate thinner than the ball's travel is not passed, nor pushed out through its back).
 #pragma once
 
 #include "limber/kernel/particles/verlet_state.hpp"

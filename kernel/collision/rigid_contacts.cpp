@@ -8,6 +8,7 @@
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
 #include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/collision/impulses.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 
@@ -118,17 +119,63 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
   }
 }
 
+// Continuous collision for the ball (rigid_contacts.hpp; which touches: answer_at_touch,
+// time_of_impact.hpp). How far inside the touch the ball is put back, m: enough that the overlap
+// test sees it through round-off, too little to push anything.
+constexpr double kTouchDepth = 1e-6;
+
+// Sweeps ball body `ball` from state.step_start_position to its position now against the limbs
+// (at their poses now) and the static colliders, and moves it back to its first touch that needs
+// answering there (see rigid_contacts.hpp). Returns whether it moved it.
+bool sweep_ball(RigidScene& state, std::size_t ball) {
+  RigidBodyState& y = state.bodies.state;
+  const Eigen::Vector3d from = state.step_start_position[ball], to = y.position[ball], path = to - from;
+  const double radius = state.shapes.radius[ball];
+  if (!(path.norm() > kSweptSlop * radius)) return false;  // at rest (or asleep), or sliding in place
+  SweptTouch first;
+  const BoundingSphere swept{from + 0.5 * path, 0.5 * path.norm() + radius};
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    if (b == ball) continue;
+    const auto [head, tail] = head_and_tail(state, b);
+    const ShapeType shape = state.shapes.shape[b];
+    const double limb_radius = state.shapes.radius[b];
+    if (!overlaps(swept, BoundingSphere{0.5 * (head + tail), 0.5 * (head - tail).norm() + limb_radius})) continue;
+    if (sphere_limb_contact(from, radius, head, tail, shape, limb_radius).separation < -kSweptSlop * radius) continue;
+    const TimeOfImpact impact = sphere_limb_time_of_impact(from, to, radius, head, tail, shape, limb_radius);
+    if (!impact.hit || !(impact.time < first.time)) continue;
+    const SphereLimbContact touch = sphere_limb_contact(from + impact.time * path, radius, head, tail, shape, limb_radius);
+    const SphereLimbContact end = sphere_limb_contact(to, radius, head, tail, shape, limb_radius);
+    if (answer_at_touch(path, impact.time, touch.normal, radius, end.separation, end.normal)) {
+      first.keep_if_earlier(impact.time, touch.normal, touch.separation);
+    }
+  }
+  if (state.collisions.active()) {
+    const SweptTouch wall = state.collisions.first_static_touch(static_cast<std::uint32_t>(ball), from, to, radius);
+    if (wall.time < first.time) first = wall;
+  }
+  if (!first.found()) return false;
+  y.position[ball] = from + first.time * path - std::max(first.separation + kTouchDepth, 0.0) * first.normal;
+  return true;
+}
+
 }  // namespace
 
-void detect_rigid_contacts(RigidScene& state) {
+void remember_step_start(RigidScene& state) { state.step_start_position = state.bodies.state.position; }
+
+bool detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
-  for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) add_ball_contacts(state, ball);
+  bool moved = false;
+  for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) {
+    moved = sweep_ball(state, ball) || moved;
+    add_ball_contacts(state, ball);
+  }
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
   }
   if (state.collisions.active()) add_collision_world_contacts(state);
+  return moved;
 }
 
 void resolve_rigid_contacts(RigidScene& state, double dt) {

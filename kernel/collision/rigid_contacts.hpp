@@ -7,7 +7,23 @@
 // - a cylinder's end disk touches a plane at its lowest rim point, a capsule's end cap and the
 //   ball at their lowest sphere point — up to two contacts per limb and plane;
 // - the ball against a limb: bounding spheres first, and the exact sphere–capsule or
-//   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4).
+//   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4);
+// - continuous collision for the ball, first: a ball tested only where it overlaps after the
+//   move passes through a limb thinner than its step's travel (4.4 m/s against a 4 cm limb at
+//   Δt = 1/60 s, bench/README.md). So its path over the step, from its centre at the step's start
+//   (RigidScene::step_start_position, remember_step_start) to its centre now, is swept against
+//   the limbs and the static colliders (time of impact, kernel/geometry/time_of_impact.hpp). At
+//   its first touch of one that the overlap test will not answer — the ball passed through it,
+//   grazed it between two steps, or ends deeper than half its radius in it or beyond its middle
+//   (answer_at_touch) — the ball is moved back to that touch (1 µm inside, so the overlap test
+//   finds the contact there, with the normal at the time of impact) and keeps its velocity: the
+//   impulses answer the hit, and the ball gives up the rest of its step's travel (Box2D's
+//   bullets and Bullet's CCD motion clamping do the same). Touches the overlap test answers
+//   (the ball ends just inside, on the side it came from), resting and sliding contacts are as
+//   before; a shape the ball already overlaps at the step's start by more than 1% of its radius
+//   is the push-out's. Assumed: a limb holds still at its end-of-step pose through the step
+//   (exact for a limb at rest; a limb swinging fast towards the ball meets it late or not at
+//   all), and the planes are not swept (a half-space cannot be passed through).
 // Response (kernel/collision/impulses.hpp, sequential_collision_impulse): sequential impulses with
 // restitution (eq. 2.32–2.37, the full inertia tensor) and Coulomb friction, normal then
 // tangent, which never gain energy; a few passes so touching contacts settle;
@@ -21,10 +37,17 @@
 
 namespace limber {
 
+/// Records every body's centre of mass in scene.step_start_position: the start of the path
+/// detect_rigid_contacts sweeps the ball along. Every rigid method's step calls it first.
+void remember_step_start(RigidScene& scene);
+
 /// Finds the contacts of the awake bodies at the current state into scene.contacts, wakes the
 /// islands the ball or an awake limb touches and sets scene.ball_touching. Limb–limb contacts
-/// have a = the lower body index, b = the other, normal from b to a and restitution 0.
-void detect_rigid_contacts(RigidScene& scene);
+/// have a = the lower body index, b = the other, normal from b to a and restitution 0. First
+/// moves the ball back along its path to where it hit a limb or a static collider (above);
+/// returns whether it did, so a method keeping its own coordinates (Featherstone's q) takes the
+/// ball's new position over.
+bool detect_rigid_contacts(RigidScene& scene);
 
 /// Impulses and position correction for scene.contacts; dt is the step's.
 void resolve_rigid_contacts(RigidScene& scene, double dt);

@@ -106,11 +106,23 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
   }
 }
 
+void take_moved_balls(FeatherstoneState& state) {
+  const RigidBodyState& y = state.bodies.state;
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    if (!state.shapes.is_ball[b]) continue;
+    const std::int32_t i = state.tree_body[b];
+    const Eigen::Matrix3d rotation = state.kinematics.world_to_body[static_cast<std::size_t>(i)].rotation.transpose();
+    state.q.segment<3>(state.tree.position_offset(i)) = y.position[b] - rotation * state.centre_of_mass[static_cast<std::size_t>(i)];
+  }
+  refresh_rigid_bodies(state);
+}
+
 StepReport step(FeatherstoneState& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
+    remember_step_start(state);
     integrate_awake_islands(state, dt);
     refresh_rigid_bodies(state);
-    detect_rigid_contacts(state);
+    if (detect_rigid_contacts(state)) take_moved_balls(state);
     resolve_joint_space_contacts(state, dt);
     report.contacts = static_cast<int>(state.contacts.size());
     state.time += dt;

@@ -21,9 +21,10 @@ namespace limber {
 ///                whatever Δt, as in the other methods);
 ///  3. refresh    the rigid bodies from (q, v) (refresh_rigid_bodies);
 ///  4. collide    contacts with the planes and the ball found on the rigid bodies
-///                (kernel/collision/rigid_contacts.hpp), answered by impulses through the
-///                joint-space inertia and a position push-out (joint_space_contacts.hpp), with the
-///                joint limits' rows;
+///                (kernel/collision/rigid_contacts.hpp; a ball it moves back to where its path
+///                first hit something goes into its floating joint's q, take_moved_balls),
+///                answered by impulses through the joint-space inertia and a position push-out
+///                (joint_space_contacts.hpp), with the joint limits' rows;
 ///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
 /// divergence is reported in the result (also state.last_report). Allocates nothing.
@@ -35,5 +36,9 @@ inline StepReport step(FeatherstoneState& state) { return step(state, state.sett
 /// Recomputes the rigid bodies (positions, orientations, momenta) and state.kinematics (poses
 /// and spatial velocities of the tree bodies) from (q, v) by forward kinematics.
 void refresh_rigid_bodies(FeatherstoneState& state);
+
+/// After detect_rigid_contacts moved a ball (continuous collision): every ball's floating joint
+/// takes its rigid body's position (its origin is the centre of mass), then refresh_rigid_bodies.
+void take_moved_balls(FeatherstoneState& state);
 
 }  // namespace limber

@@ -321,6 +321,27 @@ void LimbCollisions::find_static(std::span<const LimbSegment> limbs, std::span<c
   }
 }
 
+SweptTouch LimbCollisions::first_static_touch(std::uint32_t segment, const Vector3d& from, const Vector3d& to, double radius) const {
+  SweptTouch first;
+  const Vector3d path = to - from;
+  const Aabb box{from.cwiseMin(to).array() - radius, from.cwiseMax(to).array() + radius};
+  statics_.query(box, [&](const StaticPrimitive& primitive) {
+    if (!filters_collide(filters_[segment], primitive.filter)) return;
+    const std::optional<SurfacePoint> start = surface_point(primitive, from);
+    if (start && start->distance - radius < -kSweptSlop * radius) return;
+    const TimeOfImpact impact = sphere_static_time_of_impact(from, to, radius, primitive);
+    if (!impact.hit || !(impact.time < first.time)) return;
+    const std::optional<SurfacePoint> touch = surface_point(primitive, from + impact.time * path);
+    const std::optional<SurfacePoint> end = surface_point(primitive, to);
+    if (!touch) return;
+    const double end_separation = end ? end->distance - radius : std::numeric_limits<double>::infinity();
+    if (answer_at_touch(path, impact.time, touch->normal, radius, end_separation, end ? end->normal : touch->normal)) {
+      first.keep_if_earlier(impact.time, touch->normal, touch->distance - radius);
+    }
+  });
+  return first;
+}
+
 double LimbCollisions::deepest_penetration(std::span<const LimbSegment> limbs) {
   find(limbs, all_awake_, 0, scratch_);
   double deepest = 0;

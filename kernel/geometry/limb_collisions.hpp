@@ -29,6 +29,7 @@
 #include "limber/kernel/geometry/bounding_volumes.hpp"
 #include "limber/kernel/geometry/broadphase.hpp"
 #include "limber/kernel/geometry/static_geometry.hpp"
+#include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/model/model.hpp"
 
 namespace limber {
@@ -96,6 +97,14 @@ class LimbCollisions {
   /// The deepest overlap among `limbs` now (m, ≥ 0; 0 when nothing overlaps), between limbs and
   /// static geometry and between limbs — the run summary's measure (every method alike).
   double deepest_penetration(std::span<const LimbSegment> limbs);
+
+  /// Continuous collision against the static geometry (time_of_impact.hpp): segment `segment`'s
+  /// sphere (the ball's, head = tail) of `radius` (m) moving from `from` to `to` (m, world) —
+  /// its first touch of a static primitive its filter meets that needs answering there
+  /// (answer_at_touch), among the primitives it does not overlap at `from` by more than
+  /// kSweptSlop radii (deeper ones are the push-out's). Ties go to the tree's fixed order. No
+  /// allocation.
+  SweptTouch first_static_touch(std::uint32_t segment, const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius) const;
 
  private:
   // A value type (states are copied): no shared buffers.

@@ -147,6 +147,7 @@ void velocity_level_step(LagrangeState& state, double dt) {
 // One step after the guard: integrate, contacts, projections, errors, sleep.
 void advance(LagrangeState& state, double dt, StepReport& report) {
   state.time_step = dt;
+  remember_step_start(state);
   if (state.options.integrator == Integrator::semi_implicit_euler) {
     velocity_level_step(state, dt);
   } else {

@@ -98,6 +98,7 @@ RigidScene compile_rigid_scene(const Model& model) {
     scene.limb_contacts.reserve(3 * body_count);
   }
   scene.contacts.reserve(contacts);
+  scene.step_start_position = bodies.state.position;
   scene.velocity.assign(body_count, Eigen::Vector3d::Zero());
   scene.angular_velocity.assign(body_count, Eigen::Vector3d::Zero());
   scene.applied_force.assign(body_count, Eigen::Vector3d::Zero());

@@ -73,6 +73,9 @@ struct RigidScene {
   int contact_iterations = 8;  ///< passes of sequential impulses over a step's contacts
 
   double time = 0;                     ///< s
+  /// Per body: its centre of mass at the start of the step being taken, m, world
+  /// (remember_step_start): the start of the path the ball is swept along (rigid_contacts.hpp).
+  std::vector<Eigen::Vector3d> step_start_position;
   std::vector<RigidContact> contacts;  ///< of the last step
   bool ball_touching = false;          ///< a ball had a contact with a limb in the last step
   std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world

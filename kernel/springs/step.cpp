@@ -13,6 +13,7 @@ namespace limber {
 StepReport step(SpringState& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
     state.time_step = dt;
+    remember_step_start(state);
     if (state.options.integrator == Integrator::backward_euler) {
       implicit_step(state, dt, report);
     } else {
