@@ -11,8 +11,9 @@
 // (static below the cone; at its edge the slip goes on, resisted by μλ: kinetic friction). The
 // push moves the point along n alone (by Σ s_k c_k Δλ n = Δλ/m n), so D_t is taken before it.
 // Rows of one colour share no movable particle, so lanes and threads write disjoint particles;
-// a lane writes back only the particles it moves (s ≠ 0): never the null particle, and never
-// a particle its row names with c = 0 (a limb end another row of the colour moves).
+// a lane writes back only the particles it moves (s ≠ 0, and only if its row pushed): never the
+// null particle, and never a particle its row names with c = 0 (a limb end another row of the
+// colour moves).
 #pragma once
 
 #include <cstddef>
