@@ -194,10 +194,14 @@ void BM_Sweep(benchmark::State& run, int kind, bool simd) {
   if (kind == contact_rows) {  // rows the colouring could not place: projected one lane at a time
     const auto& batches = state.plan.contact_batches;
     run.counters["overflow"] = static_cast<double>(batches.slot_count() - batches.overflow_begin());
-    // Limb–limb rows move four particles; limb–static rows two, the ball's one (the kernel
-    // gathers all four places of every row).
+    // Limb–limb rows move four particles; limb–static rows two, the ball's one. The kernel
+    // gathers two places in a colour's blocks of limb–static rows alone, four in the rest
+    // (four_place_slots, padding included: limb–limb blocks and each colour's mixed block).
     run.counters["limb_limb"] = static_cast<double>(std::count_if(state.contact_rows.rows.begin(), state.contact_rows.rows.end(),
                                                                   [](const ContactRow& row) { return row.coefficient[2] != 0; }));
+    double four_place = 0;
+    for (std::size_t colour = 0; colour < batches.colour_count(); ++colour) four_place += batches.colour_begin[colour + 1] - batches.pair_begin[colour];
+    run.counters["four_place_slots"] = four_place;
   }
   run.counters["ns/row"] = benchmark::Counter(rows * kSweeps, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }

@@ -42,7 +42,7 @@ struct ContactRowSet {
   std::vector<ContactRow> rows;
   std::vector<std::uint8_t> colour;             ///< per row; kNoContactColour: overflow
   std::vector<std::uint64_t> particle_colours;  ///< per particle: the colours that already move it
-  std::vector<std::uint32_t> order;             ///< rows sorted by colour (scratch)
+  std::vector<std::uint32_t> order;             ///< rows sorted by colour, static ones first (scratch)
   std::uint32_t colour_count = 0;
   bool empty() const { return rows.empty(); }
 };

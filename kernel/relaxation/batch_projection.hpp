@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -50,6 +51,9 @@ struct ScalarLanes {
   static void scatter(value v, Scalar* base, index offset) { base[offset] = v; }
   static void scatter_where(bool m, value v, Scalar* base, index offset) {
     if (m) base[offset] = v;
+  }
+  static void scatter_each_where(bool m, value x, value y, value z, Scalar* base_x, Scalar* base_y, Scalar* base_z, index offset) {
+    if (m) base_x[offset] = x, base_y[offset] = y, base_z[offset] = z;
   }
   static value sqrt(value v) { return std::sqrt(v); }
   static value abs(value v) { return std::abs(v); }
@@ -110,6 +114,31 @@ struct SimdLanes {
     for (std::size_t lane = 0; lane < size; ++lane) {
       if (lanes[lane]) base[indices[lane]] = values[lane];
     }
+  }
+  // The three coordinates of the lanes where `m` holds, written lane by lane with scalar stores:
+  // where few lanes move (contact rows), faster than three masked scatters, which cost the same
+  // whatever the mask (bench/README.md, "Collision").
+  static void scatter_each_where(typename value::batch_bool_type m, value x, value y, value z, Scalar* base_x, Scalar* base_y,
+                                 Scalar* base_z, index offset) {
+    alignas(64) Scalar vx[size], vy[size], vz[size];
+    alignas(64) Index at[size];
+    x.store_aligned(vx), y.store_aligned(vy), z.store_aligned(vz), offset.store_aligned(at);
+    for (std::uint64_t lanes = bits(m); lanes != 0; lanes &= lanes - 1) {
+      const auto lane = static_cast<std::size_t>(std::countr_zero(lanes));
+      base_x[at[lane]] = vx[lane], base_y[at[lane]] = vy[lane], base_z[at[lane]] = vz[lane];
+    }
+  }
+  // Bit k of the result: lane k of `m`.
+  static std::uint64_t bits(typename value::batch_bool_type m) {
+#if defined(__AVX512F__)
+    if constexpr (size == 16 && std::is_same_v<Scalar, float>) return static_cast<__mmask16>(m);
+    if constexpr (size == 8 && std::is_same_v<Scalar, double>) return static_cast<__mmask8>(m);
+#endif
+    bool lanes[size];
+    m.store_unaligned(lanes);
+    std::uint64_t result = 0;
+    for (std::size_t lane = 0; lane < size; ++lane) result |= std::uint64_t{lanes[lane]} << lane;
+    return result;
   }
   static value sqrt(value v) { return xsimd::sqrt(v); }
   static value abs(value v) { return xsimd::abs(v); }

@@ -14,18 +14,22 @@ namespace {
 
 using contact_projection::ContactFields;
 
-// One colour's (or the overflow's) slots, as the BlockRunner hands them out.
+// One colour's slots, as the BlockRunner hands them out: a task's blocks before the colour's
+// pair_begin are projected over places 0 and 1 alone, the rest over all four.
 template <typename Scalar, typename Lanes>
 struct ContactStage {
   ContactRowBatches<Scalar>* batches;
   ContactFields<Scalar> fields;
-  std::size_t begin, end;
+  std::size_t begin, pairs, end;
   std::size_t task_count() const { return (end - begin + coloured::kSlotsPerTask - 1) / coloured::kSlotsPerTask; }
   static double project(const void* context, std::size_t task) {
     const auto& stage = *static_cast<const ContactStage*>(context);
     const std::size_t first = stage.begin + task * coloured::kSlotsPerTask;
     const std::size_t last = std::min(stage.end, first + coloured::kSlotsPerTask);
-    return contact_projection::project_contact_rows<Lanes>(*stage.batches, first, last, stage.fields);
+    const std::size_t split = std::clamp(stage.pairs, first, last);
+    using contact_projection::project_contact_rows;
+    return std::max(project_contact_rows<Lanes, kContactRowSideParticles>(*stage.batches, first, split, stage.fields),
+                    project_contact_rows<Lanes, kContactRowParticles>(*stage.batches, split, last, stage.fields));
   }
 };
 
@@ -34,12 +38,11 @@ double sweep(VerletState<Scalar>& state) {
   RelaxationPlan<Scalar>& plan = state.plan;
   ContactRowBatches<Scalar>& batches = plan.contact_batches;
   auto& p = state.particles;
-  const ContactFields<Scalar> fields{p.position_x.data(), p.position_y.data(), p.position_z.data(), p.previous_x.data(),
-                                     p.previous_y.data(), p.previous_z.data(), p.inverse_mass.data()};
+  const ContactFields<Scalar> fields{p.position_x.data(), p.position_y.data(), p.position_z.data()};
   using Stage = ContactStage<Scalar, Lanes>;
   double largest = 0;
   for (std::size_t colour = 0; colour < batches.colour_count(); ++colour) {
-    const Stage stage{&batches, fields, batches.colour_begin[colour], batches.colour_begin[colour + 1]};
+    const Stage stage{&batches, fields, batches.colour_begin[colour], batches.pair_begin[colour], batches.colour_begin[colour + 1]};
     // The sequential sweep is the thesis's loop, and a plan without a runner (the direct
     // solver's, or a scene with no distance constraints to colour) has no threads: one thread.
     if (state.options.order == SweepOrder::coloured && plan.runner.operator->() != nullptr) {
@@ -50,7 +53,7 @@ double sweep(VerletState<Scalar>& state) {
   }
   const std::size_t overflow = batches.overflow_begin();
   if (overflow < batches.slot_count()) {
-    largest = std::max(largest, static_cast<double>(contact_projection::project_contact_rows<ScalarLanes<Scalar>>(
+    largest = std::max(largest, static_cast<double>(contact_projection::project_contact_rows<ScalarLanes<Scalar>, kContactRowParticles>(
                                     batches, overflow, batches.slot_count(), fields)));
   }
   return largest;
@@ -73,13 +76,31 @@ std::uint8_t colour_row(VerletState<Scalar>& state, const ContactRow& row, std::
   return static_cast<std::uint8_t>(colour);
 }
 
+// Whether the row moves a second side (places 2 and 3): not against static geometry.
+bool moves_second_side(const ContactRow& row) {
+  return row.coefficient[kContactRowSideParticles] != 0 || row.coefficient[kContactRowSideParticles + 1] != 0;
+}
+
+// Writes row r into slot `slot`, with what stays fixed through the substep's sweeps: the shares
+// w_k c_k, the effective mass and the start point, in the sweep's own operations and order (so
+// an unmoved row has no slip, to the bit).
 template <typename Scalar>
-void fill_slot(ContactRowBatches<Scalar>& batches, std::size_t slot, const ContactRow& row, std::uint32_t r) {
+void fill_slot(ContactRowBatches<Scalar>& batches, std::size_t slot, const ContactRow& row, std::uint32_t r,
+               const ParticleBuffer<Scalar>& particles) {
   using Index = typename ContactRowBatches<Scalar>::Index;
+  Scalar denominator = 0, start_x = 0, start_y = 0, start_z = 0;
   for (std::size_t k = 0; k < kContactRowParticles; ++k) {
-    batches.particle[k][slot] = static_cast<Index>(row.particle[k]);
-    batches.coefficient[k][slot] = static_cast<Scalar>(row.coefficient[k]);
+    const std::uint32_t p = row.particle[k];
+    const auto c = static_cast<Scalar>(row.coefficient[k]);
+    const Scalar share = particles.inverse_mass[p] * c;
+    batches.particle[k][slot] = static_cast<Index>(p);
+    batches.coefficient[k][slot] = c, batches.share[k][slot] = share;
+    denominator = denominator + share * c;
+    start_x = start_x + c * particles.previous_x[p], start_y = start_y + c * particles.previous_y[p];
+    start_z = start_z + c * particles.previous_z[p];
   }
+  batches.effective_mass[slot] = denominator > Scalar(0) ? Scalar(1) / denominator : Scalar(0);
+  batches.start_x[slot] = start_x, batches.start_y[slot] = start_y, batches.start_z[slot] = start_z;
   batches.normal_x[slot] = static_cast<Scalar>(row.normal.x());
   batches.normal_y[slot] = static_cast<Scalar>(row.normal.y());
   batches.normal_z[slot] = static_cast<Scalar>(row.normal.z());
@@ -108,21 +129,31 @@ void build_contact_batches(VerletState<Scalar>& state) {
   for (const ContactRow& row : set.rows) {
     for (std::uint32_t p : row.particle) set.particle_colours[p] = 0;
   }
-  // A counting sort by colour (the overflow last), rows in detection order inside each.
-  std::array<std::uint32_t, kMaxContactColours + 2> start{};
-  for (std::uint8_t colour : set.colour) ++start[(colour == kNoContactColour ? set.colour_count : colour) + 1u];
+  // A counting sort by colour and, inside a colour, rows against static geometry first (the
+  // overflow last), rows in detection order inside each bucket. The order inside a colour
+  // changes no bit: its rows share no particle they move.
+  std::array<std::uint32_t, 2 * kMaxContactColours + 2> start{};
+  const auto bucket_of = [&](std::size_t r) -> std::uint32_t {
+    if (set.colour[r] == kNoContactColour) return 2 * set.colour_count;
+    return 2 * set.colour[r] + (moves_second_side(set.rows[r]) ? 1u : 0u);
+  };
+  for (std::size_t r = 0; r < set.rows.size(); ++r) ++start[bucket_of(r) + 1];
   for (std::size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
   set.order.resize(set.rows.size());
-  for (std::size_t r = 0; r < set.rows.size(); ++r) {
-    const std::uint32_t bucket = set.colour[r] == kNoContactColour ? set.colour_count : set.colour[r];
-    set.order[start[bucket]++] = static_cast<std::uint32_t>(r);
-  }
+  for (std::size_t r = 0; r < set.rows.size(); ++r) set.order[start[bucket_of(r)]++] = static_cast<std::uint32_t>(r);
+  // start[k] is now the end of bucket k.
+  const ParticleBuffer<Scalar>& particles = state.particles;
+  const auto fill_until = [&](std::size_t& next, std::size_t end) {
+    for (; next < end; ++next) fill_slot(batches, batches.push(null_particle), set.rows[set.order[next]], set.order[next], particles);
+  };
   std::size_t next = 0;
   for (std::uint32_t colour = 0; colour < set.colour_count; ++colour) {
-    for (; next < start[colour]; ++next) fill_slot(batches, batches.push(null_particle), set.rows[set.order[next]], set.order[next]);
-    batches.close_colour(null_particle);
+    fill_until(next, start[2 * colour]);
+    const std::size_t pairs = batches.slot_count();
+    fill_until(next, start[2 * colour + 1]);
+    batches.close_colour(null_particle, pairs);
   }
-  for (; next < set.rows.size(); ++next) fill_slot(batches, batches.push(null_particle), set.rows[set.order[next]], set.order[next]);
+  fill_until(next, set.rows.size());
 }
 
 template <typename Scalar>

@@ -14,8 +14,11 @@
 
 namespace limber {
 
-/// Colours state.contact_rows and fills the plan's contact batches (λ and friction zeroed).
-/// Allocates only when the rows outgrow every earlier substep's.
+/// Colours state.contact_rows and fills the plan's contact batches (λ and friction zeroed), with
+/// what the sweeps would otherwise gather every time: the shares w_k c_k, the effective masses
+/// and the start points at the substep's start positions (so call it after the prediction, as
+/// step() does, and before the sweeps). Allocates only when the rows outgrow every earlier
+/// substep's.
 template <typename Scalar>
 void build_contact_batches(VerletState<Scalar>& state);
 

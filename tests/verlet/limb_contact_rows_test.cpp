@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "limber/kernel/relaxation/contact_relaxation.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
 
@@ -143,6 +144,53 @@ TYPED_TEST(ParticleContactRows, ContactsGiveTheSameBitsForOneOrTwoThreadsAndScal
   const auto one = pile_positions<TypeParam>(model, 1, true);
   EXPECT_EQ(one, pile_positions<TypeParam>(model, 2, true)) << "two threads";
   EXPECT_EQ(one, pile_positions<TypeParam>(model, 1, false)) << "scalar lanes";
+}
+
+// The batches hold, per slot, what the sweeps no longer gather: the shares w_k c_k, the
+// effective mass 1/Σ w_k c_k² and the start point Σ c_k x*_k at the previous positions (the
+// substep's start). Inside each colour, the blocks before pair_begin hold rows against static
+// geometry alone (places 2 and 3 unused), which the sweep projects over two places; every row
+// has one slot.
+TEST(LimbContacts, TheBatchesHoldWhatTheSweepsNoLongerGather) {
+  auto state = compile<double>(rained_capsules(60), options_with(8));
+  for (int s = 0; s < 240; ++s) ASSERT_EQ(step(state).status, StepStatus::ok);
+  // Restitution has moved the previous positions since the last substep packed its rows: pack
+  // them again from these.
+  build_contact_batches(state);
+  const ContactRowBatches<double>& batches = state.plan.contact_batches;
+  const auto& p = state.particles;
+  ASSERT_GT(state.contact_rows.rows.size(), 50u);
+  std::vector<int> slots_of_row(state.contact_rows.rows.size(), 0);
+  std::size_t statics = 0, pairs = 0;
+  for (std::size_t colour = 0; colour < batches.colour_count(); ++colour) {
+    const std::size_t begin = batches.colour_begin[colour], split = batches.pair_begin[colour], end = batches.colour_begin[colour + 1];
+    ASSERT_TRUE(begin <= split && split <= end && split % ContactRowBatches<double>::kBlockLanes == 0) << "colour " << colour;
+    for (std::size_t slot = begin; slot < end; ++slot) {
+      if (batches.row[slot] == ~std::uint32_t{0}) continue;
+      const ContactRow& row = state.contact_rows.rows[batches.row[slot]];
+      ++slots_of_row[batches.row[slot]];
+      const bool static_row = row.coefficient[2] == 0 && row.coefficient[3] == 0;
+      if (slot < split) EXPECT_TRUE(static_row) << "slot " << slot << " is projected over two places";
+      (static_row ? statics : pairs) += 1;
+      double denominator = 0;
+      Eigen::Vector3d start = Eigen::Vector3d::Zero();
+      for (std::size_t k = 0; k < kContactRowParticles; ++k) {
+        const std::uint32_t q = row.particle[k];
+        EXPECT_EQ(batches.share[k][slot], p.inverse_mass[q] * row.coefficient[k]);
+        denominator += p.inverse_mass[q] * row.coefficient[k] * row.coefficient[k];
+        start += row.coefficient[k] * p.previous(q);
+      }
+      ASSERT_GT(denominator, 0);
+      EXPECT_NEAR(batches.effective_mass[slot], 1 / denominator, 1e-12 / denominator);
+      EXPECT_NEAR(batches.start_x[slot], start.x(), 1e-12);
+      EXPECT_NEAR(batches.start_y[slot], start.y(), 1e-12);
+      EXPECT_NEAR(batches.start_z[slot], start.z(), 1e-12);
+    }
+  }
+  EXPECT_GT(statics, 0u);
+  EXPECT_GT(pairs, 0u);
+  EXPECT_EQ(batches.overflow_begin(), batches.slot_count()) << "no overflow expected here";
+  for (std::size_t r = 0; r < slots_of_row.size(); ++r) EXPECT_EQ(slots_of_row[r], 1) << "row " << r;
 }
 
 TEST(LimbContacts, APileOfCapsulesDoesNotInterpenetrate) {
