@@ -8,7 +8,7 @@
 //   ball at their lowest sphere point — up to two contacts per limb and plane;
 // - the ball against a limb: bounding spheres first, and the exact sphere–capsule or
 //   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4);
-// - continuous collision for the ball, first: a ball tested only where it overlaps after the
+// - continuous collision for each ball, first: a ball tested only where it overlaps after the
 //   move passes through a limb thinner than its step's travel (4.4 m/s against a 4 cm limb at
 //   Δt = 1/60 s, bench/README.md). So its path over the step, from its centre at the step's start
 //   (RigidScene::step_start_position, remember_step_start) to its centre now, is swept against

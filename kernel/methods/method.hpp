@@ -44,7 +44,7 @@ WorldOptions world_options(Method method, const MethodSettings& scene);
 /// Any method's compiled state.
 using MethodState = std::variant<VerletState<double>, VerletState<float>, SpringState, LagrangeState, FeatherstoneState>;
 
-/// Settings::release_drives_on_impact: once the ball has touched a limb in the last step, every
+/// Settings::release_drives_on_impact: once a ball has touched a limb in the last step, every
 /// joint drive of `state` goes limp (stiffness and damping 0). Call after each step (the World
 /// and the command line do). Returns true on the step that released them.
 bool release_drives_after_impact(MethodState& state);

@@ -277,8 +277,8 @@ struct TriangleMesh {
 
 enum class ColliderType { box, capsule, mesh };
 
-/// Static level geometry (it never moves): limbs and the ball collide with it, with its Coulomb
-/// friction and restitution (the ball's restitution where that is larger, as on the ground).
+/// Static level geometry (it never moves): limbs and balls collide with it, with its Coulomb
+/// friction and restitution (a ball's restitution where that is larger, as on the ground).
 struct StaticCollider {
   std::string name;
   ColliderType type = ColliderType::box;
@@ -327,7 +327,7 @@ struct Settings {
   /// this fast, m/s, so resolving it cannot fling bodies (Box2D's contact push-out limit).
   /// Penetration made by the step's own motion is always resolved in full.
   double contact_recovery_speed = 0.5;
-  /// An active ragdoll's switch (thesis 5.2): once the ball has touched a limb, every joint
+  /// An active ragdoll's switch (thesis 5.2): once a ball has touched a limb, every joint
   /// drive goes limp (stiffness and damping 0), so a body that tracked a pose falls like a
   /// ragdoll. Applied after each step by release_drives_after_impact (methods/method.hpp).
   bool release_drives_on_impact = false;
@@ -349,7 +349,7 @@ struct Model {
 
   /// Index of the body called `name`, or −1.
   int find_body(std::string_view name) const;
-  /// Total mass of the bodies (not the ball), kg.
+  /// Total mass of the bodies (not the balls), kg.
   double body_mass() const;
 };
 
