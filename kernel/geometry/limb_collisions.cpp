@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "limber/kernel/geometry/golden_section.hpp"
+
 namespace limber {
 namespace {
 
@@ -129,20 +131,8 @@ double deepest_axial(const StaticPrimitive& primitive, const LimbSegment& limb) 
   const auto depth_at = [&](double s) {
     return box_surface_point(primitive.box, limb.head + s * (limb.tail - limb.head)).distance;
   };
-  const double ratio = 0.5 * (std::sqrt(5.0) - 1);
-  double low = 0, high = 1;
-  double left = high - ratio * (high - low), right = low + ratio * (high - low);
-  double f_left = depth_at(left), f_right = depth_at(right);
-  for (int step = 0; step < kGoldenSteps; ++step) {
-    if (f_left <= f_right) {
-      high = right, right = left, f_right = f_left;
-      left = high - ratio * (high - low), f_left = depth_at(left);
-    } else {
-      low = left, left = right, f_left = f_right;
-      right = low + ratio * (high - low), f_right = depth_at(right);
-    }
-  }
-  return 0.5 * (low + high);
+  const GoldenBracket deepest = golden_section(depth_at, 0.0, 1.0, kGoldenSteps, [](double, double) { return false; });
+  return 0.5 * (deepest.low + deepest.high);
 }
 
 // One point of the limb against the shape: at axial a, its sphere's separation.

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/geometry/golden_section.hpp"
 
 namespace limber {
 namespace {
@@ -97,20 +98,9 @@ double first_touch(Separation&& separation, double t0, double speed) {
   }
   if (gap <= kTouchTolerance) return t;
   // Glancing: the closest approach on [t, 1] (convex, so unimodal), then the touch before it.
-  const double ratio = 0.5 * (std::sqrt(5.0) - 1);
-  double low = t, high = 1;
-  double left = high - ratio * (high - low), right = low + ratio * (high - low);
-  double f_left = separation(left), f_right = separation(right);
-  for (int k = 0; k < kGoldenSteps && f_left > 0 && f_right > 0; ++k) {
-    if (f_left <= f_right) {
-      high = right, right = left, f_right = f_left;
-      left = high - ratio * (high - low), f_left = separation(left);
-    } else {
-      low = left, left = right, f_left = f_right;
-      right = low + ratio * (high - low), f_right = separation(right);
-    }
-  }
-  double inside = f_left <= 0 ? left : f_right <= 0 ? right : 1.0;
+  const GoldenBracket closest =
+      golden_section(separation, t, 1.0, kGoldenSteps, [](double f_left, double f_right) { return !(f_left > 0 && f_right > 0); });
+  double inside = closest.f_left <= 0 ? closest.left : closest.f_right <= 0 ? closest.right : 1.0;
   if (inside == 1.0 && separation(1.0) > 0) return kNever;
   double outside = t;
   for (int k = 0; k < kBisectionSteps && separation(outside) > kTouchTolerance; ++k) {

@@ -175,17 +175,17 @@ SelfFall fall_on_side(Method method, double drop, double seconds) {
 // travel so that it lands at four phases of a step: the overlap a landing leaves depends on
 // where in its step the contact begins, and one drop height would test one phase only.
 constexpr double kSideDrop = 0.4;  // m
-std::vector<double> side_drops() {
-  const double step_travel = std::sqrt(2 * kGravity * kSideDrop) * kStep;
+std::vector<double> landing_drops(double drop) {
+  const double step_travel = std::sqrt(2 * kGravity * drop) * kStep;
   std::vector<double> out;
-  for (const double phase : {0.1, 0.35, 0.6, 0.85}) out.push_back(kSideDrop + phase * step_travel);
+  for (const double phase : {0.1, 0.35, 0.6, 0.85}) out.push_back(drop + phase * step_travel);
   return out;
 }
 
 class RagdollSelfContact : public ::testing::TestWithParam<Method> {};
 
 TEST_P(RagdollSelfContact, RagdollLandingOnItsSideDoesNotSinkIntoItself) {
-  for (const double drop : side_drops()) {
+  for (const double drop : landing_drops(kSideDrop)) {
     SCOPED_TRACE("dropped from " + std::to_string(drop) + " m");
     const SelfFall fall = fall_on_side(GetParam(), drop, 2.0);
     // Not vacuous: its limbs lay on each other for at least 0.5 s (120 steps) of the 1.7 s
@@ -270,17 +270,11 @@ Stack drop_onto_another(Method method, bool across, double drop, double seconds)
 
 // A 0.3 m drop (landing at 2.4 m/s, 10.1 mm a step), at four phases of a step as test 1's.
 constexpr double kStackDrop = 0.3;  // m
-std::vector<double> stack_drops() {
-  const double step_travel = std::sqrt(2 * kGravity * kStackDrop) * kStep;
-  std::vector<double> out;
-  for (const double phase : {0.1, 0.35, 0.6, 0.85}) out.push_back(kStackDrop + phase * step_travel);
-  return out;
-}
 
 class RagdollStack : public ::testing::TestWithParam<Method> {};
 
 TEST_P(RagdollStack, RagdollDroppedOnAnotherComesToRestOnTopOfIt) {
-  for (const double drop : stack_drops()) {
+  for (const double drop : landing_drops(kStackDrop)) {
     SCOPED_TRACE("dropped from " + std::to_string(drop) + " m");
     const Stack stack = drop_onto_another(GetParam(), true, drop, 3.0);
     // The two bodies lay on each other for at least 1 s (240 steps) of the 2.7 s after the
