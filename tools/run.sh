@@ -7,10 +7,14 @@
 #   tools/run.sh --body thin --ball-speed 12 --method lagrange
 #   tools/run.sh run                                   # the thesis's humanoid, as in the thesis
 #   tools/run.sh run tools/scenes/chain.json --links 100
+#   tools/run.sh view                                  # the viewer (installs GLFW, ImGui first)
+#   tools/run.sh view tools/scenes/volley.json --method featherstone
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir=${LIMBER_BUILD_DIR:-build}
-if ! setup_log=$(tools/setup.sh 2>&1); then
+setup_flags=()
+if [ "${1:-}" = view ]; then setup_flags=(--viewer); fi
+if ! setup_log=$(tools/setup.sh "${setup_flags[@]}" 2>&1); then
   printf '%s\n' "$setup_log" >&2
   exit 1
 fi

@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
 # Installs the Debian packages limber needs (only the missing ones), then configures and builds
-# what was asked for: the library and the `limber` program by default, the test suite with
-# --tests, the benchmarks and studies (and the other engines they compare with) with --bench.
+# what was asked for: the library and the `limber` program by default, the viewer with --viewer,
+# the test suite with --tests, the benchmarks and studies (and the other engines they compare
+# with) with --bench.
 #
-#   tools/setup.sh [--tests] [--bench] [--portable] [--debug]
+#   tools/setup.sh [--viewer] [--tests] [--bench] [--portable] [--debug]
 #
-#   --tests      also GoogleTest, GoogleMock and MuJoCo (the Featherstone cross-check); builds the tests
+#   --viewer     also GLFW, OpenGL (Mesa), Dear ImGui and stb: `limber view`; and Xvfb, which runs it
+#                headless (xvfb-run -a limber view SCENE --frames N --screenshot out.png)
+#   --tests      also GoogleTest, GoogleMock and MuJoCo (the Featherstone cross-check), and the
+#                viewer's packages (its tests render under Xvfb); builds the tests
 #   --bench      also Google Benchmark, Bullet, ODE and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
 #   --portable   build for baseline x86-64 instead of -march=native
 #   --debug      Debug build instead of Release
@@ -21,13 +25,15 @@ native=ON
 build_type=Release
 tests=OFF
 bench=OFF
+viewer=OFF
 for arg in "$@"; do
   case "$arg" in
-    --tests) tests=ON ;;
+    --viewer) viewer=ON ;;
+    --tests) tests=ON; viewer=ON ;;
     --bench) bench=ON ;;
     --portable) native=OFF ;;
     --debug) build_type=Debug ;;
-    *) echo "setup.sh: unknown option '$arg' (expected --tests, --bench, --portable or --debug)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option '$arg' (expected --viewer, --tests, --bench, --portable or --debug)" >&2; exit 2 ;;
   esac
 done
 build_dir=${LIMBER_BUILD_DIR:-build}
@@ -41,6 +47,7 @@ fi
 # Debian 12 packages: the library and the CLI; the tests' and the benchmarks' on request.
 packages=(g++ cmake ninja-build pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev)
 if [ "$tests" = ON ]; then packages+=(libgtest-dev libgmock-dev libmujoco-dev); fi
+if [ "$viewer" = ON ]; then packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri); fi
 if [ "$bench" = ON ]; then
   packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev
              python3-matplotlib)  # tools/plot_*.py, which draw bench/figures/

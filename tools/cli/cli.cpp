@@ -1,13 +1,16 @@
 #include "tools/cli/cli.hpp"
 
 #include <array>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <ostream>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -21,9 +24,9 @@
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/compile.hpp"  // particle_name
 #include "limber/kernel/verlet/step.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
+#include "tools/cli/trajectory.hpp"
 
 namespace limber::cli {
 namespace {
@@ -390,57 +393,6 @@ std::string vector_text(const Eigen::Vector3d& v) { return format("(%.3f, %.3f, 
 // --- What each method family shows the run loop and the summary ---
 
 template <typename Scalar>
-void write_csv_header(std::ostream& csv, const Model& model, const VerletState<Scalar>& state) {
-  csv << "time";
-  for (const ParticleOrigin& origin : state.particle_origins) {
-    const std::string name = particle_name(model, origin);
-    csv << ',' << name << "_x," << name << "_y," << name << "_z";
-  }
-  csv << '\n';
-}
-template <typename Scalar>
-void write_csv_row(std::ostream& csv, const VerletState<Scalar>& state) {
-  char cell[96];
-  std::snprintf(cell, sizeof cell, "%.9g", state.time);
-  csv << cell;
-  const auto& p = state.particles;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    std::snprintf(cell, sizeof cell, ",%.9g,%.9g,%.9g", double(p.position_x[i]), double(p.position_y[i]), double(p.position_z[i]));
-    csv << cell;
-  }
-  csv << '\n';
-}
-
-// The rigid methods write each limb's head and tail (the particle methods' names) and the balls.
-void write_csv_header(std::ostream& csv, const Model& model, const RigidScene&) {
-  csv << "time";
-  for (const Body& body : model.bodies) {
-    for (const char* end : {".head", ".tail"}) csv << ',' << body.name << end << "_x," << body.name << end << "_y," << body.name << end << "_z";
-  }
-  for (std::size_t k = 0; k < model.balls.size(); ++k) {
-    const std::string name = ball_name(model, k);
-    csv << ',' << name << "_x," << name << "_y," << name << "_z";
-  }
-  csv << '\n';
-}
-void write_csv_row(std::ostream& csv, const RigidScene& state) {
-  char cell[96];
-  std::snprintf(cell, sizeof cell, "%.9g", state.time);
-  csv << cell;
-  auto write = [&](const Eigen::Vector3d& x) {
-    std::snprintf(cell, sizeof cell, ",%.9g,%.9g,%.9g", x.x(), x.y(), x.z());
-    csv << cell;
-  };
-  for (std::size_t b = 0; b < state.ball_begin; ++b) {
-    const double half = 0.5 * state.shapes.length[b];
-    write(world_point(state, b, Eigen::Vector3d(0, 0, half)));
-    write(world_point(state, b, Eigen::Vector3d(0, 0, -half)));
-  }
-  for (std::size_t b = state.ball_begin; b < state.bodies.size(); ++b) write(state.bodies.state.position[b]);
-  csv << '\n';
-}
-
-template <typename Scalar>
 bool has_joint_gaps(const VerletState<Scalar>& state) { return !state.joint_constraints.empty(); }
 bool has_joint_gaps(const SpringState& state) { return state.springs.size() > 0; }
 bool has_joint_gaps(const LagrangeState& state) { return state.joints.size() > 0; }
@@ -555,7 +507,7 @@ RunRecord run_steps(State& state, MethodState& variant, const Model& model, long
       record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
     }
     body_sleeping = record.end.body_sleeping;
-    if (csv.is_open()) write_csv_row(csv, state);
+    if (csv.is_open()) write_trajectory_row(csv, variant);
     record.status = report.status;
     if (report.status != StepStatus::ok) break;
   }
@@ -696,8 +648,8 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   if (given(flags.out_option)) {
     csv.open(flags.out_path);
     if (!csv) throw InputError(format("--out: cannot write '%s'", flags.out_path.c_str()));
-    write_csv_header(csv, model, state);
-    write_csv_row(csv, state);
+    write_trajectory_header(csv, model, variant);
+    write_trajectory_row(csv, variant);
   }
   const Observation start = observe(state);
   KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);
@@ -755,40 +707,141 @@ WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene) 
   return options;
 }
 
-int simulate(const Scene& scene, const RunFlags& flags, const std::string& source, std::ostream& out) {
-  MethodState state = compile_method(scene.model, method_options(flags, scene.methods));
-  return std::visit([&](auto& compiled) { return simulate(compiled, state, scene.model, flags, source, out); }, state);
+int simulate(const LoadedRun& loaded, const RunFlags& flags, std::ostream& out) {
+  MethodState state = compile_method(loaded.scene.model, loaded.options);
+  return std::visit([&](auto& compiled) { return simulate(compiled, state, loaded.scene.model, flags, loaded.source, out); }, state);
+}
+
+// The scene and method that parsed run flags ask for. Throws ModelError, InputError or
+// std::invalid_argument (options that do not go together), each one line.
+LoadedRun load(const RunFlags& flags) {
+  SceneOptions scene_options;
+  if (given(flags.body_option)) scene_options.variant = flags.body;
+  if (given(flags.links_option)) scene_options.links = flags.links;
+  if (given(flags.copies_option)) scene_options.copies = flags.copies;
+  const bool embedded = flags.scene.empty();
+  LoadedRun loaded;
+  loaded.source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
+  loaded.scene = embedded ? load_scene_text(embedded_humanoid_scene(), loaded.source, scene_options)
+                          : load_scene_file(flags.scene, scene_options);
+  apply_overrides(loaded.scene.model, flags);
+  loaded.options = method_options(flags, loaded.scene.methods);
+  if (given(flags.out_option)) loaded.out_path = flags.out_path;
+  return loaded;
+}
+
+// `limber view`'s own flags, which `limber run` does not take.
+struct ViewFlags {
+  long frames = -1;
+  std::string screenshot;
+  bool hide_ui = false;
+  int width = 1280, height = 720;
+};
+constexpr std::array<const char*, 4> kViewValueFlags{"--frames", "--screenshot", "--width", "--height"};
+
+void add_view_flags(CLI::App& view, ViewFlags& flags) {
+  view.add_option("--frames", flags.frames, "Headless: simulate and draw this many frames (1/60 s each) offscreen, then exit")
+      ->check(CLI::Range(0L, 100'000'000L));
+  view.add_option("--screenshot", flags.screenshot, "Headless: write the last frame as PNG to this file");
+  view.add_flag("--hide-ui", flags.hide_ui, "Draw the scene without the control panels");
+  view.add_option("--width", flags.width, "Frame width, pixels")->check(CLI::Range(64, 8192))->capture_default_str();
+  view.add_option("--height", flags.height, "Frame height, pixels")->check(CLI::Range(64, 8192))->capture_default_str();
+}
+
+// The arguments after "view" less the view's own flags: the run flags the viewer reloads with.
+std::vector<std::string> run_arguments_of_view(int argc, const char* const* argv) {
+  std::vector<std::string> kept;
+  int first = 1;
+  while (first < argc && std::string_view(argv[first]) != "view") ++first;
+  for (int i = first + 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    const auto named = [&](const char* flag) { return arg == flag || arg.starts_with(std::string(flag) + "="); };
+    if (named("--hide-ui")) continue;
+    const auto value_flag = std::find_if(kViewValueFlags.begin(), kViewValueFlags.end(), named);
+    if (value_flag != kViewValueFlags.end()) {
+      if (arg == *value_flag) ++i;  // its value is the next argument
+      continue;
+    }
+    kept.emplace_back(arg);
+  }
+  return kept;
+}
+
+// `limber view`: checks the request, then hands it to the viewer this program was built with.
+int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const RunFlags& run_flags, Viewer viewer,
+         std::ostream& out, std::ostream& err) {
+  if (!flags.screenshot.empty() && flags.frames < 0) throw InputError("--screenshot: needs --frames (the headless mode)");
+  if (!flags.screenshot.empty() && !run_flags.scene.empty()) {
+    std::error_code ignored;
+    if (std::filesystem::equivalent(flags.screenshot, run_flags.scene, ignored)) {
+      throw InputError(format("--screenshot: '%s' is the scene file; refusing to write over it", flags.screenshot.c_str()));
+    }
+  }
+  (void)load(run_flags);  // a bad scene or flag is the same one line as `limber run`'s, before any window
+  if (viewer == nullptr) {
+    throw InputError("view: this limber was built without the viewer (it needs GLFW, OpenGL and Dear ImGui: tools/setup.sh --viewer)");
+  }
+  ViewRequest request{std::move(run_arguments), flags.frames, flags.screenshot, flags.hide_ui, flags.width, flags.height};
+  return viewer(request, out, err);
 }
 
 }  // namespace
 
-int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err) {
+LoadedRun load_run(const std::vector<std::string>& run_arguments) {
+  CLI::App app{"limber run's flags", "limber run"};
+  RunFlags flags;
+  add_run_flags(app, flags);
+  std::vector<const char*> argv{"limber run"};
+  for (const std::string& argument : run_arguments) argv.push_back(argument.c_str());
+  try {
+    app.parse(int(argv.size()), argv.data());
+  } catch (const CLI::ParseError& error) {
+    throw std::runtime_error(error.what());
+  }
+  return load(flags);
+}
+
+WorldOptions options_for_method(const std::string& method, const MethodSettings& scene) {
+  CLI::App app{"limber run's flags", "limber run"};
+  RunFlags flags;
+  add_run_flags(app, flags);
+  const std::array<const char*, 3> argv{"limber run", "--method", method.c_str()};
+  try {
+    app.parse(int(argv.size()), argv.data());
+  } catch (const CLI::ParseError& error) {
+    throw std::runtime_error(error.what());
+  }
+  return method_options(flags, scene);
+}
+
+int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err, Viewer viewer) {
   CLI::App app{"limber: articulated bodies with distributed mass (Verlet with weighted relaxation, and more)", "limber"};
   app.set_version_flag("--version", "limber 0.1.0");
   app.require_subcommand(1);
   CLI::App* run = app.add_subcommand("run", "Simulate a scene and print a summary");
   RunFlags flags;
   add_run_flags(*run, flags);
+  CLI::App* view_command =
+      app.add_subcommand("view", "Show a scene in a window (OpenGL), or render it headless with --frames and --screenshot");
+  RunFlags view_run_flags;
+  ViewFlags view_flags;
+  add_run_flags(*view_command, view_run_flags);
+  add_view_flags(*view_command, view_flags);
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
     if (error.get_exit_code() == 0) return app.exit(error, out, err);  // --help, --version
-    err << "limber: " << error.what() << " (see 'limber run --help')\n";
+    const char* command = view_command->parsed() ? "view" : "run";
+    err << "limber: " << error.what() << " (see 'limber " << command << " --help')\n";
     return kBadInput;
   }
 
   try {
-    SceneOptions scene_options;
-    if (given(flags.body_option)) scene_options.variant = flags.body;
-    if (given(flags.links_option)) scene_options.links = flags.links;
-    if (given(flags.copies_option)) scene_options.copies = flags.copies;
-    const bool embedded = flags.scene.empty();
-    Scene scene = embedded ? load_scene_text(embedded_humanoid_scene(), "embedded tools/scenes/humanoid.json", scene_options)
-                           : load_scene_file(flags.scene, scene_options);
-    apply_overrides(scene.model, flags);
-    const std::string source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
-    return simulate(scene, flags, source, out);
+    if (view_command->parsed()) {
+      return view(view_flags, run_arguments_of_view(argc, argv), view_run_flags, viewer, out, err);
+    }
+    return simulate(load(flags), flags, out);
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
   } catch (const InputError& error) {

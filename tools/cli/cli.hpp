@@ -2,6 +2,11 @@
 #pragma once
 
 #include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "limber/kernel/methods/method.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber::cli {
 
@@ -12,8 +17,41 @@ enum ExitCode : int {
   kBadInput = 2,   ///< bad flags, values or scene file; one line on `err` says which
 };
 
+/// What `limber run`'s flags ask for: the scene with the flags' changes (ball, friction, Δt,
+/// body variant, links, copies) and the method with its options.
+struct LoadedRun {
+  Scene scene;
+  WorldOptions options;
+  std::string source;    ///< the scene file, or "embedded tools/scenes/humanoid.json"
+  std::string out_path;  ///< --out: where to write the trajectory (trajectory.hpp); empty: nowhere
+};
+
+/// Parses `limber run`'s flags (the arguments after "run", scene file first if any) and loads
+/// what they ask for. Throws std::exception whose what() is the one line `limber run` prints
+/// (a bad flag, value or scene file).
+LoadedRun load_run(const std::vector<std::string>& run_arguments);
+
+/// The options `limber run --method <method>` gives the scene's method settings, with no other
+/// flag ("weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange",
+/// "featherstone"). Throws std::exception naming the method when it is none of these.
+WorldOptions options_for_method(const std::string& method, const MethodSettings& scene);
+
+/// What `limber view` was asked for.
+struct ViewRequest {
+  std::vector<std::string> run_arguments;  ///< the run flags given to `view` (load_run's input)
+  long frames = -1;         ///< ≥ 0: headless: simulate and draw this many frames offscreen, then exit; −1: a window
+  std::string screenshot;   ///< headless: write the last frame here (PNG); empty: none
+  bool hide_ui = false;     ///< draw the scene without the control panels
+  int width = 1280, height = 720;  ///< pixels
+};
+
+/// The viewer (tools/viewer), which the program passes in when it was built with one: shows or
+/// renders `request` and returns the exit code, its errors one line each on `err`.
+using Viewer = int (*)(const ViewRequest& request, std::ostream& out, std::ostream& err);
+
 /// Runs `limber` with the given arguments (argv[0] is the program name), writing the summary to
-/// `out` and errors to `err`. Never throws.
-int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+/// `out` and errors to `err`. `limber view` goes to `viewer`, or is refused with one line when
+/// it is null. Never throws.
+int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err, Viewer viewer = nullptr);
 
 }  // namespace limber::cli

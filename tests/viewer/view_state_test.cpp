@@ -1,0 +1,201 @@
+// The viewer without a window: its frames step the World as `limber run` does, and its input
+// events (keys, clicks, drags) act on the picked limb through the World API.
+#include "tools/viewer/view_state.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "tools/cli/cli.hpp"
+#include "tools/viewer/scene_drawing.hpp"
+
+namespace limber::viewer {
+namespace {
+
+const std::string kHumanoid = std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/humanoid.json";
+constexpr int kWidth = 1280, kHeight = 720;
+constexpr std::size_t kUpperTorso = 2;  // humanoid.json's third body: F3
+
+std::string file_text(const std::string& path) {
+  std::ostringstream text;
+  text << std::ifstream(path).rdbuf();
+  return text.str();
+}
+
+// Where a world point lands on the screen (pixels, top left origin), through the camera's matrices.
+Eigen::Vector2d project(const OrbitCamera& camera, const Eigen::Vector3d& point) {
+  const CameraMatrices m = camera.matrices(kWidth, kHeight);
+  const Eigen::Vector4f clip = m.projection * m.view * Eigen::Vector4f(float(point.x()), float(point.y()), float(point.z()), 1);
+  return {(clip.x() / clip.w() + 1) * 0.5 * kWidth, (1 - clip.y() / clip.w()) * 0.5 * kHeight};
+}
+
+Eigen::Vector3d torso_position(const ViewState& view) { return view.world().pose(view.world().bodies()[kUpperTorso]).position; }
+Eigen::Vector3d torso_velocity(const ViewState& view) { return view.world().motion(view.world().bodies()[kUpperTorso]).linear; }
+
+class ViewerFrames : public ::testing::TestWithParam<const char*> {};
+
+// 30 frames of 1/60 s at Δt = 1/240 s are 120 steps, and give `limber run --steps 120`'s
+// trajectory to the last bit of every point of every step (the CSV is lossless).
+TEST_P(ViewerFrames, TakeTheStepsOfLimberRunBitForBit) {
+  const std::string method = GetParam();
+  const std::string viewed = ::testing::TempDir() + "/limber_view_" + method + ".csv";
+  const std::string ran = ::testing::TempDir() + "/limber_run_" + method + ".csv";
+  ViewState view({kHumanoid, "--method", method, "--out", viewed});
+  for (int frame = 0; frame < 30; ++frame) view.advance(1.0 / 60);
+  ASSERT_EQ(view.steps_taken(), 120);
+  view = ViewState({kHumanoid, "--method", method});  // closes the trajectory file
+
+  const std::vector<std::string> arguments{"limber", "run", kHumanoid, "--method", method, "--steps", "120", "--out", ran};
+  std::vector<const char*> argv;
+  for (const std::string& argument : arguments) argv.push_back(argument.c_str());
+  std::ostringstream out, err;
+  ASSERT_EQ(cli::run_main(int(argv.size()), argv.data(), out, err), cli::kSuccess) << err.str();
+  const std::string expected = file_text(ran);
+  EXPECT_EQ(std::count(expected.begin(), expected.end(), '\n'), 122);  // header, start, 120 steps
+  EXPECT_EQ(file_text(viewed), expected);
+}
+INSTANTIATE_TEST_SUITE_P(EveryMethod, ViewerFrames,
+                         ::testing::Values("weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"));
+
+TEST(ViewState, SlowMotionTakesAQuarterOfTheSteps) {
+  ViewState view({kHumanoid});
+  view.handle(KeyEvent{Key::slow_motion, true}, kWidth, kHeight);
+  for (int frame = 0; frame < 8; ++frame) view.advance(1.0 / 60);
+  EXPECT_EQ(view.steps_taken(), 8);  // 4 steps a frame at full speed
+}
+
+TEST(ViewState, SpacePausesAndStepAdvancesOneStep) {
+  ViewState view({kHumanoid});
+  view.handle(KeyEvent{Key::space, true}, kWidth, kHeight);
+  EXPECT_FALSE(view.playing());
+  EXPECT_EQ(view.advance(1.0 / 60), 0);
+  view.handle(KeyEvent{Key::step, true}, kWidth, kHeight);
+  EXPECT_EQ(view.advance(1.0 / 60), 1);
+  EXPECT_EQ(view.advance(1.0 / 60), 0);
+}
+
+// The standing humanoid sleeps; F3 and a held arrow key push its upper torso to the camera's
+// right, through World::apply_force, and releasing the key stops the push.
+TEST(ViewState, ArrowKeyPushesThePickedLimbToTheCameraRight) {
+  ViewState view({kHumanoid, "--ball-speed", "0"});
+  view.handle(KeyEvent{Key::f3, true}, kWidth, kHeight);
+  ASSERT_EQ(view.picked(), kUpperTorso);
+  view.handle(KeyEvent{Key::right, true}, kWidth, kHeight);
+  for (int frame = 0; frame < 3; ++frame) view.advance(1.0 / 60);
+  ASSERT_EQ(view.last_loads().size(), 1u);
+  const Eigen::Vector3d forward = view.camera.target - view.camera.eye();
+  const Eigen::Vector3d right = Eigen::Vector3d(forward.x(), forward.y(), 0).normalized().cross(Eigen::Vector3d::UnitZ());
+  const Eigen::Vector3d force = view.last_loads().front().second;
+  EXPECT_NEAR(force.normalized().dot(right), 1.0, 1e-12);
+  EXPECT_GT(torso_velocity(view).dot(right), 0.05);  // 3 frames of 30 m/s² on a body held by its joints
+
+  view.handle(KeyEvent{Key::right, false}, kWidth, kHeight);
+  view.advance(1.0 / 60);
+  EXPECT_TRUE(view.last_loads().empty());
+}
+
+TEST(ViewState, ClickPicksTheLimbUnderTheCursorAndNothingClears) {
+  ViewState view({kHumanoid});
+  const Eigen::Vector2d at = project(view.camera, torso_position(view));
+  view.handle(ButtonEvent{Button::left, true, at}, kWidth, kHeight);
+  EXPECT_EQ(view.picked(), kUpperTorso);
+  view.handle(ButtonEvent{Button::left, false, at}, kWidth, kHeight);
+  view.handle(ButtonEvent{Button::left, true, Eigen::Vector2d(5, 5)}, kWidth, kHeight);  // the sky
+  EXPECT_FALSE(view.picked().has_value());
+}
+
+// Dragging the torso sideways pulls it after the cursor: it moves toward the drag target.
+TEST(ViewState, DragPullsTheLimbTowardTheCursor) {
+  ViewState view({kHumanoid, "--ball-speed", "0"});
+  const Eigen::Vector3d start = torso_position(view);
+  const Eigen::Vector2d at = project(view.camera, start);
+  view.handle(ButtonEvent{Button::left, true, at}, kWidth, kHeight);
+  view.handle(CursorEvent{at + Eigen::Vector2d(120, 0)}, kWidth, kHeight);
+  ASSERT_TRUE(view.drag().has_value());
+  const Eigen::Vector3d target = view.drag()->target;
+  const double before = (target - start).norm();
+  for (int frame = 0; frame < 15; ++frame) view.advance(1.0 / 60);
+  EXPECT_LT((target - torso_position(view)).norm(), 0.6 * before);
+  view.handle(ButtonEvent{Button::left, false, at}, kWidth, kHeight);
+  EXPECT_FALSE(view.drag().has_value());
+}
+
+TEST(ViewState, LaunchThrowsTheLauncherBallAtThePickedLimb) {
+  ViewState view({kHumanoid});
+  const std::size_t balls = view.world().balls().size();
+  view.handle(KeyEvent{Key::f3, true}, kWidth, kHeight);
+  view.launcher.speed = 7, view.launcher.direction = {0, 2, 0};
+  view.handle(KeyEvent{Key::launch, true}, kWidth, kHeight);
+  ASSERT_EQ(view.world().balls().size(), balls + 1);
+  const BallMotion ball = view.world().ball(view.world().balls().back());
+  EXPECT_TRUE(ball.velocity.isApprox(Eigen::Vector3d(0, 7, 0)));
+  const Eigen::Vector3d to_target = torso_position(view) - ball.position;
+  EXPECT_NEAR(to_target.normalized().dot(Eigen::Vector3d::UnitY()), 1.0, 1e-12);
+}
+
+TEST(ViewState, MethodSwitchResetsUnderTheNewMethodAndABadOneChangesNothing) {
+  ViewState view({kHumanoid});
+  view.advance(1.0 / 60);
+  ASSERT_TRUE(view.set_method("lagrange", 100, 1, ProjectionRule::pbd));
+  EXPECT_EQ(view.world().method(), Method::lagrange);
+  EXPECT_EQ(view.method_name(), "lagrange");
+  EXPECT_EQ(view.world().time(), 0.0);
+  EXPECT_FALSE(view.set_method("verlet-please", 100, 1, ProjectionRule::pbd));
+  EXPECT_THAT(view.error(), ::testing::HasSubstr("verlet-please"));
+  EXPECT_EQ(view.world().method(), Method::lagrange);
+}
+
+TEST(ViewState, BodyVariantReloadsTheSceneAndAnUnknownOneIsRefused) {
+  ViewState view({kHumanoid});
+  const double medium = view.world().model().body_mass();
+  ASSERT_TRUE(view.set_body("wide"));
+  EXPECT_GT(view.world().model().body_mass(), medium);
+  EXPECT_FALSE(view.set_body("giant"));
+  EXPECT_THAT(view.error(), ::testing::HasSubstr("giant"));
+}
+
+// The camera's ray through a point's pixel passes through the point (matrices and rays agree).
+TEST(OrbitCamera, RayThroughAProjectedPointPassesThroughIt) {
+  OrbitCamera camera;
+  camera.orbit(130, -40), camera.pan(25, 10, kHeight), camera.zoom(2);
+  const Eigen::Vector3d point(0.3, -0.2, 1.1);
+  const Eigen::Vector2d pixel = project(camera, point);
+  const Ray ray = camera.ray(pixel.x() - 0.5, pixel.y() - 0.5, kWidth, kHeight);  // ray() takes the pixel's corner
+  const Eigen::Vector3d off = (point - ray.origin) - (point - ray.origin).dot(ray.direction) * ray.direction;
+  EXPECT_LT(off.norm(), 1e-4);
+}
+
+// What the viewer draws: each limb and ball once; contacts only where shapes touch.
+TEST(SceneDrawer, DrawsEveryLimbAndBallAndTheContactsOfALandedBody) {
+  ViewState view({kHumanoid});
+  view.overlays.contacts = true;
+  SceneDrawer drawer;
+  DrawList list;
+  drawer.draw(view, list);
+  EXPECT_EQ(list.solids.size(), view.world().model().bodies.size() + view.world().balls().size());
+  ASSERT_TRUE(list.floor.has_value());
+  // Standing: the feet touch the ground, nothing else touches.
+  const std::vector<ShownContact>& standing = drawer.contacts(view.world());
+  ASSERT_FALSE(standing.empty());
+  for (const ShownContact& contact : standing) EXPECT_NEAR(contact.point.z(), 0.0, 1e-9);
+}
+
+TEST(SceneDrawer, GapColourGoesFromGreenToRedAsTheGapGrows) {
+  EXPECT_GT(gap_colour(1e-6).g, 0.8f);
+  EXPECT_LT(gap_colour(1e-6).r, 0.05f);
+  EXPECT_GT(gap_colour(0.5).r, 0.95f);
+  EXPECT_LT(gap_colour(0.5).g, 0.05f);
+  double last_red = -1;
+  for (double gap = 1e-5; gap < 1; gap *= 2) {
+    EXPECT_GE(gap_colour(gap).r, last_red);
+    last_red = gap_colour(gap).r;
+  }
+}
+
+}  // namespace
+}  // namespace limber::viewer

@@ -1,0 +1,25 @@
+// The viewer's Dear ImGui panels: simulation controls, method and solver settings, the scene
+// (body type, friction, another file), the ball launcher, picking, overlays, and live plots of
+// energy, joint gap and time per step. They act on a ViewState through its public calls only.
+#pragma once
+
+#include <string>
+
+#include "tools/viewer/view_state.hpp"
+
+namespace limber::viewer {
+
+/// What the panels edit before it is applied (the method settings apply with a reset).
+struct PanelState {
+  std::string shown_method;  ///< the ViewState's method the fields below were read from
+  int method = 0;            ///< index into the method names
+  int iterations = 100, substeps = 1, projection = 0;
+  int body = 0;              ///< 0: the scene's own, then thin, medium, wide
+  float friction = 0.6f;
+  char scene_path[512] = {};
+};
+
+/// Draws the panels for a width × height frame and applies what the user changed.
+void draw_panels(ViewState& view, PanelState& panel, int width, int height);
+
+}  // namespace limber::viewer
