@@ -736,8 +736,10 @@ struct ViewFlags {
   std::string screenshot;
   bool hide_ui = false;
   int width = 1280, height = 720;
+  std::vector<std::string> overlays;
+  std::vector<double> camera;
 };
-constexpr std::array<const char*, 4> kViewValueFlags{"--frames", "--screenshot", "--width", "--height"};
+constexpr std::array<const char*, 6> kViewValueFlags{"--frames", "--screenshot", "--width", "--height", "--overlay", "--camera"};
 
 void add_view_flags(CLI::App& view, ViewFlags& flags) {
   view.add_option("--frames", flags.frames, "Headless: simulate and draw this many frames (1/60 s each) offscreen, then exit")
@@ -746,6 +748,14 @@ void add_view_flags(CLI::App& view, ViewFlags& flags) {
   view.add_flag("--hide-ui", flags.hide_ui, "Draw the scene without the control panels");
   view.add_option("--width", flags.width, "Frame width, pixels")->check(CLI::Range(64, 8192))->capture_default_str();
   view.add_option("--height", flags.height, "Frame height, pixels")->check(CLI::Range(64, 8192))->capture_default_str();
+  view.add_option("--overlay", flags.overlays, "Show an overlay from the start (repeatable)")
+      ->check(CLI::IsMember({"bounding-spheres", "contacts", "joint-gaps", "centre-of-mass", "forces"}))
+      ->allow_extra_args(false);  // one name per --overlay, so a scene after it stays the scene
+  view.add_option("--camera", flags.camera,
+                  "Camera YAW,PITCH,DISTANCE[,X,Y,Z]: degrees about z and above the horizon, m from the point it looks at "
+                  "(default: the bodies' centre)")
+      ->delimiter(',')
+      ->expected(3, 6);
 }
 
 // The arguments after "view" less the view's own flags: the run flags the viewer reloads with.
@@ -771,6 +781,18 @@ std::vector<std::string> run_arguments_of_view(int argc, const char* const* argv
 int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const RunFlags& run_flags, Viewer viewer,
          std::ostream& out, std::ostream& err) {
   if (!flags.screenshot.empty() && flags.frames < 0) throw InputError("--screenshot: needs --frames (the headless mode)");
+  if (!flags.camera.empty()) {
+    if (flags.camera.size() != 3 && flags.camera.size() != 6) {
+      throw InputError(format("--camera: YAW,PITCH,DISTANCE or YAW,PITCH,DISTANCE,X,Y,Z; got %zu numbers", flags.camera.size()));
+    }
+    if (!std::all_of(flags.camera.begin(), flags.camera.end(), [](double v) { return std::isfinite(v); })) {
+      throw InputError("--camera: must be finite numbers");
+    }
+    const double yaw = flags.camera[0], pitch = flags.camera[1], distance = flags.camera[2];
+    if (!std::isfinite(yaw) || !(std::abs(pitch) <= 85) || !(distance >= 0.1 && distance <= 500)) {
+      throw InputError(format("--camera: yaw finite, pitch in [-85, 85] degrees, distance in [0.1, 500] m; got %g,%g,%g", yaw, pitch, distance));
+    }
+  }
   if (!flags.screenshot.empty() && !run_flags.scene.empty()) {
     std::error_code ignored;
     if (std::filesystem::equivalent(flags.screenshot, run_flags.scene, ignored)) {
@@ -781,7 +803,7 @@ int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const R
   if (viewer == nullptr) {
     throw InputError("view: this limber was built without the viewer (it needs GLFW, OpenGL and Dear ImGui: tools/setup.sh --viewer)");
   }
-  ViewRequest request{std::move(run_arguments), flags.frames, flags.screenshot, flags.hide_ui, flags.width, flags.height};
+  ViewRequest request{std::move(run_arguments), flags.frames, flags.screenshot, flags.hide_ui, flags.overlays, flags.camera, flags.width, flags.height};
   return viewer(request, out, err);
 }
 

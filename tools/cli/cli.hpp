@@ -42,6 +42,11 @@ struct ViewRequest {
   long frames = -1;         ///< ≥ 0: headless: simulate and draw this many frames offscreen, then exit; −1: a window
   std::string screenshot;   ///< headless: write the last frame here (PNG); empty: none
   bool hide_ui = false;     ///< draw the scene without the control panels
+  /// Overlays shown from the start: "bounding-spheres", "contacts", "joint-gaps", "centre-of-mass", "forces".
+  std::vector<std::string> overlays;
+  /// The camera: yaw and pitch (degrees), distance (m), then optionally the point it looks at
+  /// (x, y, z, m); empty: framed to the bodies.
+  std::vector<double> camera;
   int width = 1280, height = 720;  ///< pixels
 };
 

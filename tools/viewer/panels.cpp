@@ -121,14 +121,14 @@ void plot(const char* label, const std::deque<float>& values, const char* format
   ImGui::PlotLines(label, samples.data(), int(samples.size()), 0, overlay, FLT_MAX, FLT_MAX, ImVec2(0, 60));
 }
 
-void plots(const ViewState& view, int width) {
+void plots(const ViewState& view, const PanelState& panel, int width) {
   ImGui::SetNextWindowPos(ImVec2(float(width) - kPanelWidth - 10, 10), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, 0), ImGuiCond_Always);
   ImGui::Begin("Plots", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
   const History& history = view.history();
   plot("energy", history.energy, "%.4g J");
   plot("joint gap", history.joint_gap, "%.3g / link");
-  plot("step", history.step_ms, "%.3f ms");
+  if (panel.wall_clock) plot("step", history.step_ms, "%.3f ms");
   ImGui::End();
 }
 
@@ -145,9 +145,9 @@ void draw_panels(ViewState& view, PanelState& panel, int width, int height) {
   ball_controls(view);
   picking_controls(view);
   if (!view.error().empty()) ImGui::TextColored(ImVec4(1, 0.35f, 0.3f, 1), "%s", view.error().c_str());
-  ImGui::TextDisabled("left drag: orbit, right drag: pan, wheel: zoom");
+  ImGui::TextDisabled("drag: orbit; right drag: pan; wheel: zoom");
   ImGui::End();
-  plots(view, width);
+  plots(view, panel, width);
 }
 
 }  // namespace limber::viewer

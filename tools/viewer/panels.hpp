@@ -17,6 +17,9 @@ struct PanelState {
   int body = 0;              ///< 0: the scene's own, then thin, medium, wide
   float friction = 0.6f;
   char scene_path[512] = {};
+  /// Whether to plot the time per step: wall-clock, so off in the headless mode, whose pictures
+  /// must be the same every run.
+  bool wall_clock = true;
 };
 
 /// Draws the panels for a width × height frame and applies what the user changed.

@@ -20,11 +20,12 @@ Eigen::Isometry3f placement(const Eigen::Vector3d& position, const Eigen::Quater
   return p;
 }
 
-// Distinct hues for neighbouring bodies (golden-ratio steps), soft enough to shade well.
+// Distinct hues for neighbouring bodies (golden-ratio steps), in linear RGB (the renderer shows
+// them brighter, as sRGB); a sleeping body greyer.
 Colour body_colour(std::size_t index, bool picked, bool sleeping) {
   if (picked) return {1.0f, 0.62f, 0.15f};
   const float hue = std::fmod(0.58f + 0.618034f * float(index), 1.0f);
-  const float s = sleeping ? 0.15f : 0.45f, v = sleeping ? 0.7f : 0.85f;
+  const float s = sleeping ? 0.35f : 0.75f, v = sleeping ? 0.55f : 0.7f;
   const float h6 = hue * 6, f = h6 - std::floor(h6);
   const float p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
   switch (int(h6) % 6) {

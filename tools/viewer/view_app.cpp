@@ -180,6 +180,7 @@ int run_headless(const cli::ViewRequest& request, ViewState& view, std::ostream&
   Renderer renderer(request.width, request.height);
   Gui gui(window.handle, false);
   PanelState panel;
+  panel.wall_clock = false;
   SceneDrawer drawer;
   DrawList list;
   for (long frame = 0; frame < request.frames; ++frame) {
@@ -239,6 +240,20 @@ int run_window(const cli::ViewRequest& request, ViewState& view) {
 int run_viewer(const cli::ViewRequest& request, std::ostream& out, std::ostream& err) {
   try {
     ViewState view(request.run_arguments);
+    for (const std::string& overlay : request.overlays) {
+      Overlays& o = view.overlays;
+      (overlay == "bounding-spheres" ? o.bounding_volumes
+       : overlay == "contacts"       ? o.contacts
+       : overlay == "joint-gaps"     ? o.joint_gaps
+       : overlay == "centre-of-mass" ? o.centre_of_mass
+                                     : o.forces) = true;
+    }
+    if (request.camera.size() >= 3) {
+      constexpr double kRadiansPerDegree = 3.14159265358979323846 / 180;
+      view.camera.yaw = kRadiansPerDegree * request.camera[0], view.camera.pitch = kRadiansPerDegree * request.camera[1];
+      view.camera.distance = request.camera[2];
+      if (request.camera.size() == 6) view.camera.target = {request.camera[3], request.camera[4], request.camera[5]};
+    }
     return request.frames >= 0 ? run_headless(request, view, out) : run_window(request, view);
   } catch (const ViewError& error) {
     err << "limber: " << error.what() << "\n";

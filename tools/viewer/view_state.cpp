@@ -92,7 +92,7 @@ void ViewState::frame_scene() {
   }
   camera.target = 0.5 * (low + high);
   const double size = (high - low).norm();
-  camera.distance = std::clamp(1.1 * size / std::tan(0.5 * camera.fov_y), 1.0, 400.0);
+  camera.distance = std::clamp(0.6 * size / std::tan(0.5 * camera.fov_y), 1.5, 400.0);
 }
 
 int ViewState::advance(double seconds) {
