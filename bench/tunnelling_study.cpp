@@ -69,15 +69,7 @@ Model target(Target kind, double speed, double start_distance) {
 // The ball's centre now, whatever the method (the last of the limb segments).
 Vector3 ball_centre(const World& world) {
   std::vector<LimbSegment> segments;
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (requires { state.particles; }) {
-          limb_segments(state, segments);
-        } else {
-          limb_segments(static_cast<const RigidScene&>(state), world.model(), segments);
-        }
-      },
-      world.state());
+  world.segments(segments);
   return segments.back().head;
 }
 

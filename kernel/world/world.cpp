@@ -77,6 +77,18 @@ Observation World::observe() const {
   return std::visit([](const auto& state) { return limber::observe(state); }, state_);
 }
 
+void World::segments(std::vector<LimbSegment>& out) const {
+  std::visit(
+      [&](const auto& state) {
+        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+          limb_segments(state, out);
+        } else {
+          limb_segments(static_cast<const RigidScene&>(state), model_, out);
+        }
+      },
+      state_);
+}
+
 // --- Handles
 
 BodyId World::body(std::string_view name) const {

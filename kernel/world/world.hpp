@@ -114,6 +114,10 @@ class World {
   const Model& model() const { return model_; }
   Method method() const { return options_.method; }
   Observation observe() const;
+  /// Each Model body's limb as collision sees it now (head, tail, radius; LimbSegment), then each
+  /// ball's (head = tail = its centre), into `out`: what a debug drawer or a query of one's own
+  /// reads, whatever the method.
+  void segments(std::vector<LimbSegment>& out) const;
 
   // --- Handles ---
   /// The body or joint called `name`. Throws WorldError when there is none.

@@ -27,19 +27,6 @@ constexpr double kGravity = 9.81;    // m/s², the scenes' |g|
 
 std::string param_name(const ::testing::TestParamInfo<Method>& info) { return std::string(method_name(info.param)); }
 
-// Every Model body's segment now (and the ball's last), whatever the method.
-void segments_of(const World& world, std::vector<LimbSegment>& out) {
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (requires { state.particles; }) {
-          limb_segments(state, out);
-        } else {
-          limb_segments(static_cast<const RigidScene&>(state), world.model(), out);
-        }
-      },
-      world.state());
-}
-
 // Turns `model` as one rigid piece by `turn` about the origin, then moves it by `offset`: every
 // pose, velocity and world-frame joint datum (axes, cone axes, world anchors). A body's frame is
 // the shortest arc from +z onto its axis (model.hpp), which after the turn may differ from the
@@ -114,7 +101,7 @@ class LimbPairs {
   explicit LimbPairs(const Model& model) : collisions_(model), limb_count_(model.bodies.size()) {}
 
   const std::vector<LimbContact>& within(const World& world, double margin) {
-    segments_of(world, segments_);
+    world.segments(segments_);
     awake_.assign(segments_.size(), 1);
     collisions_.find(segments_, awake_, margin, contacts_);
     std::erase_if(contacts_, [&](const LimbContact& c) { return c.second == kStaticShape || c.second >= limb_count_; });
@@ -330,11 +317,11 @@ Shot fire_ball(Method method, double dt, double aside, double start) {
   const int steps = static_cast<int>(std::ceil((start + 1) / (kBallSpeed * dt))) + 2;
   Vector3d before = Vector3d::Zero();
   for (int step = 0; step < steps; ++step) {
-    segments_of(world, segments);
+    world.segments(segments);
     before = segments.back().head;  // the ball's centre
     EXPECT_EQ(world.step(dt), StepStatus::ok) << "step " << step;
   }
-  segments_of(world, segments);
+  world.segments(segments);
   return {world.motion(world.body("limb")).linear, (segments.back().head - before) / dt};
 }
 
@@ -435,11 +422,11 @@ Rebound fire_at_wall(Method method, double dt, Wall wall, double start) {
   const int steps = static_cast<int>(std::ceil((start + 1) / (kBallSpeed * dt))) + 2;
   Vector3d before = Vector3d::Zero();
   for (int step = 0; step < steps; ++step) {
-    segments_of(world, segments);
+    world.segments(segments);
     before = segments.back().head;
     EXPECT_EQ(world.step(dt), StepStatus::ok) << "step " << step;
   }
-  segments_of(world, segments);
+  world.segments(segments);
   return {segments.back().head, (segments.back().head - before) / dt};
 }
 

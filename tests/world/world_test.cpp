@@ -53,6 +53,29 @@ TEST(World, StartsWhereTheModelPutsItsBodies) {
   }
 }
 
+// The segments collision sees are the bodies' poses: each limb's axis through its centre, as long
+// as its shape, and then each ball's centre.
+TEST(World, SegmentsFollowTheBodiesPosesAndEndWithTheBalls) {
+  Model model = make_chain({1, 2, 1}, 0.3, true);
+  model.balls.push_back(Ball{.radius = 0.1, .mass = 1, .restitution = 0.5, .position = Vector3(3, 0, 1), .velocity = Vector3(-1, 0, 0)});
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    for (int step = 0; step < 10; ++step) world.step();
+    std::vector<LimbSegment> segments;
+    world.segments(segments);
+    ASSERT_EQ(segments.size(), model.bodies.size() + 1) << name(method);
+    for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+      const Pose pose = world.pose(world.bodies()[b]);
+      const Eigen::Vector3d half = 0.5 * model.bodies[b].shape.length * (pose.orientation * Eigen::Vector3d::UnitZ());
+      EXPECT_LT((segments[b].head - (pose.position + half)).norm(), 1e-6) << name(method) << " body " << b;
+      EXPECT_LT((segments[b].tail - (pose.position - half)).norm(), 1e-6) << name(method) << " body " << b;
+      EXPECT_EQ(segments[b].radius, model.bodies[b].shape.radius);
+    }
+    EXPECT_EQ(segments.back().head, world.ball(world.balls().front()).position) << name(method);
+    EXPECT_EQ(segments.back().tail, segments.back().head);
+  }
+}
+
 TEST(World, AnImpulseChangesMomentumByExactlyTheImpulse) {
   // No gravity, a free body: the change of linear momentum over the step is the impulse.
   const Eigen::Vector3d impulse(0.7, -1.1, 0.4);

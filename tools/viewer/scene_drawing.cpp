@@ -4,7 +4,6 @@
 #include <cmath>
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
-#include "limber/kernel/metrics/observers.hpp"
 
 namespace limber::viewer {
 namespace {
@@ -190,19 +189,6 @@ void draw_overlays(const ViewState& view, SceneDrawer& drawer, DrawList& list) {
   }
 }
 
-// The limbs (and balls after them) as collision sees them now, whatever the method.
-void segments_now(const World& world, std::vector<LimbSegment>& segments) {
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (requires { state.particles; }) {
-          limb_segments(state, segments);
-        } else {
-          limb_segments(static_cast<const RigidScene&>(state), world.model(), segments);
-        }
-      },
-      world.state());
-}
-
 }  // namespace
 
 Colour gap_colour(double relative_gap) {
@@ -220,7 +206,7 @@ void SceneDrawer::refresh(const World& world) {
 const std::vector<ShownContact>& SceneDrawer::contacts(const World& world) {
   refresh(world);
   contacts_.clear();
-  segments_now(world, segments_);
+  world.segments(segments_);
   const Model& model = world.model();
   if (collisions_.active()) {
     awake_.assign(segments_.size(), 1);

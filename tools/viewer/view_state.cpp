@@ -66,8 +66,12 @@ ViewState::ViewState(std::vector<std::string> run_arguments)
   frame_scene();
 }
 
-void ViewState::build_world() {
-  world_.emplace(loaded_.scene.model, loaded_.options);
+void ViewState::build_world(std::optional<World> compiled) {
+  if (compiled) {
+    world_ = std::move(compiled);
+  } else {
+    world_.emplace(loaded_.scene.model, loaded_.options);
+  }
   steps_taken_ = 0, unspent_seconds_ = 0;
   drag_.reset(), last_loads_.clear();
   history_ = History{};
@@ -284,15 +288,15 @@ bool ViewState::reload(std::vector<std::string> run_arguments) {
   try {
     cli::LoadedRun loaded = cli::load_run(run_arguments);
     loaded.options = loaded_.options;  // the method settings stay those chosen
-    World trial(loaded.scene.model, loaded.options);  // a model the method cannot take is refused here
+    World compiled(loaded.scene.model, loaded.options);  // a model the method cannot take is refused here
     loaded_ = std::move(loaded);
     run_arguments_ = std::move(run_arguments);
+    build_world(std::move(compiled));
   } catch (const std::exception& error) {
     error_ = error.what();
     return false;
   }
   error_.clear();
-  build_world();
   frame_scene();
   return true;
 }
@@ -301,20 +305,20 @@ bool ViewState::set_method(const std::string& method, int iterations, int subste
   try {
     WorldOptions options = cli::options_for_method(method, loaded_.scene.methods);
     if (options.method == Method::particles) {
-      if (iterations < 1 || substeps < 1 || substeps > kMaxSubsteps) throw std::invalid_argument("iterations and substeps must be >= 1");
+      if (iterations < 1 || substeps < 1 || substeps > kMaxSubsteps) throw std::invalid_argument("sweeps must be >= 1 and substeps in [1, 10000]");
       options.particles.relaxation.iterations = iterations;
       options.particles.relaxation.substeps = substeps;
       options.particles.relaxation.projection = projection;
     }
-    World trial(loaded_.scene.model, options);
+    World compiled(loaded_.scene.model, options);
     loaded_.options = options;
+    method_name_ = method;
+    build_world(std::move(compiled));
   } catch (const std::exception& error) {
     error_ = error.what();
     return false;
   }
   error_.clear();
-  method_name_ = method;
-  build_world();
   return true;
 }
 

@@ -156,7 +156,9 @@ class ViewState {
   const std::string& source() const { return loaded_.source; }
 
  private:
-  void build_world();
+  // Starts the World from the scene as loaded (or takes one already compiled from it) and clears
+  // what belonged to the old one.
+  void build_world(std::optional<World> compiled = std::nullopt);
   void step_once();
   void apply_loads();
   void on_key(const KeyEvent& event);
