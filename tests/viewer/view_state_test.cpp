@@ -164,6 +164,15 @@ TEST(ViewState, BodyVariantReloadsTheSceneAndAnUnknownOneIsRefused) {
   EXPECT_THAT(view.error(), ::testing::HasSubstr("giant"));
 }
 
+TEST(ViewState, FrictionResetsOnTheNewGroundAndABadValueChangesNothing) {
+  ViewState view({kHumanoid});
+  ASSERT_TRUE(view.set_friction(0.1));
+  EXPECT_EQ(view.world().model().ground->friction, 0.1);
+  EXPECT_FALSE(view.set_friction(-1));
+  EXPECT_THAT(view.error(), ::testing::HasSubstr("friction"));
+  EXPECT_EQ(view.world().model().ground->friction, 0.1);
+}
+
 // The camera's ray through a point's pixel passes through the point (matrices and rays agree).
 TEST(OrbitCamera, RayThroughAProjectedPointPassesThroughIt) {
   OrbitCamera camera;

@@ -323,7 +323,15 @@ bool ViewState::set_method(const std::string& method, int iterations, int subste
 }
 
 bool ViewState::set_friction(double friction) {
-  if (!loaded_.scene.model.ground || !(friction >= 0) || !std::isfinite(friction)) return false;
+  if (!loaded_.scene.model.ground) {
+    error_ = "friction: the scene '" + loaded_.scene.model.name + "' has no ground";
+    return false;
+  }
+  if (!(friction >= 0) || !std::isfinite(friction)) {
+    error_ = "friction: must be finite and >= 0";
+    return false;
+  }
+  error_.clear();
   loaded_.scene.model.ground->friction = friction;
   build_world();
   return true;

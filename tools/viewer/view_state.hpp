@@ -25,7 +25,7 @@
 
 namespace limber::viewer {
 
-/// Keys the viewer answers (the thesis's F1–F7 pick limbs, F9 shows the bounding spheres).
+/// Keys the viewer answers (F1–F8 pick limbs, as the thesis's F1–F7 did; F9 shows the bounding spheres).
 enum class Key : std::uint8_t {
   f1, f2, f3, f4, f5, f6, f7, f8, f9,
   left, right, up, down,  ///< push the picked limb (held)
@@ -74,7 +74,7 @@ struct Launcher {
   double distance = 0.8;    ///< m from the target at launch
 };
 
-/// The numbers the plots draw, one entry per step (the last kHistory steps).
+/// The numbers the plots draw, one entry per step (the last kSteps steps).
 struct History {
   static constexpr std::size_t kSteps = 600;
   std::deque<float> energy;         ///< J, kinetic + potential
@@ -112,7 +112,7 @@ class ViewState {
   double drag_stiffness = 200;
 
   // --- Picking ---
-  /// The picked body (Model index), if any. F1–F7 pick bodies 0–6; a click picks the limb under
+  /// The picked body (Model index), if any. F1–F8 pick bodies 0–7; a click picks the limb under
   /// the cursor, a click on nothing clears it.
   std::optional<std::size_t> picked() const { return picked_; }
   void pick(std::optional<std::size_t> body);

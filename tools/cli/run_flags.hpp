@@ -1,0 +1,80 @@
+// `limber run`'s flags, shared by `limber run` and `limber view` (tools/cli/ only, not
+// installed): what they are, how each is checked, and how they become a loaded scene and a
+// method's options. Every bad value is an InputError whose what() is the one line printed after
+// "limber: ".
+#pragma once
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "limber/kernel/methods/method.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "tools/cli/cli.hpp"
+
+namespace limber::cli {
+
+// A bad flag value; what() is the one line printed after "limber: ".
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline std::string format(const char* pattern, auto... values) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof buffer, pattern, values...);
+  return buffer;
+}
+
+// The flags of `limber run`, with the option handles that tell whether each was given.
+struct RunFlags {
+  std::string scene;
+  std::string method = "weighted";
+  std::string precision = "double";
+  std::string body;
+  double ball_speed = 0, ball_radius = 0, ball_mass = 0, ball_restitution = 0, friction = 0;
+  std::vector<double> ball_direction;
+  long links = 0, copies = 0, steps = 0;
+  int iterations = 0, substeps = 0;
+  std::string projection;
+  double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
+  std::string out_path;
+  std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "auto", threading = "workers";
+  std::string ordering = "depth-parity";
+  int threads = 0;
+  bool scalar = false;
+  int newton_iterations = 2;
+  double compliance = 0;
+  bool warm_start = false, long_range_attachments = false;
+  double stiffness = 0, damping = 0;
+  std::string integrator, linear_solver = "ldlt";
+  std::string stabilization = "baumgarte", constraint_solver = "auto";
+
+  CLI::Option *body_option, *ball_speed_option, *ball_direction_option, *ball_radius_option, *ball_mass_option,
+      *ball_restitution_option, *friction_option, *links_option, *copies_option, *steps_option, *dt_option, *iterations_option,
+      *tolerance_option, *budget_option, *over_relaxation_option, *out_option, *stiffness_option, *damping_option,
+      *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option, *newton_iterations_option,
+      *compliance_option, *warm_start_option, *projection_option, *substeps_option;
+  std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
+
+  bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
+  bool lagrange() const { return method == "lagrange"; }
+  bool featherstone() const { return method == "featherstone"; }
+  bool rigid() const { return springs() || lagrange() || featherstone(); }  ///< the methods on rigid bodies
+};
+
+inline bool given(const CLI::Option* option) { return option->count() > 0; }
+
+/// Declares the run flags on `run` (the `run` or `view` subcommand, or an app of its own).
+void add_run_flags(CLI::App& run, RunFlags& flags);
+/// The method and its options the flags ask for, over the scene's method settings (each reader
+/// refuses the other methods' flags).
+WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene);
+/// The scene and method that parsed run flags ask for. Throws ModelError, InputError or
+/// std::invalid_argument (options that do not go together), each one line.
+LoadedRun load(const RunFlags& flags);
+
+}  // namespace limber::cli
