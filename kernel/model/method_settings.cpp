@@ -8,6 +8,7 @@ using namespace checks;
 
 void validate(const RelaxationSettings& relaxation) {
   require_at_least(relaxation.iterations, 1, "settings.relaxation.iterations");
+  require_at_most(relaxation.iterations, kMaxIterations, "settings.relaxation.iterations");
   require_non_negative(relaxation.tolerance, "settings.relaxation.tolerance");
   require_non_negative(relaxation.budget_us, "settings.relaxation.budget_us");
   require_in_range(relaxation.over_relaxation, 0, 2, "settings.relaxation.over_relaxation",

@@ -29,6 +29,9 @@ enum class ProjectionRule : std::uint8_t {
 
 /// Most substeps a step may be split into (a guard against hostile input, not a physical limit).
 inline constexpr int kMaxSubsteps = 10000;
+/// Most relaxation sweeps per substep (a guard against hostile input: 1e5 sweeps of the pile are
+/// minutes per step; the thesis used 100).
+inline constexpr int kMaxIterations = 100000;
 
 /// When relaxation stops (thesis 3.2.3): after `iterations` sweeps, or earlier when the largest
 /// correction of a sweep falls below `tolerance`, or when `budget_us` of wall-clock time has
@@ -36,7 +39,7 @@ inline constexpr int kMaxSubsteps = 10000;
 /// of Δt/substeps (Macklin et al. 2019, "Small steps in physics simulation"), each with its own
 /// sweeps (and, for rattle, as many velocity sweeps).
 struct RelaxationSettings {
-  int iterations = 100;    ///< ≥ 1 sweeps per substep; the thesis's program used 100
+  int iterations = 100;    ///< in [1, kMaxIterations] sweeps per substep; the thesis's program used 100
   double tolerance = 0;    ///< m; 0 disables
   double budget_us = 0;    ///< µs per step; 0 disables
   /// Successive over-relaxation factor ω in (0, 2) for distance constraints: each projection

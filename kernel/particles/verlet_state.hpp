@@ -57,6 +57,12 @@ enum class SweepDirection : std::uint8_t {
   pinned_last,   ///< the reverse
 };
 
+/// Most threads VerletOptions::threads may ask for (a guard: asking for 1e5 threads failed to
+/// start them and ended the program).
+inline constexpr int kMaxThreads = 256;
+/// Most Newton steps of the direct solver per time step (a guard, as kMaxIterations).
+inline constexpr int kMaxNewtonIterations = 1000;
+
 /// Choices the Verlet method takes besides the Model. None changes the physics model; the
 /// solver, order and direction change how relaxation converges, the rest only how fast it runs
 /// (results are the same bits for every thread count, lane width, layout and ordering).
@@ -68,8 +74,8 @@ struct VerletOptions {
   bool simd = true;                          ///< false: the scalar path (one lane)
   ParticleLayout layout = ParticleLayout::automatic;  ///< of the relaxation's particle copy
   ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
-  /// Threads for relaxation, the calling one included: 1 (the default) starts none; 0 takes the
-  /// hardware's, and only when some colour is big enough to pay for them
+  /// Threads for relaxation, the calling one included, in [0, kMaxThreads]: 1 (the default)
+  /// starts none; 0 takes the hardware's, and only when some colour is big enough to pay for them
   /// (parallel_minimum_slots); a small scene then starts none either.
   int threads = 1;
   Threading threading = Threading::workers;  ///< how a colour is split across threads
@@ -81,7 +87,7 @@ struct VerletOptions {
   /// SIMD, threads, layouts").
   std::uint32_t parallel_minimum_slots = 0;
   std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
-  /// RelaxationSolver::direct: Newton steps per time step (≥ 1; replaces
+  /// RelaxationSolver::direct: Newton steps per time step (in [1, kMaxNewtonIterations]; replaces
   /// relaxation.iterations), whether they start from the previous step's multipliers,
   /// and the compliance α of every distance constraint, m/N (0: rigid; XPBD, Macklin et al.
   /// 2016 — the other solvers treat every constraint as rigid and refuse α > 0).

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 #include "limber/kernel/relaxation/distance_projection.hpp"
 
@@ -80,7 +81,9 @@ const Vector3s<Scalar>& linearization(VerletState<Scalar>& state, std::size_t c)
 template <typename Scalar>
 void prepare_direct_projection(VerletState<Scalar>& state) {
   const VerletOptions& options = state.options;
-  if (options.newton_iterations < 1) throw std::invalid_argument("options: newton_iterations must be at least 1");
+  if (options.newton_iterations < 1 || options.newton_iterations > kMaxNewtonIterations) {
+    throw std::invalid_argument("options: newton_iterations must be in [1, " + std::to_string(kMaxNewtonIterations) + "]");
+  }
   if (!(options.compliance >= 0)) throw std::invalid_argument("options: compliance must be a non-negative number of m/N");
   DirectProjection<Scalar>& direct = state.plan.direct;
   const auto& particles = state.particles;

@@ -9,6 +9,7 @@
 #include <limits>
 #include <queue>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <type_traits>
 
@@ -248,7 +249,9 @@ double project_long_range_attachments(VerletState<Scalar>& state) {
 template <typename Scalar>
 void prepare_relaxation_plan(VerletState<Scalar>& state) {
   const VerletOptions& options = state.options;
-  if (options.threads < 0) throw std::invalid_argument("options: threads must be 0 (automatic) or at least 1");
+  if (options.threads < 0 || options.threads > kMaxThreads) {
+    throw std::invalid_argument("options: threads must be 0 (automatic) or in [1, " + std::to_string(kMaxThreads) + "]");
+  }
   prepare_joint_rows(state);
   if (options.compliance != 0 && options.solver != RelaxationSolver::direct) {
     throw std::invalid_argument("options: compliance needs the direct solver (Gauss-Seidel and Jacobi sweeps treat every constraint as rigid)");

@@ -82,6 +82,7 @@ MethodSettings read_method_settings(const Object& object) {
     RelaxationSettings& target = methods.relaxation;
     if (relaxation.find("iterations")) target.iterations = relaxation.integer("iterations");
     require_at_least(target.iterations, 1, relaxation.path("iterations"));
+    require_at_most(target.iterations, kMaxIterations, relaxation.path("iterations"));
     relaxation.optional("tolerance", target.tolerance);
     require_non_negative(target.tolerance, relaxation.path("tolerance"));
     relaxation.optional("budget_us", target.budget_us);
@@ -915,8 +916,14 @@ Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& opt
   std::string text;
   char buffer[1 << 16];
   std::size_t count = 0;
-  while ((count = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) text.append(buffer, count);
+  while ((count = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) {
+    text.append(buffer, count);
+    if (text.size() > kMaxSceneFileBytes) {
+      throw ModelError(source + ": larger than the " + std::to_string(kMaxSceneFileBytes >> 20) + " MiB a scene file may be");
+    }
+  }
   if (std::ferror(file.get())) cannot_read();
+  if (text.empty()) throw ModelError(source + ": empty file (a scene is a JSON object)");
   return load_scene_text(text, source, options);
 }
 

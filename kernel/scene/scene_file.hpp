@@ -165,6 +165,7 @@
 // JSON: <detail>".
 #pragma once
 
+#include <cstddef>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -195,7 +196,12 @@ struct Scene {
 /// an option the scene cannot honour (a variant it lacks, links without a "chain").
 Scene load_scene_text(std::string_view json_text, std::string_view source, const SceneOptions& options = {});
 
-/// Reads and loads a scene file. Throws ModelError when it cannot be read or is invalid.
+/// Most bytes a scene file may have (64 MiB: the largest shipped scene is ~30 kB; a mesh of
+/// 10⁵ triangles is ~10 MB): a guard against reading a wrong file whole.
+inline constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
+
+/// Reads and loads a scene file. Throws ModelError (one line naming the file) when it cannot be
+/// read, is a directory, is empty, is larger than kMaxSceneFileBytes, or is invalid.
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
 
 /// The text of tools/scenes/humanoid.json, compiled into the library: the default scene.

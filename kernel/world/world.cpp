@@ -50,6 +50,7 @@ World::World(Model model, WorldOptions options) : model_(std::move(model)), opti
   reset_loads();
   for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
   transport_frames();
+  divergence_ = divergence_bounds(model_, observe());
 }
 
 // Sizes the per-body loads after a (re)compile, all zero.
@@ -158,7 +159,7 @@ StepStatus World::step(double dt) {
     load_force_[b] += impulse_force_[b] / dt, load_torque_[b] += impulse_torque_[b] / dt;
     impulse_force_[b].setZero(), impulse_torque_[b].setZero();
   }
-  const StepStatus status = std::visit(
+  StepStatus status = std::visit(
       [&](auto& state) {
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
@@ -170,6 +171,10 @@ StepStatus World::step(double dt) {
         return limber::step(state, dt).status;
       },
       state_);
+  if (status == StepStatus::ok) {
+    status = check_divergence(observe(), divergence_);
+    std::visit([&](auto& state) { state.last_report.status = status; }, state_);
+  }
   if (release_drives_after_impact(state_)) {  // keep the Model's drives as the state's, for recompiles
     for (Joint& joint : model_.joints) {
       if (joint.drive) joint.drive->stiffness = joint.drive->damping = 0;
@@ -356,6 +361,7 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
         world_bodies::wake(state, b);
       },
       state_);
+  divergence_.start_energy = observe().energy();  // a teleport may put energy in: measure from here
 }
 
 // --- Structure
@@ -544,6 +550,7 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
   reset_loads();
   limb_frame_ = std::move(frames);
   transport_frames();
+  divergence_ = divergence_bounds(model_, observe());
 }
 
 }  // namespace limber

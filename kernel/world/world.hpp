@@ -34,6 +34,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/kernel/metrics/divergence.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
@@ -103,7 +104,10 @@ class World {
   World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
 
   /// One step of dt seconds (the Model's time step without an argument). Never throws; a bad dt
-  /// or a divergence is the status.
+  /// or a divergence is the status: the method's own guard (a non-finite position, a point past
+  /// Settings::divergence_speed), then the checks every method shares (metrics/divergence.hpp:
+  /// any non-finite number, energy gained past its bound, a joint come apart), measured against
+  /// the World's start or its last structural edit or teleport.
   StepStatus step(double dt);
   StepStatus step() { return step(model_.settings.time_step); }
   /// The last step's report, whatever the method: status, contacts, the relaxation's sweeps and
@@ -241,6 +245,7 @@ class World {
   std::unordered_map<std::uint32_t, std::size_t> ball_index_;
   std::uint32_t next_ball_handle_ = 0;
   std::unordered_map<std::uint32_t, Pin> pins_;
+  DivergenceBounds divergence_;  // from the start, the last structural edit or teleport
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.
   std::vector<Eigen::Vector3d> load_force_, load_torque_, impulse_force_, impulse_torque_;

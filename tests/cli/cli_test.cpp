@@ -1,4 +1,5 @@
 // The `limber` program: the summary it prints, and one clear line for every kind of bad input.
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "tools/cli/cli.hpp"
+#include "tools/cli/output_file.hpp"
 
 namespace limber::cli {
 namespace {
@@ -227,9 +229,9 @@ TEST(Cli, RejectsNegativeThreads) { expect_rejected({"run", "--threads", "-2"}, 
 TEST(Cli, RejectsUnknownFlag) { expect_rejected({"run", "--speed", "3"}, "--speed"); }
 TEST(Cli, RejectsUnknownMethod) { expect_rejected({"run", "--method", "midpoint"}, "midpoint"); }
 TEST(Cli, RejectsMissingSubcommand) { expect_rejected({}, "subcommand"); }
-TEST(Cli, RejectsNonPositiveTimeStep) { expect_rejected({"run", "--dt", "0"}, "--dt: must be > 0"); }
+TEST(Cli, RejectsNonPositiveTimeStep) { expect_rejected({"run", "--dt", "0"}, "--dt: must be in (0, 1]"); }
 TEST(Cli, RejectsNotANumberTimeStep) { expect_rejected({"run", "--dt", "nan"}, "--dt"); }
-TEST(Cli, RejectsZeroIterations) { expect_rejected({"run", "--iterations", "0"}, "--iterations: must be >= 1"); }
+TEST(Cli, RejectsZeroIterations) { expect_rejected({"run", "--iterations", "0"}, "--iterations: must be in [1, 100000]"); }
 TEST(Cli, RejectsNegativeBallMass) { expect_rejected({"run", "--ball-mass", "-1"}, "--ball-mass: must be > 0"); }
 TEST(Cli, RejectsInfiniteBallSpeed) { expect_rejected({"run", "--ball-speed", "inf"}, "--ball-speed"); }
 TEST(Cli, RejectsRestitutionAboveOne) { expect_rejected({"run", "--ball-restitution", "1.5"}, "--ball-restitution"); }
@@ -243,6 +245,116 @@ TEST(Cli, RejectsLinksOnASceneWithoutChain) { expect_rejected({"run", "--links",
 TEST(Cli, RejectsZeroCopies) { expect_rejected({"run", scene("chain.json"), "--copies", "0"}, "copies.count"); }
 TEST(Cli, RejectsZeroSteps) { expect_rejected({"run", "--steps", "0"}, "--steps"); }
 TEST(Cli, RejectsMissingSceneFile) { expect_rejected({"run", "no/such/scene.json"}, "no/such/scene.json"); }
+
+// Every numeric flag turns away NaN, infinity, negatives and values past its stated limit, each
+// with one line naming the flag (the limits keep a slip of the keyboard from running for days).
+TEST(Cli, EveryNumericFlagRejectsNanInfNegativesAndValuesPastItsLimit) {
+  struct Case {
+    std::vector<std::string> context;  // the scene and flags the flag needs
+    std::string flag;
+    std::vector<std::string> values;
+  };
+  const std::vector<std::string> none, chain{scene("chain.json")}, direct{"--solver", "direct"}, springs{"--method", "springs-explicit"};
+  const std::vector<Case> cases{
+      {none, "--dt", {"nan", "inf", "-1", "0", "2"}},
+      {none, "--steps", {"-1", "0", "2000000000"}},
+      {none, "--iterations", {"-3", "0", "200000"}},
+      {none, "--substeps", {"-1", "0", "20000"}},
+      {none, "--threads", {"-1", "100000"}},
+      {none, "--ball-speed", {"nan", "inf", "-1", "1e6"}},
+      {none, "--ball-radius", {"nan", "inf", "-1", "0"}},
+      {none, "--ball-mass", {"nan", "inf", "-1", "0"}},
+      {none, "--ball-restitution", {"nan", "inf", "-0.1", "1.5"}},
+      {none, "--friction", {"nan", "inf", "-1"}},
+      {none, "--tolerance", {"nan", "inf", "-1"}},
+      {none, "--budget-us", {"nan", "inf", "-1"}},
+      {none, "--over-relaxation", {"nan", "inf", "-1", "0", "2"}},
+      {chain, "--links", {"-1", "0", "1000000000000"}},
+      {chain, "--copies", {"-1", "0", "1000000000"}},
+      {springs, "--stiffness", {"nan", "inf", "-1", "0"}},
+      {springs, "--damping", {"nan", "inf", "-1"}},
+      {direct, "--newton-iterations", {"-1", "0", "1000000"}},
+      {direct, "--compliance", {"nan", "inf", "-1"}},
+  };
+  for (const Case& c : cases) {
+    for (const std::string& value : c.values) {
+      std::vector<std::string> arguments{"run"};
+      arguments.insert(arguments.end(), c.context.begin(), c.context.end());
+      arguments.insert(arguments.end(), {c.flag, value, "--steps", "1"});
+      if (c.flag == "--steps") arguments.resize(arguments.size() - 2);
+      SCOPED_TRACE(c.flag + " " + value);
+      const std::string needle = c.flag == "--links" || c.flag == "--copies" ? "" : c.flag;  // scene options name the field
+      expect_rejected(arguments, needle);
+    }
+  }
+}
+
+// A chain on springs too soft to hold it comes apart: the run says so and exits 1, though no
+// number is infinite and no point is fast.
+TEST(Cli, AJointComeApartIsADivergenceAndExitsOne) {
+  const Result r = run({"run", scene("chain.json"), "--method", "springs-explicit", "--stiffness", "1", "--steps", "2000"});
+  EXPECT_EQ(r.code, kDiverged) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("DIVERGED (a joint gap past a whole link)"));
+}
+
+// A scene path that is no scene file: one line naming it, whatever it is.
+TEST(Cli, WhatIsNoSceneFileGetsOneLineNamingIt) {
+  const std::string directory = ::testing::TempDir() + "/limber_cli_directory";
+  std::filesystem::create_directories(directory);
+  expect_rejected({"run", directory}, directory);
+  const std::string empty = ::testing::TempDir() + "/limber_cli_empty.json";
+  std::ofstream(empty).flush();
+  expect_rejected({"run", empty}, "empty file");
+  const std::string garbage = ::testing::TempDir() + "/limber_cli_garbage.json";
+  std::ofstream(garbage, std::ios::binary) << std::string("\x00\xff\x13{[\"", 6);
+  expect_rejected({"run", garbage}, garbage);
+  const std::string huge = ::testing::TempDir() + "/limber_cli_huge.json";
+  std::ofstream(huge).flush();
+  std::filesystem::resize_file(huge, std::uintmax_t(65) << 20);  // sparse: 65 MiB of zeros
+  expect_rejected({"run", huge}, "MiB");
+  std::filesystem::remove(huge);
+}
+
+// --out never writes over the scene, however the path is spelled, and leaves it as it was.
+TEST(Cli, OutNeverWritesOverTheSceneFile) {
+  const std::string copy = ::testing::TempDir() + "/limber_cli_scene_copy.json";
+  std::filesystem::copy_file(scene("chain.json"), copy, std::filesystem::copy_options::overwrite_existing);
+  const auto bytes = [](const std::string& path) {
+    std::ostringstream text;
+    text << std::ifstream(path, std::ios::binary).rdbuf();
+    return text.str();
+  };
+  const std::string before = bytes(copy);
+  const std::string respelled = std::filesystem::path(copy).parent_path().string() + "/./" + std::filesystem::path(copy).filename().string();
+  expect_rejected({"run", copy, "--steps", "2", "--out", respelled}, "--out");
+  EXPECT_EQ(bytes(copy), before);
+  expect_rejected({"run", copy, "--steps", "2", "--out", ::testing::TempDir()}, "directory");
+}
+
+// An output file appears under its name only once complete: an abandoned one leaves nothing,
+// not even over an older file of that name.
+TEST(Cli, AnOutputFileAppearsOnlyWhenComplete) {
+  const std::string path = ::testing::TempDir() + "/limber_cli_output.csv";
+  std::ofstream(path) << "an older result\n";
+  {
+    OutputFile file(path, "--out", {});
+    file.stream() << "half a trajectory";
+  }  // abandoned: not committed
+  std::ifstream older(path);
+  std::string line;
+  std::getline(older, line);
+  EXPECT_EQ(line, "an older result");
+  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  {
+    OutputFile file(path, "--out", {});
+    file.stream() << "complete\n";
+    file.commit();
+  }
+  std::ifstream done(path);
+  std::getline(done, line);
+  EXPECT_EQ(line, "complete");
+  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+}
 
 TEST(Cli, RejectsABadSceneFileNamingFileAndField) {
   const std::string path = ::testing::TempDir() + "limber_cli_bad_scene.json";

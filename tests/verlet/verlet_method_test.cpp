@@ -223,12 +223,12 @@ TYPED_TEST(VerletMethod, RelaxationReportsWhichCriterionStoppedIt) {
   EXPECT_LT(report.iterations, 50);
   EXPECT_LT(report.largest_correction, 1e-3);
 
-  VerletOptions budget_options = thesis_options(1000000);
+  VerletOptions budget_options = thesis_options(kMaxIterations);
   budget_options.relaxation.budget_us = 200;
   auto by_budget = compile<TypeParam>(thesis_chain(2000), budget_options);
   report = step(by_budget);
   EXPECT_EQ(report.stop, RelaxationStop::budget);
-  EXPECT_LT(report.iterations, 1000000);
+  EXPECT_LT(report.iterations, kMaxIterations);
 }
 
 TYPED_TEST(VerletMethod, DampingIsARatePerSecondWhateverTheStep) {

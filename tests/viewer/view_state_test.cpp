@@ -3,6 +3,7 @@
 #include "tools/viewer/view_state.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -45,10 +46,13 @@ TEST_P(ViewerFrames, TakeTheStepsOfLimberRunBitForBit) {
   const std::string method = GetParam();
   const std::string viewed = ::testing::TempDir() + "/limber_view_" + method + ".csv";
   const std::string ran = ::testing::TempDir() + "/limber_run_" + method + ".csv";
-  ViewState view({kHumanoid, "--method", method, "--out", viewed});
-  for (int frame = 0; frame < 30; ++frame) view.advance(1.0 / 60);
-  ASSERT_EQ(view.steps_taken(), 120);
-  view = ViewState({kHumanoid, "--method", method});  // closes the trajectory file
+  std::filesystem::remove(viewed);
+  {
+    ViewState view({kHumanoid, "--method", method, "--out", viewed});
+    for (int frame = 0; frame < 30; ++frame) view.advance(1.0 / 60);
+    ASSERT_EQ(view.steps_taken(), 120);
+    EXPECT_FALSE(std::filesystem::exists(viewed)) << "the trajectory is renamed into place only when the view ends";
+  }
 
   const std::vector<std::string> arguments{"limber", "run", kHumanoid, "--method", method, "--steps", "120", "--out", ran};
   std::vector<const char*> argv;

@@ -249,7 +249,11 @@ TEST(World, StructuralEditsCarryUntouchedBodiesBitForBit) {
   for (const Method method : kMethods) {
     Model model = make_chain({1, 1, 1}, 0.2, true);
     model.settings.sleep.enabled = false;
-    World world(model, options_for(method));
+    WorldOptions options = options_for(method);
+    // Semi-implicit springs open these light 0.2 m links by a whole link at 1/240 s (reported as
+    // diverged_joint_gap); the edits, not the springs, are under test here.
+    options.springs.integrator = Integrator::backward_euler;
+    World world(model, options);
     world.add_model(make_chain({1, 2}, 0.2, true, Vector3(0, 1, 1)), "b.");
     for (int s = 0; s < 60; ++s) ASSERT_EQ(world.step(1.0 / 240), StepStatus::ok);
     const auto snapshot = [&] {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/metrics/divergence.hpp"
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
@@ -24,6 +26,7 @@
 #include "limber/kernel/springs/step.hpp"
 #include "limber/kernel/verlet/step.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
+#include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
 #include "tools/cli/trajectory.hpp"
 
@@ -42,8 +45,10 @@ const char* stop_name(RelaxationStop stop) {
 const char* status_name(StepStatus status) {
   switch (status) {
     case StepStatus::ok: return "ok";
-    case StepStatus::diverged_non_finite: return "DIVERGED (non-finite position)";
+    case StepStatus::diverged_non_finite: return "DIVERGED (a non-finite number in the state)";
     case StepStatus::diverged_speed: return "DIVERGED (speed above settings.divergence_speed)";
+    case StepStatus::diverged_energy: return "DIVERGED (energy gained past 100 energy scales of the scene)";
+    case StepStatus::diverged_joint_gap: return "DIVERGED (a joint gap past a whole link)";
     case StepStatus::invalid_time_step: return "invalid time step";
   }
   return "?";
@@ -136,12 +141,13 @@ double penetration_now(const State& state, const Model& model, LimbCollisions& c
 // Steps `state` `steps` times (stopping at a divergence), observing after every step. `variant`
 // holds `state`: the drives go limp through it when the scene asks (release_drives_on_impact).
 template <typename State>
-RunRecord run_steps(State& state, MethodState& variant, const Model& model, long steps, std::ofstream& csv, KnockMeter& knock) {
+RunRecord run_steps(State& state, MethodState& variant, const Model& model, long steps, std::ostream* csv, KnockMeter& knock) {
   RunRecord record;
   LimbCollisions collisions(model);
   std::vector<LimbSegment> segments;
   record.deepest_penetration = penetration_now(state, model, collisions, segments);
   record.start = record.end = observe(state);
+  const DivergenceBounds bounds = divergence_bounds(model, record.start);
   record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
   record.largest_limit_violation = record.start.joints.limit_violation;
   bool body_sleeping = record.start.body_sleeping;
@@ -167,9 +173,10 @@ RunRecord run_steps(State& state, MethodState& variant, const Model& model, long
       record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
     }
     body_sleeping = record.end.body_sleeping;
-    if (csv.is_open()) write_trajectory_row(csv, variant);
-    record.status = report.status;
-    if (report.status != StepStatus::ok) break;
+    if (csv) write_trajectory_row(*csv, variant);
+    // The method's own guard, then the checks every method shares (metrics/divergence.hpp).
+    record.status = report.status == StepStatus::ok ? check_divergence(record.end, bounds) : report.status;
+    if (record.status != StepStatus::ok) break;
   }
   return record;
 }
@@ -304,16 +311,15 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
              std::ostream& out) {
   const double dt = model.settings.time_step;
   const long steps = given(flags.steps_option) ? flags.steps : std::max(1L, std::lround(model.settings.duration / dt));
-  std::ofstream csv;
+  std::optional<OutputFile> csv;  // renamed into place once the run is summed up
   if (given(flags.out_option)) {
-    csv.open(flags.out_path);
-    if (!csv) throw InputError(format("--out: cannot write '%s'", flags.out_path.c_str()));
-    write_trajectory_header(csv, model, variant);
-    write_trajectory_row(csv, variant);
+    csv.emplace(flags.out_path, "--out", std::vector<std::filesystem::path>{flags.scene});
+    write_trajectory_header(csv->stream(), model, variant);
+    write_trajectory_row(csv->stream(), variant);
   }
   const Observation start = observe(state);
   KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);
-  const RunRecord record = run_steps(state, variant, model, steps, csv, knock);
+  const RunRecord record = run_steps(state, variant, model, steps, csv ? &csv->stream() : nullptr, knock);
   const Observation& end = record.end;
 
   out << "limber run: " << model.name << " (" << source << ")\n";
@@ -347,6 +353,7 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   for (const std::string& event : record.sleep_events) out << "; " << event;
   out << "; " << (end.body_sleeping ? "asleep" : "awake") << " at end\n";
   out << "status      " << status_name(record.status) << "\n";
+  if (csv) csv->commit();  // a diverged run's trajectory is a result too: kept up to the divergence
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }
 

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <iosfwd>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -13,8 +14,14 @@ namespace limber::cli {
 /// Exit codes of `limber`.
 enum ExitCode : int {
   kSuccess = 0,
-  kDiverged = 1,   ///< the simulation reported divergence (NaN or runaway speed)
+  kDiverged = 1,   ///< the simulation diverged: a non-finite number, runaway speed or energy, a joint come apart
   kBadInput = 2,   ///< bad flags, values or scene file; one line on `err` says which
+};
+
+/// A bad flag, value or output path; what() is the one line printed after "limber: ".
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// What `limber run`'s flags ask for: the scene with the flags' changes (ball, friction, Δt,
@@ -23,6 +30,7 @@ struct LoadedRun {
   Scene scene;
   WorldOptions options;
   std::string source;    ///< the scene file, or "embedded tools/scenes/humanoid.json"
+  std::string scene_path;  ///< the scene file; empty for the embedded humanoid
   std::string out_path;  ///< --out: where to write the trajectory (trajectory.hpp); empty: nowhere
 };
 

@@ -20,6 +20,11 @@ bool positive(double v) { return v > 0; }
 bool non_negative(double v) { return v >= 0; }
 bool unit_interval(double v) { return v >= 0 && v <= 1; }
 
+// Limits on flags that would otherwise run for days or fill a disk: guards against a slip of the
+// keyboard, not physical limits (the kernel's own are kMaxIterations, kMaxThreads, ...).
+constexpr long kMaxSteps = 1'000'000'000;
+constexpr double kMaxBallSpeed = 1e5;  // m/s, 100× the fastest the tunnelling study checks
+
 }  // namespace
 
 void add_run_flags(CLI::App& run, RunFlags& flags) {
@@ -52,7 +57,7 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"float", "double"}))
       ->capture_default_str();
   flags.body_option = run.add_option("--body", flags.body, "Body variant of the scene (humanoid: thin, medium, wide)");
-  flags.ball_speed_option = run.add_option("--ball-speed", flags.ball_speed, "Ball launch speed (every ball's), m/s");
+  flags.ball_speed_option = run.add_option("--ball-speed", flags.ball_speed, "Ball launch speed (every ball's), m/s, in [0, 1e5]");
   flags.ball_direction_option = run.add_option("--ball-direction", flags.ball_direction, "Ball launch direction X,Y,Z (every ball's)")
                                     ->delimiter(',')
                                     ->expected(3);
@@ -62,9 +67,9 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.friction_option = run.add_option("--friction", flags.friction, "Ground Coulomb friction coefficient");
   flags.links_option = run.add_option("--links", flags.links, "Number of links of a chain or tree scene");
   flags.copies_option = run.add_option("--copies", flags.copies, "Copies of the scene's bodies, side by side");
-  flags.steps_option = run.add_option("--steps", flags.steps, "Number of steps (default: the scene's duration / dt)");
-  flags.dt_option = run.add_option("--dt", flags.dt, "Time step, s");
-  flags.iterations_option = run.add_option("--iterations", flags.iterations, "Relaxation sweeps per step");
+  flags.steps_option = run.add_option("--steps", flags.steps, "Number of steps, in [1, 1e9] (default: the scene's duration / dt)");
+  flags.dt_option = run.add_option("--dt", flags.dt, "Time step, s, in (0, 1]");
+  flags.iterations_option = run.add_option("--iterations", flags.iterations, "Relaxation sweeps per substep, in [1, 1e5]");
   flags.projection_option =
       run.add_option("--projection", flags.projection,
                      "Projection rule: pbd (end-of-step gradient, the thesis's) or rattle (start-of-step gradient and a "
@@ -82,7 +87,7 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->capture_default_str();
   flags.newton_iterations_option =
       run.add_option("--newton-iterations", flags.newton_iterations, "--solver direct: Newton steps per time step (replaces --iterations)")
-          ->check(CLI::PositiveNumber)
+          ->check(CLI::Range(1, kMaxNewtonIterations))
           ->capture_default_str();
   flags.compliance_option = run.add_option("--compliance", flags.compliance, "--solver direct: compliance of every constraint, m/N")
                                 ->check(CLI::NonNegativeNumber);
@@ -98,7 +103,7 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"first", "last"}))
       ->capture_default_str();
   run.add_option("--threads", flags.threads, "Threads for relaxation; 0: the hardware's, where they pay off")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   run.add_option("--threading", flags.threading, "How a colour is split: workers (long-lived) or parallel-for")
       ->check(CLI::IsMember({"workers", "parallel-for"}))
@@ -193,7 +198,9 @@ FeatherstoneOptions featherstone_options(const RunFlags& flags) {
 // The scene's relaxation settings with the flags' changes (--iterations, --projection, ...).
 RelaxationSettings relaxation_settings(const RunFlags& flags, RelaxationSettings relaxation) {
   if (given(flags.iterations_option)) {
-    if (flags.iterations < 1) throw InputError(format("--iterations: must be >= 1, got %d", flags.iterations));
+    if (flags.iterations < 1 || flags.iterations > kMaxIterations) {
+      throw InputError(format("--iterations: must be in [1, %d], got %d", kMaxIterations, flags.iterations));
+    }
     relaxation.iterations = flags.iterations;
   }
   if (given(flags.projection_option)) {
@@ -237,7 +244,7 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
     }
     if (flags.sweep == "sequential") throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver direct");
     options.newton_iterations = flags.newton_iterations;
-    options.compliance = flags.compliance;
+    options.compliance = given(flags.compliance_option) ? checked(flags.compliance_option, flags.compliance, non_negative, ">= 0") : 0;
     options.warm_start = flags.warm_start;
   } else {
     for (const CLI::Option* option : {flags.newton_iterations_option, flags.compliance_option, flags.warm_start_option}) {
@@ -274,7 +281,9 @@ void apply_ball_overrides(Ball& ball, const RunFlags& flags) {
   if (given(flags.ball_speed_option) || given(flags.ball_direction_option)) {
     double speed = ball.velocity.norm();
     Vector3 direction = speed > 0 ? Vector3(ball.velocity / speed) : Vector3(-1, 0, 0);
-    if (given(flags.ball_speed_option)) speed = checked(flags.ball_speed_option, flags.ball_speed, non_negative, ">= 0");
+    if (given(flags.ball_speed_option)) {
+      speed = checked(flags.ball_speed_option, flags.ball_speed, [](double v) { return v >= 0 && v <= kMaxBallSpeed; }, "in [0, 1e5]");
+    }
     if (given(flags.ball_direction_option)) {
       const Vector3 d(flags.ball_direction[0], flags.ball_direction[1], flags.ball_direction[2]);
       if (!d.allFinite() || d.norm() == 0) {
@@ -297,8 +306,10 @@ void apply_overrides(Model& model, const RunFlags& flags) {
     if (!model.ground) throw InputError(format("--friction: the scene '%s' has no ground", model.name.c_str()));
     model.ground->friction = checked(flags.friction_option, flags.friction, non_negative, ">= 0");
   }
-  if (given(flags.dt_option)) model.settings.time_step = checked(flags.dt_option, flags.dt, positive, "> 0");
-  if (given(flags.steps_option) && flags.steps < 1) throw InputError(format("--steps: must be >= 1, got %ld", flags.steps));
+  if (given(flags.dt_option)) model.settings.time_step = checked(flags.dt_option, flags.dt, [](double v) { return v > 0 && v <= 1; }, "in (0, 1]");
+  if (given(flags.steps_option) && (flags.steps < 1 || flags.steps > kMaxSteps)) {
+    throw InputError(format("--steps: must be in [1, %ld], got %ld", kMaxSteps, flags.steps));
+  }
   validate(model);
 }
 
@@ -327,6 +338,7 @@ LoadedRun load(const RunFlags& flags) {
   const bool embedded = flags.scene.empty();
   LoadedRun loaded;
   loaded.source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
+  loaded.scene_path = flags.scene;
   loaded.scene = embedded ? load_scene_text(embedded_humanoid_scene(), loaded.source, scene_options)
                           : load_scene_file(flags.scene, scene_options);
   apply_overrides(loaded.scene.model, flags);

@@ -17,12 +17,6 @@
 
 namespace limber::cli {
 
-// A bad flag value; what() is the one line printed after "limber: ".
-class InputError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 inline std::string format(const char* pattern, auto... values) {
   char buffer[512];
   std::snprintf(buffer, sizeof buffer, pattern, values...);

@@ -66,6 +66,15 @@ ViewState::ViewState(std::vector<std::string> run_arguments)
   frame_scene();
 }
 
+ViewState::~ViewState() {
+  if (!trajectory_) return;
+  try {
+    trajectory_->commit();
+  } catch (const std::exception&) {
+    // A destructor cannot report it; the .part is removed and nothing is left under the name.
+  }
+}
+
 void ViewState::build_world(std::optional<World> compiled) {
   if (compiled) {
     world_ = std::move(compiled);
@@ -76,11 +85,11 @@ void ViewState::build_world(std::optional<World> compiled) {
   drag_.reset(), last_loads_.clear();
   history_ = History{};
   if (picked_ && *picked_ >= world_->model().bodies.size()) picked_.reset();
+  trajectory_.reset();  // a reset starts the trajectory again
   if (!loaded_.out_path.empty()) {
-    trajectory_ = std::ofstream(loaded_.out_path, std::ios::trunc);
-    if (!trajectory_) throw std::runtime_error("--out: cannot write '" + loaded_.out_path + "'");
-    cli::write_trajectory_header(trajectory_, world_->model(), world_->state());
-    cli::write_trajectory_row(trajectory_, world_->state());
+    trajectory_.emplace(loaded_.out_path, "--out", std::vector<std::filesystem::path>{loaded_.scene_path});
+    cli::write_trajectory_header(trajectory_->stream(), world_->model(), world_->state());
+    cli::write_trajectory_row(trajectory_->stream(), world_->state());
   }
 }
 
@@ -123,7 +132,7 @@ void ViewState::step_once() {
   world_->step();
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - before).count();
   ++steps_taken_;
-  if (trajectory_.is_open()) cli::write_trajectory_row(trajectory_, world_->state());
+  if (trajectory_) cli::write_trajectory_row(trajectory_->stream(), world_->state());
   record(ms);
 }
 

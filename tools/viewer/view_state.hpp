@@ -21,6 +21,7 @@
 
 #include "limber/kernel/world/world.hpp"
 #include "tools/cli/cli.hpp"
+#include "tools/cli/output_file.hpp"
 #include "tools/viewer/orbit_camera.hpp"
 
 namespace limber::viewer {
@@ -87,6 +88,10 @@ class ViewState {
  public:
   /// Loads `run_arguments` as `limber run` would (cli::load_run). Throws its one-line error.
   explicit ViewState(std::vector<std::string> run_arguments);
+  /// Renames the --out trajectory into place (a view that ends, even by a divergence, keeps it).
+  ~ViewState();
+  ViewState(const ViewState&) = delete;
+  ViewState& operator=(const ViewState&) = delete;
 
   // --- Time ---
   /// One displayed frame of `seconds`: when playing, the steps that fit speed × seconds of
@@ -171,7 +176,7 @@ class ViewState {
   cli::LoadedRun loaded_;  // the scene as loaded; the World starts from it on reset
   std::string method_name_;
   std::optional<World> world_;
-  std::ofstream trajectory_;
+  std::optional<cli::OutputFile> trajectory_;  // --out, renamed into place when the view ends
   std::string error_;
   bool playing_ = true, step_requested_ = false;
   double unspent_seconds_ = 0;

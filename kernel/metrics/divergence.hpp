@@ -1,0 +1,42 @@
+// Divergence that cannot hide: the checks past the per-island speed guard (island_sleep.hpp),
+// which sees how fast points move but not a limb spinning about its own axis, nor a state that
+// gained energy slowly, nor joints pulled apart. Every method is observed alike (observers.hpp),
+// so one check serves them all; the World and the command line run it after every step.
+//
+// A run has diverged when, after a step,
+// - a number of the state is not finite: its energy, momentum, centre of mass or a joint gap
+//   (a non-finite position, velocity, angular velocity or orientation reaches one of them);
+// - its energy (kinetic, linear and angular, plus potential) has risen above the energy it
+//   started with by more than kDivergenceEnergyFactor times the scene's energy scale: the work
+//   gravity does on its mass across its extent, plus the kinetic energy it started with (a
+//   thrown ball's); without loads and drives no method may gain energy at all, so the bound
+//   only leaves room for what pushes, drives and moving pins put in;
+// - a joint gap has grown past kDivergenceJointGap (a whole link length).
+#pragma once
+
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/step_status.hpp"
+
+namespace limber {
+
+/// How many energy scales a run may gain before it has diverged (a stable run gains none).
+inline constexpr double kDivergenceEnergyFactor = 100;
+/// The largest joint gap, relative to the link length, of a run that holds together: a whole
+/// link. The stiff springs' default joints sag to 0.5–0.6 of a short link (a neck under a head)
+/// in the shipped ragdolls without coming apart; a spring that lets go stretches to many.
+inline constexpr double kDivergenceJointGap = 1.0;
+
+/// What a run is measured against, fixed when it starts (or its model changes).
+struct DivergenceBounds {
+  double start_energy = 0;  ///< J, kinetic + potential at the start
+  double energy_scale = 0;  ///< J, > 0: M·|g|·max(extent, 1 m) + the start's kinetic energy, at least 1 J
+};
+
+/// The bounds of `model` from its observation at the start.
+DivergenceBounds divergence_bounds(const Model& model, const Observation& start);
+
+/// Which bound `now` is past: diverged_non_finite, diverged_energy or diverged_joint_gap; ok when none.
+StepStatus check_divergence(const Observation& now, const DivergenceBounds& bounds);
+
+}  // namespace limber
