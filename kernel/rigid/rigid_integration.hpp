@@ -6,6 +6,8 @@
 // forces at that stage's state.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -35,22 +37,44 @@ inline Eigen::Quaterniond rotation_quaternion(const Eigen::Vector3d& rotation_ve
 }
 
 /// Turns a torque-free body for h seconds, keeping its world angular momentum `angular_momentum`:
-/// the free rigid body's flow split into rotations about the principal axes (Strang splitting
-/// x(h/2) y(h/2) z(h) y(h/2) x(h/2); each is exact: a turn about body axis i by h·L_i/I_i with
-/// L_i = (Rᵀ L)_i). It is symplectic and second order, keeps |L| exactly and the energy within
-/// O(h²) for all time — where advancing q with ω = I_world⁻¹ L (explicitly) makes a thin limb
-/// spin up without bound once h·ω is not small (McLachlan 1993; Dullweber, Leimkuhler &
-/// McLachlan 1997). `principal_moments`: the diagonal of the body-frame inertia, which must be
-/// diagonal (the body frame on the principal axes), kg·m².
+/// the free rigid body's flow split about a symmetric top (Fassò 2003; Dullweber, Leimkuhler &
+/// McLachlan 1997). With I_r the middle principal moment, the kinetic energy is
+///   ½|L|²/I_r + ½L_j²(1/I_j − 1/I_r) + ½L_k²(1/I_k − 1/I_r),
+/// k the axis whose moment is farther from I_r, j the other; each term's flow is exact (a turn
+/// about the world L by h|L|/I_r, or about body axis i by h·L_i·(1/I_i − 1/I_r), L_i = (Rᵀ L)_i)
+/// and applied as j(h/2) k(h) j(h/2), then the turn about L (it commutes with the others). It is
+/// symplectic and second order, keeps |L| exactly and the energy within O(h²) for all time — where
+/// advancing q with ω = I_world⁻¹ L (explicitly) makes a thin limb spin up without bound once h·ω
+/// is not small. For a symmetric body (I_j = I_r: any limb's shape) it is the exact flow at any h:
+/// the spin about the limb's axis, however fast (h·|L_k|/I_k ≫ 1 for a limb of zero radius), does
+/// not move the axis, so the momentum about it stays what it was. Splitting about the three
+/// principal axes instead (x(h/2) y(h/2) z(h) y(h/2) x(h/2)) turned a zero-radius rod's axis by
+/// O(h³·ω_axial) errors, which fed its axial momentum (then ω_axial = L_k/I_k, 10⁶ times it):
+/// Lagrange's default step diverged within 0.2 s on 0.1 m rods (kernel/lagrange/README.md).
+/// `principal_moments`: the diagonal of the body-frame inertia, which must be diagonal (the body
+/// frame on the principal axes), kg·m².
 inline void rotate_free_body(Eigen::Quaterniond& orientation, const Eigen::Vector3d& angular_momentum,
                              const Eigen::Vector3d& principal_moments, double h) {
-  constexpr int kAxes[5] = {0, 1, 2, 1, 0};
-  constexpr double kFractions[5] = {0.5, 0.5, 1.0, 0.5, 0.5};
-  for (int k = 0; k < 5; ++k) {
-    const int axis = kAxes[k];
+  const Eigen::Vector3d& moment = principal_moments;
+  int low = 0, high = 0;
+  moment.minCoeff(&low), moment.maxCoeff(&high);
+  if (low == high) high = (low + 1) % 3;  // all equal: any order
+  const int middle = 3 - low - high;
+  const double reference = moment[middle];
+  const bool low_is_far = reference - moment[low] > moment[high] - reference;
+  const int far = low_is_far ? low : high, near = low_is_far ? high : low;
+  const auto turn_about_body_axis = [&](int axis, double fraction) {
     const double body_momentum = (orientation.conjugate() * angular_momentum)[axis];
-    const double angle = kFractions[k] * h * body_momentum / principal_moments[axis];
+    const double angle = fraction * h * body_momentum * (1 / moment[axis] - 1 / reference);
     orientation = (orientation * Eigen::Quaterniond(Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(axis)))).normalized();
+  };
+  turn_about_body_axis(near, 0.5);
+  turn_about_body_axis(far, 1.0);
+  turn_about_body_axis(near, 0.5);
+  const double norm = angular_momentum.norm();
+  if (norm > 0) {
+    const Eigen::Quaterniond turn(Eigen::AngleAxisd(h * norm / reference, angular_momentum / norm));
+    orientation = (turn * orientation).normalized();
   }
 }
 
@@ -61,6 +85,7 @@ struct RigidIntegratorScratch {
   // Stage derivatives k_s of (x, q, P, L): velocities, quaternion rates, forces, torques.
   std::vector<Eigen::Vector3d> velocity[4], force[4], torque[4];
   std::vector<Eigen::Vector4d> orientation_rate[4];
+  std::vector<double> axial_torque[4];  ///< d/dt of the momentum about the body's least axis (detail::least_axis)
 
   void resize(std::size_t count) {
     stage.resize(count);
@@ -68,6 +93,7 @@ struct RigidIntegratorScratch {
     for (int s = 0; s < 4; ++s) {
       velocity[s].assign(count, Eigen::Vector3d::Zero()), force[s].assign(count, Eigen::Vector3d::Zero());
       torque[s].assign(count, Eigen::Vector3d::Zero()), orientation_rate[s].assign(count, Eigen::Vector4d::Zero());
+      axial_torque[s].assign(count, 0.0);
     }
   }
 };
@@ -80,7 +106,17 @@ inline Eigen::Vector4d orientation_rate(const Eigen::Quaterniond& q, const Eigen
   return 0.5 * (w * q).coeffs();
 }
 
-// Evaluates Ẏ(y) into stage slot s. `accumulate` adds forces and torques for state y.
+// The principal axis of body b's least moment (a limb's own axis).
+inline int least_axis(const RigidBodyBuffer& bodies, std::size_t b) {
+  int axis = 0;
+  bodies.body_inertia[b].diagonal().minCoeff(&axis);
+  return axis;
+}
+
+// Evaluates Ẏ(y) into stage slot s. `accumulate` adds forces and torques for state y. Also the
+// rate of the momentum about the least axis k in the body frame, Euler's equation
+// L̇_k = τ_k + L_i·L_j·(1/I_j − 1/I_i) ((i, j, k) cyclic): 0 for a symmetric limb without torque
+// about its axis, exactly, however the world L and q are being advanced.
 template <typename AccumulateForces>
 void derivative(const RigidBodyBuffer& bodies, const RigidBodyState& y, AccumulateForces& accumulate,
                 RigidIntegratorScratch& scratch, int s) {
@@ -91,13 +127,41 @@ void derivative(const RigidBodyBuffer& bodies, const RigidBodyState& y, Accumula
     scratch.orientation_rate[s][b] = orientation_rate(y.orientation[b], bodies.angular_velocity(y, b));
     scratch.force[s][b] = scratch.forces.force[b];
     scratch.torque[s][b] = scratch.forces.torque[b];
+    const int k = least_axis(bodies, b), i = (k + 1) % 3, j = (k + 2) % 3;
+    const Eigen::Vector3d moment = bodies.body_inertia[b].diagonal();
+    const Eigen::Vector3d momentum = y.orientation[b].conjugate() * y.angular_momentum[b];
+    scratch.axial_torque[s][b] = (y.orientation[b].conjugate() * scratch.forces.torque[b])[k] +
+                                 momentum[i] * momentum[j] * (1 / moment[j] - 1 / moment[i]);
   }
 }
 
-// out = y + h · Σ weight_k · k_k over the listed stages; q renormalized.
-inline void advance(const RigidBodyState& y, double h, std::initializer_list<std::pair<int, double>> stages,
-                    const RigidIntegratorScratch& scratch, RigidBodyState& out) {
+// Turns `orientation` about the axis ⊥ to both the body's least axis a and the world L so that
+// L·a = `axial` (clamped to ±|L|): the momentum about a as the body-frame equation gave it.
+inline void align_axial_momentum(Eigen::Quaterniond& orientation, const Eigen::Vector3d& angular_momentum, int axis,
+                                 double axial) {
+  const double norm = angular_momentum.norm();
+  const Eigen::Vector3d a = orientation * Eigen::Vector3d::Unit(axis);
+  const Eigen::Vector3d normal = a.cross(angular_momentum);
+  if (normal.norm() <= 1e-12 * norm) return;  // L along the axis: turning cannot change L·a
+  // The angles between a and L now and wanted, by atan2 (acos loses half the digits near 0 and π).
+  const double now = std::atan2(normal.norm(), a.dot(angular_momentum));
+  const double s = std::clamp(axial, -norm, norm);
+  const double wanted = std::atan2(std::sqrt((norm - s) * (norm + s)), s);
+  orientation = (Eigen::Quaterniond(Eigen::AngleAxisd(now - wanted, normal.normalized())) * orientation).normalized();
+}
+
+// out = y + h · Σ weight_k · k_k over the listed stages; q renormalized, then turned so the world
+// L agrees with the momentum about the least axis advanced the same way in the body frame
+// (align_axial_momentum). The world L and q, advanced apart, keep L·a only to the method's order,
+// and ω_axial = L·a/I_axial magnifies that error by I_transverse/I_axial (10⁶ for a limb of zero
+// radius): RK4 spun thin rods up until they diverged, at any Δt (kernel/lagrange/README.md).
+// Turning q (O(h^(order+1)) each step) keeps L as integrated: exact for a torque-free body.
+inline void advance(const RigidBodyBuffer& bodies, const RigidBodyState& y, double h,
+                    std::initializer_list<std::pair<int, double>> stages, const RigidIntegratorScratch& scratch,
+                    RigidBodyState& out) {
   for (std::size_t b = 0; b < y.size(); ++b) {
+    const int k = least_axis(bodies, b);
+    double axial = (y.orientation[b].conjugate() * y.angular_momentum[b])[k];
     Eigen::Vector3d x = y.position[b], p = y.linear_momentum[b], l = y.angular_momentum[b];
     Eigen::Vector4d q = y.orientation[b].coeffs();
     for (const auto& [s, weight] : stages) {
@@ -105,9 +169,11 @@ inline void advance(const RigidBodyState& y, double h, std::initializer_list<std
       q += h * weight * scratch.orientation_rate[s][b];
       p += h * weight * scratch.force[s][b];
       l += h * weight * scratch.torque[s][b];
+      axial += h * weight * scratch.axial_torque[s][b];
     }
     out.position[b] = x, out.linear_momentum[b] = p, out.angular_momentum[b] = l;
     out.orientation[b].coeffs() = q.normalized();
+    align_axial_momentum(out.orientation[b], l, k, axial);
   }
 }
 
@@ -121,6 +187,9 @@ inline void advance(const RigidBodyState& y, double h, std::initializer_list<std
 /// - semi_implicit_euler: P, L first, then x with the new v and q by the free rotation with the
 ///   new L (rotate_free_body; order 1 with forces, 2 without); needs diagonal body inertias;
 /// - rk2 (midpoint, order 2) and rk4 (classical, order 4).
+/// euler, rk2 and rk4 also advance each body's momentum about its least principal axis in the body
+/// frame and turn q to agree with it (detail::advance: a limb of zero radius spun up otherwise).
+/// Every integrator needs diagonal body inertias (the body frame on the principal axes).
 /// backward_euler is the spring method's own (kernel/springs/implicit_step.hpp): compile refuses
 /// it elsewhere, and here it does nothing.
 template <typename AccumulateForces>
@@ -130,7 +199,7 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, Integrator integr
   switch (integrator) {
     case Integrator::euler:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(y, h, {{0, 1.0}}, scratch, y);
+      detail::advance(bodies, y, h, {{0, 1.0}}, scratch, y);
       return;
     case Integrator::semi_implicit_euler:
       scratch.forces.clear();
@@ -144,19 +213,19 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, Integrator integr
       return;
     case Integrator::rk2:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(y, h, {{0, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
-      detail::advance(y, h, {{1, 1.0}}, scratch, y);
+      detail::advance(bodies, y, h, {{1, 1.0}}, scratch, y);
       return;
     case Integrator::rk4:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(y, h, {{0, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
-      detail::advance(y, h, {{1, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{1, 0.5}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 2);
-      detail::advance(y, h, {{2, 1.0}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{2, 1.0}}, scratch, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 3);
-      detail::advance(y, h, {{0, 1.0 / 6}, {1, 2.0 / 6}, {2, 2.0 / 6}, {3, 1.0 / 6}}, scratch, y);
+      detail::advance(bodies, y, h, {{0, 1.0 / 6}, {1, 2.0 / 6}, {2, 2.0 / 6}, {3, 1.0 / 6}}, scratch, y);
       return;
     case Integrator::backward_euler: return;
   }

@@ -12,7 +12,9 @@ namespace limber {
 namespace {
 
 // The rigid body's frame: the limb's principal axes (so its inertia is diagonal, which the
-// free-rotation flow needs), with moments below 10⁻⁶ of the largest raised to it.
+// free-rotation flow needs), with moments below 10⁻⁶ of the largest raised to it: a limb of zero
+// radius has none about its axis, and M must be invertible. Its value is not what keeps such a
+// limb stable (rigid_scene.hpp).
 struct PrincipalFrame {
   Eigen::Quaterniond rotation;  // principal frame → Model body frame
   Eigen::Vector3d moments;

@@ -95,7 +95,11 @@ struct RigidScene {
 /// - each limb becomes a rigid body at its centre of mass, with the mass properties of
 ///   body_mass_properties() (kernel/mass/): uniform over its shape, or its point masses; its
 ///   frame is on its principal axes (diagonal inertia), and principal moments below 10⁻⁶ of the
-///   largest (a limb of zero radius about its axis) are raised to that floor;
+///   largest (a limb of zero radius about its axis) are raised to that floor, which only keeps
+///   M invertible: nothing but a twist (an angular joint row, a drive) acts about such a limb's
+///   axis, and the integrators keep the momentum about it (rotate_free_body, detail::advance in
+///   rigid_integration.hpp), so thin-rod stability does not hang on the floor's value (measured
+///   the same from 10⁻⁹ to 10⁻²; a floor of 10⁻² alone still diverged: kernel/lagrange/README.md);
 /// - each ball becomes a solid sphere body, after the limbs;
 /// - bodies joined by joints (not through the world) form islands, which start asleep when the
 ///   scene asks (Settings::sleep.start_asleep) and they are at rest; each ball is its own;
