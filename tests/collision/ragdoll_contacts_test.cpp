@@ -300,9 +300,10 @@ struct Shot {
 // contact is the only thing that can move it. The ball flies along −x, `aside` m off the limb's
 // axis in y, from `start` m out in x; the run lasts until it would be 1 m past the limb, and two
 // steps more, so the last step is free flight after any hit.
-Shot fire_ball(Method method, double dt, double aside, double start) {
+// The shots' model: one capsule limb along z at `position`, at rest, no gravity, no ground, no sleep.
+Model lone_limb(const char* name, double dt, const Vector3d& position) {
   Model model;
-  model.name = "ball_at_limb";
+  model.name = name;
   model.settings.gravity = Vector3d::Zero();
   model.settings.time_step = dt;
   model.settings.sleep.enabled = false;
@@ -310,7 +311,13 @@ Shot fire_ball(Method method, double dt, double aside, double start) {
   limb.name = "limb";
   limb.shape = {ShapeType::capsule, kLimbLength, kLimbRadius};
   limb.mass = kLimbMass;
+  limb.position = position;
   model.bodies.push_back(limb);
+  return model;
+}
+
+Shot fire_ball(Method method, double dt, double aside, double start) {
+  Model model = lone_limb("ball_at_limb", dt, Vector3d::Zero());
   model.balls = {Ball{kBallRadius, kBallMass, kBallRestitution, Vector3d(start, aside, 0), Vector3d(-kBallSpeed, 0, 0)}};
   World world(model, WorldOptions{.method = method});
   std::vector<LimbSegment> segments;
@@ -394,17 +401,7 @@ struct Rebound {
 };
 
 Rebound fire_at_wall(Method method, double dt, Wall wall, double start) {
-  Model model;
-  model.name = "ball_at_wall";
-  model.settings.gravity = Vector3d::Zero();
-  model.settings.time_step = dt;
-  model.settings.sleep.enabled = false;
-  Body limb;
-  limb.name = "limb";
-  limb.shape = {ShapeType::capsule, kLimbLength, kLimbRadius};
-  limb.mass = kLimbMass;
-  limb.position = Vector3d(0, 3, 0);
-  model.bodies.push_back(limb);
+  Model model = lone_limb("ball_at_wall", dt, Vector3d(0, 3, 0));
   StaticCollider collider;
   collider.name = "wall";
   if (wall == Wall::plate) {

@@ -347,31 +347,33 @@ LoadedRun load(const RunFlags& flags) {
   return loaded;
 }
 
-LoadedRun load_run(const std::vector<std::string>& run_arguments) {
+namespace {
+
+// Parses `arguments` as `limber run`'s flags and hands them to `use` while the app that owns
+// their option handles lives. Throws std::runtime_error with CLI11's one line.
+template <typename Use>
+auto with_run_flags(const std::vector<std::string>& arguments, Use use) {
   CLI::App app{"limber run's flags", "limber run"};
   RunFlags flags;
   add_run_flags(app, flags);
   std::vector<const char*> argv{"limber run"};
-  for (const std::string& argument : run_arguments) argv.push_back(argument.c_str());
+  for (const std::string& argument : arguments) argv.push_back(argument.c_str());
   try {
     app.parse(int(argv.size()), argv.data());
   } catch (const CLI::ParseError& error) {
     throw std::runtime_error(error.what());
   }
-  return load(flags);
+  return use(flags);
+}
+
+}  // namespace
+
+LoadedRun load_run(const std::vector<std::string>& run_arguments) {
+  return with_run_flags(run_arguments, [](const RunFlags& flags) { return load(flags); });
 }
 
 WorldOptions options_for_method(const std::string& method, const MethodSettings& scene) {
-  CLI::App app{"limber run's flags", "limber run"};
-  RunFlags flags;
-  add_run_flags(app, flags);
-  const std::array<const char*, 3> argv{"limber run", "--method", method.c_str()};
-  try {
-    app.parse(int(argv.size()), argv.data());
-  } catch (const CLI::ParseError& error) {
-    throw std::runtime_error(error.what());
-  }
-  return method_options(flags, scene);
+  return with_run_flags({"--method", method}, [&](const RunFlags& flags) { return method_options(flags, scene); });
 }
 
 }  // namespace limber::cli

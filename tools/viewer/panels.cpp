@@ -21,17 +21,15 @@ void sync(const ViewState& view, PanelState& panel) {
   panel.shown_method = view.method_name();
   panel.method = int(std::find(kMethods.begin(), kMethods.end(), view.method_name()) - kMethods.begin()) % int(kMethods.size());
   const World& world = view.world();
-  if (std::holds_alternative<VerletState<double>>(world.state()) || std::holds_alternative<VerletState<float>>(world.state())) {
-    std::visit(
-        [&](const auto& state) {
-          if constexpr (requires { state.options.relaxation; }) {
-            panel.iterations = state.options.relaxation.iterations;
-            panel.substeps = state.options.relaxation.substeps;
-            panel.projection = state.options.relaxation.projection == ProjectionRule::rattle ? 1 : 0;
-          }
-        },
-        world.state());
-  }
+  std::visit(
+      [&](const auto& state) {
+        if constexpr (requires { state.options.relaxation; }) {  // the Verlet methods
+          panel.iterations = state.options.relaxation.iterations;
+          panel.substeps = state.options.relaxation.substeps;
+          panel.projection = state.options.relaxation.projection == ProjectionRule::rattle ? 1 : 0;
+        }
+      },
+      world.state());
   if (world.model().ground) panel.friction = float(world.model().ground->friction);
 }
 

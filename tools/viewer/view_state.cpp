@@ -230,10 +230,10 @@ void ViewState::on_button(const ButtonEvent& event, int width, int height) {
     if (body) {
       const BodyId id = world_->bodies()[*body];
       const Pose pose = world_->pose(id);
-      std::optional<double> t;
-      const Body& description = world_->body_description(id);
-      const Eigen::Vector3d half = 0.5 * description.shape.length * (pose.orientation * Eigen::Vector3d::UnitZ());
-      t = ray_capsule(ray, pose.position + half, pose.position - half, description.shape.radius);
+      std::vector<LimbSegment> segments;
+      world_->segments(segments);
+      const LimbSegment& limb = segments[*body];
+      const std::optional<double> t = ray_capsule(ray, limb.head, limb.tail, limb.radius);
       const Eigen::Vector3d grab = ray.origin + t.value_or(0) * ray.direction;
       const double depth = (grab - ray.origin).dot(camera.target - camera.eye()) / camera.distance;
       drag_ = Drag{*body, pose.orientation.conjugate() * (grab - pose.position), grab, depth};
@@ -267,13 +267,11 @@ void ViewState::pick(std::optional<std::size_t> body) {
 std::optional<std::size_t> ViewState::hit(const Ray& ray) const {
   std::optional<std::size_t> best;
   double nearest = std::numeric_limits<double>::infinity();
-  const std::vector<BodyId> bodies = world_->bodies();
-  for (std::size_t i = 0; i < bodies.size(); ++i) {
-    const Pose pose = world_->pose(bodies[i]);
-    const Shape& shape = world_->body_description(bodies[i]).shape;
-    const Eigen::Vector3d half = 0.5 * shape.length * (pose.orientation * Eigen::Vector3d::UnitZ());
+  std::vector<LimbSegment> segments;
+  world_->segments(segments);
+  for (std::size_t i = 0; i < world_->model().bodies.size(); ++i) {
     // A thin limb is hard to click: it takes clicks within 2 cm of its surface.
-    const std::optional<double> t = ray_capsule(ray, pose.position + half, pose.position - half, shape.radius + 0.02);
+    const std::optional<double> t = ray_capsule(ray, segments[i].head, segments[i].tail, segments[i].radius + 0.02);
     if (t && *t < nearest) nearest = *t, best = i;
   }
   return best;
