@@ -44,30 +44,12 @@ if [ -f "$build_dir/CMakeCache.txt" ]; then
   grep -q '^LIMBER_BUILD_BENCHMARKS:BOOL=ON' "$build_dir/CMakeCache.txt" && bench=ON
 fi
 
-# Debian 12 packages: the library and the CLI; the tests' and the benchmarks' on request.
-packages=(g++ cmake ninja-build pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev)
-if [ "$tests" = ON ]; then packages+=(libgtest-dev libgmock-dev libmujoco-dev); fi
-if [ "$viewer" = ON ]; then packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri); fi
-if [ "$bench" = ON ]; then
-  packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev
-             python3-matplotlib)  # tools/plot_*.py, which draw bench/figures/
-fi
-
-if [ "${LIMBER_SKIP_INSTALL:-0}" != 1 ]; then
-  missing=()
-  for p in "${packages[@]}"; do
-    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
-      missing+=("$p")
-    fi
-  done
-  if [ ${#missing[@]} -gt 0 ]; then
-    echo "setup.sh: installing ${missing[*]}"
-    sudo_cmd=()
-    if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
-    "${sudo_cmd[@]}" apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
-  fi
-fi
+# Debian 12 packages: the library's, and the tests', the viewer's and the benchmarks' on request.
+purposes=(library)
+if [ "$tests" = ON ]; then purposes+=(tests); fi
+if [ "$viewer" = ON ]; then purposes+=(viewer); fi
+if [ "$bench" = ON ]; then purposes+=(bench); fi
+tools/install_packages.sh "${purposes[@]}"
 
 # Configure once (or again when the options change), then build only what was asked for.
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \

@@ -100,6 +100,8 @@ struct StairsSpec {
 /// steps · rise above `position`, its length (steps − 1) · run + landing. Throws ModelError
 /// "stairs.<field>: ..." on a bad spec.
 TriangleMesh make_stairs_mesh(const StairsSpec& spec);
+/// How many triangles make_stairs_mesh(spec) makes: 8·steps + 4.
+inline std::size_t stairs_triangles(const StairsSpec& spec) { return 8 * spec.steps + 4; }
 
 /// The larger of the bodies' extents in x and y (capsule axes ± radius), m; 0 for no bodies.
 double footprint(const Model& model);

@@ -98,7 +98,17 @@ StairsSpec read_stairs(const Object& object) {
   return spec;
 }
 
-StaticCollider read_collider(const Object& object) {
+/// Takes `triangles` from the scene's triangle budget (SceneOptions::max_triangles), or refuses
+/// the collider before its mesh is allocated.
+void take_triangles(std::size_t triangles, std::size_t& budget, std::size_t max_triangles, const std::string& path) {
+  if (triangles > budget) {
+    fail(path, "asks for " + std::to_string(triangles) + " triangles, more than the " + std::to_string(budget) + " left of the " +
+                   std::to_string(max_triangles) + " the colliders may have");
+  }
+  budget -= triangles;
+}
+
+StaticCollider read_collider(const Object& object, std::size_t& triangle_budget, std::size_t max_triangles) {
   object.allow_only({"name", "type", "position", "rotation", "axis", "half_extents", "length", "radius", "vertices", "triangles",
                      "thickness", "restitution", "friction", "collision", "steps", "rise", "run", "width", "landing", "direction"});
   StaticCollider collider;
@@ -136,6 +146,8 @@ StaticCollider read_collider(const Object& object) {
   } else {
     collider.type = ColliderType::mesh;
     if (type == "mesh") {
+      const Json& triangles = object.at("triangles");
+      if (triangles.is_array()) take_triangles(triangles.size(), triangle_budget, max_triangles, object.path("triangles"));
       collider.mesh = read_mesh(object);
       // The vertices are in the frame that position and rotation give (both optional); the Model
       // holds them in world coordinates, so its position and orientation stay unused.
@@ -143,7 +155,9 @@ StaticCollider read_collider(const Object& object) {
       const Eigen::Quaterniond rotation = object.find("rotation") ? read_rotation(object) : Eigen::Quaterniond::Identity();
       for (Vector3& vertex : collider.mesh.vertices) vertex = rotation * vertex + position;
     } else {
-      collider.mesh = make_stairs_mesh(read_stairs(object));
+      const StairsSpec stairs = read_stairs(object);
+      take_triangles(stairs_triangles(stairs), triangle_budget, max_triangles, object.path("steps"));
+      collider.mesh = make_stairs_mesh(stairs);
     }
     require_triangle_mesh(collider.mesh, object.path("vertices"), object.path("triangles"));
     if (object.find("thickness")) collider.thickness = read_positive(object, "thickness");
@@ -167,11 +181,14 @@ CollisionFilter read_collision_filter(const Object& object) {
   return filter;
 }
 
-std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path) {
+std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles) {
   if (!value.is_array()) wrong_type(value, path, "an array");
   std::vector<StaticCollider> colliders;
   colliders.reserve(value.size());
-  for (std::size_t i = 0; i < value.size(); ++i) colliders.push_back(read_collider(Object(value[i], indexed(path, i))));
+  std::size_t triangle_budget = max_triangles;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    colliders.push_back(read_collider(Object(value[i], indexed(path, i)), triangle_budget, max_triangles));
+  }
   require_unique_names(colliders, [](const StaticCollider& collider) -> std::string_view { return collider.name; }, path);
   return colliders;
 }

@@ -374,13 +374,11 @@ void generate_chain(const Chain& chain, std::vector<BodySpec>& bodies, std::vect
   }
 }
 
-/// Most bodies a scene may generate (chain, tree, grid, copies): a guard against a file asking
-/// for terabytes, well above the largest workload measured (10⁶ links).
-constexpr double kMostGeneratedBodies = 1e7;
-
-void require_generated(double bodies, const std::string& path) {
-  if (bodies > kMostGeneratedBodies) {
-    fail(path, "asks for " + format_number(bodies) + " bodies, more than the " + format_number(kMostGeneratedBodies) +
+/// Refuses a generator asking for more bodies than SceneOptions::max_bodies, before anything is
+/// allocated.
+void require_generated(double bodies, const std::string& path, const SceneOptions& options) {
+  if (bodies > double(options.max_bodies)) {
+    fail(path, "asks for " + format_number(bodies) + " bodies, more than the " + format_number(double(options.max_bodies)) +
                    " a scene may generate");
   }
 }
@@ -411,7 +409,7 @@ Model read_tree(const Object& object, const SceneOptions& options) {
     require_at_least(depth, 0, object.path("depth"));
     require_at_most(depth, 64, object.path("depth"));
     links = branching == 1 ? double(depth + 1) : (std::pow(double(branching), double(depth + 1)) - 1) / double(branching - 1);
-    require_generated(links, object.path("depth"));
+    require_generated(links, object.path("depth"), options);
   } else {
     links = object.integer("links");
     require_at_least(static_cast<long>(links), 1, object.path("links"));
@@ -420,7 +418,7 @@ Model read_tree(const Object& object, const SceneOptions& options) {
     require_at_least(*options.links, 1, "tree.links (SceneOptions::links)");
     links = double(*options.links);
   }
-  require_generated(links, object.path(by_depth ? "depth" : "links"));
+  require_generated(links, object.path(by_depth ? "depth" : "links"), options);
   spec.links = static_cast<std::size_t>(links);
   spec.link_length = object.number("link_length");
   spec.link_mass = object.number("link_mass");
@@ -429,13 +427,13 @@ Model read_tree(const Object& object, const SceneOptions& options) {
 }
 
 /// The "grid" generator: GridSpec (generators.hpp), its top row's first node at `anchor`.
-Model read_grid(const Object& object) {
+Model read_grid(const Object& object, const SceneOptions& options) {
   object.allow_only({"columns", "rows", "spacing", "link_mass", "anchor", "pin_top_corners"});
   GridSpec spec;
   const long columns = object.integer("columns"), rows = object.integer("rows");
   require_at_least(columns, 2, object.path("columns"));
   require_at_least(rows, 2, object.path("rows"));
-  require_generated(2.0 * double(columns) * double(rows), object.path());
+  require_generated(2.0 * double(columns) * double(rows), object.path(), options);
   spec.columns = static_cast<std::size_t>(columns), spec.rows = static_cast<std::size_t>(rows);
   spec.spacing = object.number("spacing");
   spec.link_mass = object.number("link_mass");
@@ -681,7 +679,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
   if (const Json* bounds = root.find("bounds"))
     model.bounds = read_bounds(Object(*bounds, "bounds"));
   model.balls = read_balls(root);
-  if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders");
+  if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders", options.max_triangles);
 
   // Bodies: the explicit ones, then the chain's links.
   const Json* bodies_json = root.find("bodies");
@@ -709,9 +707,9 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
     if (options.links) {
       require_at_least(*options.links, 1, "chain.links (SceneOptions::links)");
       chain.links = static_cast<int>(std::min<long>(*options.links, INT_MAX));
-      require_generated(double(*options.links), "chain.links (SceneOptions::links)");
+      require_generated(double(*options.links), "chain.links (SceneOptions::links)", options);
     }
-    require_generated(chain.links, "chain.links");
+    require_generated(chain.links, "chain.links", options);
     generate_chain(chain, bodies, chain_joints);
   } else if (tree_json) {
     append_generated(read_tree(Object(*tree_json, "tree"), options), bodies, chain_joints);
@@ -719,7 +717,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
     fail("chain", std::to_string(*options.links) +
                       " links requested but the scene has no \"chain\" or \"tree\" generator");
   }
-  if (grid_json) append_generated(read_grid(Object(*grid_json, "grid")), bodies, chain_joints);
+  if (grid_json) append_generated(read_grid(Object(*grid_json, "grid"), options), bodies, chain_joints);
   // Names become indices only for what refers to bodies by name (variants, explicit joints); a
   // generated million-link chain needs no map.
   std::unordered_map<std::string, int> body_index;
@@ -785,7 +783,7 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
     require_at_least(*options.copies, 1, "copies.count (SceneOptions::copies)");
     copies = *options.copies;
   }
-  require_generated(double(copies) * double(model.bodies.size()), "copies.count");
+  require_generated(double(copies) * double(model.bodies.size()), "copies.count", options);
   if (copies > 1) {
     model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies", static_cast<std::size_t>(layers), layer_height);
   } else if (layers > 1) {

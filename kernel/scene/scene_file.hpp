@@ -123,7 +123,7 @@
 //                                              m above the one below (≥ the bodies' height), odd ones
 //                                              half a spacing across (a pile to drop; generators.hpp's
 //                                              copies_of). Colliders, ground and balls stay as given.
-//     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together).
+//     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together; SceneOptions::max_bodies).
 //   "colliders": [ {                           optional (none): static level geometry (model.hpp's StaticCollider)
 //       "name": "bar",                         required, unique, non-empty, no body's name
 //       "type": "box",                         required: "box" | "capsule" | "mesh" | "stairs" (a generator
@@ -151,6 +151,7 @@
 //               "direction": [1, 0, 0],        required, horizontal, non-zero (normalized): uphill
 //               "thickness": 0.1 } ],          optional (0.1), as a mesh's
 //     The stairs are a closed mesh: risers, treads, landing, back, sides and bottom, facing out.
+//     The meshes and stairs may have at most 10⁶ triangles in all (SceneOptions::max_triangles).
 //   "variants": {                              optional: named sets of per-body overrides
 //       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
 //                                              each override may give "radius" and/or "mass" (or
@@ -176,11 +177,25 @@
 
 namespace limber {
 
+/// Most bodies a scene may generate by default (chain, tree, grid and copies together): a guard
+/// against a file asking for terabytes, well above the largest workload measured (10⁶ links).
+inline constexpr std::size_t kMaxSceneBodies = 10'000'000;
+
+/// Most triangles a scene's mesh and stairs colliders may have in all, by default: a guard
+/// against a few bytes of "stairs" asking for gigabytes (a mesh file of 10⁶ triangles would
+/// already be past kMaxSceneFileBytes).
+inline constexpr std::size_t kMaxSceneTriangles = 1'000'000;
+
 /// Choices made when loading, for scenes that offer them.
 struct SceneOptions {
   std::optional<std::string> variant;  ///< select one of "variants" (e.g. the humanoid's "thin")
   std::optional<long> links;           ///< number of links of the "chain" or "tree" generator
   std::optional<long> copies;          ///< copies of the scene's bodies (its "copies" count, or laid out by their extent)
+  /// A generator (or copies) asking for more bodies is refused before anything is allocated:
+  /// lower it to load untrusted files within a memory and time budget.
+  std::size_t max_bodies = kMaxSceneBodies;
+  /// Likewise for the triangles of the mesh and stairs colliders, all together.
+  std::size_t max_triangles = kMaxSceneTriangles;
 };
 
 /// A loaded scene: the solver-independent Model, and what the file says about the methods

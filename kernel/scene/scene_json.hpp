@@ -164,7 +164,9 @@ class Object {
 /// in [0, 2^32); CollisionFilter's defaults 1 and 0xFFFFFFFF).
 CollisionFilter read_collision_filter(const Object& object);
 
-/// The top-level "colliders": an array of static colliders, "stairs" generated into meshes.
-std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path);
+/// The top-level "colliders": an array of static colliders, "stairs" generated into meshes; a mesh
+/// or stairs that would take the colliders past `max_triangles` in all is refused before its
+/// mesh is allocated (SceneOptions::max_triangles).
+std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles);
 
 }  // namespace limber::scene_json

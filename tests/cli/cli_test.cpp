@@ -331,6 +331,16 @@ TEST(Cli, OutNeverWritesOverTheSceneFile) {
   expect_rejected({"run", copy, "--steps", "2", "--out", ::testing::TempDir()}, "directory");
 }
 
+// A trajectory that could not fit on the disk (10⁹ rows of 10⁴ links: petabytes) is refused
+// before the run, and leaves no file.
+TEST(Cli, OutRefusesATrajectoryLargerThanTheFreeSpace) {
+  const std::string path = ::testing::TempDir() + "/limber_cli_huge.csv";
+  std::filesystem::remove(path);
+  expect_rejected({"run", scene("chain.json"), "--links", "10000", "--steps", "1000000000", "--out", path}, "free in");
+  EXPECT_FALSE(std::filesystem::exists(path));
+  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+}
+
 // An output file appears under its name only once complete: an abandoned one leaves nothing,
 // not even over an older file of that name.
 TEST(Cli, AnOutputFileAppearsOnlyWhenComplete) {

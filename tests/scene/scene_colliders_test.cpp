@@ -175,6 +175,37 @@ TEST(SceneColliders, StairsBecomeAClosedMesh) {
   EXPECT_NEAR(length, 0.6, 1e-12);
 }
 
+// A few bytes of "stairs" could ask for gigabytes (10⁶ steps took 7 GB and minutes): the
+// colliders' triangles are counted against SceneOptions::max_triangles before any is made.
+TEST(SceneColliders, TrianglesPastTheLimitAreRefusedBeforeTheMeshIsMade) {
+  EXPECT_EQ(load_error(scene(R"({"name": "stairs", "type": "stairs", "steps": 1000000, "rise": 0.2, "run": 0.3, "width": 2,
+                                 "position": [1, 0, 0], "direction": [1, 0, 0]})")),
+            "test.json: colliders[0].steps: asks for 8000004 triangles, more than the 1000000 left of the 1000000 the colliders may have");
+  // The limit is on all the colliders together: two stairs of 36 triangles pass 40, one does not.
+  const std::string stairs = R"({"name": "NAME", "type": "stairs", "steps": 4, "rise": 0.2, "run": 0.3, "width": 2,
+                                 "position": [1, 0, 0], "direction": [1, 0, 0]})";
+  const std::string two = replaced(stairs, "NAME", "a") + ", " + replaced(stairs, "NAME", "b");
+  SceneOptions options;
+  options.max_triangles = 40;
+  EXPECT_EQ(load_scene_text(scene(replaced(stairs, "NAME", "a")), "test.json", options).model.colliders.size(), 1u);
+  try {
+    load_scene_text(scene(two), "test.json", options);
+    ADD_FAILURE() << "two stairs of 36 triangles loaded under a limit of 40";
+  } catch (const ModelError& error) {
+    EXPECT_STREQ(error.what(), "test.json: colliders[1].steps: asks for 36 triangles, more than the 4 left of the 40 the colliders may have");
+  }
+  // A mesh counts its triangles as given.
+  options.max_triangles = 1;
+  try {
+    load_scene_text(scene(R"({"name": "floor", "type": "mesh", "vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]],
+                              "triangles": [[0, 1, 2], [1, 3, 2]]})"),
+                    "test.json", options);
+    ADD_FAILURE() << "a mesh of 2 triangles loaded under a limit of 1";
+  } catch (const ModelError& error) {
+    EXPECT_STREQ(error.what(), "test.json: colliders[0].triangles: asks for 2 triangles, more than the 1 left of the 1 the colliders may have");
+  }
+}
+
 TEST(SceneColliders, BadCollidersAreNamedByTheirField) {
   EXPECT_EQ(load_error(scene(R"({"name": "wall", "type": "cone", "position": [0, 0, 0]})")),
             "test.json: colliders[0].type: must be \"box\", \"capsule\", \"mesh\" or \"stairs\", got \"cone\"");

@@ -482,6 +482,25 @@ TEST(SceneErrors, BadGeneratorsAndCopiesAreNamed) {
   EXPECT_THAT(load_error(kPendulum, options), StartsWith("test.json: copies.count (SceneOptions::copies): must be >= 1"));
 }
 
+TEST(SceneErrors, MaxBodiesRefusesAGeneratorBeforeItAllocates) {
+  // 10¹² links would need ~10¹⁴ bytes: the refusal must come before the generator runs.
+  SceneOptions options;
+  options.links = 1'000'000'000'000;
+  EXPECT_EQ(load_error(read_text(kScenes + "chain.json"), options),
+            "test.json: chain.links (SceneOptions::links): asks for 1e+12 bodies, more than the 1e+07 a scene may generate");
+  // An engine loading untrusted files lowers the limit; the same scene then loads under a higher one.
+  options.links = 50;
+  options.max_bodies = 49;
+  EXPECT_THAT(load_error(read_text(kScenes + "chain.json"), options),
+              StartsWith("test.json: chain.links (SceneOptions::links): asks for 50 bodies, more than the 49 "));
+  options.max_bodies = 50;
+  EXPECT_EQ(load_scene_text(read_text(kScenes + "chain.json"), "test.json", options).model.bodies.size(), 50u);
+  options = {};
+  options.max_bodies = 100;
+  EXPECT_THAT(load_error(with(kTree, R"("depth": 3)", R"("depth": 7)"), options), StartsWith("test.json: tree.depth: asks for "))
+      << "a binary tree of depth 7 has 255 links";
+}
+
 TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {
   const Model model = load_scene_text(kPendulum, "test.json").model;
   const double r = 0.01;

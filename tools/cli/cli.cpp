@@ -9,6 +9,7 @@
 #include <fstream>
 #include <optional>
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -315,7 +316,10 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   if (given(flags.out_option)) {
     csv.emplace(flags.out_path, "--out", std::vector<std::filesystem::path>{flags.scene});
     write_trajectory_header(csv->stream(), model, variant);
-    write_trajectory_row(csv->stream(), variant);
+    std::ostringstream first_row;
+    write_trajectory_row(first_row, variant);
+    csv->require_space(double(steps) * double(first_row.view().size()));
+    csv->stream() << first_row.view();
   }
   const Observation start = observe(state);
   KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);

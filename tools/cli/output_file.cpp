@@ -2,6 +2,8 @@
 
 #include <system_error>
 
+#include "tools/cli/run_flags.hpp"
+
 #include "tools/cli/cli.hpp"
 
 namespace limber::cli {
@@ -25,6 +27,16 @@ OutputFile::~OutputFile() {
   stream_.close();
   std::error_code ignored;
   std::filesystem::remove(partial_, ignored);
+}
+
+void OutputFile::require_space(double bytes) const {
+  std::error_code error;
+  const std::filesystem::path folder = std::filesystem::absolute(partial_, error).parent_path();
+  const std::filesystem::space_info space = std::filesystem::space(folder, error);
+  if (error || bytes <= double(space.available)) return;  // unknown space: the write itself reports a full disk
+  const auto gigabytes = [](double b) { return format("%.3g GB", b / 1e9); };
+  throw InputError(flag_ + ": '" + path_.string() + "' would take about " + gigabytes(bytes) + ", more than the " +
+                   gigabytes(double(space.available)) + " free in " + folder.string() + " (fewer --steps, or no " + flag_ + ")");
 }
 
 void OutputFile::commit() {

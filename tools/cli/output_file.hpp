@@ -22,6 +22,9 @@ class OutputFile {
   OutputFile& operator=(const OutputFile&) = delete;
 
   std::ostream& stream() { return stream_; }
+  /// Throws InputError, before anything more is written, when `bytes` more would not fit in the
+  /// space free where the file is written (a run of 10⁹ steps asking for terabytes).
+  void require_space(double bytes) const;
   /// Closes the file and renames it over `path`. Throws InputError when a write failed (a full
   /// disk) or the rename did; the `.part` is then removed.
   void commit();

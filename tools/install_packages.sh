@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages a purpose needs, only the missing ones (apt-get; sudo when not
+# root). The one list of limber's packages: tools/setup.sh, tools/fuzz.sh and the sanitizer runs
+# call it. LIMBER_SKIP_INSTALL=1 skips it.
+#
+#   tools/install_packages.sh PURPOSE...
+#
+#   library   the library and the `limber` program (compiler, CMake, Ninja, Eigen, oneTBB, xsimd,
+#             nlohmann-json, CLI11)
+#   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone cross-check)
+#   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
+#   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py)
+#   fuzz      clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer
+set -euo pipefail
+packages=()
+for purpose in "$@"; do
+  case "$purpose" in
+    library) packages+=(g++ cmake ninja-build pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev) ;;
+    tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev) ;;
+    viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
+    bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib) ;;
+    fuzz) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
+    *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench or fuzz)" >&2; exit 2 ;;
+  esac
+done
+if [ "${LIMBER_SKIP_INSTALL:-0}" = 1 ]; then exit 0; fi
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then exit 0; fi
+echo "install_packages.sh: installing ${missing[*]}"
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+"${sudo_cmd[@]}" apt-get update -qq
+DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
