@@ -32,10 +32,12 @@ DivergenceBounds divergence_bounds(const Model& model, const Observation& start)
 
 StepStatus check_divergence(const Observation& now, const DivergenceBounds& bounds) {
   const bool finite = std::isfinite(now.kinetic_energy) && std::isfinite(now.potential_energy) && now.linear_momentum.allFinite() &&
-                      now.body_centre_of_mass.allFinite() && std::isfinite(now.max_joint_gap);
+                      now.body_centre_of_mass.allFinite() && std::isfinite(now.max_joint_gap) &&
+                      std::isfinite(now.max_link_stretch);
   if (!finite) return StepStatus::diverged_non_finite;
   if (now.energy() - bounds.start_energy > kDivergenceEnergyFactor * bounds.energy_scale) return StepStatus::diverged_energy;
-  if (now.max_joint_gap > kDivergenceJointGap) return StepStatus::diverged_joint_gap;
+  // A particle limb's length is a constraint like a joint's: stretched by a whole link, it has come apart too.
+  if (std::max(now.max_joint_gap, now.max_link_stretch) > kDivergenceJointGap) return StepStatus::diverged_joint_gap;
   return StepStatus::ok;
 }
 

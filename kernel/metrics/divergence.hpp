@@ -4,14 +4,18 @@
 // so one check serves them all; the World and the command line run it after every step.
 //
 // A run has diverged when, after a step,
-// - a number of the state is not finite: its energy, momentum, centre of mass or a joint gap
+// - a number of the state is not finite: its energy, momentum, centre of mass, a joint gap or a
+//   link's stretch
 //   (a non-finite position, velocity, angular velocity or orientation reaches one of them);
 // - its energy (kinetic, linear and angular, plus potential) has risen above the energy it
 //   started with by more than kDivergenceEnergyFactor times the scene's energy scale: the work
 //   gravity does on its mass across its extent, plus the kinetic energy it started with (a
 //   thrown ball's); without loads and drives no method may gain energy at all, so the bound
 //   only leaves room for what pushes, drives and moving pins put in;
-// - a joint gap has grown past kDivergenceJointGap (a whole link length).
+// - a joint gap, or a particle limb's stretch (Observation::max_link_stretch: its head–tail
+//   distance is a constraint like a joint's), has grown past kDivergenceJointGap (a whole link
+//   length). Unconverged relaxation on a long chain can leave the joints closed and the links
+//   several times their length, gaining energy, with every number finite.
 #pragma once
 
 #include "limber/kernel/metrics/observers.hpp"
@@ -22,9 +26,10 @@ namespace limber {
 
 /// How many energy scales a run may gain before it has diverged (a stable run gains none).
 inline constexpr double kDivergenceEnergyFactor = 100;
-/// The largest joint gap, relative to the link length, of a run that holds together: a whole
-/// link. The stiff springs' default joints sag to 0.5–0.6 of a short link (a neck under a head)
-/// in the shipped ragdolls without coming apart; a spring that lets go stretches to many.
+/// The largest joint gap or link stretch, relative to the link length, of a run that holds
+/// together: a whole link. The stiff springs' default joints sag to 0.5–0.6 of a short link (a
+/// neck under a head) in the shipped ragdolls without coming apart; a spring that lets go
+/// stretches to many.
 inline constexpr double kDivergenceJointGap = 1.0;
 
 /// What a run is measured against, fixed when it starts (or its model changes).

@@ -83,5 +83,22 @@ TEST(Divergence, TheEnergyScaleIsTheScenes) {
   EXPECT_EQ(check_divergence(gained, rest), StepStatus::diverged_non_finite);
 }
 
+// A particle limb stretched past a whole link has come apart as surely as an open joint:
+// unconverged relaxation on a long chain closes the joints and leaves the links stretched
+// (tests/world/soak_test.cpp: a 10³-link chain at 1/30 s under the direct solver reached 2.3×
+// its links' length and 5× its start energy while reported ok).
+TEST(Divergence, ALinkStretchedPastAWholeLinkIsReported) {
+  const Model model = make_chain({1, 1}, 0.5, true);
+  World world(model, WorldOptions{});
+  const DivergenceBounds bounds = divergence_bounds(model, world.observe());
+  Observation stretched = world.observe();
+  stretched.max_link_stretch = 0.99;
+  EXPECT_EQ(check_divergence(stretched, bounds), StepStatus::ok);
+  stretched.max_link_stretch = 1.01;
+  EXPECT_EQ(check_divergence(stretched, bounds), StepStatus::diverged_joint_gap);
+  stretched.max_link_stretch = std::nan("");
+  EXPECT_EQ(check_divergence(stretched, bounds), StepStatus::diverged_non_finite);
+}
+
 }  // namespace
 }  // namespace limber
