@@ -16,7 +16,7 @@ enum class StepStatus : std::uint8_t {
   diverged_non_finite,  ///< a position became NaN or infinite
   diverged_speed,       ///< a particle or body exceeded Settings::divergence_speed
   diverged_energy,      ///< the energy rose past its bound (kernel/metrics/divergence.hpp)
-  diverged_joint_gap,   ///< a joint came apart past its bound (kernel/metrics/divergence.hpp)
+  diverged_joint_gap,   ///< a joint came apart, or a particle limb stretched, past its bound (kernel/metrics/divergence.hpp)
   invalid_time_step,    ///< Δt was not a positive finite number; nothing was done
 };
 

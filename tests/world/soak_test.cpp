@@ -1,5 +1,5 @@
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
-// Long-run soak (issue "Hard to break", item 6): the humanoid and its ball under every method,
+// Long-run soak: the humanoid and its ball under every method,
 // and a long chain under every Verlet solver at Δt = 1/30 s, stepped through World and checked
 // after every step against what the physics allows, measured here from World::observe(),
 // pose(), motion(), ball() and segments() — not by the kernel's own divergence check:
@@ -182,9 +182,14 @@ void soak_humanoid(bool sleeping) {
                 result.end_energy);
     EXPECT_EQ(result.steps, kHumanoidSteps);
     EXPECT_EQ(result.status, StepStatus::ok);
-    if (c.options.method == Method::particles && c.options.particles.rule == RelaxationRule::unweighted && !sleeping) {
-      continue;  // measured to gain energy at rest: HumanoidSoak.UnweightedRelaxationAtRestGainsNoEnergy
-    }
+    // The thesis's unweighted rule (½ and ½, eq. 4.6) does not keep the centre of mass. Lying awake
+    // on the ground it creeps upward in a propped pose and gains energy with no kinetic energy to
+    // speak of (< 3·10⁻⁶ J): measured 229.452 J at 2·10⁴ steps, 229.748 J at 10⁵ (centre of mass
+    // +0.17 mm), 0.456 J above its lowest at step 120503 (502 s), when the body tips over into a
+    // lower pose (178.10 J) and lies still to 4·10⁵ steps. The weighted rule under the same
+    // conditions rises at most 0.4 mJ. Not asserted for it (the creep is bounded by the tip-over, and
+    // is what the thesis's weighting removes); everything else is.
+    if (c.options.method == Method::particles && c.options.particles.rule == RelaxationRule::unweighted && !sleeping) continue;
     EXPECT_LE(result.largest_rise_at_rest, kHumanoidRise);
   }
 }
@@ -195,17 +200,6 @@ TEST(HumanoidSoak, EveryMethodStaysFiniteAndGainsNoEnergy) { soak_humanoid(true)
 // Sleeping off: it lies on the ground awake for the rest of the run, every contact solved every
 // step, which is where slow creep would show.
 TEST(HumanoidSoak, EveryMethodLyingAwakeStaysFiniteAndGainsNoEnergy) { soak_humanoid(false); }
-
-// The thesis's unweighted rule (½ and ½, eq. 4.6) does not keep the centre of mass. Lying awake
-// on the ground it creeps upward in a propped pose and gains energy with no kinetic energy to
-// speak of (< 3·10⁻⁶ J): measured 229.452 J at 2·10⁴ steps, 229.748 J at 10⁵ (centre of mass
-// +0.17 mm), 0.456 J above its lowest at step 120503 (502 s), when the body tips over into a
-// lower pose (178.10 J) and lies still to 4·10⁵ steps. The weighted rule under the same
-// conditions rises at most 0.4 mJ. Reported, not asserted: the creep is bounded by the tip-over,
-// and is what the thesis's weighting removes.
-TEST(HumanoidSoak, UnweightedRelaxationAtRestGainsNoEnergy) {
-  GTEST_SKIP() << "measured failure: the unweighted rule lying awake gains 0.46 J in 502 s before tipping over (see the comment)";
-}
 
 // --- The long chain at 1/30 s -------------------------------------------------------------------
 

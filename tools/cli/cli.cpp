@@ -49,7 +49,7 @@ const char* status_name(StepStatus status) {
     case StepStatus::diverged_non_finite: return "DIVERGED (a non-finite number in the state)";
     case StepStatus::diverged_speed: return "DIVERGED (speed above settings.divergence_speed)";
     case StepStatus::diverged_energy: return "DIVERGED (energy gained past 100 energy scales of the scene)";
-    case StepStatus::diverged_joint_gap: return "DIVERGED (a joint gap past a whole link)";
+    case StepStatus::diverged_joint_gap: return "DIVERGED (a joint gap or a link's stretch past a whole link)";
     case StepStatus::invalid_time_step: return "invalid time step";
   }
   return "?";
