@@ -18,9 +18,13 @@
 # -march=native as tools/setup.sh does (LIMBER_NATIVE=ON); -fno-sanitize-recover=all makes an
 # undefined-behaviour report abort the test instead of printing and going on.
 # Not run under a sanitizer, with the reason:
-#   - label `package` (package_installs_and_a_client_builds): it installs the instrumented library
+#   - package_installs_and_a_client_builds (label package): it installs the instrumented library
 #     and links a client built without the sanitizer's runtime, which cannot link; the code it
 #     runs (the README's example) is the World's, which the World tests cover.
+#   - the viewer's two rendering tests (viewer_renders_headless, program_view_writes_a_screenshot)
+#     run, but without leak checking: a GL library loaded with dlopen and unloaded before exit
+#     (Mesa's DRI driver, by every sign) leaves ~5 kB in ~257 allocations that LeakSanitizer cannot
+#     name (an unknown module: no suppression can match it); ASan and UBSan still check them.
 #   - label `stress` is run (it is the point of a sanitizer run); pass -LE stress to shorten.
 # Setup: run tools/setup.sh --tests (or tools/test.sh) once first for the packages; this script
 # installs nothing. Environment: LIMBER_SANITIZE_BUILD_DIR overrides build-asan / build-tsan.
@@ -55,8 +59,9 @@ if [ "$mode" = address ]; then
   # default allows). new/delete mismatches and container overflows are checked too.
   export ASAN_OPTIONS=halt_on_error=1:abort_on_error=0:detect_leaks=1:check_initialization_order=1:strict_init_order=1:alloc_dealloc_mismatch=1:new_delete_type_mismatch=1:detect_odr_violation=2
   export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
-  export LSAN_OPTIONS=suppressions=$PWD/tools/sanitize/lsan.supp:print_suppressions=0
-  ctest --test-dir "$build_dir" --output-on-failure -j2 -LE '^package$' "$@"
+  rendering='^(viewer_renders_headless|program_view_writes_a_screenshot)$'
+  ctest --test-dir "$build_dir" --output-on-failure -j2 -E "^package_installs_and_a_client_builds\$|$rendering" "$@"
+  ASAN_OPTIONS=$ASAN_OPTIONS:detect_leaks=0 ctest --test-dir "$build_dir" --output-on-failure -R "$rendering" "$@"
 else
   # The programs whose tests start threads (grep the tests for threads =, Threading::, std::thread).
   programs=(threading_tests relaxation_tests verlet_tests limb_contact_tests allocation_tests world_tests cli_tests)
