@@ -26,6 +26,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// The state of a rigid body an impulse acts on, all in the world frame.

@@ -35,6 +35,7 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/featherstone/spatial.hpp"
 
 namespace limber {

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 

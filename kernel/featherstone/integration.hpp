@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/numerics/integrator.hpp"

@@ -6,6 +6,8 @@
 
 #include <cmath>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// Where the search stopped: the bracket [low, high] and its two interior points with their values.

@@ -15,6 +15,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 struct MassProperties {

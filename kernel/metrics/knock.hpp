@@ -3,6 +3,8 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// How far the body's centre of mass moves along the ball's initial path in the `window`

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <utility>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/numerics/flush_denormals.hpp"
 
 namespace limber {

@@ -7,6 +7,8 @@
 
 #if defined(__SSE__) || defined(__x86_64__)
 #include <xmmintrin.h>
+
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #endif
 
 namespace limber {

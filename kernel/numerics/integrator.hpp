@@ -8,6 +8,8 @@
 #include <string>
 #include <string_view>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 enum class Integrator : std::uint8_t {

@@ -11,6 +11,8 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 template <int N, typename Scalar = double>

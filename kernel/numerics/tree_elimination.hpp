@@ -29,6 +29,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/numerics/small_cholesky.hpp"
 
 namespace limber {

@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// [r]×, the matrix with [r]×·x = r × x.

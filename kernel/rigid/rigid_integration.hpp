@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/kernel/numerics/integrator.hpp"
 #include "limber/layouts/bodies/rigid_body_buffer.hpp"
 

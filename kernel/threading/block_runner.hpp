@@ -27,6 +27,8 @@
 
 #include <oneapi/tbb/task_arena.h>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 enum class Threading : std::uint8_t { serial, parallel_for, workers, tasks };

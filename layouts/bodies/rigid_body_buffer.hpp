@@ -7,6 +7,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// The integration state Y = (x, q, P, L) of n rigid bodies (thesis eq. 2.29), one array per

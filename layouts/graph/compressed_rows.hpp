@@ -6,6 +6,8 @@
 #include <utility>
 #include <vector>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// Row r holds entries[offsets[r] .. offsets[r + 1]). Shapes: offsets has rows() + 1 elements.

@@ -25,6 +25,8 @@
 #include <string>
 #include <vector>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// Colour of a constraint that is in no colour (overflow, or never projected).

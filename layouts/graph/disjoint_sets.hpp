@@ -5,6 +5,8 @@
 #include <numeric>
 #include <vector>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber {
 
 /// Union-find with path halving and union by index (the smaller index becomes the root, so the

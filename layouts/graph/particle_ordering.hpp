@@ -21,6 +21,7 @@
 #include <random>
 #include <vector>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/layouts/graph/compressed_rows.hpp"
 
 namespace limber {

@@ -1,7 +1,9 @@
 # The packaging test (ctest package_installs_and_a_client_builds): installs limber from BUILD_DIR
 # into WORK_DIR/prefix, builds a client with find_package(limber) whose main.cpp is the first
 # ```cpp block of README.md, runs it, and checks that a translation unit compiled for another
-# instruction set than the library is refused at build time.
+# instruction set than the library is refused at build time: the example, and every installed
+# header included alone (a client that includes only, say, the Featherstone headers must be
+# refused too, not crash freeing an Eigen object with the wrong alignment).
 #
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -DNATIVE=ON|OFF -DCXX=... -DEIGEN_DIR=... -P package_test.cmake
 function(run)
@@ -49,4 +51,28 @@ if(result EQUAL 0)
   endif()
 elseif(NOT output MATCHES "instruction-set mismatch")
   message(FATAL_ERROR "the mismatched build failed, but not with limber's message:\n${output}")
+else()
+  # Each installed header alone, preprocessed only (the #error is the preprocessor's): every one
+  # must reach limber/config.hpp.
+  file(GLOB_RECURSE headers RELATIVE ${WORK_DIR}/prefix/include ${WORK_DIR}/prefix/include/limber/*.hpp)
+  list(REMOVE_ITEM headers limber/config.hpp)
+  set(unguarded "")
+  foreach(header IN LISTS headers)
+    file(WRITE ${WORK_DIR}/one_header.cpp "#include <${header}>\n")
+    execute_process(COMMAND ${CXX} -std=c++20 ${other_flags} -Wfatal-errors -E -o /dev/null -I${WORK_DIR}/prefix/include -I${EIGEN_DIR}
+                            ${WORK_DIR}/one_header.cpp
+                    RESULT_VARIABLE result OUTPUT_VARIABLE output ERROR_VARIABLE output)
+    if(result EQUAL 0 OR NOT output MATCHES "instruction-set mismatch")
+      list(APPEND unguarded ${header})
+    endif()
+  endforeach()
+  list(LENGTH headers count)
+  if(count LESS 20)
+    message(FATAL_ERROR "only ${count} headers installed under ${WORK_DIR}/prefix/include/limber")
+  endif()
+  if(unguarded)
+    list(JOIN unguarded "\n  " unguarded)
+    message(FATAL_ERROR "installed headers that a translation unit for another instruction set can include without "
+                        "limber's #error (include limber/config.hpp in each):\n  ${unguarded}")
+  endif()
 endif()

@@ -2,6 +2,11 @@
 // spring method's and the Lagrange tree solve's. (The implicit springs and Lagrange's sparse path
 // allocate inside Eigen's sparse factorization, kernel/springs/step.hpp.) Counted by
 // tests/support/allocation_counter.cpp, which replaces this program's allocation functions.
+#include <algorithm>
+#include <cstdint>
+#include <new>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "limber/kernel/lagrange/compile.hpp"
@@ -147,6 +152,42 @@ TEST(Allocation, TheCounterSeesAllocations) {  // so the test above can fail
   std::vector<int> vector(100, 1);
   EXPECT_EQ(vector[99], 1);
   EXPECT_GE(testing::allocation_count() - before, 1);
+}
+
+TEST(Allocation, TheCounterCountsEveryFormOnceAndFreesItsOwn) {
+  // Each replaceable allocation function counts one allocation and its memory goes back through
+  // the matching delete (called directly: unlike a new-expression, a call is never elided).
+  // std::stable_partition's temporary buffer takes the nothrow new: AddressSanitizer reported
+  // alloc-dealloc-mismatch when that form was left to the runtime and freed here.
+  const auto counted = [](auto allocate_and_free) {
+    const long before = testing::allocation_count();
+    allocate_and_free();
+    return testing::allocation_count() - before;
+  };
+  const auto wide = std::align_val_t{64};
+  const std::nothrow_t& nothrow = std::nothrow;
+  EXPECT_EQ(counted([] { ::operator delete(::operator new(24)); }), 1);
+  EXPECT_EQ(counted([] { ::operator delete[](::operator new[](24)); }), 1);
+  EXPECT_EQ(counted([] { ::operator delete(::operator new(24), 24); }), 1);
+  EXPECT_EQ(counted([] { ::operator delete[](::operator new[](24), 24); }), 1);
+  EXPECT_EQ(counted([&] { ::operator delete(::operator new(24, nothrow), nothrow); }), 1);
+  EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](24, nothrow), nothrow); }), 1);
+  for (const std::size_t size : {std::size_t{0}, std::size_t{24}, std::size_t{200}}) {
+    EXPECT_EQ(counted([&] {
+                void* p = ::operator new(size, wide);
+                EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % 64, 0u);
+                ::operator delete(p, size, wide);
+              }),
+              1);
+    EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](size, wide), size, wide); }), 1);
+    EXPECT_EQ(counted([&] { ::operator delete(::operator new(size, wide), wide); }), 1);
+    EXPECT_EQ(counted([&] { ::operator delete(::operator new(size, wide, nothrow), wide, nothrow); }), 1);
+    EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](size, wide, nothrow), wide, nothrow); }), 1);
+  }
+  std::vector<int> values(1000);
+  for (int k = 0; k < 1000; ++k) values[static_cast<std::size_t>(k)] = (k * 7919) % 1000;
+  EXPECT_GE(counted([&] { std::stable_partition(values.begin(), values.end(), [](int v) { return v % 2 == 0; }); }), 1);
+  EXPECT_TRUE(std::is_partitioned(values.begin(), values.end(), [](int v) { return v % 2 == 0; }));
 }
 
 TEST(Allocation, ExplicitSpringStepAllocatesNothingAfterItsFirstCall) {

@@ -5,10 +5,12 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "limber/kernel/world/world.hpp"
 #include "tests/support/models.hpp"
@@ -465,6 +467,43 @@ TEST(World, ADefaultWorldStartsNoThread) {
   World chain(make_chain(std::vector<double>(50, 1.0), 0.1, true));
   for (int s = 0; s < 60; ++s) chain.step(1.0 / 240);
   EXPECT_EQ(thread_count(), before);
+}
+
+TEST(World, OnAnEnginesTaskSystemStepsTheSerialBits) {
+  // WorldOptions::particles.threading = Threading::tasks: the colour sweeps run on the engine's
+  // scheduler (here two threads of the test's own, and a oneTBB arena) and every body ends each
+  // step where the serial World puts it, bit for bit. (tools/sanitize.sh thread runs this.)
+  const Scene ragdoll = testing::shipped_scene("ragdoll.json");
+  const auto poses_after = [&](const WorldOptions& options) {
+    World world(ragdoll.model, options);
+    std::vector<double> coordinates;
+    for (int s = 0; s < 90; ++s) {
+      EXPECT_EQ(world.step(), StepStatus::ok);
+      for (const BodyId body : world.bodies()) {
+        const Pose pose = world.pose(body);
+        coordinates.insert(coordinates.end(), pose.position.data(), pose.position.data() + 3);
+        coordinates.insert(coordinates.end(), pose.orientation.coeffs().data(), pose.orientation.coeffs().data() + 4);
+      }
+    }
+    return coordinates;
+  };
+  const WorldOptions serial = world_options(Method::particles, ragdoll.methods);
+  const std::vector<double> expected = poses_after(serial);
+  TaskSystem two_threads;
+  two_threads.enqueue = [](TaskSystem::Work work, std::size_t count, void* work_context, void*) -> void* {
+    std::thread second(work, count / 2, count, work_context);
+    work(0, count / 2, work_context);
+    second.join();
+    return nullptr;
+  };
+  two_threads.finish = [](void*, void*) {};
+  tbb::task_arena arena(2);
+  for (const TaskSystem& tasks : {two_threads, tbb_task_system(arena)}) {
+    WorldOptions options = serial;
+    options.particles.threading = Threading::tasks, options.particles.tasks = tasks, options.particles.threads = 2;
+    options.particles.parallel_minimum_slots = 1;
+    EXPECT_EQ(poses_after(options), expected);
+  }
 }
 
 }  // namespace
