@@ -14,7 +14,8 @@
 #                          task system; the CLI's --threads) and runs each of them. Extra arguments
 #                          go to every program (e.g. --gtest_filter=...).
 #
-# Both build -O1 -g with NDEBUG (the release build's code paths, readable stacks) and
+# Both build -O2 -g with NDEBUG (the release build's code paths, readable stacks; at -O1 xsimd's
+# batch operators stay calls and the SIMD tests run ~15× slower) and
 # -march=native as tools/setup.sh does (LIMBER_NATIVE=ON); -fno-sanitize-recover=all makes an
 # undefined-behaviour report abort the test instead of printing and going on.
 # Not run under a sanitizer, with the reason:
@@ -26,8 +27,8 @@
 #     (Mesa's DRI driver, by every sign) leaves ~5 kB in ~257 allocations that LeakSanitizer cannot
 #     name (an unknown module: no suppression can match it); ASan and UBSan still check them.
 #   - label `stress` is run (it is the point of a sanitizer run); pass -LE stress to shorten.
-# Setup: run tools/setup.sh --tests (or tools/test.sh) once first for the packages; this script
-# installs nothing. Environment: LIMBER_SANITIZE_BUILD_DIR overrides build-asan / build-tsan.
+# Installs the test suite's packages (tools/install_packages.sh). Environment:
+# LIMBER_SANITIZE_BUILD_DIR overrides build-asan / build-tsan; LIMBER_SKIP_INSTALL=1 skips apt-get.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -37,6 +38,8 @@ case "${1:-}" in
   -*|"") ;;
   *) echo "sanitize.sh: unknown mode '$1' (expected address or thread)" >&2; exit 2 ;;
 esac
+
+tools/install_packages.sh library tests viewer
 
 if [ "$mode" = address ]; then
   sanitize="-fsanitize=address,undefined -fno-sanitize-recover=all"
@@ -48,7 +51,7 @@ fi
 flags="$sanitize -fno-omit-frame-pointer -g"
 
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER=g++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g -DNDEBUG" -DCMAKE_CXX_FLAGS="$flags" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g -DNDEBUG" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
   -DLIMBER_NATIVE=ON -DLIMBER_BUILD_TESTS=ON -DLIMBER_BUILD_BENCHMARKS=OFF >/dev/null
 

@@ -35,8 +35,8 @@ std::vector<WorldOptions> configurations(const Scene& scene) {
   all.push_back(direct);
   for (WorldOptions& options : all) {
     RelaxationSettings& relaxation = options.particles.relaxation;
-    relaxation.iterations = std::min(relaxation.iterations, kMaxSweeps);
-    relaxation.substeps = std::min(relaxation.substeps, kMaxSubsteps);
+    relaxation.iterations = std::min(relaxation.iterations, kSweepCap);
+    relaxation.substeps = std::min(relaxation.substeps, kSubstepCap);
     relaxation.budget_us = 0;  // wall-clock stops are not deterministic
   }
   return all;
