@@ -2,9 +2,8 @@
 
 #include <system_error>
 
-#include "tools/cli/run_flags.hpp"
-
 #include "tools/cli/cli.hpp"
+#include "tools/cli/run_flags.hpp"
 
 namespace limber::cli {
 
