@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's vector code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"  // operator delete frees what the counting operator new mallocs
 // What collision costs the particle method (bench/README.md, "Collision: contact sweeps, the cost
 // of collision, tunnelling"), ratios inside one run:

@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Time per call of the articulated-body algorithm (Featherstone 2008, Table 7.1) against the
 // number of links: a chain of revolute joints (axes turning from link to link) or of spherical
 // joints, 0.1 m slender links, at a fixed pseudo-random state. ns_per_link staying flat from 10 to

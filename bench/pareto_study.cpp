@@ -25,7 +25,6 @@
 // reproduce a uniform rod's mass, centre and inertia), so every method simulates the same body;
 // the series "verlet gauss-seidel, thesis masses" keeps the thesis's half-mass-at-each-end
 // limbs, whose rods are 3x too hard to turn: its trajectory error does not fall with Δt.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>

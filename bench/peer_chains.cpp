@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Other engines on limber's chain workload: limber's methods and every peer engine
 // found at build time (Bullet 3.24, ODE 0.16, MuJoCo 2.2.2; bench/peers/peers.cmake) on the same
 // heavy-end chains, time per step and joint error measured in the same run.

@@ -15,7 +15,6 @@
 // the distance to the same run at 1/48000 s). Errors are max_point_error: the largest distance of
 // any rod end from the reference's over samples every 1/60 s — the worst point at its worst
 // moment. Energy drift is max |E(t) − E(0)|, relative to m·g·ΣL (run_metrics.hpp).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 // Stability stress of every method (bench/README.md, "Stability stress"). One Model, nine
 // Methods (kernel/study/simulation.hpp), every run classified by study::classify() as stable or
 // diverged — non-finite (NaN, or a point faster than Settings::divergence_speed), energy growth

@@ -6,7 +6,6 @@
 //
 // Physics only — joint gaps, how far bodies move, integration error. Timings are in verlet_bench
 // and thesis_speed (Google Benchmark).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <algorithm>
 #include <array>
 #include <cmath>

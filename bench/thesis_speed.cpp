@@ -16,7 +16,6 @@
 // - Verlet: 5 sweeps a step, the setting of the thesis's 597 frames/s (the printed chain demo
 //   loops 1000, the humanoid demo 100; both are measured as well).
 // Chains have no contacts and sleeping is off, so every step does the same work.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <functional>
 #include <string>
 

@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's vector code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // What the World facade costs an engine: the humanoid (awake, hit by the ball) stepped through
 // World::step, against the same method's step() on its state directly, and through the World
 // with a force, a torque and an impulse each step. Compare the rows of one run as ratios (the

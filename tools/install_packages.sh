@@ -10,7 +10,8 @@
 #   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone cross-check)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
 #   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py)
-#   fuzz      clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer
+#   clang     clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer: the fuzzer
+#             and the sanitizer runs build with it
 set -euo pipefail
 packages=()
 for purpose in "$@"; do
@@ -19,8 +20,8 @@ for purpose in "$@"; do
     tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib) ;;
-    fuzz) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
-    *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench or fuzz)" >&2; exit 2 ;;
+    clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
+    *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench or clang)" >&2; exit 2 ;;
   esac
 done
 if [ "${LIMBER_SKIP_INSTALL:-0}" = 1 ]; then exit 0; fi

@@ -1,6 +1,3 @@
-// GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (the _mm512_undefined_*
-// operand of masked builtins; GCC bug 105593), instantiated here through Eigen.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/collision/impulses.hpp"
 
 #include <cmath>

@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/lagrange/step.hpp"
 
 #include <algorithm>

@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's vector paths
 #include "limber/kernel/methods/method.hpp"
 
 #include "limber/kernel/featherstone/compile.hpp"

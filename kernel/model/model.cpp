@@ -1,6 +1,3 @@
-// GCC 12 false positive in Eigen's AVX-512 reductions (the SVD inside FromTwoVectors): the
-// pragma must precede the Eigen headers, where the warning is located.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/model/model.hpp"
 
 #include <Eigen/Eigenvalues>

@@ -1,5 +1,3 @@
-// GCC 12 reports -Wmaybe-uninitialized inside its own AVX-512 intrinsics (GCC bug 105593).
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include "limber/kernel/relaxation/contact_relaxation.hpp"
 
 #include <algorithm>

@@ -1,6 +1,3 @@
-// GCC 12 false positive in Eigen's AVX-512 reductions (the SVD inside FromTwoVectors, a capsule's
-// "axis"): the pragma must precede the Eigen headers, where the warning is located.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // The scene loader's static colliders (format in scene_file.hpp): "colliders" entries of type
 // box, capsule, mesh, and the "stairs" generator that becomes a mesh; and the "collision" filter
 // that bodies and colliders share.

@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 #include "limber/kernel/study/simulation.hpp"
 
 #include <stdexcept>

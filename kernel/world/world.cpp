@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's vector paths
 #include "limber/kernel/world/world.hpp"
 
 #include <algorithm>

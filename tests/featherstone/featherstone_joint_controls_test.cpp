@@ -6,8 +6,8 @@
 // that reaches its target rotation, a drive changed between steps, and no allocation in a step.
 // Every coordinate is measured from the rigid bodies with kernel/model/joint_coordinates.hpp.
 
-// GCC 12 false positives inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (a
+// relative of bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #include <algorithm>
 #include <cmath>

@@ -5,9 +5,8 @@
 // same accelerations as the Lagrange method's constrained solve on random trees.
 // This program counts allocations (tests/support/allocation_counter.cpp): a step allocates nothing.
 
-// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (bug
-// 105593 and its -Warray-bounds relative); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (a
+// relative of bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #include <algorithm>
 #include <cmath>

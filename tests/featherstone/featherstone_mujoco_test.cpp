@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // limber's articulated-body algorithm against MuJoCo 2.2.2 (Debian's libmujoco-dev): the same
 // random trees, written as MJCF, give the same joint accelerations to 1e-9 (relative).
 //

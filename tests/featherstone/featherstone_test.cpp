@@ -1,5 +1,3 @@
-// GCC 12 false positive inside Eigen's AVX-512 code (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Featherstone's algorithms in reduced coordinates (kernel/featherstone/): spatial algebra
 // identities, the three dynamics algorithms against each other on random trees, the joint
 // coordinates against their own derivatives, and the conservation laws an integrator should keep.

@@ -4,9 +4,8 @@
 // ratio c/(2√(kI)) and stays stable when stiff; the tree and sparse solves agree; a step with
 // control rows allocates nothing; what cannot be applied is refused by name.
 
-// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (bug
-// 105593 and its -Warray-bounds relative); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (a
+// relative of bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #include <cmath>
 #include <numbers>

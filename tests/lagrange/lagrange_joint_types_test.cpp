@@ -3,9 +3,8 @@
 // type leaves exactly the motions it should; the tree and sparse solvers agree with every type;
 // meshed gears keep their speed ratio and their energy.
 
-// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (bug
-// 105593 and its -Warray-bounds relative); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+// GCC 12 false positives inside Eigen's AVX-512 reductions over fixed-capacity vectors (a
+// relative of bug 105593); must precede Eigen's headers.
 #pragma GCC diagnostic ignored "-Warray-bounds"
 #include <cmath>
 #include <numbers>

@@ -2,8 +2,6 @@
 // forces, the joints stay closed, and energy and momentum are kept to the integrator's accuracy.
 // (Joint types, gears and the tree solve against the sparse one: lagrange_joint_types_test.cpp.)
 
-// GCC 12 false positive inside Eigen's AVX-512 reductions (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <cmath>
 #include <random>
 

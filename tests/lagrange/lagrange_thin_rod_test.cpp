@@ -4,8 +4,6 @@
 // its spin about its axis must stay what it was; the rods must stay finite, gain no energy and
 // move as Featherstone's reduced coordinates move them (kernel/lagrange/README.md, "Thin limbs").
 
-// GCC 12 false positive inside Eigen's AVX-512 reductions (bug 105593); must precede Eigen's headers.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 // The study's measures (kernel/study/) on cases with known answers, and the fact the Pareto study
 // rests on: every method simulates the same body model, so its trajectory converges to the
 // reference as Δt falls — except the thesis's particle masses, a different body.

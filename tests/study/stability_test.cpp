@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 // The stability stress, shortened for CI (bench/stability_stress.cpp is the full
 // run; bench/README.md, "Stability stress"): what diverges, what does not, and the explicit springs'
 // boundary of eq. 3.15 where the linearized spring modes put it. The StabilityStress tests

@@ -170,7 +170,9 @@ TEST(LimbContacts, TheBatchesHoldWhatTheSweepsNoLongerGather) {
       const ContactRow& row = state.contact_rows.rows[batches.row[slot]];
       ++slots_of_row[batches.row[slot]];
       const bool static_row = row.coefficient[2] == 0 && row.coefficient[3] == 0;
-      if (slot < split) EXPECT_TRUE(static_row) << "slot " << slot << " is projected over two places";
+      if (slot < split) {
+        EXPECT_TRUE(static_row) << "slot " << slot << " is projected over two places";
+      }
       (static_row ? statics : pairs) += 1;
       double denominator = 0;
       Eigen::Vector3d start = Eigen::Vector3d::Zero();

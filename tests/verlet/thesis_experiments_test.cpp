@@ -1,7 +1,6 @@
 // The thesis's experiments as physical facts (the tables are bench/thesis_experiments):
 // Verlet's accuracy on one particle against the kernel's RK2 (figure 3.12), and the heavy end of
 // the 4.4 chain under the weighted and the midpoint rule.
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #include <algorithm>
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,3 @@
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12 false positives in Eigen's AVX-512 paths
 // Long-run soak: the humanoid and its ball under every method,
 // and a long chain under every Verlet solver at Δt = 1/30 s, stepped through World and checked
 // after every step against what the physics allows, measured here from World::observe(),
