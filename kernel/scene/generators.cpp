@@ -1,6 +1,8 @@
 // GCC 12 false positive (bug 105329) in operator+(const char*, std::string&&), here and in
 // checks.hpp's format_vector. The warning is located in <string>, so the pragma precedes it.
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC diagnostic ignored "-Wrestrict"
+#endif
 #include "limber/kernel/scene/generators.hpp"
 
 #include <charconv>

@@ -168,19 +168,24 @@ TEST(Allocation, TheCounterCountsEveryFormOnceAndFreesItsOwn) {
   const std::nothrow_t& nothrow = std::nothrow;
   EXPECT_EQ(counted([] { ::operator delete(::operator new(24)); }), 1);
   EXPECT_EQ(counted([] { ::operator delete[](::operator new[](24)); }), 1);
+#if defined(__cpp_sized_deallocation)  // clang declares the sized forms only with -fsized-deallocation
   EXPECT_EQ(counted([] { ::operator delete(::operator new(24), 24); }), 1);
   EXPECT_EQ(counted([] { ::operator delete[](::operator new[](24), 24); }), 1);
+#endif
   EXPECT_EQ(counted([&] { ::operator delete(::operator new(24, nothrow), nothrow); }), 1);
   EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](24, nothrow), nothrow); }), 1);
   for (const std::size_t size : {std::size_t{0}, std::size_t{24}, std::size_t{200}}) {
     EXPECT_EQ(counted([&] {
                 void* p = ::operator new(size, wide);
                 EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % 64, 0u);
-                ::operator delete(p, size, wide);
+                ::operator delete(p, wide);
               }),
               1);
+#if defined(__cpp_sized_deallocation)
+    EXPECT_EQ(counted([&] { ::operator delete(::operator new(size, wide), size, wide); }), 1);
     EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](size, wide), size, wide); }), 1);
-    EXPECT_EQ(counted([&] { ::operator delete(::operator new(size, wide), wide); }), 1);
+#endif
+    EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](size, wide), wide); }), 1);
     EXPECT_EQ(counted([&] { ::operator delete(::operator new(size, wide, nothrow), wide, nothrow); }), 1);
     EXPECT_EQ(counted([&] { ::operator delete[](::operator new[](size, wide, nothrow), wide, nothrow); }), 1);
   }
