@@ -8,15 +8,42 @@
 // goes back through its free: no allocation is missed, none counted twice (each form allocates
 // itself instead of calling another), and none is freed by another allocator's delete (which
 // AddressSanitizer reports as alloc-dealloc-mismatch).
+//
+// Under clang's ThreadSanitizer the runtime must own operator new (it links its own definitions
+// statically, and two definitions do not link), so there the count comes from the sanitizer's
+// malloc hook instead, which its allocator runs for every new and malloc alike. (GCC's runtime
+// is a shared library whose definitions these replace, as without a sanitizer.)
 #include "tests/support/allocation_counter.hpp"
 
 #include <atomic>
 #include <cstdlib>
 #include <new>
 
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define LIMBER_COUNT_WITH_SANITIZER_HOOKS 1
+#endif
+#endif
+
 namespace {
 
 std::atomic<long> allocations{0};
+
+}  // namespace
+
+#if defined(LIMBER_COUNT_WITH_SANITIZER_HOOKS)
+#include <sanitizer/allocator_interface.h>
+
+namespace {
+
+void count_allocation(const volatile void*, std::size_t) { ++allocations; }
+void ignore_free(const volatile void*) {}
+// The runtime takes a free hook with every malloc hook; nothing is counted on free.
+[[maybe_unused]] const int hooks_installed = __sanitizer_install_malloc_and_free_hooks(count_allocation, ignore_free);
+
+}  // namespace
+#else
+namespace {
 
 // One counted allocation: malloc, or aligned_alloc for an alignment beyond the default (its size
 // rounded up to a multiple of the alignment, as aligned_alloc requires). On failure, calls the
@@ -76,5 +103,6 @@ void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete(void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
 void operator delete[](void* p, std::align_val_t, const std::nothrow_t&) noexcept { std::free(p); }
+#endif
 
 long limber::testing::allocation_count() { return allocations.load(); }
