@@ -7,7 +7,7 @@
 # --sanitize (what CI runs, .ci/run): after the suite, the sanitizer runs in their shortened form,
 # tools/sanitize.sh address -LE stress (ASan + UBSan + LeakSanitizer over every test but the long
 # stress runs, which the suite has just run uninstrumented) and tools/sanitize.sh thread (the
-# threaded tests under ThreadSanitizer); each builds clang 14 in a folder of its own.
+# threaded tests under ThreadSanitizer); each builds with clang 14 in a folder of its own.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 sanitize=0
