@@ -181,19 +181,6 @@ void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, cons
   }
 }
 
-// Grows the sweep's pair buffer to about four pairs per limb (a limb among its neighbours in a
-// pile or a fallen figure) by one sweep over a row of boxes each overlapping the next four, so
-// steps that find no more allocate nothing. (SweepAndPrune has no reserve(); this keeps its
-// header, which half the kernel includes, unchanged.)
-void warm_broadphase(SweepAndPrune& broadphase, std::uint32_t count) {
-  std::vector<Aabb> row(count);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    row[i].min = Vector3d(i, 0, 0);
-    row[i].max = Vector3d(i + 4.5, 1, 1);
-  }
-  broadphase.find_pairs(row);
-}
-
 bool contact_before(const LimbContact& a, const LimbContact& b) {
   if (a.first != b.first) return a.first < b.first;
   if (a.second != b.second) return a.second < b.second;
@@ -243,11 +230,12 @@ LimbCollisions::LimbCollisions(const Model& model)
   }
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
-  // Warm the buffers: four candidate pairs per limb (a limb among its neighbours in a pile or a
-  // fallen figure), one contact per limb and three per segment against static geometry are a
-  // typical scene's; more grow them once.
-  warm_broadphase(broadphase_, static_cast<std::uint32_t>(segments));
+  // Room for a typical scene's search: four candidate pairs per segment (a limb among its
+  // neighbours in a pile or a fallen figure), one contact per segment and three per segment
+  // against static geometry, four candidates per ball; more grow them once.
+  broadphase_.reserve(segments, 0, 4 * segments);
   scratch_.reserve(3 * segments);
+  ball_candidates_.reserve(limb_count_, model.balls.size(), 4 * model.balls.size());
 }
 
 bool LimbCollisions::excluded(std::uint32_t first, std::uint32_t second) const {

@@ -106,6 +106,15 @@ class LimbCollisions {
   /// allocation.
   SweptTouch first_static_touch(std::uint32_t segment, const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius) const;
 
+  /// The balls' own candidate search (broadphase.hpp), kept here with the other buffers every
+  /// method's state holds: contacts.cpp and rigid_contacts.cpp fill it and read it each step.
+  /// Reserved at construction for a few candidates per ball.
+  BallCandidates& ball_candidates() { return ball_candidates_; }
+
+  /// Box pairs the broadphase compared over every find() so far (and the set-up's sweep): the
+  /// search's work, for tests and benchmarks.
+  std::uint64_t comparisons() const { return broadphase_.comparisons(); }
+
  private:
   // A value type (states are copied): no shared buffers.
   void find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
@@ -128,6 +137,7 @@ class LimbCollisions {
   std::vector<Aabb> boxes_;                 // per segment, this call's
   std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
+  BallCandidates ball_candidates_;
 };
 
 }  // namespace limber
