@@ -201,7 +201,11 @@ void apply_rigid_limb_impulse(VerletState<Scalar>& state, const RigidLimbRespons
 // start of the step keeps that configuration's plane.
 template <typename Scalar>
 bool find_ball_contact(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, BallContact& contact) {
+  // A limb (or ball) gone non-finite touches nothing: its contact would carry the NaN to the ball
+  // and from it to every body the ball meets.
+  if (!std::isfinite(ball_limb_geometry(state, ball, limb, 1.0).separation)) return false;
   const SphereLimbContact start = ball_limb_geometry(state, ball, limb, 0.0);
+  if (!std::isfinite(start.separation)) return false;
   double time = 0;
   if (start.separation >= 0) {
     // Samples close enough that the ball cannot cross the limb between two: the relative motion
