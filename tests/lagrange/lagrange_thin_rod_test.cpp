@@ -121,22 +121,26 @@ std::string number(double value) {
 }
 
 // What a run of `duration` s shows: the largest energy gain over the start (J), the largest change
-// of any rod's axial spin (rad/s); fails the test at a step that is not ok or not finite.
+// of any rod's axial spin (rad/s); fails the test at a step that is not ok or not finite. Records
+// them, and the largest distance of the chain's end from Featherstone's RK4 at the same step over
+// the first second (m), as properties named after `label` and the setting (--gtest_output=xml).
 struct RunSummary {
   double largest_gain = 0, largest_spin_change = 0;
 };
-RunSummary run(const Model& model, const Setting& setting, double duration) {
+RunSummary run(const std::string& label, const Model& model, const Setting& setting, double duration) {
   LagrangeState state = compile_lagrange(model, setting.options);
+  FeatherstoneState featherstone = compile_featherstone(model);
   const double start = observe(state).energy();
   std::vector<double> spin(model.bodies.size());
   for (std::size_t b = 0; b < spin.size(); ++b) spin[b] = axial_spin(state, b);
   RunSummary result;
-  const int steps = static_cast<int>(std::lround(duration / setting.dt));
+  double largest_distance = 0;
+  const int steps = static_cast<int>(std::lround(duration / setting.dt)), first_second = static_cast<int>(std::lround(1 / setting.dt));
   for (int s = 1; s <= steps; ++s) {
     const StepReport report = step(state, setting.dt);
     const double energy = observe(state).energy();
     if (report.status != StepStatus::ok || !std::isfinite(energy)) {
-      ADD_FAILURE() << model.name << ", " << setting.name << ": step " << s << " (" << s * setting.dt << " s) status "
+      ADD_FAILURE() << label << ", " << setting.name << ": step " << s << " (" << s * setting.dt << " s) status "
                     << static_cast<int>(report.status) << ", energy " << energy;
       return {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
     }
@@ -144,7 +148,14 @@ RunSummary run(const Model& model, const Setting& setting, double duration) {
     for (std::size_t b = 0; b < spin.size(); ++b) {
       result.largest_spin_change = std::max(result.largest_spin_change, std::abs(axial_spin(state, b) - spin[b]));
     }
+    if (s <= first_second && step(featherstone, setting.dt).status == StepStatus::ok) {
+      largest_distance = std::max(largest_distance, (tip(state) - tip(featherstone)).norm());
+    }
   }
+  const std::string name = label + ", " + setting.name + ": ";
+  ::testing::Test::RecordProperty(name + "largest energy gain (J)", number(result.largest_gain));
+  ::testing::Test::RecordProperty(name + "largest axial spin change (rad/s)", number(result.largest_spin_change));
+  ::testing::Test::RecordProperty(name + "end from Featherstone over 1 s (m)", number(largest_distance));
   return result;
 }
 
@@ -157,7 +168,7 @@ TEST(LagrangeThinRods, ConicalRodSwingsWithoutGainingEnergyOrSpin) {
   for (const Setting& setting : {Setting{"defaults, 1/60 s", kDefaults, 1.0 / 60},
                                  Setting{"RK4 + projection, 1/60 s", kRk4Projection, 1.0 / 60},
                                  Setting{"RK4 + projection, 1/240 s", kRk4Projection, 1.0 / 240}}) {
-    const RunSummary result = run(model, setting, 5);
+    const RunSummary result = run("conical rod", model, setting, 5);
     EXPECT_LT(result.largest_gain, budget) << setting.name;
     EXPECT_LT(result.largest_spin_change, 0.01 * 3 * std::cos(0.5)) << setting.name;
   }
@@ -172,8 +183,10 @@ TEST(LagrangeThinRods, RodChainsReleasedFromRestStayBounded) {
     const double budget = 0.01 * swing_energy(model);
     for (const Setting& setting : {Setting{"defaults, 1/60 s", kDefaults, 1.0 / 60},
                                    Setting{"defaults, 1/240 s", kDefaults, 1.0 / 240},
-                                   Setting{"RK4 + projection, 1/240 s", kRk4Projection, 1.0 / 240}}) {
-      EXPECT_LT(run(model, setting, 5).largest_gain, budget) << links << " links, " << setting.name;
+                                   Setting{"RK4 + projection, 1/240 s", kRk4Projection, 1.0 / 240},
+                                   Setting{"RK4 + projection, 1/1000 s", kRk4Projection, 1.0 / 1000}}) {
+      const std::string label = std::to_string(links) + " rods";
+      EXPECT_LT(run(label, model, setting, 5).largest_gain, budget) << label << ", " << setting.name;
     }
   }
 }
@@ -222,36 +235,45 @@ double largest_distance(const std::vector<Eigen::Vector3d>& path, const std::vec
   return largest;
 }
 
-TEST(LagrangeThinRods, RungeKuttaWithProjectionConvergesAtFourthOrder) {
-  // RK4 + projection on thin chains against Featherstone's RK4 at 1/9600 s (the same bodies, with
-  // the same 10⁻⁶ floor on the axial moment): the chain's end over 2 s, at 1/240, 1/480 and
-  // 1/960 s. Fourth order divides the error by 2⁴ = 16 per halving of Δt once the leading term
-  // dominates (14–16 here); at least 2^3.5 ≈ 11.3 is asked, room for what is left of the higher
-  // terms at 1/240 s and nothing for second order (4). Turning q inside the stages (e163403) gave
-  // 21 then 3.3 on the rods and 9.3 then 4.9 on the point masses (kernel/lagrange/README.md).
+TEST(LagrangeThinRods, RungeKuttaWithProjectionConvergesAtItsOrder) {
+  // RK4 and RK2 + projection on thin chains against Featherstone's RK4 at 1/9600 s (the same
+  // bodies, with the same 10⁻⁶ floor on the axial moment): the chain's end over 2 s, at 1/240,
+  // 1/480 and 1/960 s. Order p divides the error by 2^p per halving of Δt once the leading term
+  // dominates (RK4: 14–16 here, RK2: 3.7–3.9); at least 2^(p − 0.5) is asked (RK4: 11.3), room
+  // for what is left of the higher terms at 1/240 s and nothing for an order less. Turning q
+  // inside the stages (e163403) gave RK4 21 then 3.3 on the rods and 9.3 then 4.9 on the point
+  // masses (kernel/lagrange/README.md, "Thin limbs").
   const double duration = 2, reference_dt = 1.0 / 9600;
   struct Chain {
     const char* name;
     Model model;
   };
   const Chain chains[] = {{"rods", hanging_rod_chain(5)},
-                          {"point_masses", study::heavy_end_chain(study::ChainRelease::small_3d).model}};
+                          {"point masses", study::heavy_end_chain(study::ChainRelease::small_3d).model}};
+  struct Method {
+    const char* name;
+    Integrator integrator;
+    int order;
+  };
   for (const Chain& chain : chains) {
-    SCOPED_TRACE(chain.name);
     const std::vector<Eigen::Vector3d> reference = end_path(compile_featherstone(chain.model), reference_dt, duration);
     // The reference's own error: about 1/15 of its distance to the run at twice its step (RK4).
     const double reference_error = largest_distance(end_path(compile_featherstone(chain.model), 2 * reference_dt, duration), reference);
-    std::vector<double> errors;
-    for (int steps_per_second : {240, 480, 960}) {
-      const double error = largest_distance(end_path(compile_lagrange(chain.model, kRk4Projection), 1.0 / steps_per_second, duration), reference);
-      RecordProperty(std::string(chain.name) + "_error_1_" + std::to_string(steps_per_second) + "_m", number(error));
-      errors.push_back(error);
-    }
-    EXPECT_LT(reference_error, 0.01 * errors.back());  // the reference does not blur the finest error
-    for (std::size_t k = 1; k < errors.size(); ++k) {
-      const double rate = std::log2(errors[k - 1] / errors[k]);
-      RecordProperty(std::string(chain.name) + "_order_" + std::to_string(k), number(rate));
-      EXPECT_GE(rate, 3.5) << "errors " << errors[k - 1] << " m, " << errors[k] << " m";
+    for (const Method& method : {Method{"RK4", Integrator::rk4, 4}, Method{"RK2", Integrator::rk2, 2}}) {
+      SCOPED_TRACE(std::string(chain.name) + ", " + method.name);
+      const LagrangeOptions options{.integrator = method.integrator, .stabilization = Stabilization::projection};
+      std::vector<double> errors;
+      for (int steps_per_second : {240, 480, 960}) {
+        const double error = largest_distance(end_path(compile_lagrange(chain.model, options), 1.0 / steps_per_second, duration), reference);
+        RecordProperty(std::string(chain.name) + ", " + method.name + ": error at 1/" + std::to_string(steps_per_second) + " s (m)", number(error));
+        errors.push_back(error);
+      }
+      EXPECT_LT(reference_error, 0.01 * errors.back());  // the reference does not blur the finest error
+      for (std::size_t k = 1; k < errors.size(); ++k) {
+        const double rate = std::log2(errors[k - 1] / errors[k]);
+        RecordProperty(std::string(chain.name) + ", " + method.name + ": order from 1/" + std::to_string(240 << (k - 1)) + " s", number(rate));
+        EXPECT_GE(rate, method.order - 0.5) << "errors " << errors[k - 1] << " m, " << errors[k] << " m";
+      }
     }
   }
 }
