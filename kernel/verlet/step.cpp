@@ -141,12 +141,13 @@ void move_kinematic_particles(VerletState<Scalar>& state, int index, int count, 
   }
 }
 
-// Contact rows whose surfaces touch at the end of the substep (the rest are speculative).
+// The substep's contacts: those with the ground, the bounds and the ball, and the contact rows
+// relaxation pushed (the rest are speculative).
 template <typename Scalar>
-std::size_t touching_rows(const VerletState<Scalar>& state) {
-  std::size_t count = 0;
+int substep_contacts(const VerletState<Scalar>& state) {
+  std::size_t count = state.plane_contacts.size() + state.ball_contacts.size();
   for (const auto lambda : state.plan.contact_batches.lambda) count += lambda > 0 ? 1 : 0;
-  return count;
+  return static_cast<int>(count);
 }
 
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
@@ -347,6 +348,7 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     if (has_ball || has_planes) apply_restitution(state, dt);
     if (!state.contact_rows.empty()) apply_contact_row_restitution(state, dt);
   }
+  report.contacts = substep_contacts(state);
   report.status = update_sleep(state, dt);
   report.substeps = 1;
   state.time += dt;
@@ -369,6 +371,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
       report.iterations += part.iterations;
       report.largest_correction = part.largest_correction;
       report.stop = part.stop;
+      report.contacts = std::max(report.contacts, part.contacts);
       report.status = part.status;
       report.substeps += 1;
       if (part.status != StepStatus::ok) break;
@@ -377,7 +380,6 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
-    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size() + touching_rows(state));
   });
 }
 

@@ -224,5 +224,58 @@ TEST(LimbContacts, AChainWithoutCollidersPaysNothingForCollision) {
   EXPECT_EQ(state.limb_segments.capacity(), 0u) << "no collision scratch was allocated";
 }
 
+
+// --- Contacts under the rattle rule ---
+
+// Capsules dropped at different heights onto a static plate that bounces them (restitution 0.8)
+// and onto each other: contacts come and go inside a frame.
+Model bouncing_capsules() {
+  Model model = empty_world();
+  model.ground.reset();
+  StaticCollider plate;
+  plate.name = "plate";
+  plate.type = ColliderType::box;
+  plate.half_extents = {1, 1, 0.05};
+  plate.restitution = 0.8;
+  model.colliders.push_back(plate);
+  for (int k = 0; k < 4; ++k) {
+    const Vector3 axis(std::cos(0.7 * k), std::sin(0.7 * k), 0.2 * (k % 2));
+    model.bodies.push_back(capsule("c" + std::to_string(k), {0.05 * k, 0.03 * k, 0.15 + 0.13 * k}, axis));
+  }
+  return model;
+}
+
+// A step of n substeps reports the most contacts any of its substeps had (StepReport::contacts),
+// as the same run stepped one substep at a time — the same bits — reports them substep by
+// substep; so a contact made and lost inside a frame is counted.
+TEST(RattleContacts, AStepReportsTheMostContactsOfAnyOfItsSubsteps) {
+  constexpr int kSubsteps = 16;
+  VerletOptions options = options_with(2);
+  options.relaxation.projection = ProjectionRule::rattle;
+  options.relaxation.substeps = kSubsteps;
+  auto framed = compile<double>(bouncing_capsules(), options);
+  options.relaxation.substeps = 1;
+  auto single = compile<double>(bouncing_capsules(), options);
+  const double dt = 1.0 / 60;
+  int early_only = 0, busier_before_the_end = 0, frames_with_contacts = 0;
+  for (int frame = 0; frame < 90; ++frame) {
+    const StepReport report = step(framed, dt);
+    ASSERT_EQ(report.status, StepStatus::ok);
+    int most = 0, last = 0;
+    for (int k = 0; k < kSubsteps; ++k) {
+      last = step(single, dt / kSubsteps).contacts;
+      most = std::max(most, last);
+    }
+    ASSERT_EQ(framed.particles.position_x, single.particles.position_x) << "frame " << frame;
+    EXPECT_EQ(report.contacts, most) << "frame " << frame;
+    frames_with_contacts += most > 0 ? 1 : 0;
+    early_only += most > 0 && last == 0 ? 1 : 0;
+    busier_before_the_end += most > last ? 1 : 0;
+  }
+  EXPECT_GT(frames_with_contacts, 10);
+  EXPECT_GT(early_only, 0) << "no frame had its only contacts before its last substep";
+  EXPECT_GT(busier_before_the_end, early_only) << "no frame had more contacts in an earlier substep than in its last";
+}
+
 }  // namespace
 }  // namespace limber
