@@ -44,7 +44,7 @@ enum class RelaxationStop : std::uint8_t {
 /// fallbacks; `stop` and `largest_correction` are the last substep's.
 struct StepReport {
   StepStatus status = StepStatus::ok;
-  int contacts = 0;  ///< contacts found this step (particles: those of its last substep)
+  int contacts = 0;  ///< contacts found this step (particles: the most in any one of its substeps)
 
   // Particles: the relaxation.
   RelaxationStop stop = RelaxationStop::idle;

@@ -152,6 +152,8 @@ struct PlaneContact {
   std::uint32_t feature = 0, plane = 0;
   double approach_speed = 0;    ///< normal velocity before relaxation, m/s (< 0 approaching)
   double start_separation = 0;  ///< at the previous positions, m (< 0: it began the step inside)
+  double position_impulse = 0;  ///< the pushes of this (sub)step's relaxation, kg·m (≥ 0)
+  double velocity_impulse = 0;  ///< the rattle rule's velocity stage so far, N·s (contact_impulse, contacts.hpp)
 };
 /// A ball as the particle method holds it: one particle, its own island.
 struct BallParticle {
@@ -172,6 +174,8 @@ struct BallContact {
   double offset = 0;            ///< k, m
   double approach_speed = 0;    ///< relative normal velocity before relaxation, m/s
   double start_separation = 0;  ///< at the previous positions, m
+  double position_impulse = 0;  ///< the pushes of this (sub)step's relaxation, kg·m (≥ 0)
+  double velocity_impulse = 0;  ///< the rattle rule's velocity stage so far, N·s (contact_impulse, contacts.hpp)
 };
 
 /// What a particle stands for: a limb's head, tail or centre (index: Model body), the world end

@@ -187,12 +187,13 @@ void move_kinematic_particles(VerletState<Scalar>& state, int index, int count, 
   }
 }
 
-// Contact rows whose surfaces touch at the end of the substep (the rest are speculative).
+// The substep's contacts: those with the ground, the bounds and the ball, and the contact rows
+// relaxation pushed (the rest are speculative).
 template <typename Scalar>
-std::size_t touching_rows(const VerletState<Scalar>& state) {
-  std::size_t count = 0;
+int substep_contacts(const VerletState<Scalar>& state) {
+  std::size_t count = state.plane_contacts.size() + state.ball_contacts.size();
   for (const auto lambda : state.plan.contact_batches.lambda) count += lambda > 0 ? 1 : 0;
-  return count;
+  return static_cast<int>(count);
 }
 
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
@@ -334,12 +335,21 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
   end_relaxation(state);
 }
 
+// Most sweeps the rattle rule's velocity stage runs in a substep where contacts act: a bound on
+// the cost of a substep that does not converge (README.md, "Contacts under the rattle rule").
+constexpr int kMaxContactVelocitySweeps = 32;
+
 // The rattle rule's velocity stage: as many sweeps as the position stage ran (Newton steps: one
 // exact solve each), each followed by the limb centres' rate and the contacts' restitution pass
-// — Gauss-Seidel over every velocity row, so joints and contacts agree on the velocities the
-// substep ends with — until the velocity changes times the substep fall below the tolerance.
-// Compliant constraints (direct solver, α > 0) are springs, whose rate is free: they get the
-// second half kick of their force instead (kick_compliant_constraints), then the contacts.
+// — Gauss-Seidel over every velocity row, the contacts as inequalities (contact_impulse), so
+// joints and contacts agree on the velocities the substep ends with — until the velocity
+// changes times the substep fall below the tolerance. Where a contact acts, the sweeps go on
+// until no sweep changes a velocity by the resting speed (2|g|h) or more, at most
+// kMaxContactVelocitySweeps: left unconverged, the contacts' last impulses break the joints'
+// rates, the joints open gaps, and the gaps return the energy later (README.md, "Contacts under
+// the rattle rule"). Compliant constraints (direct solver, α > 0) are springs, whose rate is
+// free: they get the second half kick of their force instead (kick_compliant_constraints), then
+// the contacts.
 template <typename Scalar>
 void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
   const bool contacts = !state.balls.empty() || !state.planes.empty();
@@ -351,13 +361,19 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     return;
   }
   const bool has_centres = has_limb_centres(state);
+  const double settled = resting_speed(state, dt);
+  bool contact_acted = false;
   begin_velocity_projection(state);
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
+  for (int sweep = 1;; ++sweep) {
     double largest = velocity_sweep(state);
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
-    if (contacts) apply_restitution(state, dt);
-    if (rows) apply_contact_row_restitution(state, dt);
+    double contact_change = 0;
+    if (contacts) contact_change = apply_restitution(state, dt);
+    if (rows) contact_change = std::max(contact_change, apply_contact_row_restitution(state, dt));
+    contact_acted = contact_acted || contact_change > 0;
+    largest = std::max(largest, contact_change);
     if (state.options.relaxation.tolerance > 0 && largest * dt < state.options.relaxation.tolerance) break;
+    if (sweep >= sweeps && (!contact_acted || largest < settled || sweep >= kMaxContactVelocitySweeps)) break;
   }
   end_velocity_projection(state);
 }
@@ -397,6 +413,7 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     if (has_ball || has_planes) apply_restitution(state, dt);
     if (!state.contact_rows.empty()) apply_contact_row_restitution(state, dt);
   }
+  report.contacts = substep_contacts(state);
   report.status = update_sleep(state, dt);
   report.substeps = 1;
   state.time += dt;
@@ -440,6 +457,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
       report.iterations += part.iterations;
       report.largest_correction = part.largest_correction;
       report.stop = part.stop;
+      report.contacts = std::max(report.contacts, part.contacts);
       report.status = part.status;
       report.substeps += 1;
       if (part.status != StepStatus::ok) break;
@@ -449,7 +467,6 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
-    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size() + touching_rows(state));
   });
 }
 
