@@ -36,18 +36,20 @@ Model jointed_bodies(long count, int variant) {
   for (long c = 0; c < count; ++c) {
     const Vector3 at(static_cast<double>(c % 300), static_cast<double>(c / 300), 1.0);
     const int first = static_cast<int>(model.bodies.size());
+    // Appended, not "t" + std::string&&: GCC 12's -Wrestrict false positive (bug 105329).
+    const auto label = [c](const char* kind) { return std::string(kind).append(std::to_string(c)); };
     Body torso;
-    torso.name = "t" + std::to_string(c), torso.shape = {ShapeType::capsule, 0.4, 0.1}, torso.mass = 30, torso.position = at;
+    torso.name = label("t"), torso.shape = {ShapeType::capsule, 0.4, 0.1}, torso.mass = 30, torso.position = at;
     Body limb;
-    limb.name = "l" + std::to_string(c), limb.shape = {ShapeType::capsule, 0.4, 0.04}, limb.mass = 5;
+    limb.name = label("l"), limb.shape = {ShapeType::capsule, 0.4, 0.04}, limb.mass = 5;
     limb.axis = Vector3(0, 0.3, 1).normalized();
     limb.position = torso.tail() - 0.2 * limb.axis;
     limb.angular_velocity = Vector3(1, 2, 3);
     model.bodies.push_back(torso), model.bodies.push_back(limb);
     Joint hold;
-    hold.name = "h" + std::to_string(c), hold.type = JointType::spherical;
+    hold.name = label("h"), hold.type = JointType::spherical;
     hold.inboard = kWorld, hold.outboard = first, hold.inboard_anchor = torso.head(), hold.outboard_anchor = Vector3(0, 0, 0.2);
-    Joint joint = spherical_joint("j" + std::to_string(c), first, first + 1, Vector3(0, 0, -0.2), Vector3(0, 0, 0.2));
+    Joint joint = spherical_joint(label("j"), first, first + 1, Vector3(0, 0, -0.2), Vector3(0, 0, 0.2));
     if (variant == hinge_range) joint.type = JointType::revolute, joint.axis = Vector3::UnitX(), joint.limits.range = Range{-0.5, 0.5};
     if (variant == cone_twist) joint.limits.swing = 0.5, joint.limits.twist = Range{-0.3, 0.3};
     if (variant == drive) joint.drive = JointDrive{.stiffness = 200, .damping = 20, .target_rotation = Vector3(0.2, 0, 0)};

@@ -5,7 +5,8 @@
 #
 #   tools/install_packages.sh PURPOSE...
 #
-#   library   the library and the `limber` program (compiler, CMake, Ninja, Eigen, oneTBB, xsimd,
+#   library   the library and the `limber` program (compiler, CMake, Ninja and make — an installed
+#             package's client may configure with either —, Eigen, oneTBB, xsimd,
 #             nlohmann-json, CLI11)
 #   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone cross-check)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
@@ -16,7 +17,7 @@ set -euo pipefail
 packages=()
 for purpose in "$@"; do
   case "$purpose" in
-    library) packages+=(g++ cmake ninja-build pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev) ;;
+    library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev) ;;
     tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib) ;;
@@ -32,8 +33,14 @@ for p in "${packages[@]}"; do
   fi
 done
 if [ ${#missing[@]} -eq 0 ]; then exit 0; fi
-echo "install_packages.sh: installing ${missing[*]}"
+# apt-get's own output goes to a log, shown only when it fails.
+echo "limber: installing ${#missing[@]} Debian packages: ${missing[*]}" >&2
 sudo_cmd=()
 if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
-"${sudo_cmd[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+log=$(mktemp "${TMPDIR:-/tmp}/limber-apt.XXXXXX.log")
+if ! { "${sudo_cmd[@]}" apt-get update -qq && DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"; } >"$log" 2>&1; then
+  tail -n 40 "$log" >&2
+  echo "install_packages.sh: apt-get failed; its whole output is in $log" >&2
+  exit 1
+fi
+rm -f "$log"

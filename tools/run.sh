@@ -14,10 +14,7 @@ cd "$(dirname "$0")/.."
 build_dir=${LIMBER_BUILD_DIR:-build}
 setup_flags=()
 if [ "${1:-}" = view ]; then setup_flags=(--viewer); fi
-if ! setup_log=$(tools/setup.sh "${setup_flags[@]}" 2>&1); then
-  printf '%s\n' "$setup_log" >&2
-  exit 1
-fi
+tools/setup.sh "${setup_flags[@]}"  # a line for each stage and the build's progress; the tools' output only on failure
 if [ $# -eq 0 ] || [[ "$1" == -* && "$1" != "--help" && "$1" != "--version" ]]; then
   set -- run tools/scenes/ragdoll.json "$@"
 fi

@@ -54,6 +54,8 @@ else
 fi
 flags="$sanitize -fno-omit-frame-pointer -g"
 
+. tools/progress.sh
+stage "sanitizer run ($mode): configuring $build_dir/ (clang 14)"
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g -DNDEBUG" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
@@ -62,7 +64,9 @@ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUIL
 # The sanitizers' runtimes symbolize stacks with llvm-symbolizer, which Debian keeps in llvm-14's folder.
 export PATH=/usr/lib/llvm-14/bin:$PATH
 if [ "$mode" = address ]; then
-  cmake --build "$build_dir" -j2
+  stage "sanitizer run (address): building the suite in $build_dir/ (about 14 min from nothing on 2 cores)"
+  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2
+  stage "sanitizer run (address): the tests"
   # Every report is fatal and exits non-zero; leaks are checked at exit (LeakSanitizer works in
   # this container: it needs ptrace-like access to the process's own threads, which Debian's
   # default allows). new/delete mismatches and container overflows are checked too.
@@ -74,7 +78,9 @@ if [ "$mode" = address ]; then
 else
   # The programs whose tests start threads (grep the tests for threads =, Threading::, std::thread).
   programs=(threading_tests relaxation_tests verlet_tests limb_contact_tests allocation_tests world_tests cli_tests)
-  cmake --build "$build_dir" -j2 --target "${programs[@]}"
+  stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 6 min from nothing on 2 cores)"
+  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${programs[@]}"
+  stage "sanitizer run (thread): the tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tools/sanitize/tsan.supp"
   failed=()
   for program in "${programs[@]}"; do

@@ -51,11 +51,23 @@ if [ "$viewer" = ON ]; then purposes+=(viewer); fi
 if [ "$bench" = ON ]; then purposes+=(bench); fi
 tools/install_packages.sh "${purposes[@]}"
 
-# Configure once (or again when the options change), then build only what was asked for.
-cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \
-  -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" >/dev/null
+# Configure once (or again when the options change), then build only what was asked for. The
+# compiler's output goes to $build_dir/build.log, shown when the build fails.
+. tools/progress.sh
+mkdir -p "$build_dir"
+if ! cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \
+  -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" >"$build_dir/configure.log" 2>&1; then
+  cat "$build_dir/configure.log" >&2
+  stage "configuring $build_dir/ failed (above)"
+  exit 1
+fi
+what="the library and the limber program"
 if [ "$build_all" = ON ]; then
-  cmake --build "$build_dir" -j2
+  [ "$tests" = ON ] && what="$what, the tests"
+  [ "$bench" = ON ] && what="$what, the benchmarks"
+  stage "building $what in $build_dir/ ($build_type; about 25 min from nothing on 2 cores, seconds when up to date)"
+  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2
 else
-  cmake --build "$build_dir" -j2 --target limber_program
+  stage "building $what in $build_dir/ ($build_type; about 8 min from nothing on 2 cores, seconds when up to date)"
+  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target limber_program
 fi

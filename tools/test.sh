@@ -14,6 +14,8 @@ sanitize=0
 if [ "${1:-}" = --sanitize ]; then sanitize=1; shift; fi
 build_dir=${LIMBER_BUILD_DIR:-build}
 tools/setup.sh --tests
+. tools/progress.sh
+stage "running the tests (ctest -j2, about 2 min; -LE stress skips the long runs)"
 ctest --test-dir "$build_dir" --output-on-failure -j2 "$@"
 if [ $sanitize = 1 ]; then
   tools/sanitize.sh address -LE stress

@@ -201,7 +201,11 @@ void apply_rigid_limb_impulse(VerletState<Scalar>& state, const RigidLimbRespons
 // start of the step keeps that configuration's plane.
 template <typename Scalar>
 bool find_ball_contact(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, BallContact& contact) {
+  // A limb (or ball) gone non-finite touches nothing: its contact would carry the NaN to the ball
+  // and from it to every body the ball meets.
+  if (!std::isfinite(ball_limb_geometry(state, ball, limb, 1.0).separation)) return false;
   const SphereLimbContact start = ball_limb_geometry(state, ball, limb, 0.0);
+  if (!std::isfinite(start.separation)) return false;
   double time = 0;
   if (start.separation >= 0) {
     // Samples close enough that the ball cannot cross the limb between two: the relative motion
@@ -298,8 +302,11 @@ void detect_plane_contacts(VerletState<Scalar>& state, double dt) {
       for (std::uint32_t plane = 0; plane < state.planes.size(); ++plane) {
         const PlaneFeatureConstraint constraint = plane_constraint(state, f, plane);
         if (constraint.separation >= 0) continue;
-        state.plane_contacts.push_back({f, plane, plane_normal_speed(state, state.features[f], constraint, dt),
-                                        plane_constraint(state, f, plane, /*previous=*/true).separation});
+        PlaneContact contact;
+        contact.feature = f, contact.plane = plane;
+        contact.approach_speed = plane_normal_speed(state, state.features[f], constraint, dt);
+        contact.start_separation = plane_constraint(state, f, plane, /*previous=*/true).separation;
+        state.plane_contacts.push_back(contact);
       }
     }
   }
@@ -310,7 +317,7 @@ double project_plane_contacts(VerletState<Scalar>& state, double dt) {
   const double recovery = state.settings.contact_recovery_speed * dt;
   auto& particles = state.particles;
   double largest = 0;
-  for (const PlaneContact& contact : state.plane_contacts) {
+  for (PlaneContact& contact : state.plane_contacts) {
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
     const double push = allowed_separation(contact.start_separation, recovery) - constraint.separation;
@@ -318,6 +325,7 @@ double project_plane_contacts(VerletState<Scalar>& state, double dt) {
     if (push <= 0 || inverse_mass <= 0) continue;
     // λ = −C / Σ w|∇C|²; each particle moves w·λ·∇C (for a sphere: the whole push along n).
     const double lambda = push / inverse_mass;
+    contact.position_impulse += lambda;
     const std::uint32_t p = feature.particle, q = feature.axis_partner;
     Eigen::Vector3d delta = particles.inverse_mass[p] * lambda * constraint.gradient_point;
     if (q != p) {
@@ -344,10 +352,11 @@ template <typename Scalar>
 double project_ball_contacts(VerletState<Scalar>& state, double dt) {
   const double recovery = state.settings.contact_recovery_speed * dt;
   double largest = 0;
-  for (const BallContact& contact : state.ball_contacts) {
+  for (BallContact& contact : state.ball_contacts) {
     const double error = ball_separation(state, contact) - allowed_separation(contact.start_separation, recovery);
     const double inverse_mass = ball_limb_inverse_mass(state, contact);
     if (error >= 0 || inverse_mass <= 0) continue;
+    contact.position_impulse += -error / inverse_mass;
     const Eigen::Vector3d impulse = (-error / inverse_mass) * contact.normal;  // kg·m
     share_ball_limb_impulse(state, contact, impulse, [&](std::uint32_t p, const Eigen::Vector3d& d) {
       move(state.particles, p, d);
@@ -360,12 +369,14 @@ double project_ball_contacts(VerletState<Scalar>& state, double dt) {
 
 namespace {
 
-// One pass of the restitution impulses over every contact of the step.
+// One pass of the restitution impulses over every contact of the step. Returns the largest
+// change of a contact's normal speed, m/s.
 template <typename Scalar>
-void restitution_pass(VerletState<Scalar>& state, double dt) {
+double restitution_pass(VerletState<Scalar>& state, double dt) {
   const double resting = resting_speed(state, dt);
   auto& particles = state.particles;
-  for (const PlaneContact& contact : state.plane_contacts) {
+  double largest = 0;
+  for (PlaneContact& contact : state.plane_contacts) {
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
     const double restitution = std::max(state.planes[contact.plane].restitution, feature.restitution);
@@ -378,21 +389,25 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
       const RigidLimbResponse response = rigid_limb_response(state, feature.limb, at_head ? constraint.gradient_point : partner,
                                                              at_head ? partner : constraint.gradient_point);
       if (response.inverse_mass <= 0) continue;
-      const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / response.inverse_mass;
+      const double wanted = (target - plane_normal_speed(state, feature, constraint, dt)) / response.inverse_mass;
+      const double impulse = contact_impulse(state, wanted, contact.position_impulse, dt, contact.velocity_impulse);
       apply_rigid_limb_impulse(state, response, impulse, dt);
+      largest = std::max(largest, std::abs(impulse) * response.inverse_mass);
       continue;
     }
     const double inverse_mass = plane_inverse_mass(state, feature, constraint);
     if (constraint.separation > kTouchingSlop || inverse_mass <= 0) continue;  // lifted off, or fixed
-    const double impulse = (target - plane_normal_speed(state, feature, constraint, dt)) / inverse_mass;  // N·s
+    const double wanted = (target - plane_normal_speed(state, feature, constraint, dt)) / inverse_mass;
+    const double impulse = contact_impulse(state, wanted, contact.position_impulse, dt, contact.velocity_impulse);  // N·s
     change_velocity(state, feature.particle,
                     particles.inverse_mass[feature.particle] * impulse * constraint.gradient_point, dt);
     if (feature.axis_partner != feature.particle) {
       change_velocity(state, feature.axis_partner,
                       particles.inverse_mass[feature.axis_partner] * impulse * constraint.gradient_partner, dt);
     }
+    largest = std::max(largest, std::abs(impulse) * inverse_mass);
   }
-  for (const BallContact& contact : state.ball_contacts) {
+  for (BallContact& contact : state.ball_contacts) {
     const double target = bounce_speed(contact.approach_speed, state.balls[contact.ball].restitution, resting);
     const double normal_speed = ball_normal_speed(state, contact, dt);
     if (has_centre(state, contact.limb)) {
@@ -402,18 +417,23 @@ void restitution_pass(VerletState<Scalar>& state, double dt) {
                                                              -contact.axial * contact.normal);
       const double inverse_mass = state.particles.inverse_mass[ball] + response.inverse_mass;
       if (inverse_mass <= 0) continue;
-      const double impulse = (target - normal_speed) / inverse_mass;  // N·s, thesis eq. 2.33
+      const double wanted = (target - normal_speed) / inverse_mass;  // N·s, thesis eq. 2.33
+      const double impulse = contact_impulse(state, wanted, contact.position_impulse, dt, contact.velocity_impulse);
       change_velocity(state, ball, state.particles.inverse_mass[ball] * impulse * contact.normal, dt);
       apply_rigid_limb_impulse(state, response, impulse, dt);
+      largest = std::max(largest, std::abs(impulse) * inverse_mass);
       continue;
     }
     const double inverse_mass = ball_limb_inverse_mass(state, contact);
     if (ball_separation(state, contact) > kTouchingSlop || inverse_mass <= 0) continue;
     // Thesis eq. 2.33: J = Δv_n / (Σ generalized inverse masses), shared like the projection.
-    const Eigen::Vector3d impulse = ((target - normal_speed) / inverse_mass) * contact.normal;  // N·s
-    share_ball_limb_impulse(state, contact, impulse,
+    const double wanted = (target - normal_speed) / inverse_mass;
+    const double impulse = contact_impulse(state, wanted, contact.position_impulse, dt, contact.velocity_impulse);  // N·s
+    share_ball_limb_impulse(state, contact, impulse * contact.normal,
                             [&](std::uint32_t p, const Eigen::Vector3d& dv) { change_velocity(state, p, dv, dt); });
+    largest = std::max(largest, std::abs(impulse) * inverse_mass);
   }
+  return largest;
 }
 
 // Contacts on two-particle limbs meet their target speeds in one pass: an impulse across the
@@ -426,10 +446,12 @@ constexpr int kRigidLimbRestitutionPasses = 8;
 }  // namespace
 
 template <typename Scalar>
-void apply_restitution(VerletState<Scalar>& state, double dt) {
+double apply_restitution(VerletState<Scalar>& state, double dt) {
   const bool centres = state.limbs.size() > 0 && state.limbs.centre[0] != kNoCentre;
   const int passes = centres ? kRigidLimbRestitutionPasses : 1;
-  for (int pass = 0; pass < passes; ++pass) restitution_pass(state, dt);
+  double largest = 0;
+  for (int pass = 0; pass < passes; ++pass) largest = std::max(largest, restitution_pass(state, dt));
+  return largest;
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                                \
@@ -437,7 +459,7 @@ void apply_restitution(VerletState<Scalar>& state, double dt) {
   template void detect_plane_contacts<Scalar>(VerletState<Scalar>&, double);     \
   template double project_plane_contacts<Scalar>(VerletState<Scalar>&, double);  \
   template double project_ball_contacts<Scalar>(VerletState<Scalar>&, double);   \
-  template void apply_restitution<Scalar>(VerletState<Scalar>&, double);
+  template double apply_restitution<Scalar>(VerletState<Scalar>&, double);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -17,7 +17,10 @@
 // extended position based dynamics", 3.6): a contact still touching after relaxation leaves with
 // normal speed exactly e·v, v its approach speed before the step (thesis eq. 2.33, the impulse
 // spread by inverse mass) — which also removes any push-out velocity; approach speeds below
-// 2|g|Δt bounce with e = 0 so resting contacts stay at rest.
+// 2|g|Δt bounce with e = 0 so resting contacts stay at rest. Under the rattle rule the pass runs
+// after each sweep of the velocity stage, each contact an inequality row (contact_impulse), and
+// the stage sweeps on while contacts act and the sweeps still change velocities
+// (kernel/verlet/README.md, "Contacts under the rattle rule").
 // Limbs with a centre particle (LimbMasses::inertia): contacts act on the head and tail only
 // (the ends' features reach the whole surface); in relaxation the centre follows through its
 // constraints, sweep by sweep. The velocity pass has no sweeps after it, so there the impulse
@@ -25,6 +28,8 @@
 // point is 1/(1/m + s²/I), as for the rigid limb — and the pass is repeated (8 times) because
 // such a limb couples its two ends' contacts.
 #pragma once
+
+#include <algorithm>
 
 #include "limber/kernel/particles/verlet_state.hpp"
 
@@ -64,6 +69,24 @@ inline double bounce_speed(double approach_speed, double restitution, double res
   return approach_speed < -resting_speed ? -restitution * approach_speed : 0.0;
 }
 
+/// The impulse a contact takes in one restitution pass, N·s, given `wanted`, the one that brings
+/// its normal speed to its target (bounce_speed). Under pbd (one pass after relaxation) `wanted`
+/// itself. Under the rattle rule the passes are the contacts' rows of the velocity stage's
+/// Gauss-Seidel sweeps, and a contact is an inequality there: `velocity_impulse` accumulates what
+/// it has taken this substep, held at or above −position_impulse/dt (position_impulse: relaxation's
+/// pushes, kg·m) — its whole impulse over the substep never pulls, yet the velocity stage may take
+/// back the speed a push gave it (push-out speed is not kept). Sequential impulses' accumulated
+/// clamp (Catto 2005), with the position stage's push counted in.
+template <typename Scalar>
+double contact_impulse(const VerletState<Scalar>& state, double wanted, double position_impulse, double dt,
+                       double& velocity_impulse) {
+  if (!uses_rattle(state)) return wanted;
+  const double total = std::max(velocity_impulse + wanted, -position_impulse / dt);
+  const double taken = total - velocity_impulse;
+  velocity_impulse = total;
+  return taken;
+}
+
 /// Finds the awake balls' contacts with the limbs (asleep or not) and wakes the islands they
 /// touch: each ball tests its candidates from the broadphase (BallCandidates,
 /// kernel/geometry/broadphase.hpp), in increasing order. dt converts displacements to velocities.
@@ -83,8 +106,9 @@ double project_plane_contacts(VerletState<Scalar>& state, double dt);
 template <typename Scalar>
 double project_ball_contacts(VerletState<Scalar>& state, double dt);
 
-/// The restitution pass over all contacts of the step (changes previous positions only).
+/// The restitution pass over all contacts of the step: velocities (pbd: previous positions only),
+/// contact_impulse's rule. Returns the largest change of a contact's normal speed, m/s.
 template <typename Scalar>
-void apply_restitution(VerletState<Scalar>& state, double dt);
+double apply_restitution(VerletState<Scalar>& state, double dt);
 
 }  // namespace limber

@@ -163,34 +163,40 @@ void detect_limb_contacts(VerletState<Scalar>& state, double dt) {
 }
 
 template <typename Scalar>
-void apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
+double apply_contact_row_restitution(VerletState<Scalar>& state, double dt) {
   const ContactRowBatches<Scalar>& batches = state.plan.contact_batches;
   const double resting = resting_speed(state, dt);
   auto& particles = state.particles;
+  double largest = 0;
   for (std::size_t slot = 0; slot < batches.slot_count(); ++slot) {
     if (batches.row[slot] == ~std::uint32_t{0}) continue;
-    const ContactRow& row = state.contact_rows.rows[batches.row[slot]];
+    ContactRow& row = state.contact_rows.rows[batches.row[slot]];
     const double separation =
         along_normal(row, [&](std::uint32_t p) -> Eigen::Vector3d { return particles.position(p).template cast<double>(); }) - row.offset;
     const double inverse_mass = row_inverse_mass(state, row);
     if (separation > kTouchingSlop || inverse_mass <= 0) continue;
     const double target = bounce_speed(row.approach_speed, row.restitution, resting);
     const double speed = along_normal(row, [&](std::uint32_t p) { return contact_velocity(state, p, dt); });
-    // A row relaxation did not push keeps a separating speed of its own.
-    if (speed >= target && batches.lambda[slot] <= 0) continue;
-    const double impulse = (target - speed) / inverse_mass;  // N·s, thesis eq. 2.33
+    // A row relaxation did not push keeps a separating speed of its own (contact_impulse's clamp
+    // says the same under rattle).
+    if (!uses_rattle(state) && speed >= target && batches.lambda[slot] <= 0) continue;
+    const double wanted = (target - speed) / inverse_mass;  // N·s, thesis eq. 2.33
+    const double impulse = contact_impulse(state, wanted, double(batches.lambda[slot]), dt, row.velocity_impulse);
+    if (impulse == 0) continue;
     for (std::size_t k = 0; k < kContactRowParticles; ++k) {
       const std::uint32_t p = row.particle[k];
       const double share = double(particles.inverse_mass[p]) * row.coefficient[k];
       if (share == 0) continue;
       change_velocity(state, p, share * impulse * row.normal, dt);
     }
+    largest = std::max(largest, std::abs(impulse) * inverse_mass);
   }
+  return largest;
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                                  \
   template void detect_limb_contacts<Scalar>(VerletState<Scalar>&, double);         \
-  template void apply_contact_row_restitution<Scalar>(VerletState<Scalar>&, double);
+  template double apply_contact_row_restitution<Scalar>(VerletState<Scalar>&, double);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -27,8 +27,10 @@ void detect_limb_contacts(VerletState<Scalar>& state, double dt);
 
 /// The restitution pass over the contact rows (velocities, as apply_restitution in
 /// contacts.hpp): a row still touching leaves with normal speed e·v (v its approach), 0 for
-/// resting approaches; one pushed by relaxation also loses the push-out speed.
+/// resting approaches; one pushed by relaxation also loses the push-out speed; under the rattle
+/// rule each row is an inequality of the velocity stage (contact_impulse, contacts.hpp). Returns
+/// the largest change of a row's normal speed, m/s.
 template <typename Scalar>
-void apply_contact_row_restitution(VerletState<Scalar>& state, double dt);
+double apply_contact_row_restitution(VerletState<Scalar>& state, double dt);
 
 }  // namespace limber

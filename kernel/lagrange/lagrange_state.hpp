@@ -42,7 +42,8 @@ struct LagrangeOptions {
   Stabilization stabilization = Stabilization::baumgarte;
   MultiplierSolver solver = MultiplierSolver::automatic;
   /// ω_b of Baumgarte stabilization, 1/s; 0: 1/(4Δt), critically damped and four steps to
-  /// correct an error.
+  /// correct an error — with Δt no shorter than the Model's Settings::time_step, so that a short
+  /// step does not turn a longer step's error C into a velocity C/(4Δt).
   double baumgarte_frequency = 0;
   int projection_iterations = 2;  ///< Newton iterations of the position projection
 };

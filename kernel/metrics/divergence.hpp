@@ -32,6 +32,14 @@ inline constexpr double kDivergenceEnergyFactor = 100;
 /// stretches to many.
 inline constexpr double kDivergenceJointGap = 1.0;
 
+/// A run that holds together can still be poor: the command line's summary flags (and does not
+/// fail) one that ends with a joint gap or link stretch past kAccuracyJointGap of a link, or
+/// with its energy risen past kAccuracyEnergyGain of the scene's energy scale (DivergenceBounds):
+/// without loads and drives no method should gain energy, and a converged solve holds joints
+/// closed to far less than a percent once an impact has passed.
+inline constexpr double kAccuracyJointGap = 0.01;
+inline constexpr double kAccuracyEnergyGain = 0.01;
+
 /// What a run is measured against, fixed when it starts (or its model changes).
 struct DivergenceBounds {
   double start_energy = 0;  ///< J, kinetic + potential at the start

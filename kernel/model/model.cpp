@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "limber/kernel/model/checks.hpp"
+#include "limber/kernel/model/step_status.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
@@ -325,6 +326,10 @@ void require_collider_names(const Model& model) {
 void validate_settings(const Settings& settings) {
   require_finite(settings.gravity, "settings.gravity");
   require_positive(settings.time_step, "settings.time_step");
+  if (settings.time_step < kMinimumTimeStep) {
+    fail("settings.time_step", "must be >= " + format_number(kMinimumTimeStep) + " s (the shortest step a method takes), got " +
+                                   format_number(settings.time_step));
+  }
   require_positive(settings.duration, "settings.duration");
   require_non_negative(settings.damping, "settings.damping");
   require_positive(settings.divergence_speed, "settings.divergence_speed");
@@ -363,8 +368,8 @@ void validate(const Model& model) {
   for (std::size_t i = 0; i < model.balls.size(); ++i) {
     const Ball& ball = model.balls[i];
     const std::string field = "balls[" + std::to_string(i) + "].";
-    require_positive(ball.radius, field + "radius");
-    require_positive(ball.mass, field + "mass");
+    require_in_range(ball.radius, 0, kMaxBallRadius, field + "radius", /*low_open=*/true);
+    require_in_range(ball.mass, 0, kMaxBallMass, field + "mass", /*low_open=*/true);
     require_in_range(ball.restitution, 0, 1, field + "restitution");
     require_finite(ball.position, field + "position");
     require_finite(ball.velocity, field + "velocity");

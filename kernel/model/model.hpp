@@ -255,13 +255,18 @@ struct Bounds {
   double friction = 0;
 };
 
+/// The largest ball a Model takes: radius (m) and mass (kg). Guards against a slip of the
+/// keyboard (a radius of 10³⁰⁰ m has an infinite moment of inertia), not physical limits.
+inline constexpr double kMaxBallRadius = 1e3;
+inline constexpr double kMaxBallMass = 1e9;
+
 /// A solid sphere thrown at the scene (thesis 4.5: the elastic ball; several make a volley). A
 /// free rigid body of its own island, in every method; it meets limbs, the ground, the bounds,
 /// static colliders and the other balls. (A capsule or cylinder projectile is a Body without
 /// joints.)
 struct Ball {
-  double radius = 0;                    ///< m, > 0
-  double mass = 0;                      ///< kg, > 0
+  double radius = 0;                    ///< m, in (0, kMaxBallRadius]
+  double mass = 0;                      ///< kg, in (0, kMaxBallMass]
   double restitution = 0;               ///< [0, 1], used for its contacts with limbs
   Vector3 position = Vector3::Zero();   ///< centre, m
   Vector3 velocity = Vector3::Zero();   ///< initial, m/s

@@ -18,11 +18,18 @@ enum class StepStatus : std::uint8_t {
   diverged_speed,       ///< a particle or body exceeded Settings::divergence_speed
   diverged_energy,      ///< the energy rose past its bound (kernel/metrics/divergence.hpp)
   diverged_joint_gap,   ///< a joint came apart, or a particle limb stretched, past its bound (kernel/metrics/divergence.hpp)
-  invalid_time_step,    ///< Δt was not a positive finite number; nothing was done
+  invalid_time_step,    ///< Δt was not a finite number ≥ the method's minimum (kMinimumTimeStep); nothing was done
 };
 
-/// Whether step() can take a step of dt seconds: a positive finite number.
-inline bool valid_time_step(double dt) { return dt > 0 && std::isfinite(dt); }
+/// The shortest step any method takes, s. Below it a step is refused (invalid_time_step): a
+/// subnormal Δt is zero once denormals are flushed, and steps this short carry a body's motion
+/// in the last digits of its coordinates (a particle moving at 1 m/s moves 10⁻⁹ m, 10⁷ ulps of
+/// a double at 1 m; a float has 10⁻⁷ of a metre there, which is why float particle states
+/// take their own minimum, VerletState's minimum_time_step).
+inline constexpr double kMinimumTimeStep = 1e-9;
+
+/// Whether step() can take a step of dt seconds: a finite number ≥ `minimum` (s).
+inline bool valid_time_step(double dt, double minimum = kMinimumTimeStep) { return dt >= minimum && std::isfinite(dt); }
 
 /// Why the particle method's relaxation stopped in a step (thesis 3.2.3 lists the three).
 enum class RelaxationStop : std::uint8_t {
@@ -37,7 +44,7 @@ enum class RelaxationStop : std::uint8_t {
 /// fallbacks; `stop` and `largest_correction` are the last substep's.
 struct StepReport {
   StepStatus status = StepStatus::ok;
-  int contacts = 0;  ///< contacts found this step (particles: those of its last substep)
+  int contacts = 0;  ///< contacts found this step (particles: the most in any one of its substeps)
 
   // Particles: the relaxation.
   RelaxationStop stop = RelaxationStop::idle;
@@ -58,13 +65,20 @@ struct StepReport {
   double angular_error = 0;     ///< largest |u·v| of a joint's angular rows (≈ rad)
 };
 
-/// The step guard of every method's step(): a bad dt is refused (invalid_time_step, nothing
-/// done); otherwise `advance(report)` runs with denormals flushed to zero. The report is kept as
-/// state.last_report and returned.
+/// The shortest step `state` takes, s: kMinimumTimeStep, unless an overload for its type (found
+/// by argument-dependent lookup) says more.
+template <typename State>
+double minimum_time_step(const State&) {
+  return kMinimumTimeStep;
+}
+
+/// The step guard of every method's step(): a bad dt (valid_time_step with the state's
+/// minimum_time_step) is refused (invalid_time_step, nothing done); otherwise `advance(report)`
+/// runs with denormals flushed to zero. The report is kept as state.last_report and returned.
 template <typename State, typename Advance>
 StepReport guarded_step(State& state, double dt, Advance&& advance) {
   StepReport report;
-  if (!valid_time_step(dt)) {
+  if (!valid_time_step(dt, minimum_time_step(state))) {
     report.status = StepStatus::invalid_time_step;
   } else {
     const FlushDenormals flush;

@@ -35,6 +35,9 @@ struct ContactRow {
   double offset = 0;
   double friction = 0, restitution = 0;
   double approach_speed = 0;  ///< n·Σ c_k v_k before relaxation, m/s (< 0 approaching)
+  /// The rattle rule's velocity stage so far this substep, N·s (relaxation's push is the
+  /// batches' λ; contact_impulse, kernel/collision/contacts.hpp).
+  double velocity_impulse = 0;
 };
 
 /// The substep's contact rows and the colouring's scratch (capacities kept between substeps).

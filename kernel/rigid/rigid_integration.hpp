@@ -151,15 +151,25 @@ inline void align_axial_momentum(Eigen::Quaterniond& orientation, const Eigen::V
   orientation = (Eigen::Quaterniond(Eigen::AngleAxisd(now - wanted, normal.normalized())) * orientation).normalized();
 }
 
-// out = y + h · Σ weight_k · k_k over the listed stages; q renormalized, then turned so the world
-// L agrees with the momentum about the least axis advanced the same way in the body frame
-// (align_axial_momentum). The world L and q, advanced apart, keep L·a only to the method's order,
-// and ω_axial = L·a/I_axial magnifies that error by I_transverse/I_axial (10⁶ for a limb of zero
-// radius): RK4 spun thin rods up until they diverged, at any Δt (kernel/lagrange/README.md).
-// Turning q (O(h^(order+1)) each step) keeps L as integrated: exact for a torque-free body.
+// What advance() writes: a Runge-Kutta stage (a state only derivative() reads) or the step's end.
+enum class Advance : std::uint8_t { stage, step_end };
+
+// out = y + h · Σ weight_k · k_k over the listed stages, q renormalized, for the state extended by
+// the momentum about each body's least axis a in the body frame, L_a (derivative(): Euler's
+// equation). The world L and q, advanced apart, keep L·a only to the method's order, and
+// ω_axial = L·a/I_axial magnifies that error by I_transverse/I_axial (10⁶ for a limb of zero
+// radius): RK4 spun thin rods up until they diverged, at any Δt (kernel/lagrange/README.md). So
+// - a stage's L gets the component L_a along a (L += (L_a − L·a)·a): only ω's part about a
+//   changes, to L_a/I_axial, and linearly, so the method is Runge-Kutta on the extended state and
+//   keeps its order. Turning q in the stages instead moved the axis itself, the joints' geometry,
+//   by (L·a − L_a)/|L × a|: an O(h²) difference over a transverse momentum that passes through 0
+//   whenever a limb's swing reverses, which cost RK4 its order (kernel/lagrange/README.md);
+// - the step's end turns q so that L·a = L_a (align_axial_momentum), by O(h^(order+1)): L stays as
+//   integrated, exactly kept for a torque-free body. Without this turn the stored L·a drifts from
+//   L_a by the method's error every step, and thin rods spun up and diverged again.
 inline void advance(const RigidBodyBuffer& bodies, const RigidBodyState& y, double h,
                     std::initializer_list<std::pair<int, double>> stages, const RigidIntegratorScratch& scratch,
-                    RigidBodyState& out) {
+                    Advance what, RigidBodyState& out) {
   for (std::size_t b = 0; b < y.size(); ++b) {
     const int k = least_axis(bodies, b);
     double axial = (y.orientation[b].conjugate() * y.angular_momentum[b])[k];
@@ -172,9 +182,15 @@ inline void advance(const RigidBodyBuffer& bodies, const RigidBodyState& y, doub
       l += h * weight * scratch.torque[s][b];
       axial += h * weight * scratch.axial_torque[s][b];
     }
-    out.position[b] = x, out.linear_momentum[b] = p, out.angular_momentum[b] = l;
+    out.position[b] = x, out.linear_momentum[b] = p;
     out.orientation[b].coeffs() = q.normalized();
-    align_axial_momentum(out.orientation[b], l, k, axial);
+    if (what == Advance::stage) {
+      const Eigen::Vector3d a = out.orientation[b] * Eigen::Vector3d::Unit(k);
+      out.angular_momentum[b] = l + (axial - l.dot(a)) * a;
+    } else {
+      out.angular_momentum[b] = l;
+      align_axial_momentum(out.orientation[b], l, k, axial);
+    }
   }
 }
 
@@ -189,7 +205,8 @@ inline void advance(const RigidBodyBuffer& bodies, const RigidBodyState& y, doub
 ///   new L (rotate_free_body; order 1 with forces, 2 without); needs diagonal body inertias;
 /// - rk2 (midpoint, order 2) and rk4 (classical, order 4).
 /// euler, rk2 and rk4 also advance each body's momentum about its least principal axis in the body
-/// frame and turn q to agree with it (detail::advance: a limb of zero radius spun up otherwise).
+/// frame, as part of the state: the stages take ω about that axis from it, and the step's end
+/// turns q to agree with it (detail::advance: a limb of zero radius spun up otherwise).
 /// Every integrator needs diagonal body inertias (the body frame on the principal axes).
 /// backward_euler is the spring method's own (kernel/springs/implicit_step.hpp): compile refuses
 /// it elsewhere, and here it does nothing.
@@ -200,7 +217,7 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, Integrator integr
   switch (integrator) {
     case Integrator::euler:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(bodies, y, h, {{0, 1.0}}, scratch, y);
+      detail::advance(bodies, y, h, {{0, 1.0}}, scratch, detail::Advance::step_end, y);
       return;
     case Integrator::semi_implicit_euler:
       scratch.forces.clear();
@@ -214,19 +231,20 @@ void integrate_rigid_bodies(RigidBodyBuffer& bodies, double h, Integrator integr
       return;
     case Integrator::rk2:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, detail::Advance::stage, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
-      detail::advance(bodies, y, h, {{1, 1.0}}, scratch, y);
+      detail::advance(bodies, y, h, {{1, 1.0}}, scratch, detail::Advance::step_end, y);
       return;
     case Integrator::rk4:
       detail::derivative(bodies, y, accumulate, scratch, 0);
-      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{0, 0.5}}, scratch, detail::Advance::stage, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 1);
-      detail::advance(bodies, y, h, {{1, 0.5}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{1, 0.5}}, scratch, detail::Advance::stage, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 2);
-      detail::advance(bodies, y, h, {{2, 1.0}}, scratch, scratch.stage);
+      detail::advance(bodies, y, h, {{2, 1.0}}, scratch, detail::Advance::stage, scratch.stage);
       detail::derivative(bodies, scratch.stage, accumulate, scratch, 3);
-      detail::advance(bodies, y, h, {{0, 1.0 / 6}, {1, 2.0 / 6}, {2, 2.0 / 6}, {3, 1.0 / 6}}, scratch, y);
+      detail::advance(bodies, y, h, {{0, 1.0 / 6}, {1, 2.0 / 6}, {2, 2.0 / 6}, {3, 1.0 / 6}}, scratch,
+                       detail::Advance::step_end, y);
       return;
     case Integrator::backward_euler: return;
   }

@@ -107,16 +107,62 @@ void kick_and_drift(VerletState<Scalar>& state, double h) {
   state.counters.particles_integrated += integrated;
 }
 
-// The rattle rule after the position projections: v ← (x − x₀)/h, the constrained half-step
-// velocity, then the second half kick.
+// A substep shorter than the ones before it would turn the relaxation's closing of the joint
+// gaps they left, ε, into a velocity ε/h: a gap left by a step of 1/240 s closed in 10⁻⁷ s is a
+// kick of 40 000·ε/Δt (the chain's 200 J became 13 000 J). So a substep of h within a time H
+// after a longer step of H (state.correction_time: H = span − age > h) takes the velocity its
+// relaxation makes, δ = x − x_predicted, as made over H, δ/H: closing ε, in one substep or
+// several, then gives ε/H — what the step that left it would have given — and the substep's own
+// constraint impulse, O(h), changes by O(h). Once a time H has passed, or at h ≥ H, the usual
+// form runs (the same bits at a constant step).
+//
+// pbd: x* ← x₀ + (1 − h/H)·δ, so that (x − x*)/h = (x_predicted − x₀)/h + δ/H; the prediction
+// is kept in the velocity arrays (pbd's velocity is implicit, so they are free).
 template <typename Scalar>
-void velocity_from_positions(VerletState<Scalar>& state, double h) {
+void keep_prediction(VerletState<Scalar>& state) {
   auto& p = state.particles;
-  const Scalar inverse_step = static_cast<Scalar>(1.0 / h);
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      p.velocity_x[i] = p.position_x[i], p.velocity_y[i] = p.position_y[i], p.velocity_z[i] = p.position_z[i];
+    }
+  }
+}
+
+template <typename Scalar>
+void shortened_step_velocity(VerletState<Scalar>& state, double h, double longer) {
+  auto& p = state.particles;
+  const Scalar kept = static_cast<Scalar>(1.0 - h / longer);
   for (std::uint32_t island_index : state.awake_islands) {
     const Island& island = state.islands[island_index];
     for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
       if (p.inverse_mass[i] == Scalar(0)) continue;
+      p.previous_x[i] += kept * (p.position_x[i] - p.velocity_x[i]);
+      p.previous_y[i] += kept * (p.position_y[i] - p.velocity_y[i]);
+      p.previous_z[i] += kept * (p.position_z[i] - p.velocity_z[i]);
+    }
+  }
+}
+
+// The rattle rule after the position projections: v ← (x − x₀)/h, the constrained half-step
+// velocity, then the second half kick. A shortened substep (`longer` > h) takes
+// v ← v + (x − x₀ − h·v)/longer instead (shortened_step_velocity's reason).
+template <typename Scalar>
+void velocity_from_positions(VerletState<Scalar>& state, double h, double longer) {
+  auto& p = state.particles;
+  const Scalar inverse_step = static_cast<Scalar>(1.0 / h);
+  const bool shortened = h < longer;
+  const Scalar step = static_cast<Scalar>(h), inverse_longer = static_cast<Scalar>(1.0 / longer);
+  for (std::uint32_t island_index : state.awake_islands) {
+    const Island& island = state.islands[island_index];
+    for (std::uint32_t i = island.particle_begin; i < island.particle_end; ++i) {
+      if (p.inverse_mass[i] == Scalar(0)) continue;
+      if (shortened) {  // the drift's own prediction, x₀ + h·v, rounded as it was
+        p.velocity_x[i] += (p.position_x[i] - (p.previous_x[i] + step * p.velocity_x[i])) * inverse_longer;
+        p.velocity_y[i] += (p.position_y[i] - (p.previous_y[i] + step * p.velocity_y[i])) * inverse_longer;
+        p.velocity_z[i] += (p.position_z[i] - (p.previous_z[i] + step * p.velocity_z[i])) * inverse_longer;
+        continue;
+      }
       p.velocity_x[i] = (p.position_x[i] - p.previous_x[i]) * inverse_step;
       p.velocity_y[i] = (p.position_y[i] - p.previous_y[i]) * inverse_step;
       p.velocity_z[i] = (p.position_z[i] - p.previous_z[i]) * inverse_step;
@@ -141,12 +187,13 @@ void move_kinematic_particles(VerletState<Scalar>& state, int index, int count, 
   }
 }
 
-// Contact rows whose surfaces touch at the end of the substep (the rest are speculative).
+// The substep's contacts: those with the ground, the bounds and the ball, and the contact rows
+// relaxation pushed (the rest are speculative).
 template <typename Scalar>
-std::size_t touching_rows(const VerletState<Scalar>& state) {
-  std::size_t count = 0;
+int substep_contacts(const VerletState<Scalar>& state) {
+  std::size_t count = state.plane_contacts.size() + state.ball_contacts.size();
   for (const auto lambda : state.plan.contact_batches.lambda) count += lambda > 0 ? 1 : 0;
-  return count;
+  return static_cast<int>(count);
 }
 
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps
@@ -288,12 +335,21 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
   end_relaxation(state);
 }
 
+// Most sweeps the rattle rule's velocity stage runs in a substep where contacts act: a bound on
+// the cost of a substep that does not converge (README.md, "Contacts under the rattle rule").
+constexpr int kMaxContactVelocitySweeps = 32;
+
 // The rattle rule's velocity stage: as many sweeps as the position stage ran (Newton steps: one
 // exact solve each), each followed by the limb centres' rate and the contacts' restitution pass
-// — Gauss-Seidel over every velocity row, so joints and contacts agree on the velocities the
-// substep ends with — until the velocity changes times the substep fall below the tolerance.
-// Compliant constraints (direct solver, α > 0) are springs, whose rate is free: they get the
-// second half kick of their force instead (kick_compliant_constraints), then the contacts.
+// — Gauss-Seidel over every velocity row, the contacts as inequalities (contact_impulse), so
+// joints and contacts agree on the velocities the substep ends with — until the velocity
+// changes times the substep fall below the tolerance. Where a contact acts, the sweeps go on
+// until no sweep changes a velocity by the resting speed (2|g|h) or more, at most
+// kMaxContactVelocitySweeps: left unconverged, the contacts' last impulses break the joints'
+// rates, the joints open gaps, and the gaps return the energy later (README.md, "Contacts under
+// the rattle rule"). Compliant constraints (direct solver, α > 0) are springs, whose rate is
+// free: they get the second half kick of their force instead (kick_compliant_constraints), then
+// the contacts.
 template <typename Scalar>
 void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
   const bool contacts = !state.balls.empty() || !state.planes.empty();
@@ -305,13 +361,19 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     return;
   }
   const bool has_centres = has_limb_centres(state);
+  const double settled = resting_speed(state, dt);
+  bool contact_acted = false;
   begin_velocity_projection(state);
-  for (int sweep = 0; sweep < sweeps; ++sweep) {
+  for (int sweep = 1;; ++sweep) {
     double largest = velocity_sweep(state);
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
-    if (contacts) apply_restitution(state, dt);
-    if (rows) apply_contact_row_restitution(state, dt);
+    double contact_change = 0;
+    if (contacts) contact_change = apply_restitution(state, dt);
+    if (rows) contact_change = std::max(contact_change, apply_contact_row_restitution(state, dt));
+    contact_acted = contact_acted || contact_change > 0;
+    largest = std::max(largest, contact_change);
     if (state.options.relaxation.tolerance > 0 && largest * dt < state.options.relaxation.tolerance) break;
+    if (sweep >= sweeps && (!contact_acted || largest < settled || sweep >= kMaxContactVelocitySweeps)) break;
   }
   end_velocity_projection(state);
 }
@@ -323,10 +385,13 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
   StepReport report;
   const bool rattle = uses_rattle(state);
   const bool has_ball = !state.balls.empty(), has_planes = !state.planes.empty();
+  // > dt: a shortened substep (shortened_step_velocity).
+  const double longer = std::max(dt, state.correction_time.span - state.correction_time.age);
   if (rattle) {
     kick_and_drift(state, dt);
   } else {
     integrate(state, dt);
+    if (dt < longer) keep_prediction(state);
   }
   if (!state.kinematic_targets.empty()) move_kinematic_particles(state, index, count, dt);
   if (has_ball) {
@@ -341,17 +406,40 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
   if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
   if (!state.awake_islands.empty()) relax_positions(state, dt, budget_us, report);
   if (rattle) {
-    velocity_from_positions(state, dt);
+    velocity_from_positions(state, dt, longer);
     if (!state.awake_islands.empty()) project_velocities(state, dt, std::max(1, report.iterations));
   } else {
+    if (dt < longer) shortened_step_velocity(state, dt, longer);
     if (has_ball || has_planes) apply_restitution(state, dt);
     if (!state.contact_rows.empty()) apply_contact_row_restitution(state, dt);
   }
+  report.contacts = substep_contacts(state);
   report.status = update_sleep(state, dt);
   report.substeps = 1;
   state.time += dt;
   state.previous_time_step = dt;
+  if (longer == dt) {
+    state.correction_time.span = dt, state.correction_time.age = 0;
+  } else {
+    state.correction_time.age += dt;
+  }
   return report;
+}
+
+// After a step that diverged: a pinned particle (w = 0) is moved only by a kinematic target,
+// but a correction gone infinite moves it by 0·∞ = NaN; it goes back where it was, so that the
+// bodies it holds can be teleported back and the World step on.
+// The null particle (padded SIMD lanes point at it) goes back to the origin.
+template <typename Scalar>
+void restore_pinned_particles(VerletState<Scalar>& state) {
+  auto& p = state.particles;
+  for (std::uint32_t i = 0; i < p.size(); ++i) {
+    if (p.inverse_mass[i] == Scalar(0) && !p.position(i).allFinite() && p.previous(i).allFinite()) p.set_position(i, p.previous(i));
+  }
+  const std::uint32_t null = p.null_particle();
+  if (!p.position(null).allFinite() || !p.previous(null).allFinite()) {
+    p.set_position(null, ParticleBuffer<Scalar>::Vector3::Zero()), p.set_previous(null, ParticleBuffer<Scalar>::Vector3::Zero());
+  }
 }
 
 }  // namespace
@@ -369,15 +457,16 @@ StepReport step(VerletState<Scalar>& state, double dt) {
       report.iterations += part.iterations;
       report.largest_correction = part.largest_correction;
       report.stop = part.stop;
+      report.contacts = std::max(report.contacts, part.contacts);
       report.status = part.status;
       report.substeps += 1;
       if (part.status != StepStatus::ok) break;
     }
     if (report.status == StepStatus::ok) state.time = start_time + dt;  // not n roundings of h
+    if (report.status != StepStatus::ok) restore_pinned_particles(state);
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
-    report.contacts = static_cast<int>(state.plane_contacts.size() + state.ball_contacts.size() + touching_rows(state));
   });
 }
 

@@ -1,6 +1,7 @@
 #include "limber/kernel/world/world.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <type_traits>
@@ -37,9 +38,13 @@ std::vector<std::int64_t> first_bodies_kept(std::size_t count, std::size_t kept)
   return old_body_of_new;
 }
 
+// Serials for the handles of each World made (0 is no World's).
+std::atomic<std::uint32_t> next_world_serial{1};
+
 }  // namespace
 
-World::World(Model model, WorldOptions options) : model_(std::move(model)), options_(std::move(options)), state_(compile_method(model_, options_)) {
+World::World(Model model, WorldOptions options)
+    : model_(std::move(model)), options_(std::move(options)), serial_(next_world_serial.fetch_add(1)), state_(compile_method(model_, options_)) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
@@ -94,31 +99,41 @@ void World::segments(std::vector<LimbSegment>& out) const {
 BodyId World::body(std::string_view name) const {
   const int b = model_.find_body(name);
   if (b < 0) throw WorldError("body: no body called '" + std::string(name) + "'");
-  return BodyId{body_handle_[static_cast<std::size_t>(b)]};
+  return BodyId{body_handle_[static_cast<std::size_t>(b)], serial_};
 }
 
 JointId World::joint(std::string_view name) const {
   for (std::size_t j = 0; j < model_.joints.size(); ++j) {
-    if (model_.joints[j].name == name) return JointId{joint_handle_[j]};
+    if (model_.joints[j].name == name) return JointId{joint_handle_[j], serial_};
   }
   throw WorldError("joint: no joint called '" + std::string(name) + "'");
 }
 
 std::vector<BodyId> World::bodies() const {
   std::vector<BodyId> out;
-  for (std::uint32_t handle : body_handle_) out.push_back(BodyId{handle});
+  for (std::uint32_t handle : body_handle_) out.push_back(BodyId{handle, serial_});
   return out;
 }
 
 const Body& World::body_description(BodyId body) const { return model_.bodies[index(body)]; }
 
+template <typename Id>
+void World::check_world(Id id, std::string_view kind) const {
+  if (id.world != serial_) {
+    throw WorldError(std::string(kind) + " handle " + std::to_string(id.value) +
+                     (id.world == 0 ? ": not a handle a World gave" : ": from another World (each World's handles are its own)"));
+  }
+}
+
 std::size_t World::index(BodyId body) const {
+  check_world(body, "body");
   const auto it = body_index_.find(body.value);
   if (it == body_index_.end()) throw WorldError("body handle " + std::to_string(body.value) + ": no such body (removed?)");
   return it->second;
 }
 
 std::size_t World::index(JointId joint) const {
+  check_world(joint, "joint");
   const auto it = joint_index_.find(joint.value);
   if (it == joint_index_.end()) throw WorldError("joint handle " + std::to_string(joint.value) + ": no such joint (removed?)");
   return it->second;
@@ -126,12 +141,13 @@ std::size_t World::index(JointId joint) const {
 
 ColliderId World::collider(std::string_view name) const {
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
-    if (model_.colliders[c].name == name) return ColliderId{collider_handle_[c]};
+    if (model_.colliders[c].name == name) return ColliderId{collider_handle_[c], serial_};
   }
   throw WorldError("collider: no collider called '" + std::string(name) + "'");
 }
 
 std::size_t World::index(ColliderId collider) const {
+  check_world(collider, "collider");
   const auto it = collider_index_.find(collider.value);
   if (it == collider_index_.end()) {
     throw WorldError("collider handle " + std::to_string(collider.value) + ": no such collider (removed?)");
@@ -150,7 +166,8 @@ void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const 
 // --- Stepping
 
 StepStatus World::step(double dt) {
-  if (!valid_time_step(dt)) {  // the method's guard refuses it and records the refusal
+  const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, state_);
+  if (!valid_time_step(dt, minimum)) {  // the method's guard refuses it and records the refusal
     return std::visit([&](auto& state) { return limber::step(state, dt).status; }, state_);
   }
   // This step's loads: forces and torques, and impulses as their force over the step.
@@ -241,7 +258,7 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
   check_vector(torque, "apply_joint_torque");
   const Joint& j = model_.joints[index(joint)];
   load_torque_[static_cast<std::size_t>(j.outboard)] += torque;
-  wake(BodyId{body_handle_[static_cast<std::size_t>(j.outboard)]});
+  wake(BodyId{body_handle_[static_cast<std::size_t>(j.outboard)], serial_});
   if (j.inboard != kWorld) load_torque_[static_cast<std::size_t>(j.inboard)] -= torque;
 }
 
@@ -273,7 +290,7 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
         }
       },
       state_);
-  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[k].outboard)]});
+  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[k].outboard)], serial_});
 }
 
 // --- Held points
@@ -288,10 +305,11 @@ PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
   Joint joint = spherical_joint("pin " + std::to_string(next_pin_), kWorld, static_cast<int>(b), world_point, local_point);
   const JointId id = add_joint(joint);
   pins_[next_pin_] = Pin{id, std::nullopt};
-  return PinId{next_pin_++};
+  return PinId{next_pin_++, serial_};
 }
 
 void World::unpin(PinId pin) {
+  check_world(pin, "unpin: pin");
   const auto it = pins_.find(pin.value);
   if (it == pins_.end()) throw WorldError("unpin: pin " + std::to_string(pin.value) + ": no such pin");
   const JointId joint = it->second.joint;
@@ -301,13 +319,15 @@ void World::unpin(PinId pin) {
 
 void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
   check_vector(world_target, "move_pin");
+  check_world(pin, "move_pin: pin");
   const auto it = pins_.find(pin.value);
   if (it == pins_.end()) throw WorldError("move_pin: pin " + std::to_string(pin.value) + ": no such pin");
   it->second.target = world_target;
-  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[index(it->second.joint)].outboard)]});
+  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[index(it->second.joint)].outboard)], serial_});
 }
 
 Eigen::Vector3d World::pin_position(PinId pin) const {
+  check_world(pin, "pin_position: pin");
   const auto it = pins_.find(pin.value);
   if (it == pins_.end()) throw WorldError("pin_position: pin " + std::to_string(pin.value) + ": no such pin");
   return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(it->second.joint)); }, state_);
@@ -321,7 +341,7 @@ void World::wake(BodyId body) {
 }
 
 void World::wake_all() {
-  for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b]});
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b], serial_});
 }
 
 const StepReport& World::last_report() const {
@@ -342,6 +362,13 @@ bool World::sleeping(BodyId body) const {
 
 void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
   check_vector(pose.position, "teleport"), check_vector(motion.linear, "teleport"), check_vector(motion.angular, "teleport");
+  const double norm = pose.orientation.norm();
+  if (!pose.orientation.coeffs().allFinite() || !(std::abs(norm - 1) <= 1e-3)) {
+    const Eigen::Quaterniond& q = pose.orientation;
+    std::ostringstream got;
+    got << "(" << q.w() << ", " << q.x() << ", " << q.y() << ", " << q.z() << ")";
+    throw WorldError("teleport: orientation must be a finite unit quaternion (w, x, y, z), got " + got.str());
+  }
   const std::size_t b = index(body);
   const Eigen::Quaterniond orientation = pose.orientation.normalized();
   std::visit(
@@ -371,7 +398,7 @@ BodyId World::add_body(const Body& body) {
   recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()));
   body_handle_.push_back(next_body_handle_);
   body_index_[next_body_handle_] = edited.bodies.size() - 1;
-  return BodyId{next_body_handle_++};
+  return BodyId{next_body_handle_++, serial_};
 }
 
 JointId World::add_joint(const Joint& joint) {
@@ -380,7 +407,7 @@ JointId World::add_joint(const Joint& joint) {
   recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
   joint_handle_.push_back(next_joint_handle_);
   joint_index_[next_joint_handle_] = edited.joints.size() - 1;
-  return JointId{next_joint_handle_++};
+  return JointId{next_joint_handle_++, serial_};
 }
 
 void World::remove_joint(JointId joint) {
@@ -435,7 +462,7 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
   for (std::size_t b = base; b < edited.bodies.size(); ++b) {
     body_handle_.push_back(next_body_handle_);
     body_index_[next_body_handle_] = b;
-    added.push_back(BodyId{next_body_handle_++});
+    added.push_back(BodyId{next_body_handle_++, serial_});
   }
   for (std::size_t j = model_.joints.size() - other.joints.size(); j < model_.joints.size(); ++j) {
     joint_handle_.push_back(next_joint_handle_);
@@ -451,7 +478,7 @@ ColliderId World::add_collider(const StaticCollider& collider) {
   recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
   collider_handle_.push_back(next_collider_handle_);
   collider_index_[next_collider_handle_] = edited.colliders.size() - 1;
-  return ColliderId{next_collider_handle_++};
+  return ColliderId{next_collider_handle_++, serial_};
 }
 
 void World::remove_collider(ColliderId collider) {
@@ -472,7 +499,7 @@ BallId World::add_ball(const Ball& ball) {
   recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
   ball_handle_.push_back(next_ball_handle_);
   ball_index_[next_ball_handle_] = edited.balls.size() - 1;
-  return BallId{next_ball_handle_++};
+  return BallId{next_ball_handle_++, serial_};
 }
 
 void World::remove_ball(BallId ball) {
@@ -491,11 +518,12 @@ void World::remove_ball(BallId ball) {
 
 std::vector<BallId> World::balls() const {
   std::vector<BallId> out;
-  for (const std::uint32_t handle : ball_handle_) out.push_back(BallId{handle});
+  for (const std::uint32_t handle : ball_handle_) out.push_back(BallId{handle, serial_});
   return out;
 }
 
 std::size_t World::index(BallId ball) const {
+  check_world(ball, "ball");
   const auto it = ball_index_.find(ball.value);
   if (it == ball_index_.end()) throw WorldError("ball handle " + std::to_string(ball.value) + ": no such ball (removed?)");
   return it->second;

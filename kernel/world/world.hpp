@@ -50,28 +50,35 @@ class WorldError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Handles: stable across structural edits (a removed body's handle is refused thereafter).
+/// Handles: stable across structural edits (a removed body's handle is refused thereafter), and
+/// bound to the World that made them: another World refuses them with a WorldError instead of
+/// addressing a body of its own.
 struct BodyId {
   std::uint32_t value = ~0u;
+  std::uint32_t world = 0;  ///< the issuing World's serial (0: none)
   friend bool operator==(BodyId, BodyId) = default;
 };
 struct JointId {
   std::uint32_t value = ~0u;
+  std::uint32_t world = 0;
   friend bool operator==(JointId, JointId) = default;
 };
 /// Static level geometry (Model::colliders; World::add_collider).
 struct ColliderId {
   std::uint32_t value = ~0u;
+  std::uint32_t world = 0;
   friend bool operator==(ColliderId, ColliderId) = default;
 };
 /// A ball (Model::balls; World::add_ball).
 struct BallId {
   std::uint32_t value = ~0u;
+  std::uint32_t world = 0;
   friend bool operator==(BallId, BallId) = default;
 };
 /// A point of a body held to the world (World::pin): a spherical joint to the world.
 struct PinId {
   std::uint32_t value = ~0u;
+  std::uint32_t world = 0;
   friend bool operator==(PinId, PinId) = default;
 };
 
@@ -103,9 +110,12 @@ class World {
   /// (world_options(method, scene.methods)).
   World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
 
-  /// One step of dt seconds (the Model's time step without an argument). Never throws; a bad dt
-  /// or a divergence is the status: the method's own guard (a non-finite position, a point past
-  /// Settings::divergence_speed), then the checks every method shares (metrics/divergence.hpp:
+  /// One step of dt seconds (the Model's time step without an argument), of any length from the
+  /// method's minimum (kMinimumTimeStep, 10⁻⁹ s; float particles: substeps of 1 µs) up: a short
+  /// step among long ones keeps the energy. Never throws; a bad dt (shorter, subnormal, not
+  /// finite: invalid_time_step, nothing done) or a divergence is the status: the method's own
+  /// guard (a non-finite position, a point past Settings::divergence_speed), then the checks
+  /// every method shares (metrics/divergence.hpp:
   /// any non-finite number, energy gained past its bound, a joint come apart), measured against
   /// the World's start or its last structural edit or teleport.
   StepStatus step(double dt);
@@ -177,8 +187,11 @@ class World {
   bool sleeping(BodyId body) const;
 
   // --- Teleport ---
-  /// Sets the body's pose and motion. Featherstone: only a body that is its tree's floating
-  /// root (its coordinates are its own); others are refused.
+  /// Sets the body's pose and motion. The orientation must be a unit quaternion to within 10⁻³
+  /// (it is normalized); a position, velocity or orientation that is not finite, or an
+  /// orientation far from unit (a zero quaternion), is refused with a WorldError and nothing
+  /// changes. Featherstone: only a body that is its tree's floating root (its coordinates are its
+  /// own); others are refused.
   void teleport(BodyId body, const Pose& pose, const Motion& motion);
 
   // --- Structure (each recompiles and carries every surviving body's state) ---
@@ -230,9 +243,13 @@ class World {
                  std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
+  // A handle of this World, or a WorldError naming `kind` (a handle from another World).
+  template <typename Id>
+  void check_world(Id id, std::string_view kind) const;
 
   Model model_;
   WorldOptions options_;
+  std::uint32_t serial_;  // this World's, in every handle it issues
   State state_;
   // Handles ↔ Model indices.
   std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle

@@ -267,6 +267,7 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
   }
   fresh.time = old.time;
   fresh.previous_time_step = old.previous_time_step;
+  fresh.correction_time = old.correction_time;
   // An island of surviving bodies sleeps if they all slept; one of new bodies as compiled.
   const std::vector<std::uint32_t> old_island = island_of_each_limb(old), fresh_island = island_of_each_limb(fresh);
   std::vector<char> any_old(fresh.islands.size(), 0), all_asleep(fresh.islands.size(), 1);

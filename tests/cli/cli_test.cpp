@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -222,7 +224,7 @@ TEST(Cli, RejectsFloatSprings) { expect_rejected({"run", "--method", "springs-im
 TEST(Cli, RejectsExplicitIntegratorWithImplicitSprings) {
   expect_rejected({"run", "--method", "springs-implicit", "--integrator", "rk4"}, "backward-euler");
 }
-TEST(Cli, RejectsNegativeStiffness) { expect_rejected({"run", "--method", "springs-explicit", "--stiffness", "-5"}, "--stiffness: must be > 0"); }
+TEST(Cli, RejectsNegativeStiffness) { expect_rejected({"run", "--method", "springs-explicit", "--stiffness", "-5"}, "--stiffness: must be in (0, 1e12]"); }
 
 TEST(Cli, RejectsSequentialJacobi) { expect_rejected({"run", "--sweep", "sequential", "--solver", "jacobi"}, "--sweep"); }
 TEST(Cli, RejectsUnknownLayout) { expect_rejected({"run", "--layout", "soaos"}, "soaos"); }
@@ -230,15 +232,15 @@ TEST(Cli, RejectsNegativeThreads) { expect_rejected({"run", "--threads", "-2"}, 
 TEST(Cli, RejectsUnknownFlag) { expect_rejected({"run", "--speed", "3"}, "--speed"); }
 TEST(Cli, RejectsUnknownMethod) { expect_rejected({"run", "--method", "midpoint"}, "midpoint"); }
 TEST(Cli, RejectsMissingSubcommand) { expect_rejected({}, "subcommand"); }
-TEST(Cli, RejectsNonPositiveTimeStep) { expect_rejected({"run", "--dt", "0"}, "--dt: must be in (0, 1]"); }
+TEST(Cli, RejectsNonPositiveTimeStep) { expect_rejected({"run", "--dt", "0"}, "--dt: must be in [1e-09, 1]"); }
 TEST(Cli, RejectsNotANumberTimeStep) { expect_rejected({"run", "--dt", "nan"}, "--dt"); }
 TEST(Cli, RejectsZeroIterations) { expect_rejected({"run", "--iterations", "0"}, "--iterations: must be in [1, 100000]"); }
-TEST(Cli, RejectsNegativeBallMass) { expect_rejected({"run", "--ball-mass", "-1"}, "--ball-mass: must be > 0"); }
+TEST(Cli, RejectsNegativeBallMass) { expect_rejected({"run", "--ball-mass", "-1"}, "--ball-mass: must be in (0, 1e9]"); }
 TEST(Cli, RejectsInfiniteBallSpeed) { expect_rejected({"run", "--ball-speed", "inf"}, "--ball-speed"); }
 TEST(Cli, RejectsRestitutionAboveOne) { expect_rejected({"run", "--ball-restitution", "1.5"}, "--ball-restitution"); }
 TEST(Cli, RejectsZeroBallDirection) { expect_rejected({"run", "--ball-direction", "0,0,0"}, "--ball-direction"); }
 TEST(Cli, RejectsShortBallDirection) { expect_rejected({"run", "--ball-direction", "1,0"}, "--ball-direction"); }
-TEST(Cli, RejectsNegativeFriction) { expect_rejected({"run", "--friction", "-0.1"}, "--friction: must be >= 0"); }
+TEST(Cli, RejectsNegativeFriction) { expect_rejected({"run", "--friction", "-0.1"}, "--friction: must be in [0, 100]"); }
 TEST(Cli, RejectsFrictionWithoutGround) { expect_rejected({"run", scene("chain.json"), "--friction", "0.3"}, "no ground"); }
 TEST(Cli, RejectsBallFlagsWithoutBall) { expect_rejected({"run", scene("chain.json"), "--ball-speed", "3"}, "no ball"); }
 TEST(Cli, RejectsUnknownBodyVariant) { expect_rejected({"run", "--body", "giant"}, "giant"); }
@@ -257,25 +259,25 @@ TEST(Cli, EveryNumericFlagRejectsNanInfNegativesAndValuesPastItsLimit) {
   };
   const std::vector<std::string> none, chain{scene("chain.json")}, direct{"--solver", "direct"}, springs{"--method", "springs-explicit"};
   const std::vector<Case> cases{
-      {none, "--dt", {"nan", "inf", "-1", "0", "2"}},
+      {none, "--dt", {"nan", "inf", "-1", "0", "2", "1e-300", "5e-10"}},
       {none, "--steps", {"-1", "0", "2000000000"}},
       {none, "--iterations", {"-3", "0", "200000"}},
       {none, "--substeps", {"-1", "0", "20000"}},
       {none, "--threads", {"-1", "100000"}},
       {none, "--ball-speed", {"nan", "inf", "-1", "1e6"}},
-      {none, "--ball-radius", {"nan", "inf", "-1", "0"}},
-      {none, "--ball-mass", {"nan", "inf", "-1", "0"}},
+      {none, "--ball-radius", {"nan", "inf", "-1", "0", "1e300", "1001"}},
+      {none, "--ball-mass", {"nan", "inf", "-1", "0", "1e300"}},
       {none, "--ball-restitution", {"nan", "inf", "-0.1", "1.5"}},
-      {none, "--friction", {"nan", "inf", "-1"}},
-      {none, "--tolerance", {"nan", "inf", "-1"}},
-      {none, "--budget-us", {"nan", "inf", "-1"}},
+      {none, "--friction", {"nan", "inf", "-1", "1e300"}},
+      {none, "--tolerance", {"nan", "inf", "-1", "1e300"}},
+      {none, "--budget-us", {"nan", "inf", "-1", "1e300"}},
       {none, "--over-relaxation", {"nan", "inf", "-1", "0", "2"}},
       {chain, "--links", {"-1", "0", "1000000000000"}},
       {chain, "--copies", {"-1", "0", "1000000000"}},
-      {springs, "--stiffness", {"nan", "inf", "-1", "0"}},
-      {springs, "--damping", {"nan", "inf", "-1"}},
+      {springs, "--stiffness", {"nan", "inf", "-1", "0", "1e300"}},
+      {springs, "--damping", {"nan", "inf", "-1", "1e300"}},
       {direct, "--newton-iterations", {"-1", "0", "1000000"}},
-      {direct, "--compliance", {"nan", "inf", "-1"}},
+      {direct, "--compliance", {"nan", "inf", "-1", "1e300"}},
   };
   for (const Case& c : cases) {
     for (const std::string& value : c.values) {
@@ -288,6 +290,19 @@ TEST(Cli, EveryNumericFlagRejectsNanInfNegativesAndValuesPastItsLimit) {
       expect_rejected(arguments, needle);
     }
   }
+}
+
+// "ok" means ok: a run that holds together but opens its joints past a percent of a link, or
+// gains energy, is flagged (exit code still 0); a converged one is not, and the energy line
+// gives the drift against the scene's energy scale.
+TEST(Cli, AnOkRunThatOpensItsJointsOrGainsEnergyIsFlagged) {
+  const Result poor = run({"run", scene("chain.json"), "--links", "1000", "--projection", "rattle", "--substeps", "8", "--steps", "240"});
+  ASSERT_EQ(poor.code, kSuccess) << poor.out;
+  EXPECT_THAT(poor.out, HasSubstr("status      ok, but inaccurate: joints open (or links stretched) by "));
+  const Result good = run({"run", scene("chain.json"), "--steps", "240"});
+  ASSERT_EQ(good.code, kSuccess) << good.out;
+  EXPECT_THAT(good.out, HasSubstr("\nstatus      ok\n"));
+  EXPECT_THAT(good.out, HasSubstr("of the scene's energy scale ("));
 }
 
 // A chain on springs too soft to hold it comes apart: the run says so and exits 1, though no
@@ -330,6 +345,54 @@ TEST(Cli, OutNeverWritesOverTheSceneFile) {
   expect_rejected({"run", copy, "--steps", "2", "--out", respelled}, "--out");
   EXPECT_EQ(bytes(copy), before);
   expect_rejected({"run", copy, "--steps", "2", "--out", ::testing::TempDir()}, "directory");
+}
+
+// --out replaces only a regular file: a device, a pipe or a socket at its path (or at its
+// NAME.part) is refused before the run and stays what it was; /dev/null and /dev/full included
+// (as root, a rename would replace the device node itself).
+TEST(Cli, OutRefusesToReplaceAnythingButARegularFile) {
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "limber_cli_not_regular";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::string pipe = (folder / "pipe").string();
+  ASSERT_EQ(mkfifo(pipe.c_str(), 0600), 0);
+  for (const std::string& path : {std::string("/dev/null"), std::string("/dev/full"), pipe}) {
+    SCOPED_TRACE(path);
+    const std::filesystem::file_type before = std::filesystem::symlink_status(path).type();
+    expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", path}, "not a regular file");
+    expect_rejected({"view", scene("chain.json"), "--frames", "1", "--screenshot", path}, "not a regular file");
+    EXPECT_EQ(std::filesystem::symlink_status(path).type(), before);
+    EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  }
+  const std::string blocked = (folder / "out.csv").string();
+  ASSERT_EQ(mkfifo((blocked + ".part").c_str(), 0600), 0);
+  expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", blocked}, "partial file");
+  EXPECT_EQ(std::filesystem::symlink_status(blocked + ".part").type(), std::filesystem::file_type::fifo);
+  EXPECT_FALSE(std::filesystem::exists(blocked));
+  std::filesystem::remove_all(folder);
+}
+
+// A symbolic link at --out is followed: the file it names gets the trajectory and the link
+// stays a link; a link to a device or to nothing is refused.
+TEST(Cli, OutWritesThroughASymbolicLinkAndKeepsIt) {
+  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "limber_cli_links";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path target = folder / "results.csv", link = folder / "latest.csv";
+  std::ofstream(target) << "an older result\n";
+  std::filesystem::create_symlink(target, link);
+  const Result r = run({"run", scene("chain.json"), "--steps", "2", "--out", link.string()});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  std::ifstream written(target);
+  std::string header;
+  std::getline(written, header);
+  EXPECT_THAT(header, HasSubstr("time"));
+  std::filesystem::create_symlink("/dev/null", folder / "null.csv");
+  expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", (folder / "null.csv").string()}, "not a regular file");
+  std::filesystem::create_symlink(folder / "nowhere" / "x.csv", folder / "dangling.csv");
+  expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", (folder / "dangling.csv").string()}, "link to nothing");
+  std::filesystem::remove_all(folder);
 }
 
 // A trajectory that could not fit on the disk (10⁹ rows of 10⁴ links: petabytes) is refused
@@ -389,6 +452,29 @@ TEST(Cli, AnOutputFileAppearsOnlyWhenComplete) {
   EXPECT_FALSE(std::filesystem::exists(path + ".part"));
 }
 
+// The README's example of an error runs as written and prints the line the README shows.
+TEST(Cli, TheReadmesErrorExamplePrintsWhatTheReadmeShows) {
+  std::ifstream readme(std::string(LIMBER_SOURCE_DIR) + "/README.md");
+  std::string line, command, shown;
+  while (std::getline(readme, line)) {
+    if (line.rfind("$ limber run ", 0) == 0) {
+      command = line.substr(2);
+      std::getline(readme, shown);
+      break;
+    }
+  }
+  ASSERT_FALSE(command.empty()) << "README.md shows no '$ limber run' example";
+  std::vector<std::string> arguments;
+  std::istringstream words(command.substr(std::string("limber ").size()));
+  for (std::string word; words >> word;) arguments.push_back(word);
+  const std::filesystem::path here = std::filesystem::current_path();
+  std::filesystem::current_path(LIMBER_SOURCE_DIR);  // the README's paths are the repository's
+  const Result r = run(arguments);
+  std::filesystem::current_path(here);
+  EXPECT_EQ(r.code, kBadInput);
+  EXPECT_EQ(r.err, shown + "\n");
+}
+
 TEST(Cli, RejectsABadSceneFileNamingFileAndField) {
   const std::string path = ::testing::TempDir() + "limber_cli_bad_scene.json";
   std::ifstream in(scene("chain.json"));
@@ -403,6 +489,20 @@ TEST(Cli, RejectsABadSceneFileNamingFileAndField) {
   EXPECT_EQ(r.code, kBadInput);
   EXPECT_THAT(r.err, HasSubstr(path));
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+// --version says the version the project declares (CMakeLists.txt's project()), not a copy of it.
+TEST(Cli, VersionIsTheProjectsDeclaredVersion) {
+  std::ifstream lists(std::string(LIMBER_SOURCE_DIR) + "/CMakeLists.txt");
+  std::string line, declared;
+  while (std::getline(lists, line) && declared.empty()) {
+    const std::size_t at = line.find("project(limber VERSION ");
+    if (at != std::string::npos) declared = line.substr(at + 23, line.find(' ', at + 23) - (at + 23));
+  }
+  ASSERT_FALSE(declared.empty());
+  const Result r = run({"--version"});
+  EXPECT_EQ(r.code, kSuccess);
+  EXPECT_EQ(r.out, "limber " + declared + "\n");
 }
 
 TEST(Cli, HelpExitsCleanly) {

@@ -185,8 +185,20 @@ TEST(ModelValidation, ValidateRejectsZeroRelaxationIterations) {
 }
 
 TEST(ModelValidation, ValidateRejectsBallWithoutSizeOrMass) {
-  EXPECT_EQ(error_after([](Model& m) { m.balls.front().radius = 0; }), "balls[0].radius: must be > 0, got 0");
-  EXPECT_EQ(error_after([](Model& m) { m.balls.front().mass = -2; }), "balls[0].mass: must be > 0, got -2");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().radius = 0; }), "balls[0].radius: must be in (0, 1000], got 0");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().mass = -2; }), "balls[0].mass: must be in (0, 1e+09], got -2");
+}
+
+// A ball past the stated limits is refused as the ball it is: a radius of 1e300 m once passed
+// validation and was refused by Featherstone's compile as "bodies[9]" (the rigid body it becomes).
+TEST(ModelValidation, ValidateRejectsABallPastItsLimitsNamingTheBall) {
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().radius = 1e300; }), "balls[0].radius: must be in (0, 1000], got 1e+300");
+  EXPECT_EQ(error_after([](Model& m) { m.balls.front().mass = 1e300; }), "balls[0].mass: must be in (0, 1e+09], got 1e+300");
+}
+
+TEST(ModelValidation, ValidateRejectsATimeStepShorterThanAnyMethodTakes) {
+  EXPECT_EQ(error_after([](Model& m) { m.settings.time_step = 1e-12; }),
+            "settings.time_step: must be >= 1e-09 s (the shortest step a method takes), got 1e-12");
 }
 
 TEST(ModelValidation, ValidateChecksDragFactorOnlyWhenSet) {

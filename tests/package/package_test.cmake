@@ -29,7 +29,8 @@ string(SUBSTRING "${rest}" 0 ${end} example)
 file(COPY ${SOURCE_DIR}/tests/package/client/CMakeLists.txt DESTINATION ${WORK_DIR}/client)
 file(WRITE ${WORK_DIR}/client/main.cpp "${example}")
 
-run(${CMAKE_COMMAND} -S ${WORK_DIR}/client -B ${WORK_DIR}/client-build -G Ninja -DCMAKE_BUILD_TYPE=Release
+# The generator CMake picks by itself (Unix Makefiles), as the README's command does.
+run(${CMAKE_COMMAND} -S ${WORK_DIR}/client -B ${WORK_DIR}/client-build -DCMAKE_BUILD_TYPE=Release
     -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DCMAKE_CXX_COMPILER=${CXX})
 run(${CMAKE_COMMAND} --build ${WORK_DIR}/client-build)
 run(${WORK_DIR}/client-build/client)

@@ -346,7 +346,11 @@ Model jointed_copies(int copies) {
   }());
   Model model = one;
   model.bodies.clear(), model.joints.clear();
-  for (int c = 0; c < copies; ++c) append_model(model, one, "c" + std::to_string(c) + ".", Vector3(c % 40, c / 40, 0));
+  for (int c = 0; c < copies; ++c) {
+    std::string prefix = "c";  // appended, not "c" + std::string&&: GCC 12's -Wrestrict false positive (bug 105329)
+    prefix.append(std::to_string(c)).append(".");
+    append_model(model, one, prefix, Vector3(c % 40, c / 40, 0));
+  }
   for (Body& body : model.bodies) body.angular_velocity = Vector3(1.5, -2, 0.7);
   return model;
 }

@@ -2,16 +2,21 @@
 // coloured sweeps (kernel/particles/contact_rows.hpp). Each test asserts a physical property:
 // no interpenetration past a stated depth, Coulomb's law at the cone, the same bits for one or
 // two threads and for scalar or SIMD lanes, nothing paid by a scene without collision.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/relaxation/contact_relaxation.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
+#include "tests/support/models.hpp"
 
 namespace limber {
 namespace {
@@ -222,6 +227,138 @@ TEST(LimbContacts, AChainWithoutCollidersPaysNothingForCollision) {
   EXPECT_TRUE(state.contact_rows.empty());
   EXPECT_EQ(state.plan.contact_batches.slot_count(), 0u);
   EXPECT_EQ(state.limb_segments.capacity(), 0u) << "no collision scratch was allocated";
+}
+
+
+// --- Contacts under the rattle rule ---
+
+// The thesis's 5-link chain (tools/scenes/chain.json: pinned, released from the horizontal, its
+// own rattle settings with over-relaxation 1.5) at 128 substeps × 2 sweeps in frames of 1/60 s,
+// with its links colliding with each other (`limb_contacts`: the Model's default filters, which
+// the chain generator leaves out) and, if `ground` is given, the ground that high (m). Stepped
+// one substep at a time, to see each substep's energy and contacts.
+struct RattleChainRun {
+  double start = 0, end = 0;       ///< energy, J
+  double largest_rise = 0;         ///< max over t of E(t) − min_{s ≤ t} E(s), J
+  double largest_gain = 0;         ///< the most any substep gained, J
+  double largest_contact_gain = 0; ///< the most a substep with a contact gained, J
+  long contact_substeps = 0;       ///< substeps whose report counts a contact
+  double largest_gap = 0;          ///< the largest joint gap or link stretch at a substep's end, relative
+  double sweeps = 0;               ///< position and velocity sweeps a substep, mean
+};
+
+RattleChainRun run_rattle_chain(bool limb_contacts, std::optional<double> ground, double seconds) {
+  const Scene scene = testing::shipped_scene("chain.json");
+  Model model = scene.model;
+  if (limb_contacts) {
+    for (Body& body : model.bodies) body.collision = CollisionFilter{};
+  }
+  if (ground) model.ground = Ground{*ground, 0, 0.5};
+  VerletOptions options = testing::with_scene_settings(scene);
+  options.relaxation.projection = ProjectionRule::rattle;
+  options.relaxation.substeps = 1, options.relaxation.iterations = 2;
+  constexpr int kSubsteps = 128;
+  const double h = 1.0 / (60 * kSubsteps);
+  VerletState<double> state = compile<double>(model, options);
+  EXPECT_EQ(state.collisions.active(), limb_contacts);
+  RattleChainRun run;
+  run.start = run.end = observe(state).energy();
+  double lowest = run.start;
+  for (long k = 0; k < std::lround(seconds * 60) * kSubsteps; ++k) {
+    const StepReport report = step(state, h);
+    EXPECT_EQ(report.status, StepStatus::ok);
+    const Observation observation = observe(state);
+    const double energy = observation.energy(), gain = energy - run.end;
+    run.largest_gap = std::max({run.largest_gap, observation.max_joint_gap, observation.max_link_stretch});
+    run.largest_gain = std::max(run.largest_gain, gain);
+    if (report.contacts > 0) {
+      run.contact_substeps += 1;
+      run.largest_contact_gain = std::max(run.largest_contact_gain, gain);
+    }
+    run.largest_rise = std::max(run.largest_rise, energy - lowest);
+    lowest = std::min(lowest, energy);
+    run.end = energy;
+  }
+  run.sweeps = double(state.counters.constraint_projections) / double(state.plan.awake_constraints) / (seconds * 60 * kSubsteps);
+  std::printf("[ rattle   ] limb contacts %s, ground %s: E %.3f -> %.3f J; largest rise %.3g J, largest substep gain %.3g J, "
+              "with a contact %.3g J (%ld substeps); largest joint gap or stretch %.2g; sweeps a substep %.3f\n", limb_contacts ? "on" : "off", ground ? "yes" : "no",
+              run.start, run.end, run.largest_rise, run.largest_gain, run.largest_contact_gain, run.contact_substeps, run.largest_gap,
+              run.sweeps);
+  return run;
+}
+
+// Contacts of restitution 0 with friction can only take energy. What a rattle run with two
+// sweeps a substep may gain is what its unconverged sweeps store in the joints (gaps, and the
+// rates that open them) and give back a few substeps later — the run without contacts measures
+// that. So: no substep in which limbs touch gains more than the most any substep gains without
+// contacts, and the largest rise of the energy is within twice the contact-free run's (the two
+// trajectories part after the first contact, so their whips differ; twice is their margin).
+TEST(RattleContacts, AChainFoldingOntoItselfGainsNoEnergyAtItsContacts) {
+  const RattleChainRun free = run_rattle_chain(false, std::nullopt, 10);
+  const RattleChainRun folding = run_rattle_chain(true, std::nullopt, 10);
+  ASSERT_GT(folding.contact_substeps, 100) << "the links must meet";
+  EXPECT_LT(folding.end, folding.start - 1) << "inelastic contacts take energy";
+  EXPECT_LT(folding.largest_contact_gain, free.largest_gain);
+  EXPECT_LT(folding.largest_rise, 2 * free.largest_rise);
+}
+
+// The same for the ground (plane contacts): the chain swings into it half a metre below its pin.
+TEST(RattleContacts, AChainSwingingIntoTheGroundGainsNoEnergyThere) {
+  const RattleChainRun free = run_rattle_chain(false, std::nullopt, 3);
+  const RattleChainRun grounded = run_rattle_chain(false, 1.0, 3);
+  ASSERT_GT(grounded.contact_substeps, 100) << "the chain must reach the ground";
+  EXPECT_LT(grounded.largest_contact_gain, free.largest_gain);
+  EXPECT_LT(grounded.largest_rise, 2 * free.largest_rise);
+}
+
+// Capsules dropped at different heights onto a static plate that bounces them (restitution 0.8)
+// and onto each other: contacts come and go inside a frame.
+Model bouncing_capsules() {
+  Model model = empty_world();
+  model.ground.reset();
+  StaticCollider plate;
+  plate.name = "plate";
+  plate.type = ColliderType::box;
+  plate.half_extents = {1, 1, 0.05};
+  plate.restitution = 0.8;
+  model.colliders.push_back(plate);
+  for (int k = 0; k < 4; ++k) {
+    const Vector3 axis(std::cos(0.7 * k), std::sin(0.7 * k), 0.2 * (k % 2));
+    model.bodies.push_back(capsule("c" + std::to_string(k), {0.05 * k, 0.03 * k, 0.15 + 0.13 * k}, axis));
+  }
+  return model;
+}
+
+// A step of n substeps reports the most contacts any of its substeps had (StepReport::contacts),
+// as the same run stepped one substep at a time — the same bits — reports them substep by
+// substep; so a contact made and lost inside a frame is counted.
+TEST(RattleContacts, AStepReportsTheMostContactsOfAnyOfItsSubsteps) {
+  constexpr int kSubsteps = 16;
+  VerletOptions options = options_with(2);
+  options.relaxation.projection = ProjectionRule::rattle;
+  options.relaxation.substeps = kSubsteps;
+  auto framed = compile<double>(bouncing_capsules(), options);
+  options.relaxation.substeps = 1;
+  auto single = compile<double>(bouncing_capsules(), options);
+  const double dt = 1.0 / 60;
+  int early_only = 0, busier_before_the_end = 0, frames_with_contacts = 0;
+  for (int frame = 0; frame < 90; ++frame) {
+    const StepReport report = step(framed, dt);
+    ASSERT_EQ(report.status, StepStatus::ok);
+    int most = 0, last = 0;
+    for (int k = 0; k < kSubsteps; ++k) {
+      last = step(single, dt / kSubsteps).contacts;
+      most = std::max(most, last);
+    }
+    ASSERT_EQ(framed.particles.position_x, single.particles.position_x) << "frame " << frame;
+    EXPECT_EQ(report.contacts, most) << "frame " << frame;
+    frames_with_contacts += most > 0 ? 1 : 0;
+    early_only += most > 0 && last == 0 ? 1 : 0;
+    busier_before_the_end += most > last ? 1 : 0;
+  }
+  EXPECT_GT(frames_with_contacts, 10);
+  EXPECT_GT(early_only, 0) << "no frame had its only contacts before its last substep";
+  EXPECT_GT(busier_before_the_end, early_only) << "no frame had more contacts in an earlier substep than in its last";
 }
 
 }  // namespace

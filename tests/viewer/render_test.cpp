@@ -70,7 +70,28 @@ TEST(HeadlessView, TheSameFrameRendersToTheSameNonBlankPng) {
 TEST(HeadlessView, ScreenshotOverTheSceneFileIsRefused) {
   std::string err;
   EXPECT_EQ(view({kHumanoid, "--frames", "1", "--screenshot", kHumanoid}, &err), cli::kBadInput);
-  EXPECT_NE(err.find("scene file"), std::string::npos) << err;
+  EXPECT_NE(err.find("is an input of this run"), std::string::npos) << err;
+}
+
+// The panels fit the frame sizes the README's pictures use and the common 1280x720, on the scene
+// with the longest name: nothing cut off at the side (the title) or the bottom (the last
+// sections). At 640x360 they cannot, and the run says so.
+TEST(HeadlessView, ThePanelsFitAt960x540AndLarger) {
+  const std::string ragdoll = std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/active_ragdoll.json";
+  for (const auto& [width, height] : {std::pair{960, 540}, std::pair{1280, 720}, std::pair{1920, 1080}}) {
+    std::vector<const char*> argv{"limber", "view"};
+    const std::string w = std::to_string(width), h = std::to_string(height);
+    for (const std::string* argument : {&ragdoll}) argv.push_back(argument->c_str());
+    for (const char* argument : {"--frames", "1", "--width"}) argv.push_back(argument);
+    argv.push_back(w.c_str()), argv.push_back("--height"), argv.push_back(h.c_str());
+    std::ostringstream out, err;
+    ASSERT_EQ(cli::run_main(int(argv.size()), argv.data(), out, err, run_viewer), cli::kSuccess) << err.str();
+    EXPECT_EQ(out.str().find("cut off"), std::string::npos) << width << "x" << height << ": " << out.str();
+  }
+  std::vector<const char*> argv{"limber", "view", ragdoll.c_str(), "--frames", "1", "--width", "640", "--height", "360"};
+  std::ostringstream out, err;
+  ASSERT_EQ(cli::run_main(int(argv.size()), argv.data(), out, err, run_viewer), cli::kSuccess) << err.str();
+  EXPECT_NE(out.str().find("the panels are cut off"), std::string::npos) << out.str();
 }
 
 // A hidden window's OpenGL 3.3 core context, for the renderer alone.

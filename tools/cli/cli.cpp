@@ -307,6 +307,21 @@ std::string limits_line(const Model& model, const RunRecord& record) {
   return "limits      " + (line.empty() ? std::string("none") : line) + "\n";
 }
 
+// What makes an "ok" run poor (divergence.hpp's accuracy tolerances): ", but inaccurate: ..." or "".
+std::string accuracy_flags(const RunRecord& record, double energy_gain) {
+  if (record.status != StepStatus::ok) return "";
+  std::string flags;
+  const double gap = std::max(record.end.max_joint_gap, record.end.max_link_stretch);  // the end's: an impact's passing gap is no fault
+  if (gap > kAccuracyJointGap) {
+    flags += format("joints open (or links stretched) by %.3g of a link at the end (flagged past %g)", gap, kAccuracyJointGap);
+  }
+  if (energy_gain > kAccuracyEnergyGain) {
+    flags += format("%senergy gained %.3g%% of the scene's energy scale (flagged past %g%%)", flags.empty() ? "" : "; ",
+                    100 * energy_gain, 100 * kAccuracyEnergyGain);
+  }
+  return flags.empty() ? "" : ", but inaccurate: " + flags;
+}
+
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
 int simulate(State& state, MethodState& variant, const Model& model, const RunFlags& flags, const std::string& source,
@@ -350,14 +365,17 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
     out << format("impact      ball first touched the body at t = %.3f s; in the next %.1f s the body's centre of mass moved %.4f m along the ball's path\n",
                   knock.first_contact_time(), knock.window(), knock.distance());
   }
-  out << format("energy      %.6g J at start (kinetic %.4g), %.6g J at end (kinetic %.4g)\n", start.energy(),
-                start.kinetic_energy, end.energy(), end.kinetic_energy);
+  const DivergenceBounds bounds = divergence_bounds(model, start);
+  const double drift = end.energy() - start.energy();
+  out << format("energy      %.6g J at start (kinetic %.4g), %.6g J at end (kinetic %.4g); drift %+.4g J, %+.3g%% of the scene's "
+                "energy scale (%.4g J)\n", start.energy(), start.kinetic_energy, end.energy(), end.kinetic_energy, drift,
+                100 * drift / bounds.energy_scale, bounds.energy_scale);
   out << format("momentum    %s -> %s kg m/s\n", vector_text(start.linear_momentum).c_str(),
                 vector_text(end.linear_momentum).c_str());
   out << "sleeping    body " << (start.body_sleeping ? "asleep" : "awake") << " at start";
   for (const std::string& event : record.sleep_events) out << "; " << event;
   out << "; " << (end.body_sleeping ? "asleep" : "awake") << " at end\n";
-  out << "status      " << status_name(record.status) << "\n";
+  out << "status      " << status_name(record.status) << accuracy_flags(record, drift / bounds.energy_scale) << "\n";
   if (csv) csv->commit();  // a diverged run's trajectory is a result too: kept up to the divergence
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }
@@ -430,12 +448,7 @@ int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const R
       throw InputError(format("--camera: yaw finite, pitch in [-85, 85] degrees, distance in [0.1, 500] m; got %g,%g,%g", yaw, pitch, distance));
     }
   }
-  if (!flags.screenshot.empty() && !run_flags.scene.empty()) {
-    std::error_code ignored;
-    if (std::filesystem::equivalent(flags.screenshot, run_flags.scene, ignored)) {
-      throw InputError(format("--screenshot: '%s' is the scene file; refusing to write over it", flags.screenshot.c_str()));
-    }
-  }
+  if (!flags.screenshot.empty()) (void)checked_output_path(flags.screenshot, "--screenshot", {run_flags.scene});
   (void)load(run_flags);  // a bad scene or flag is the same one line as `limber run`'s, before any window
   if (viewer == nullptr) {
     throw InputError("view: this limber was built without the viewer (it needs GLFW, OpenGL and Dear ImGui: tools/setup.sh --viewer)");
@@ -448,7 +461,7 @@ int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const R
 
 int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err, Viewer viewer) {
   CLI::App app{"limber: articulated bodies with distributed mass (Verlet with weighted relaxation, and more)", "limber"};
-  app.set_version_flag("--version", "limber 0.1.0");
+  app.set_version_flag("--version", "limber " LIMBER_VERSION);  // the project() version in CMakeLists.txt
   app.require_subcommand(1);
   CLI::App* run = app.add_subcommand("run", "Simulate a scene and print a summary");
   RunFlags flags;

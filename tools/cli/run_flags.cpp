@@ -17,14 +17,18 @@ double checked(const CLI::Option* option, double value, bool (*accept)(double), 
   }
   return value;
 }
-bool positive(double v) { return v > 0; }
-bool non_negative(double v) { return v >= 0; }
 bool unit_interval(double v) { return v >= 0 && v <= 1; }
 
 // Limits on flags that would otherwise run for days or fill a disk: guards against a slip of the
 // keyboard, not physical limits (the kernel's own are kMaxIterations, kMaxThreads, ...).
 constexpr long kMaxSteps = 1'000'000'000;
 constexpr double kMaxBallSpeed = 1e5;  // m/s, 100× the fastest the tunnelling study checks
+constexpr double kMaxFriction = 100;    // Coulomb coefficient; rubber on rubber is about 1
+constexpr double kMaxTolerance = 1;     // m, a sweep's largest correction
+constexpr double kMaxBudget = 1e9;      // µs, a step's wall-clock budget: 1000 s
+constexpr double kMaxStiffness = 1e12;  // N/m, the springs'; the thesis's humanoid uses 10⁴–10⁶
+constexpr double kMaxDamping = 1e9;     // N·s/m
+constexpr double kMaxCompliance = 1;    // m/N, XPBD's α
 
 }  // namespace
 
@@ -162,8 +166,8 @@ SpringOptions spring_options(const RunFlags& flags, const SpringSettings& scene)
   options.integrator = integrator_of(integrator);
   if (flags.linear_solver_option->count() && !implicit) throw InputError("--linear-solver: applies to springs-implicit only");
   options.linear_solver = flags.linear_solver == "cg" ? SpringLinearSolver::conjugate_gradient : SpringLinearSolver::ldlt;
-  if (given(flags.stiffness_option)) options.stiffness = checked(flags.stiffness_option, flags.stiffness, positive, "> 0");
-  if (given(flags.damping_option)) options.damping = checked(flags.damping_option, flags.damping, non_negative, ">= 0");
+  if (given(flags.stiffness_option)) options.stiffness = checked(flags.stiffness_option, flags.stiffness, [](double k) { return k > 0 && k <= kMaxStiffness; }, "in (0, 1e12]");
+  if (given(flags.damping_option)) options.damping = checked(flags.damping_option, flags.damping, [](double c) { return c >= 0 && c <= kMaxDamping; }, "in [0, 1e9]");
   return options;
 }
 
@@ -214,10 +218,10 @@ RelaxationSettings relaxation_settings(const RunFlags& flags, RelaxationSettings
     relaxation.substeps = flags.substeps;
   }
   if (given(flags.tolerance_option)) {
-    relaxation.tolerance = checked(flags.tolerance_option, flags.tolerance, non_negative, ">= 0");
+    relaxation.tolerance = checked(flags.tolerance_option, flags.tolerance, [](double t) { return t >= 0 && t <= kMaxTolerance; }, "in [0, 1]");
   }
   if (given(flags.budget_option)) {
-    relaxation.budget_us = checked(flags.budget_option, flags.budget_us, non_negative, ">= 0");
+    relaxation.budget_us = checked(flags.budget_option, flags.budget_us, [](double b) { return b >= 0 && b <= kMaxBudget; }, "in [0, 1e9]");
   }
   if (given(flags.over_relaxation_option)) {
     relaxation.over_relaxation =
@@ -245,7 +249,7 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
     }
     if (flags.sweep == "sequential") throw InputError("--sweep sequential: is Gauss-Seidel; it cannot run with --solver direct");
     options.newton_iterations = flags.newton_iterations;
-    options.compliance = given(flags.compliance_option) ? checked(flags.compliance_option, flags.compliance, non_negative, ">= 0") : 0;
+    options.compliance = given(flags.compliance_option) ? checked(flags.compliance_option, flags.compliance, [](double a) { return a >= 0 && a <= kMaxCompliance; }, "in [0, 1]") : 0;
     options.warm_start = flags.warm_start;
   } else {
     for (const CLI::Option* option : {flags.newton_iterations_option, flags.compliance_option, flags.warm_start_option}) {
@@ -274,8 +278,8 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
 
 // The --ball-* flags, on one ball (a volley's balls all take them).
 void apply_ball_overrides(Ball& ball, const RunFlags& flags) {
-  if (given(flags.ball_radius_option)) ball.radius = checked(flags.ball_radius_option, flags.ball_radius, positive, "> 0");
-  if (given(flags.ball_mass_option)) ball.mass = checked(flags.ball_mass_option, flags.ball_mass, positive, "> 0");
+  if (given(flags.ball_radius_option)) ball.radius = checked(flags.ball_radius_option, flags.ball_radius, [](double r) { return r > 0 && r <= kMaxBallRadius; }, "in (0, 1000]");
+  if (given(flags.ball_mass_option)) ball.mass = checked(flags.ball_mass_option, flags.ball_mass, [](double m) { return m > 0 && m <= kMaxBallMass; }, "in (0, 1e9]");
   if (given(flags.ball_restitution_option)) {
     ball.restitution = checked(flags.ball_restitution_option, flags.ball_restitution, unit_interval, "in [0, 1]");
   }
@@ -305,9 +309,9 @@ void apply_overrides(Model& model, const RunFlags& flags) {
   for (Ball& ball : model.balls) apply_ball_overrides(ball, flags);
   if (given(flags.friction_option)) {
     if (!model.ground) throw InputError(format("--friction: the scene '%s' has no ground", model.name.c_str()));
-    model.ground->friction = checked(flags.friction_option, flags.friction, non_negative, ">= 0");
+    model.ground->friction = checked(flags.friction_option, flags.friction, [](double f) { return f >= 0 && f <= kMaxFriction; }, "in [0, 100]");
   }
-  if (given(flags.dt_option)) model.settings.time_step = checked(flags.dt_option, flags.dt, [](double v) { return v > 0 && v <= 1; }, "in (0, 1]");
+  if (given(flags.dt_option)) model.settings.time_step = checked(flags.dt_option, flags.dt, [](double v) { return v >= kMinimumTimeStep && v <= 1; }, "in [1e-09, 1]");
   if (given(flags.steps_option) && (flags.steps < 1 || flags.steps > kMaxSteps)) {
     throw InputError(format("--steps: must be in [1, %ld], got %ld", kMaxSteps, flags.steps));
   }

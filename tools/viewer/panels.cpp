@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <string>
 #include <vector>
 
 #include <imgui.h>
@@ -33,9 +35,20 @@ void sync(const ViewState& view, PanelState& panel) {
   if (world.model().ground) panel.friction = float(world.model().ground->friction);
 }
 
+// A collapsing section, open at the start when `open` says so.
+bool section(const char* name, bool open) {
+  ImGui::SetNextItemOpen(open, ImGuiCond_Once);
+  return ImGui::CollapsingHeader(name);
+}
+
 void simulation_controls(ViewState& view) {
   const World& world = view.world();
-  ImGui::Text("%s  (%s)", world.model().name.c_str(), view.source().c_str());
+  // The file's name, not its folders (a long path would widen the panel past the frame).
+  const std::string& source = view.source();
+  const std::string file = view.scene_path().empty() ? source : std::filesystem::path(view.scene_path()).filename().string();
+  ImGui::PushTextWrapPos(kPanelWidth - 20);
+  ImGui::TextWrapped("%s  (%s)", world.model().name.c_str(), file.c_str());
+  ImGui::PopTextWrapPos();
   ImGui::Text("t = %.3f s   steps %ld   %s", world.time(), view.steps_taken(),
               world.last_report().status == StepStatus::ok ? "ok" : "DIVERGED");
   if (ImGui::Button(view.playing() ? "Pause (space)" : "Play (space)")) view.set_playing(!view.playing());
@@ -48,7 +61,7 @@ void simulation_controls(ViewState& view) {
 }
 
 void method_controls(ViewState& view, PanelState& panel) {
-  if (!ImGui::CollapsingHeader("Method", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  if (!section("Method", true)) return;
   ImGui::Combo("method", &panel.method, kMethods.data(), int(kMethods.size()));
   const bool verlet = panel.method < 2;
   if (verlet) {
@@ -65,7 +78,7 @@ void method_controls(ViewState& view, PanelState& panel) {
 }
 
 void scene_controls(ViewState& view, PanelState& panel) {
-  if (!ImGui::CollapsingHeader("Scene", ImGuiTreeNodeFlags_DefaultOpen)) return;
+  if (!section("Scene", true)) return;
   if (ImGui::Combo("body", &panel.body, kBodies.data(), int(kBodies.size()))) {
     view.set_body(panel.body == 0 ? std::string() : kBodies[std::size_t(panel.body)]);
     panel.shown_method.clear();
@@ -80,8 +93,8 @@ void scene_controls(ViewState& view, PanelState& panel) {
   ImGui::TextDisabled("or drop a scene file on the window");
 }
 
-void ball_controls(ViewState& view) {
-  if (!ImGui::CollapsingHeader("Ball", ImGuiTreeNodeFlags_DefaultOpen)) return;
+void ball_controls(ViewState& view, bool open) {
+  if (!section("Ball", open)) return;
   Launcher& ball = view.launcher;
   float speed = float(ball.speed), radius = float(ball.radius), mass = float(ball.mass), restitution = float(ball.restitution);
   float direction[3] = {float(ball.direction.x()), float(ball.direction.y()), float(ball.direction.z())};
@@ -92,11 +105,11 @@ void ball_controls(ViewState& view) {
   if (ImGui::SliderFloat("elasticity", &restitution, 0.0f, 1.0f)) ball.restitution = restitution;
   if (ImGui::Button("Launch (B)")) view.launch();
   ImGui::SameLine();
-  ImGui::TextDisabled("at the picked limb, else the body");
+  ImGui::TextDisabled("at the picked limb or the body");
 }
 
-void picking_controls(ViewState& view) {
-  if (!ImGui::CollapsingHeader("Picking and overlays", ImGuiTreeNodeFlags_DefaultOpen)) return;
+void picking_controls(ViewState& view, bool open) {
+  if (!section("Picking and overlays", open)) return;
   const World& world = view.world();
   ImGui::Text("picked: %s", view.picked() ? world.model().bodies[*view.picked()].name.c_str() : "none (F1-F8 or click)");
   float push = float(view.push_acceleration);
@@ -119,7 +132,10 @@ void plot(const char* label, const std::deque<float>& values, const char* format
   ImGui::PlotLines(label, samples.data(), int(samples.size()), 0, overlay, FLT_MAX, FLT_MAX, ImVec2(0, 60));
 }
 
-void plots(const ViewState& view, const PanelState& panel, int width) {
+// Whether the current window's content fitted it in the last frame (nothing to scroll to).
+bool window_fits() { return ImGui::GetScrollMaxX() <= 0 && ImGui::GetScrollMaxY() <= 0; }
+
+void plots(const ViewState& view, PanelState& panel, int width) {
   ImGui::SetNextWindowPos(ImVec2(float(width) - kPanelWidth - 10, 10), ImGuiCond_Always);
   ImGui::SetNextWindowSize(ImVec2(kPanelWidth, 0), ImGuiCond_Always);
   ImGui::Begin("Plots", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
@@ -127,6 +143,7 @@ void plots(const ViewState& view, const PanelState& panel, int width) {
   plot("energy", history.energy, "%.4g J");
   plot("joint gap", history.joint_gap, "%.3g / link");
   if (panel.wall_clock) plot("step", history.step_ms, "%.3f ms");
+  panel.fits = panel.fits && window_fits();
   ImGui::End();
 }
 
@@ -140,10 +157,16 @@ void draw_panels(ViewState& view, PanelState& panel, int width, int height) {
   simulation_controls(view);
   method_controls(view, panel);
   scene_controls(view, panel);
-  ball_controls(view);
-  picking_controls(view);
-  if (!view.error().empty()) ImGui::TextColored(ImVec4(1, 0.35f, 0.3f, 1), "%s", view.error().c_str());
+  const bool tall = height >= kFullPanelHeight;
+  ball_controls(view, tall);
+  picking_controls(view, tall);
+  if (!view.error().empty()) {
+    ImGui::PushTextWrapPos(kPanelWidth - 20);
+    ImGui::TextColored(ImVec4(1, 0.35f, 0.3f, 1), "%s", view.error().c_str());
+    ImGui::PopTextWrapPos();
+  }
   ImGui::TextDisabled("drag: orbit; right drag: pan; wheel: zoom");
+  panel.fits = window_fits();
   ImGui::End();
   plots(view, panel, width);
 }

@@ -9,6 +9,9 @@
 
 namespace limber::viewer {
 
+/// Pixels the control panel takes with every section open.
+inline constexpr int kFullPanelHeight = 760;
+
 /// What the panels edit before it is applied (the method settings apply with a reset).
 struct PanelState {
   std::string shown_method;  ///< the ViewState's method the fields below were read from
@@ -20,9 +23,13 @@ struct PanelState {
   /// Whether to plot the time per step: wall-clock, so off in the headless mode, whose pictures
   /// must be the same every run.
   bool wall_clock = true;
+  /// Out: whether every panel's content fitted its window in the last frame drawn (nothing cut
+  /// off at the panel's side or bottom, nothing to scroll).
+  bool fits = true;
 };
 
-/// Draws the panels for a width × height frame and applies what the user changed.
+/// Draws the panels for a width × height frame and applies what the user changed. Frames shorter
+/// than kFullPanelHeight start with the Ball and Picking sections closed, so the headers fit.
 void draw_panels(ViewState& view, PanelState& panel, int width, int height);
 
 }  // namespace limber::viewer

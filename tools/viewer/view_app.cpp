@@ -17,6 +17,7 @@
 #include <imgui.h>
 #include <stb_image_write.h>
 
+#include "tools/cli/output_file.hpp"
 #include "tools/viewer/panels.hpp"
 #include "tools/viewer/renderer.hpp"
 #include "tools/viewer/scene_drawing.hpp"
@@ -159,20 +160,19 @@ void draw_gui(ViewState& view, PanelState& panel, int width, int height, bool he
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
 
-// Writes RGBA pixels (top row first) as PNG: to a temporary file beside it, then renamed, so a
-// failed write never leaves half an image.
-void write_png(const std::string& path, const std::vector<std::uint8_t>& pixels, int width, int height) {
-  const std::string partial = path + ".part";
-  if (!stbi_write_png(partial.c_str(), width, height, 4, pixels.data(), width * 4)) {
-    std::remove(partial.c_str());
-    throw ViewError("--screenshot: cannot write '" + path + "'");
+// Writes RGBA pixels (top row first) as PNG through cli::OutputFile: beside the name, then
+// renamed, so a failed write never leaves half an image, and never over an input or anything
+// but a regular file.
+void write_png(const std::string& path, const std::vector<std::filesystem::path>& inputs, const std::vector<std::uint8_t>& pixels,
+               int width, int height) {
+  cli::OutputFile file(path, "--screenshot", inputs);
+  const auto write = [](void* context, void* data, int size) {
+    static_cast<std::ostream*>(context)->write(static_cast<const char*>(data), size);
+  };
+  if (!stbi_write_png_to_func(write, &file.stream(), width, height, 4, pixels.data(), width * 4)) {
+    throw ViewError("--screenshot: cannot encode '" + path + "'");
   }
-  std::error_code error;
-  std::filesystem::rename(partial, path, error);
-  if (error) {
-    std::remove(partial.c_str());
-    throw ViewError("--screenshot: cannot write '" + path + "': " + error.message());
-  }
+  file.commit();
 }
 
 int run_headless(const cli::ViewRequest& request, ViewState& view, std::ostream& out) {
@@ -193,11 +193,14 @@ int run_headless(const cli::ViewRequest& request, ViewState& view, std::ostream&
     renderer.draw(list, view.camera.matrices(request.width, request.height));
     if (!request.hide_ui) draw_gui(view, panel, request.width, request.height, true);
   }
-  if (!request.screenshot.empty()) write_png(request.screenshot, renderer.read_pixels(), request.width, request.height);
+  if (!request.screenshot.empty()) {
+    write_png(request.screenshot, {view.scene_path()}, renderer.read_pixels(), request.width, request.height);
+  }
   const bool ok = view.world().last_report().status == StepStatus::ok;
   out << "limber view: " << view.world().model().name << " (" << view.source() << "), " << request.frames << " frames, "
       << view.steps_taken() << " steps, t = " << view.world().time() << " s, " << (ok ? "ok" : "diverged");
   if (!request.screenshot.empty()) out << "; wrote " << request.screenshot << " (" << request.width << "x" << request.height << ")";
+  if (!request.hide_ui && !panel.fits) out << "; the panels are cut off at this size";
   out << "\n";
   return ok ? cli::kSuccess : cli::kDiverged;
 }

@@ -159,6 +159,7 @@ class ViewState {
   World& world() { return *world_; }
   const History& history() const { return history_; }
   const std::string& source() const { return loaded_.source; }
+  const std::string& scene_path() const { return loaded_.scene_path; }  ///< empty for the embedded humanoid
 
  private:
   // Starts the World from the scene as loaded (or takes one already compiled from it) and clears
