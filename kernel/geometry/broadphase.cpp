@@ -257,6 +257,11 @@ std::span<Aabb> BallCandidates::boxes(std::size_t shapes, std::size_t balls) {
 }
 
 void BallCandidates::find(bool other_balls) {
+  // A body gone non-finite (a NaN world) has no box to sort: every ball then gets every body this
+  // call, and the exact tests refuse what is not finite.
+  list_every_ = list_every_ || !std::all_of(boxes_.begin(), boxes_.end(), [](const Aabb& box) {
+    return box.min.allFinite() && box.max.allFinite();
+  });
   if (list_every_) {
     // Every ball every body (itself too: the callers skip it), one list shared by all.
     listed_count_ = shapes_ + (other_balls ? balls_ : 0);

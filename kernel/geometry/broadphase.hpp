@@ -137,7 +137,7 @@ class BallCandidates {
   /// reference): then there is nothing to fill.
   std::span<Aabb> boxes(std::size_t shapes, std::size_t balls);
   /// Finds each ball's candidates among the boxes just filled; with `other_balls`, the other
-  /// balls as well as the shapes.
+  /// balls as well as the shapes. A box not finite makes every ball get every body this call.
   void find(bool other_balls);
   /// Ball `ball`'s candidates in increasing order: a shape's index, or (shapes + b) for ball b.
   /// When every ball gets every body, the list holds the ball itself too: skip it.

@@ -4,6 +4,7 @@
 // line, over a plane or through a volume.
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -232,6 +233,22 @@ TEST(BallCandidates, AFewBallsOrTheReferenceGetEveryBody) {
     candidates.find(/*other_balls=*/false);
     const std::span<const std::uint32_t> third = candidates.of(2);
     EXPECT_EQ(std::vector<std::uint32_t>(third.begin(), third.end()), (std::vector<std::uint32_t>{0, 1}));
+  }
+}
+
+TEST(BallCandidates, ABoxNotFiniteGivesEveryBallEveryBody) {
+  // A ball gone NaN (a diverged world still stepped) cannot be sorted: the search falls back to
+  // every body for every ball, and the exact tests refuse what is not finite.
+  BallCandidates candidates;
+  const std::size_t balls = 2 * BallCandidates::kSearchFromBalls;
+  const std::span<Aabb> boxes = candidates.boxes(3, balls);
+  ASSERT_EQ(boxes.size(), 3 + balls);
+  for (std::size_t k = 0; k < boxes.size(); ++k) boxes[k] = {Vector3d(10.0 * k, 0, 0), Vector3d(10.0 * k + 1, 1, 1)};
+  boxes[4].min.x() = std::numeric_limits<double>::quiet_NaN();
+  candidates.find(/*other_balls=*/false);
+  for (std::size_t b = 0; b < balls; ++b) {
+    const std::span<const std::uint32_t> found = candidates.of(b);
+    EXPECT_EQ(std::vector<std::uint32_t>(found.begin(), found.end()), (std::vector<std::uint32_t>{0, 1, 2})) << "ball " << b;
   }
 }
 
