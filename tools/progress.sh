@@ -17,17 +17,26 @@ quiet_build() {
   shift
   local tty=0
   if [ -t 2 ]; then tty=1; fi
-  # The build's output goes to the log and, through awk, becomes the progress: its
-  # [done/total] lines. The callers run under `set -e -o pipefail`: the list keeps a failed
-  # build from ending the script before its error is shown.
+  # The build's output goes to the log and becomes the progress: its [done/total] lines, read
+  # line by line as they come (mawk, Debian's awk, reads a pipe in 4 kB blocks: the progress
+  # came in bursts minutes apart). The callers run under `set -e -o pipefail`: the list keeps a
+  # failed build from ending the script before its error is shown.
   local status=0
-  NINJA_STATUS='[%f/%t] ' "$@" 2>&1 | tee "$log" | awk -v tty="$tty" '
-    match($0, /^\[[0-9]+\/[0-9]+\]/) {
-      split(substr($0, 2, RLENGTH - 2), n, "/")
-      if (tty == 1) { printf "\r  %d/%d files built", n[1], n[2]; fflush() }
-      else if (int(10 * n[1] / n[2]) > shown) { shown = int(10 * n[1] / n[2]); printf "  %d/%d files built\n", n[1], n[2]; fflush() }
-    }
-    END { if (tty == 1 && NR > 0) printf "\n" }' >&2 || status=${PIPESTATUS[0]}
+  NINJA_STATUS='[%f/%t] ' "$@" 2>&1 | tee "$log" | {
+    local line finished total shown=0
+    while IFS= read -r line; do
+      [[ $line =~ ^\[([0-9]+)/([0-9]+)\] ]] || continue
+      finished=${BASH_REMATCH[1]} total=${BASH_REMATCH[2]}
+      if [ "$tty" = 1 ]; then
+        printf '\r  %d/%d files built' "$finished" "$total"
+        shown=1
+      elif [ $((10 * finished / total)) -gt "$shown" ]; then
+        shown=$((10 * finished / total))
+        printf '  %d/%d files built\n' "$finished" "$total"
+      fi
+    done
+    if [ "$tty" = 1 ] && [ "$shown" -gt 0 ]; then printf '\n'; fi
+  } >&2 || status=${PIPESTATUS[0]}
   if [ "$status" -ne 0 ]; then
     if grep -q '^FAILED:' "$log"; then
       sed -n '/^FAILED:/,$p' "$log" | head -n 80 >&2

@@ -16,6 +16,18 @@ if [ "${1:-}" = fail ]; then echo "FAILED: file21.o"; echo "file21.cpp:3:1: erro
 FAKE
 chmod +x "$work/fake_build"
 
+# A build whose first line must be shown while it still runs: it waits (up to 5 s) for its
+# progress line to reach the screen before it goes on.
+cat >"$work/slow_build" <<'SLOW'
+#!/usr/bin/env bash
+echo "[1/2] Building CXX object first.o"
+for _ in $(seq 50); do grep -q '1/2 files built' "$1" && break; sleep 0.1; done
+grep -q '1/2 files built' "$1" || { echo "the progress line did not come while the build ran"; exit 1; }
+echo "[2/2] Linking CXX executable first"
+SLOW
+chmod +x "$work/slow_build"
+quiet_build "$work/slow.log" "$work/slow_build" "$work/slow.err" 2>"$work/slow.err" || fail "progress came late: $(cat "$work/slow.log")"
+
 quiet_build "$work/ok.log" "$work/fake_build" >"$work/ok.out" 2>"$work/ok.err" || fail "a build that passed returned non-zero"
 [ ! -s "$work/ok.out" ] || fail "stdout was not empty: $(cat "$work/ok.out")"
 [ "$(wc -l <"$work/ok.err")" -eq 10 ] || fail "expected a line at each tenth (10), got: $(cat "$work/ok.err")"
