@@ -99,7 +99,7 @@ void World::segments(std::vector<LimbSegment>& out) const {
 BodyId World::body(std::string_view name) const {
   const int b = model_.find_body(name);
   if (b < 0) throw WorldError("body: no body called '" + std::string(name) + "'");
-  return BodyId{body_handle_[static_cast<std::size_t>(b)], serial_};
+  return body_id(static_cast<std::size_t>(b));
 }
 
 JointId World::joint(std::string_view name) const {
@@ -118,9 +118,9 @@ std::vector<BodyId> World::bodies() const {
 const Body& World::body_description(BodyId body) const { return model_.bodies[index(body)]; }
 
 template <typename Id>
-void World::check_world(Id id, std::string_view kind) const {
+void World::check_world(Id id, std::string_view kind, std::string_view call) const {
   if (id.world != serial_) {
-    throw WorldError(std::string(kind) + " handle " + std::to_string(id.value) +
+    throw WorldError((call.empty() ? std::string() : std::string(call) + ": ") + std::string(kind) + " handle " + std::to_string(id.value) +
                      (id.world == 0 ? ": not a handle a World gave" : ": from another World (each World's handles are its own)"));
   }
 }
@@ -258,7 +258,7 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
   check_vector(torque, "apply_joint_torque");
   const Joint& j = model_.joints[index(joint)];
   load_torque_[static_cast<std::size_t>(j.outboard)] += torque;
-  wake(BodyId{body_handle_[static_cast<std::size_t>(j.outboard)], serial_});
+  wake(body_id(static_cast<std::size_t>(j.outboard)));
   if (j.inboard != kWorld) load_torque_[static_cast<std::size_t>(j.inboard)] -= torque;
 }
 
@@ -290,7 +290,7 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
         }
       },
       state_);
-  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[k].outboard)], serial_});
+  wake(body_id(static_cast<std::size_t>(model_.joints[k].outboard)));
 }
 
 // --- Held points
@@ -308,29 +308,29 @@ PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
   return PinId{next_pin_++, serial_};
 }
 
-void World::unpin(PinId pin) {
-  check_world(pin, "unpin: pin");
+const World::Pin& World::pin_entry(PinId pin, std::string_view call) const {
+  check_world(pin, "pin", call);
   const auto it = pins_.find(pin.value);
-  if (it == pins_.end()) throw WorldError("unpin: pin " + std::to_string(pin.value) + ": no such pin");
-  const JointId joint = it->second.joint;
-  pins_.erase(it);
+  if (it == pins_.end()) throw WorldError(std::string(call) + ": pin " + std::to_string(pin.value) + ": no such pin");
+  return it->second;
+}
+
+void World::unpin(PinId pin) {
+  const JointId joint = pin_entry(pin, "unpin").joint;
+  pins_.erase(pin.value);
   remove_joint(joint);
 }
 
 void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
   check_vector(world_target, "move_pin");
-  check_world(pin, "move_pin: pin");
-  const auto it = pins_.find(pin.value);
-  if (it == pins_.end()) throw WorldError("move_pin: pin " + std::to_string(pin.value) + ": no such pin");
-  it->second.target = world_target;
-  wake(BodyId{body_handle_[static_cast<std::size_t>(model_.joints[index(it->second.joint)].outboard)], serial_});
+  const JointId joint = pin_entry(pin, "move_pin").joint;
+  pins_.find(pin.value)->second.target = world_target;
+  wake(body_id(static_cast<std::size_t>(model_.joints[index(joint)].outboard)));
 }
 
 Eigen::Vector3d World::pin_position(PinId pin) const {
-  check_world(pin, "pin_position: pin");
-  const auto it = pins_.find(pin.value);
-  if (it == pins_.end()) throw WorldError("pin_position: pin " + std::to_string(pin.value) + ": no such pin");
-  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(it->second.joint)); }, state_);
+  const JointId joint = pin_entry(pin, "pin_position").joint;
+  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(joint)); }, state_);
 }
 
 // --- Sleeping
@@ -341,7 +341,7 @@ void World::wake(BodyId body) {
 }
 
 void World::wake_all() {
-  for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(BodyId{body_handle_[b], serial_});
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(body_id(b));
 }
 
 const StepReport& World::last_report() const {

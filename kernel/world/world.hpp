@@ -243,9 +243,14 @@ class World {
                  std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
-  // A handle of this World, or a WorldError naming `kind` (a handle from another World).
+  // A handle of this World, or a WorldError naming `call` (if any) and `kind` (a handle from
+  // another World). Builds no string unless it throws: step() paths call it.
   template <typename Id>
-  void check_world(Id id, std::string_view kind) const;
+  void check_world(Id id, std::string_view kind, std::string_view call = {}) const;
+  // The handle of body index `b`.
+  BodyId body_id(std::size_t b) const { return BodyId{body_handle_[b], serial_}; }
+  // The pin `pin` of this World, or a WorldError naming `call` (another World's, or removed).
+  const Pin& pin_entry(PinId pin, std::string_view call) const;
 
   Model model_;
   WorldOptions options_;
