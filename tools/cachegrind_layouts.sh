@@ -3,7 +3,7 @@
 # breadth-first, reverse Cuthill-McKee, shuffled) under cachegrind: a 100000-link chain, 1 thread,
 # 10 sweeps a step, double. Each case runs `limber run` for 21 steps and for 1 step and prints the
 # difference, so the table covers exactly 20 steps, not loading and compiling the scene. Takes
-# about 4 minutes.
+# about 14 minutes (818 s on the shared 2-core VM, load average 3, given an AVX2 build).
 #
 #   tools/cachegrind_layouts.sh [BUILD_DIR]        (default: build-valgrind, built if missing)
 #
@@ -40,8 +40,10 @@ trap 'rm -rf "$tmp"' EXIT
 # measure LAYOUT ORDERING STEPS: prints "D_refs D1_misses LLd_misses I_refs" of one run.
 measure() {
   local log="$tmp/$1-$2-$3.log"
-  local args=(run tools/scenes/chain.json --links "$links" --threads 1 --iterations 10 --steps "$3" --layout "$1"
-              --precision double)
+  # One substep of 10 sweeps a step, as the table states (the default is now 16 substeps: 16 times
+  # the sweeps, and hours under cachegrind).
+  local args=(run tools/scenes/chain.json --links "$links" --threads 1 --iterations 10 --substeps 1 --steps "$3"
+              --layout "$1" --precision double)
   [ "$2" != default ] && args+=(--ordering "$2")
   if ! valgrind "${valgrind_opts[@]}" "$limber" "${args[@]}" >/dev/null 2>"$log"; then
     grep -q "Unrecognised instruction" "$log" &&

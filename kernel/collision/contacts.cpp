@@ -246,30 +246,49 @@ bool find_ball_contact(const VerletState<Scalar>& state, const BallParticle& bal
 template <typename Scalar>
 void detect_ball_contacts(VerletState<Scalar>& state, double dt) {
   state.ball_contacts.clear();
+  const auto awake = [&](const BallParticle& ball) { return !state.islands[ball.island].sleeping; };
+  if (std::none_of(state.balls.begin(), state.balls.end(), awake)) return;
+  // Candidates through the broadphase (BallCandidates): each limb's bounding sphere now and each
+  // ball's path this step grown by its radius, as boxes — what the sphere test below can accept
+  // (none to fill for a few balls: each then tests every limb).
+  BallCandidates& candidates = state.collisions.ball_candidates();
+  const std::span<Aabb> boxes = candidates.boxes(state.limbs.size(), state.balls.size());
+  for (std::uint32_t limb = 0; limb < state.limbs.size() && !boxes.empty(); ++limb) {
+    const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
+    const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
+    const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb];
+    boxes[limb] = {(0.5 * (head + tail)).array() - reach, (0.5 * (head + tail)).array() + reach};
+  }
+  for (std::uint32_t b = 0; b < state.balls.size() && !boxes.empty(); ++b) {
+    const BallParticle& ball = state.balls[b];
+    const Eigen::Vector3d from = position_of(state.particles, ball.particle, true), to = position_of(state.particles, ball.particle);
+    boxes[state.limbs.size() + b] = {from.cwiseMin(to).array() - ball.radius, from.cwiseMax(to).array() + ball.radius};
+  }
+  candidates.find(/*other_balls=*/false);
   for (std::uint32_t b = 0; b < state.balls.size(); ++b) {
     const BallParticle& ball = state.balls[b];
-    if (state.islands[ball.island].sleeping) continue;
+    if (!awake(ball)) continue;
     const Eigen::Vector3d from = position_of(state.particles, ball.particle, true), to = position_of(state.particles, ball.particle);
     const Eigen::Vector3d path = to - from;
-    for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
-      const Island& island = state.islands[k];
-      for (std::uint32_t limb = island.limb_begin; limb < island.limb_end; ++limb) {
-        // Bounding spheres first (thesis 2.4), the limb's against the ball's path this step; the
-        // exact test only when they overlap.
-        const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
-        const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
-        const Eigen::Vector3d centre = 0.5 * (head + tail);
-        const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb] + ball.radius;
-        const double along =
-            path.squaredNorm() > 0 ? std::clamp((centre - from).dot(path) / path.squaredNorm(), 0.0, 1.0) : 0.0;
-        if ((centre - (from + along * path)).squaredNorm() > reach * reach) continue;
-        BallContact contact;
-        if (!find_ball_contact(state, ball, limb, contact)) continue;
-        wake_island(state, k);
-        contact.ball = b;
-        contact.approach_speed = ball_normal_speed(state, contact, dt);
-        state.ball_contacts.push_back(contact);
-      }
+    for (const std::uint32_t limb : candidates.of(b)) {
+      // Bounding spheres first (thesis 2.4), the limb's against the ball's path this step; the
+      // exact test only when they overlap.
+      const Eigen::Vector3d head = position_of(state.particles, state.limbs.head[limb]);
+      const Eigen::Vector3d tail = position_of(state.particles, state.limbs.tail[limb]);
+      const Eigen::Vector3d centre = 0.5 * (head + tail);
+      const double reach = 0.5 * (tail - head).norm() + state.limbs.radius[limb] + ball.radius;
+      const double along =
+          path.squaredNorm() > 0 ? std::clamp((centre - from).dot(path) / path.squaredNorm(), 0.0, 1.0) : 0.0;
+      if ((centre - (from + along * path)).squaredNorm() > reach * reach) continue;
+      BallContact contact;
+      if (!find_ball_contact(state, ball, limb, contact)) continue;
+      // The limb's island: islands hold consecutive limbs, in order.
+      const auto island = std::upper_bound(state.islands.begin(), state.islands.end(), limb,
+                                           [](std::uint32_t l, const Island& i) { return l < i.limb_end; });
+      wake_island(state, static_cast<std::uint32_t>(island - state.islands.begin()));
+      contact.ball = b;
+      contact.approach_speed = ball_normal_speed(state, contact, dt);
+      state.ball_contacts.push_back(contact);
     }
   }
 }

@@ -87,8 +87,9 @@ double contact_impulse(const VerletState<Scalar>& state, double wanted, double p
   return taken;
 }
 
-/// Finds the ball's contacts with every limb (asleep or not) and wakes the islands it touches.
-/// Needs the ball's island awake. dt converts displacements to velocities.
+/// Finds the awake balls' contacts with the limbs (asleep or not) and wakes the islands they
+/// touch: each ball tests its candidates from the broadphase (BallCandidates,
+/// kernel/geometry/broadphase.hpp), in increasing order. dt converts displacements to velocities.
 template <typename Scalar>
 void detect_ball_contacts(VerletState<Scalar>& state, double dt);
 

@@ -96,12 +96,13 @@ void add_collision_world_contacts(RigidScene& state) {
   }
 }
 
-// A ball against every limb (asleep or not: it wakes what it touches).
+// A ball against every limb among its candidates (asleep or not: it wakes what it touches).
 void add_ball_contacts(RigidScene& state, std::size_t ball) {
   const RigidBodyState& y = state.bodies.state;
   const Eigen::Vector3d centre = y.position[ball];
   const double ball_radius = state.shapes.radius[ball];
-  for (std::size_t b = 0; b < state.ball_begin; ++b) {
+  for (const std::uint32_t b : state.collisions.ball_candidates().of(ball - state.ball_begin)) {
+    if (b >= state.ball_begin) break;  // the other balls, after the limbs: the collision world's
     // Bounding spheres first (thesis 2.4); the exact closest point only when they overlap.
     const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
     const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
@@ -132,7 +133,7 @@ bool sweep_ball(RigidScene& state, std::size_t ball) {
   if (!(path.norm() > kSweptSlop * radius)) return false;  // at rest (or asleep), or sliding in place
   SweptTouch first;
   const BoundingSphere swept{from + 0.5 * path, 0.5 * path.norm() + radius};
-  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+  for (const std::uint32_t b : state.collisions.ball_candidates().of(ball - state.ball_begin)) {
     if (b == ball) continue;
     const auto [head, tail] = head_and_tail(state, b);
     const ShapeType shape = state.shapes.shape[b];
@@ -156,6 +157,31 @@ bool sweep_ball(RigidScene& state, std::size_t ball) {
   return true;
 }
 
+// Each ball's candidates, the bodies its tests below can accept, through the broadphase
+// (BallCandidates): a limb's bounding sphere and a ball's sphere about its whole path this step,
+// as boxes; a ball's grown by twice kTouchDepth, as sweep_ball may move it back that far off its
+// path before the later balls' tests and its own contacts see it. (None to fill for a few
+// balls: each then tests every body.)
+void find_ball_candidates(RigidScene& state) {
+  const RigidBodyState& y = state.bodies.state;
+  BallCandidates& candidates = state.collisions.ball_candidates();
+  const std::span<Aabb> boxes = candidates.boxes(state.ball_begin, state.bodies.size() - state.ball_begin);
+  for (std::size_t b = 0; b < state.bodies.size() && !boxes.empty(); ++b) {
+    Eigen::Vector3d centre;
+    double reach;
+    if (b < state.ball_begin) {
+      centre = world_point(state, b, Eigen::Vector3d::Zero());
+      reach = 0.5 * state.shapes.length[b] + state.shapes.radius[b];
+    } else {
+      const Eigen::Vector3d path = y.position[b] - state.step_start_position[b];
+      centre = state.step_start_position[b] + 0.5 * path;
+      reach = 0.5 * path.norm() + state.shapes.radius[b] + 2 * kTouchDepth;
+    }
+    boxes[b] = {centre.array() - reach, centre.array() + reach};
+  }
+  candidates.find(/*other_balls=*/true);
+}
+
 }  // namespace
 
 void remember_step_start(RigidScene& state) { state.step_start_position = state.bodies.state.position; }
@@ -164,6 +190,7 @@ bool detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
   bool moved = false;
+  if (state.ball_begin < state.bodies.size()) find_ball_candidates(state);
   for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) {
     moved = sweep_ball(state, ball) || moved;
     add_ball_contacts(state, ball);

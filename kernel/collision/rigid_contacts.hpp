@@ -6,6 +6,9 @@
 // Detection runs after the bodies moved (the thesis's loop, figure 2.5: move, then collide):
 // - a cylinder's end disk touches a plane at its lowest rim point, a capsule's end cap and the
 //   ball at their lowest sphere point — up to two contacts per limb and plane;
+// - each ball's candidate bodies come from the broadphase (BallCandidates,
+//   kernel/geometry/broadphase.hpp: boxes about its path this step and the limbs' bounding spheres),
+//   not from every body;
 // - the ball against a limb: bounding spheres first, and the exact sphere–capsule or
 //   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4);
 // - continuous collision for each ball, first: a ball tested only where it overlaps after the

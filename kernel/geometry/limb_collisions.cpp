@@ -6,6 +6,7 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "limber/kernel/geometry/golden_section.hpp"
 
@@ -181,19 +182,6 @@ void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, cons
   }
 }
 
-// Grows the sweep's pair buffer to about four pairs per limb (a limb among its neighbours in a
-// pile or a fallen figure) by one sweep over a row of boxes each overlapping the next four, so
-// steps that find no more allocate nothing. (SweepAndPrune has no reserve(); this keeps its
-// header, which half the kernel includes, unchanged.)
-void warm_broadphase(SweepAndPrune& broadphase, std::uint32_t count) {
-  std::vector<Aabb> row(count);
-  for (std::uint32_t i = 0; i < count; ++i) {
-    row[i].min = Vector3d(i, 0, 0);
-    row[i].max = Vector3d(i + 4.5, 1, 1);
-  }
-  broadphase.find_pairs(row);
-}
-
 bool contact_before(const LimbContact& a, const LimbContact& b) {
   if (a.first != b.first) return a.first < b.first;
   if (a.second != b.second) return a.second < b.second;
@@ -222,32 +210,74 @@ LimbCollisions::LimbCollisions(const Model& model)
     restitution_.push_back(ball.restitution);
   }
 
-  // Exclusions: joined pairs, and limb pairs overlapping at the Model's poses (found by the sweep).
+  // Exclusions: joined pairs, and limb pairs overlapping at the Model's poses (found by the sweep,
+  // when any two limbs' filters let them meet: the exclusions answer only for those).
   for (const Joint& joint : model.joints) {
     if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
     const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
     excluded_.emplace_back(std::min(a, b), std::max(a, b));
   }
   boxes_.resize(segments);
-  for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], 0);
-  for (const CandidatePair& pair : broadphase_.find_pairs(std::span<const Aabb>(boxes_).first(limb_count_))) {
-    if (limb_pair_contact(pair.first, pair.second, limbs[pair.first], limbs[pair.second]).separation < 0) excluded_.push_back(pair);
-  }
   std::sort(excluded_.begin(), excluded_.end());
   excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());
-
-  // Whether any pair is left to test (O(n²) filter checks once; usually the first pair answers).
-  // A ball meets limbs through its own path (contacts.hpp, rigid_contacts.hpp), other balls here.
-  for (std::uint32_t i = 0; i < segments && !limb_pairs_; ++i) {
-    for (std::uint32_t j = i + 1; j < segments && !limb_pairs_; ++j) limb_pairs_ = pair_tested(i, j);
+  if (some_pair_tested(/*balls=*/false)) {
+    for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], 0);
+    for (const CandidatePair& pair : broadphase_.find_pairs(std::span<const Aabb>(boxes_).first(limb_count_))) {
+      if (limb_pair_contact(pair.first, pair.second, limbs[pair.first], limbs[pair.second]).separation < 0) excluded_.push_back(pair);
+    }
+    set_up_comparisons_ += broadphase_.comparisons();
+    std::sort(excluded_.begin(), excluded_.end());
+    excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());
   }
+  limb_pairs_ = some_pair_tested(false) || some_pair_tested(true);
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
-  // Warm the buffers: four candidate pairs per limb (a limb among its neighbours in a pile or a
-  // fallen figure), one contact per limb and three per segment against static geometry are a
-  // typical scene's; more grow them once.
-  warm_broadphase(broadphase_, static_cast<std::uint32_t>(segments));
+  // Room for a typical scene's search: four candidate pairs per segment (a limb among its
+  // neighbours in a pile or a fallen figure), one contact per segment and three per segment
+  // against static geometry, four candidates per ball; more grow them once.
+  broadphase_.reserve(segments, 0, 4 * segments);
   scratch_.reserve(3 * segments);
+  ball_candidates_.reserve(limb_count_, model.balls.size(), 4 * model.balls.size());
+}
+
+bool LimbCollisions::some_pair_tested(bool balls) {
+  // The limbs' (or the balls') distinct filters, with how many segments have each.
+  struct FilterClass {
+    std::uint32_t group = 0, mask = 0;
+    std::uint64_t count = 0;
+  };
+  const auto key = [](const FilterClass& c) { return std::make_pair(c.group, c.mask); };
+  const std::uint32_t begin = balls ? limb_count_ : 0, end = balls ? static_cast<std::uint32_t>(filters_.size()) : limb_count_;
+  std::vector<FilterClass> classes;
+  classes.reserve(end - begin);
+  for (std::uint32_t s = begin; s < end; ++s) classes.push_back({filters_[s].group, filters_[s].mask, 1});
+  std::sort(classes.begin(), classes.end(), [&](const FilterClass& a, const FilterClass& b) { return key(a) < key(b); });
+  std::size_t distinct = 0;
+  for (std::size_t k = 0; k < classes.size(); ++k) {
+    if (distinct > 0 && key(classes[distinct - 1]) == key(classes[k])) {
+      ++classes[distinct - 1].count;
+    } else {
+      classes[distinct++] = classes[k];
+    }
+  }
+  classes.resize(distinct);
+  // The exclusions are distinct limb pairs: some pair is tested iff the filters allow more pairs
+  // than the exclusions remove. Pairs are counted per pair of distinct filters (few: generators
+  // and copies repeat theirs), so this costs that count squared, not the segments'.
+  std::uint64_t excluded_allowed = 0;
+  if (!balls) {
+    for (const CandidatePair& pair : excluded_) excluded_allowed += filters_collide(filters_[pair.first], filters_[pair.second]);
+  }
+  std::uint64_t allowed = 0;
+  for (std::size_t a = 0; a < classes.size(); ++a) {
+    for (std::size_t b = a; b < classes.size(); ++b) {
+      ++set_up_comparisons_;
+      if (!filters_collide({classes[a].group, classes[a].mask}, {classes[b].group, classes[b].mask})) continue;
+      allowed += a == b ? classes[a].count * (classes[a].count - 1) / 2 : classes[a].count * classes[b].count;
+      if (allowed > excluded_allowed) return true;
+    }
+  }
+  return false;
 }
 
 bool LimbCollisions::excluded(std::uint32_t first, std::uint32_t second) const {

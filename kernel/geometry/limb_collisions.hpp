@@ -111,6 +111,19 @@ class LimbCollisions {
   /// allocation.
   SweptTouch first_static_touch(std::uint32_t segment, const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius) const;
 
+  /// The balls' own candidate search (broadphase.hpp), kept here with the other buffers every
+  /// method's state holds: contacts.cpp and rigid_contacts.cpp fill it and read it each step.
+  /// Reserved at construction for a few candidates per ball.
+  BallCandidates& ball_candidates() { return ball_candidates_; }
+
+  /// Pairs the constructor examined: pairs of distinct collision filters checked, and box pairs
+  /// the sweep for overlaps at the Model's poses compared — its work, which grows with the
+  /// bodies and not their square (a count for tests, instead of a time).
+  std::uint64_t set_up_comparisons() const { return set_up_comparisons_; }
+  /// Box pairs the broadphase compared over every find() so far (and the set-up's sweep): the
+  /// search's work, for tests and benchmarks.
+  std::uint64_t comparisons() const { return broadphase_.comparisons(); }
+
  private:
   // A value type (states are copied): no shared buffers.
   void find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
@@ -118,6 +131,8 @@ class LimbCollisions {
   void find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                    std::vector<LimbContact>& out) const;
   bool excluded(std::uint32_t first, std::uint32_t second) const;
+  // Whether some pair of limbs (or of balls) left after the exclusions has filters that collide.
+  bool some_pair_tested(bool balls);
   // Whether find_limb_pairs tests segments first < second: limb–limb or ball–ball, filters allowing.
   bool pair_tested(std::uint32_t first, std::uint32_t second) const;
 
@@ -133,6 +148,8 @@ class LimbCollisions {
   std::vector<Aabb> boxes_;                 // per segment, this call's
   std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
+  BallCandidates ball_candidates_;
+  std::uint64_t set_up_comparisons_ = 0;
   std::size_t candidate_pairs_ = 0;         // the last find()'s broadphase pairs
 };
 

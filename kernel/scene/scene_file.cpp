@@ -381,6 +381,7 @@ void require_generated(double bodies, const std::string& path, const SceneOption
     fail(path, "asks for " + format_number(bodies) + " bodies, more than the " + format_number(double(options.max_bodies)) +
                    " a scene may generate");
   }
+  if (options.before_generating) options.before_generating(bodies, path);
 }
 
 /// A generated Model moved by the generator object's "anchor" (its bodies and its joints to the
@@ -409,7 +410,6 @@ Model read_tree(const Object& object, const SceneOptions& options) {
     require_at_least(depth, 0, object.path("depth"));
     require_at_most(depth, 64, object.path("depth"));
     links = branching == 1 ? double(depth + 1) : (std::pow(double(branching), double(depth + 1)) - 1) / double(branching - 1);
-    require_generated(links, object.path("depth"), options);
   } else {
     links = object.integer("links");
     require_at_least(static_cast<long>(links), 1, object.path("links"));
@@ -708,8 +708,9 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
       require_at_least(*options.links, 1, "chain.links (SceneOptions::links)");
       chain.links = static_cast<int>(std::min<long>(*options.links, INT_MAX));
       require_generated(double(*options.links), "chain.links (SceneOptions::links)", options);
+    } else {
+      require_generated(chain.links, "chain.links", options);
     }
-    require_generated(chain.links, "chain.links", options);
     generate_chain(chain, bodies, chain_joints);
   } else if (tree_json) {
     append_generated(read_tree(Object(*tree_json, "tree"), options), bodies, chain_joints);

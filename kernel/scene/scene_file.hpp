@@ -168,6 +168,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -178,7 +179,11 @@
 namespace limber {
 
 /// Most bodies a scene may generate by default (chain, tree, grid and copies together): a guard
-/// against a file asking for terabytes, well above the largest workload measured (10⁶ links).
+/// against a file asking for terabytes. Not a promise that so many fit: a 10⁷-link chain needs
+/// about 25 GB under the particle method and up to 95 GB under the implicit springs
+/// (bench/README.md, "Linear costs"), more than most machines have — `limber run` refuses a
+/// scene whose bodies would not fit in the memory available, before generating them
+/// (SceneOptions::before_generating).
 inline constexpr std::size_t kMaxSceneBodies = 10'000'000;
 
 /// Most triangles a scene's mesh and stairs colliders may have in all, by default: a guard
@@ -196,6 +201,10 @@ struct SceneOptions {
   std::size_t max_bodies = kMaxSceneBodies;
   /// Likewise for the triangles of the mesh and stairs colliders, all together.
   std::size_t max_triangles = kMaxSceneTriangles;
+  /// Called with the number of bodies a generator (or copies) is about to make and its path in
+  /// the file (e.g. "chain.links"), after the max_bodies check and before anything is allocated:
+  /// a caller refuses sizes it cannot hold (the command line: the memory available) by throwing.
+  std::function<void(double bodies, const std::string& path)> before_generating = nullptr;
 };
 
 /// A loaded scene: the solver-independent Model, and what the file says about the methods

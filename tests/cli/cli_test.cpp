@@ -12,6 +12,7 @@
 
 #include "tools/cli/cli.hpp"
 #include "tools/cli/output_file.hpp"
+#include "tools/cli/run_flags.hpp"
 
 namespace limber::cli {
 namespace {
@@ -427,6 +428,28 @@ TEST(Cli, OutRefusesATrajectoryLargerThanTheFreeSpace) {
   expect_rejected({"run", scene("chain.json"), "--links", "10000", "--steps", "1000000000", "--out", path}, "free in");
   EXPECT_FALSE(std::filesystem::exists(path));
   EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+}
+
+// A scene whose bodies would not fit in the memory available is refused before they are
+// generated, with one line naming the file, the field and both figures; what fits passes.
+TEST(Cli, RefusesBodiesThatNeedMoreMemoryThanIsAvailable) {
+  RunFlags flags;
+  flags.method = "featherstone";
+  const double gigabyte = 1e9;
+  try {
+    require_memory_for(1e7, "chain.json", "chain.links", flags, gigabyte);
+    ADD_FAILURE() << "10^7 bodies accepted in 1 GB";
+  } catch (const OutOfMemoryError& error) {
+    const std::string message = error.what();
+    EXPECT_THAT(message, HasSubstr("chain.json: chain.links: 1e+07 bodies need about "));
+    EXPECT_THAT(message, HasSubstr("under featherstone"));
+    EXPECT_THAT(message, HasSubstr("more than the 1 GB of memory available"));
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  EXPECT_NO_THROW(require_memory_for(1e4, "chain.json", "chain.links", flags, gigabyte));
+  // Each method's estimate is its own, the rigid ones' larger than the particles' per body.
+  RunFlags particles;
+  EXPECT_LT(bytes_per_body(particles), bytes_per_body(flags));
 }
 
 // An output file appears under its name only once complete: an abandoned one leaves nothing,

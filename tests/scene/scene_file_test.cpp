@@ -5,6 +5,8 @@
 #include <numbers>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -499,6 +501,30 @@ TEST(SceneErrors, MaxBodiesRefusesAGeneratorBeforeItAllocates) {
   options.max_bodies = 100;
   EXPECT_THAT(load_error(with(kTree, R"("depth": 3)", R"("depth": 7)"), options), StartsWith("test.json: tree.depth: asks for "))
       << "a binary tree of depth 7 has 255 links";
+}
+
+TEST(SceneErrors, BeforeGeneratingHearsTheBodiesAndItsRefusalStopsTheLoad) {
+  // The caller's own check (the command line's memory estimate) hears each generator's count
+  // and path before the generator runs, and what it throws ends the load: 10⁷ links, under
+  // kMaxSceneBodies, are refused here before a byte of them is allocated.
+  std::vector<std::pair<double, std::string>> heard;
+  SceneOptions options;
+  options.links = 10'000'000;
+  options.before_generating = [&](double bodies, const std::string& path) {
+    heard.emplace_back(bodies, path);
+    if (bodies > 1000) throw ModelError(path + ": too many for this test");
+  };
+  EXPECT_EQ(load_error(read_text(kScenes + "chain.json"), options), "test.json: chain.links (SceneOptions::links): too many for this test");
+  ASSERT_EQ(heard.size(), 1u);
+  EXPECT_EQ(heard[0].first, 1e7);
+  // Copies: the copies' bodies together, after the generator's own.
+  heard.clear();
+  options.links = 10;
+  options.copies = 200;
+  EXPECT_EQ(load_error(read_text(kScenes + "chain.json"), options), "test.json: copies.count: too many for this test");
+  ASSERT_EQ(heard.size(), 2u);
+  EXPECT_EQ(heard[0], std::make_pair(10.0, std::string("chain.links (SceneOptions::links)")));
+  EXPECT_EQ(heard[1].first, 2000.0);
 }
 
 TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <new>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -533,6 +534,13 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
     err << "limber: " << error.what() << "\n";
   } catch (const std::invalid_argument& error) {  // options that do not go together (compile's)
     err << "limber: " << error.what() << "\n";
+  } catch (const OutOfMemoryError& error) {
+    err << "limber: " << error.what() << "\n";
+    return kOutOfMemory;
+  } catch (const std::bad_alloc&) {
+    err << "limber: out of memory: an allocation failed (std::bad_alloc); ask for fewer bodies or steps, or run on a "
+           "machine with more memory\n";
+    return kOutOfMemory;
   } catch (const std::exception& error) {
     err << "limber: unexpected error: " << error.what() << "\n";
   }

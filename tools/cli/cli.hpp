@@ -16,10 +16,17 @@ enum ExitCode : int {
   kSuccess = 0,
   kDiverged = 1,   ///< the simulation diverged: a non-finite number, runaway speed or energy, a joint come apart
   kBadInput = 2,   ///< bad flags, values or scene file; one line on `err` says which
+  kOutOfMemory = 3,  ///< not enough memory: refused before loading (the estimate against what is available), or an allocation failed
 };
 
 /// A bad flag, value or output path; what() is the one line printed after "limber: ".
 class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Not enough memory for what was asked; what() is the one line printed after "limber: ".
+class OutOfMemoryError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -337,6 +338,37 @@ WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene) 
   return options;
 }
 
+std::optional<double> available_memory() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string key, unit;
+  double kilobytes = 0;
+  while (meminfo >> key >> kilobytes >> unit) {
+    if (key == "MemAvailable:") return kilobytes * 1024;
+  }
+  return std::nullopt;
+}
+
+double bytes_per_body(const RunFlags& flags) {
+  // Peak resident memory over bodies, the larger of a 10⁶-link chain.json and 10⁵ copies of
+  // the humanoid (9·10⁵ bodies), rounded up: `/usr/bin/time -v limber run ... --steps 1`
+  // (bench/README.md, "Linear costs").
+  if (flags.method == "springs-implicit") return 9500;  // the implicit step's sparse system
+  if (flags.springs()) return 2800;
+  if (flags.lagrange()) return 5700;
+  if (flags.featherstone()) return 7700;
+  return flags.precision == "float" ? 2300 : 2500;
+}
+
+void require_memory_for(double bodies, const std::string& source, const std::string& path, const RunFlags& flags,
+                        double available) {
+  const double needed = bodies * bytes_per_body(flags);
+  if (needed <= available) return;
+  throw OutOfMemoryError(format("%s: %s: %.4g bodies need about %.3g GB under %s (%.2g kB a body), more than the %.3g GB of memory "
+                                "available; ask for fewer, or run on a machine with more memory",
+                                source.c_str(), path.c_str(), bodies, needed / 1e9, flags.method.c_str(),
+                                bytes_per_body(flags) / 1e3, available / 1e9));
+}
+
 LoadedRun load(const RunFlags& flags) {
   SceneOptions scene_options;
   if (given(flags.body_option)) scene_options.variant = flags.body;
@@ -345,6 +377,13 @@ LoadedRun load(const RunFlags& flags) {
   const bool embedded = flags.scene.empty();
   LoadedRun loaded;
   loaded.source = embedded ? "embedded tools/scenes/humanoid.json" : flags.scene;
+  // Refuse, before generating them, bodies the memory available cannot hold: not minutes of
+  // work ending in an allocation failure (or the kernel's out-of-memory killer).
+  if (const std::optional<double> available = available_memory()) {
+    scene_options.before_generating = [&flags, &loaded, memory = *available](double bodies, const std::string& path) {
+      require_memory_for(bodies, loaded.source, path, flags, memory);
+    };
+  }
   loaded.scene_path = flags.scene;
   loaded.scene = embedded ? load_scene_text(embedded_humanoid_scene(), loaded.source, scene_options)
                           : load_scene_file(flags.scene, scene_options);

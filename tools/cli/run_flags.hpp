@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -69,7 +70,21 @@ void add_run_flags(CLI::App& run, RunFlags& flags);
 /// refuses the other methods' flags).
 WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene);
 /// The scene and method that parsed run flags ask for. Throws ModelError, InputError or
-/// std::invalid_argument (options that do not go together), each one line.
+/// std::invalid_argument (options that do not go together), each one line; OutOfMemoryError
+/// when the scene would generate more bodies than the memory available holds
+/// (require_memory_for), before generating them.
 LoadedRun load(const RunFlags& flags);
+
+/// The memory the system has available now, bytes (Linux: MemAvailable in /proc/meminfo);
+/// nullopt where it cannot tell.
+std::optional<double> available_memory();
+/// Bytes one body of a long chain or of many copies needs under the flags' method, from loading
+/// to stepping in `limber run` (peak resident memory per body at 10⁶ links, bench/README.md,
+/// "Linear costs").
+double bytes_per_body(const RunFlags& flags);
+/// Throws OutOfMemoryError, one line naming `source`, `path` and both figures, when `bodies`
+/// bodies need more than `available` bytes under the flags' method (bytes_per_body).
+void require_memory_for(double bodies, const std::string& source, const std::string& path, const RunFlags& flags,
+                        double available);
 
 }  // namespace limber::cli
