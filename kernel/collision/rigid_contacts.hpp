@@ -52,6 +52,14 @@ void remember_step_start(RigidScene& scene);
 /// ball's new position over.
 bool detect_rigid_contacts(RigidScene& scene);
 
+/// A rigid method's step counts in report.profile (step_status.hpp, StepProfile): one substep,
+/// report.contacts, and the broadphase pairs of the last detect_rigid_contacts. Called only when
+/// the method's options ask for the profile.
+inline void count_rigid_step(const RigidScene& scene, StepReport& report) {
+  report.profile.substeps = 1, report.profile.contacts = report.contacts;
+  report.profile.candidate_pairs = scene.collisions.active() ? static_cast<int>(scene.collisions.candidate_pairs()) : 0;
+}
+
 /// Impulses and position correction for scene.contacts; dt is the step's.
 void resolve_rigid_contacts(RigidScene& scene, double dt);
 

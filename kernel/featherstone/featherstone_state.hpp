@@ -45,6 +45,9 @@ struct FeatherstoneOptions {
   /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
   /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
   Integrator integrator = Integrator::rk4;
+  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
+  /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
+  bool profile = false;
 };
 
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at

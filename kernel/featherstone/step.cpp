@@ -117,10 +117,13 @@ void take_moved_balls(FeatherstoneState& state) {
 
 StepReport step(FeatherstoneState& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
+    StageClock clock(state.options.profile);
     remember_step_start(state);
     integrate_awake_islands(state, dt);
     refresh_rigid_bodies(state);
+    report.profile.integrate = clock.lap();
     if (detect_rigid_contacts(state)) take_moved_balls(state);
+    report.profile.detect = clock.lap();
     resolve_joint_space_contacts(state, dt);
     report.contacts = static_cast<int>(state.contacts.size());
     state.time += dt;
@@ -128,6 +131,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
     zero_sleeping_velocities(state);  // islands put to sleep had their rigid momenta zeroed
+    if (state.options.profile) count_rigid_step(state, report);
   });
 }
 

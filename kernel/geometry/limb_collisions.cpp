@@ -298,6 +298,7 @@ void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const st
     throw std::invalid_argument("LimbCollisions::find: expected " + std::to_string(segments) + " segments and awake flags, got " +
                                 std::to_string(limbs.size()) + " and " + std::to_string(awake.size()));
   }
+  candidate_pairs_ = 0;
   if (!active_) return;
   if (limb_pairs_) find_limb_pairs(limbs, awake, margin, out);
   if (!statics_.empty()) find_static(limbs, awake, margin, out);
@@ -307,7 +308,9 @@ void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const st
 void LimbCollisions::find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                                      std::vector<LimbContact>& out) {
   for (std::size_t i = 0; i < limbs.size(); ++i) boxes_[i] = segment_box(limbs[i], margin + limbs[i].reach);
-  for (const auto& [i, j] : broadphase_.find_pairs(boxes_)) {
+  const std::vector<CandidatePair>& pairs = broadphase_.find_pairs(boxes_);
+  candidate_pairs_ = pairs.size();
+  for (const auto& [i, j] : pairs) {
     if (!awake[i] && !awake[j]) continue;
     if (!pair_tested(i, j)) continue;
     const double reach = margin + limbs[i].reach + limbs[j].reach;

@@ -98,6 +98,11 @@ class LimbCollisions {
   /// static geometry and between limbs — the run summary's measure (every method alike).
   double deepest_penetration(std::span<const LimbSegment> limbs);
 
+  /// The pairs of segments the last find()'s sweep-and-prune broadphase gave (limb–limb and
+  /// ball–ball, before the awake, filter and bounding-sphere tests; 0 when the model has no
+  /// such pair to test). Static geometry's tree queries are not counted.
+  std::size_t candidate_pairs() const { return candidate_pairs_; }
+
   /// Continuous collision against the static geometry (time_of_impact.hpp): segment `segment`'s
   /// sphere (the ball's, head = tail) of `radius` (m) moving from `from` to `to` (m, world) —
   /// its first touch of a static primitive its filter meets that needs answering there
@@ -145,6 +150,7 @@ class LimbCollisions {
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
   BallCandidates ball_candidates_;
   std::uint64_t set_up_comparisons_ = 0;
+  std::size_t candidate_pairs_ = 0;         // the last find()'s broadphase pairs
 };
 
 }  // namespace limber

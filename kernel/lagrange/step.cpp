@@ -144,6 +144,7 @@ void velocity_level_step(LagrangeState& state, double dt) {
 
 // One step after the guard: integrate, contacts, projections, errors, sleep.
 void advance(LagrangeState& state, double dt, StepReport& report) {
+  StageClock clock(state.options.profile);
   state.time_step = dt;
   remember_step_start(state);
   if (state.options.integrator == Integrator::semi_implicit_euler) {
@@ -158,7 +159,9 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   // The projections reuse the solver; the step's multipliers are what observers report.
   std::swap(state.multipliers, state.projection_multipliers);
   const bool projection = state.options.stabilization == Stabilization::projection;
+  report.profile.integrate = clock.lap();
   detect_rigid_contacts(state);
+  report.profile.detect = clock.lap();
   resolve_rigid_contacts(state, dt);
   const bool constrained = state.constraints.size() > 0;
   if (projection && constrained) project_positions(state);
@@ -174,6 +177,7 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   state.time += dt;
   report.status = update_sleep(state, dt);
   clear_applied_loads(state);
+  if (state.options.profile) count_rigid_step(state, report);
 }
 
 }  // namespace

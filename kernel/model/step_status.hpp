@@ -2,6 +2,7 @@
 // step() runs inside.
 #pragma once
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <utility>
@@ -39,6 +40,68 @@ enum class RelaxationStop : std::uint8_t {
   idle,        ///< nothing awake to relax
 };
 
+/// Where one step's time went, and what it did (StepReport::profile), on the model of Box2D
+/// v3's b2Profile. Filled only when the method's options ask for it (VerletOptions::profile,
+/// SpringOptions::profile, LagrangeOptions::profile, FeatherstoneOptions::profile); otherwise
+/// every field is 0 and no clock is read. Times are seconds of std::chrono::steady_clock, the
+/// stages consecutive and in the order they run, so their sum is at most `step`; times and
+/// counts are sums over the step's substeps. A field a method has no such stage for stays 0.
+///
+/// The particle method (verlet/step.cpp, step.hpp's passes) fills every field. Under rattle the
+/// contacts' restitution passes run inside the velocity sweeps and count as `velocity`
+/// (`restitution` stays 0). The rigid methods (springs, lagrange, featherstone) fill `step`,
+/// `integrate` (the integrator, with the forces and any joint solve it makes: springs'
+/// backward-Euler solve, Lagrange's multipliers, Featherstone's articulated-body algorithm),
+/// `detect`, `substeps` (1), `candidate_pairs` and `contacts`; the rest of their step, contact
+/// response, projections and sleep, is `step` less those.
+struct StepProfile {
+  double integrate = 0;    ///< s: prediction (pbd Verlet, or rattle's kick and drift), forces, kinematic moves
+  double detect = 0;       ///< s: contacts with the ball, the planes, and between limbs (broadphase and narrowphase)
+  double colour = 0;       ///< s: the contact rows' colouring into batches (and the interleaved layouts' contact particles)
+  double relax = 0;        ///< s: the position sweeps (or Newton steps) with their contact projections
+  double velocity = 0;     ///< s: rattle's velocity stage; pbd: the shortened substep's velocity (else nothing)
+  double restitution = 0;  ///< s: pbd's contact restitution passes (under rattle: inside `velocity`)
+  double sleep = 0;        ///< s: sleep and divergence checks, and the step's bookkeeping after its stages
+  double step = 0;         ///< s: the whole step, guard included
+  int substeps = 0;
+  int position_sweeps = 0;   ///< = StepReport::iterations
+  int velocity_sweeps = 0;   ///< rattle's velocity sweeps (0 under pbd)
+  int contact_rows = 0;      ///< limb–limb, limb–static and ball–static rows detected
+  int contact_colours = 0;   ///< colours of those rows (the overflow not counted)
+  int candidate_pairs = 0;   ///< pairs of limbs (and balls) the sweep-and-prune broadphase gave
+  int contacts = 0;          ///< StepReport::contacts' count, summed over the substeps (≥ StepReport::contacts)
+
+  /// Adds `part` (a substep's) field by field.
+  StepProfile& operator+=(const StepProfile& part) {
+    integrate += part.integrate, detect += part.detect, colour += part.colour, relax += part.relax;
+    velocity += part.velocity, restitution += part.restitution, sleep += part.sleep, step += part.step;
+    substeps += part.substeps, position_sweeps += part.position_sweeps, velocity_sweeps += part.velocity_sweeps;
+    contact_rows += part.contact_rows, contact_colours += part.contact_colours;
+    candidate_pairs += part.candidate_pairs, contacts += part.contacts;
+    return *this;
+  }
+};
+
+/// Laps of a step's stages for StepProfile: lap() is the seconds since the last lap (or the
+/// start), 0 without reading the clock when the profile is off.
+class StageClock {
+ public:
+  explicit StageClock(bool on) : on_(on) {
+    if (on_) last_ = std::chrono::steady_clock::now();
+  }
+  double lap() {
+    if (!on_) return 0;
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - last_).count();
+    last_ = now;
+    return seconds;
+  }
+
+ private:
+  bool on_;
+  std::chrono::steady_clock::time_point last_{};
+};
+
 /// What one step did, under any method: the status, and what the method's solvers say (a field
 /// another method fills stays 0). A particle step of `substeps` substeps sums their sweeps and
 /// fallbacks; `stop` and `largest_correction` are the last substep's.
@@ -63,6 +126,8 @@ struct StepReport {
   // Lagrange: how well the joints hold after the step.
   double constraint_error = 0;  ///< largest |C| of a joint's point and slide rows, m
   double angular_error = 0;     ///< largest |u·v| of a joint's angular rows (≈ rad)
+
+  StepProfile profile;  ///< where the step's time went; all 0 unless the method's options ask (`profile`)
 };
 
 /// The shortest step `state` takes, s: kMinimumTimeStep, unless an overload for its type (found
@@ -74,9 +139,11 @@ double minimum_time_step(const State&) {
 
 /// The step guard of every method's step(): a bad dt (valid_time_step with the state's
 /// minimum_time_step) is refused (invalid_time_step, nothing done); otherwise `advance(report)`
-/// runs with denormals flushed to zero. The report is kept as state.last_report and returned.
+/// runs with denormals flushed to zero. With state.options.profile, the whole step's time is
+/// report.profile.step. The report is kept as state.last_report and returned.
 template <typename State, typename Advance>
 StepReport guarded_step(State& state, double dt, Advance&& advance) {
+  StageClock clock(state.options.profile);
   StepReport report;
   if (!valid_time_step(dt, minimum_time_step(state))) {
     report.status = StepStatus::invalid_time_step;
@@ -84,6 +151,7 @@ StepReport guarded_step(State& state, double dt, Advance&& advance) {
     const FlushDenormals flush;
     std::forward<Advance>(advance)(report);
   }
+  report.profile.step = clock.lap();
   return state.last_report = report;
 }
 

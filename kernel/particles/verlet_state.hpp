@@ -103,6 +103,9 @@ struct VerletOptions {
   /// "settings.relaxation"), and how limbs become particles ("settings.verlet").
   RelaxationSettings relaxation{};
   VerletSettings verlet{};
+  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
+  /// a substep, the same bits as without; false leaves the profile all zeros and reads no clock.
+  bool profile = false;
 };
 
 /// A connected set of particles (joined by constraints), stored contiguously in every buffer so

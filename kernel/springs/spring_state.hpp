@@ -49,6 +49,9 @@ struct SpringOptions {
   /// The spring of a joint that names none (Joint::stiffness, ::damping; a scene file's
   /// "settings.springs"). `stiffness` and `damping` above override both.
   SpringSettings defaults{};
+  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
+  /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
+  bool profile = false;
 };
 
 /// The joints' springs, one entry per Model joint: its anchors (JointAnchors: what the joint gap

@@ -349,22 +349,23 @@ constexpr int kMaxContactVelocitySweeps = 32;
 // rates, the joints open gaps, and the gaps return the energy later (README.md, "Contacts under
 // the rattle rule"). Compliant constraints (direct solver, α > 0) are springs, whose rate is
 // free: they get the second half kick of their force instead (kick_compliant_constraints), then
-// the contacts.
+// the contacts. Returns the velocity sweeps run.
 template <typename Scalar>
-void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
+int project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
   const bool contacts = !state.balls.empty() || !state.planes.empty();
   const bool rows = !state.contact_rows.empty();
   if (state.options.compliance > 0) {
     kick_compliant_constraints(state, dt);
     if (contacts) apply_restitution(state, dt);
     if (rows) apply_contact_row_restitution(state, dt);
-    return;
+    return 0;
   }
   const bool has_centres = has_limb_centres(state);
   const double settled = resting_speed(state, dt);
   bool contact_acted = false;
   begin_velocity_projection(state);
-  for (int sweep = 1;; ++sweep) {
+  int sweep = 1;
+  for (;; ++sweep) {
     double largest = velocity_sweep(state);
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
     double contact_change = 0;
@@ -376,13 +377,15 @@ void project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     if (sweep >= sweeps && (!contact_acted || largest < settled || sweep >= kMaxContactVelocitySweeps)) break;
   }
   end_velocity_projection(state);
+  return sweep;
 }
 
 // One substep of either rule (the whole step when relaxation.substeps is 1): the passes
-// of step.hpp's list.
+// of step.hpp's list, each a lap of `clock` into the report's profile (StepProfile's stages).
 template <typename Scalar>
-StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int index, int count) {
+StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int index, int count, StageClock& clock) {
   StepReport report;
+  StepProfile& profile = report.profile;
   const bool rattle = uses_rattle(state);
   const bool has_ball = !state.balls.empty(), has_planes = !state.planes.empty();
   // > dt: a shortened substep (shortened_step_velocity).
@@ -394,24 +397,31 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     if (dt < longer) keep_prediction(state);
   }
   if (!state.kinematic_targets.empty()) move_kinematic_particles(state, index, count, dt);
+  profile.integrate = clock.lap();
   if (has_ball) {
     detect_ball_contacts(state, dt);
     state.ball_touched = state.ball_touched || !state.ball_contacts.empty();
   }
   if (has_planes) detect_plane_contacts(state, dt);
-  if (state.collisions.active()) {
-    detect_limb_contacts(state, dt);
-    build_contact_batches(state);
-  }
+  const bool limb_contacts = state.collisions.active() && !state.awake_islands.empty();  // detect_limb_contacts runs find()
+  if (state.collisions.active()) detect_limb_contacts(state, dt);
+  profile.detect = clock.lap();
+  if (state.collisions.active()) build_contact_batches(state);
   if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
+  profile.colour = clock.lap();
   if (!state.awake_islands.empty()) relax_positions(state, dt, budget_us, report);
+  profile.relax = clock.lap();
+  int velocity_sweeps = 0;
   if (rattle) {
     velocity_from_positions(state, dt, longer);
-    if (!state.awake_islands.empty()) project_velocities(state, dt, std::max(1, report.iterations));
+    if (!state.awake_islands.empty()) velocity_sweeps = project_velocities(state, dt, std::max(1, report.iterations));
+    profile.velocity = clock.lap();
   } else {
     if (dt < longer) shortened_step_velocity(state, dt, longer);
+    profile.velocity = clock.lap();
     if (has_ball || has_planes) apply_restitution(state, dt);
     if (!state.contact_rows.empty()) apply_contact_row_restitution(state, dt);
+    profile.restitution = clock.lap();
   }
   report.contacts = substep_contacts(state);
   report.status = update_sleep(state, dt);
@@ -422,6 +432,15 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     state.correction_time.span = dt, state.correction_time.age = 0;
   } else {
     state.correction_time.age += dt;
+  }
+  profile.sleep = clock.lap();
+  if (state.options.profile) {
+    const ContactRowSet& rows = state.contact_rows;
+    profile.substeps = 1, profile.position_sweeps = report.iterations, profile.velocity_sweeps = velocity_sweeps;
+    profile.contact_rows = static_cast<int>(rows.rows.size());
+    profile.contact_colours = rows.empty() ? 0 : static_cast<int>(rows.colour_count);
+    profile.candidate_pairs = limb_contacts ? static_cast<int>(state.collisions.candidate_pairs()) : 0;
+    profile.contacts = report.contacts;
   }
   return report;
 }
@@ -452,8 +471,10 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.plan.fallbacks.value = 0;
     state.ball_touched = false;
     for (KinematicTarget& target : state.kinematic_targets) target.start = state.particles.position(target.particle).template cast<double>();
+    StageClock clock(state.options.profile);
     for (int k = 0; k < substeps; ++k) {
-      const StepReport part = substep(state, h, state.options.relaxation.budget_us / substeps, k, substeps);
+      const StepReport part = substep(state, h, state.options.relaxation.budget_us / substeps, k, substeps, clock);
+      report.profile += part.profile;
       report.iterations += part.iterations;
       report.largest_correction = part.largest_correction;
       report.stop = part.stop;
@@ -467,6 +488,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
+    report.profile.sleep += clock.lap();  // the step's bookkeeping after its substeps
   });
 }
 

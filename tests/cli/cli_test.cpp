@@ -160,6 +160,31 @@ TEST(Cli, SceneRelaxationSettingsRunAsStatedAndKeepTheCsvColumns) {
   EXPECT_THAT(header, HasSubstr("link_0.head_x,link_0.head_y,link_0.head_z"));
 }
 
+TEST(Cli, ProfilePrintsEachStageInTheOrderItRunsAfterTheSummary) {
+  // Every line "profile     <stage> ...", in order, after the status line: the particle
+  // method's seven stages, then the rest and the whole step; a rigid method's two.
+  const auto stage_lines = [](const std::vector<std::string>& arguments, const std::vector<std::string>& stages) {
+    const Result r = run(arguments);
+    ASSERT_EQ(r.code, kSuccess) << r.err;
+    std::size_t at = r.out.find("\nstatus      ");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    for (const std::string& stage : stages) {
+      const std::size_t next = r.out.find("\nprofile     " + stage + " ", at);
+      ASSERT_NE(next, std::string::npos) << stage << " after position " << at << " in\n" << r.out;
+      at = next;
+    }
+  };
+  stage_lines({"run", "--steps", "60", "--profile"},
+              {"integrate", "detect", "colour", "relax", "velocity", "restitution", "sleep", "rest", "step"});
+  stage_lines({"run", scene("chain.json"), "--projection", "rattle", "--substeps", "4", "--steps", "20", "--profile"},
+              {"integrate", "detect", "colour", "relax", "velocity", "restitution", "sleep", "rest", "step"});
+  for (const char* method : {"springs-implicit", "lagrange", "featherstone"}) {
+    stage_lines({"run", "--method", method, "--steps", "60", "--profile"}, {"integrate", "detect", "rest", "step"});
+  }
+  const Result plain = run({"run", "--steps", "60"});
+  EXPECT_THAT(plain.out, Not(HasSubstr("profile     "))) << "without --profile";
+}
+
 TEST(Cli, RejectsBadProjectionAndSubsteps) {
   expect_rejected({"run", "--projection", "shake"}, "--projection");
   expect_rejected({"run", "--substeps", "0"}, "--substeps: must be in [1, 10000], got 0");

@@ -126,6 +126,7 @@ struct RunRecord {
   StepStatus status = StepStatus::ok;
   int contacts = 0, most_contacts = 0;  ///< StepReport::contacts at the end, and the most in a step
   double deepest_penetration = 0;      ///< m, over the run: limbs into limbs, colliders, the ground
+  StepProfile profile;                 ///< summed over the run's steps (zeros without --profile)
 };
 
 // The deepest overlap of `state`'s limbs now, measured alike for every method (observers.hpp).
@@ -158,6 +159,7 @@ RunRecord run_steps(State& state, MethodState& variant, const Model& model, long
     const auto report = step(state);
     record.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++record.steps_done;
+    record.profile += report.profile;
     if (release_drives_after_impact(variant) && record.drives_released_at < 0) record.drives_released_at = state.time;
     if constexpr (requires { report.stop; }) {
       ++record.relaxation_stops[static_cast<int>(report.stop)];
@@ -322,6 +324,44 @@ std::string accuracy_flags(const RunRecord& record, double energy_gain) {
   return flags.empty() ? "" : ", but inaccurate: " + flags;
 }
 
+// --profile's lines: per stage, in the order the stages run, its total over the run, its share
+// of the steps' time, its time a step and what it did a step (StepProfile). The rigid methods
+// time their integrator and their contact detection; "rest" is the step's time outside the
+// stages listed.
+std::string profile_lines(const RunRecord& record, bool rigid) {
+  const StepProfile& p = record.profile;
+  const double steps = std::max(1L, record.steps_done);
+  const auto per_step = [&](int count) { return count / steps; };
+  struct Stage {
+    const char* name;
+    double seconds;
+    std::string counts;
+  };
+  std::vector<Stage> stages{
+      {"integrate", p.integrate, format("%.3g substeps", per_step(p.substeps))},
+      {"detect", p.detect, rigid ? format("%.4g candidate pairs, %.4g contacts", per_step(p.candidate_pairs), per_step(p.contacts))
+                                 : format("%.4g candidate pairs, %.4g contact rows, %.4g contacts", per_step(p.candidate_pairs),
+                                          per_step(p.contact_rows), per_step(p.contacts))}};
+  if (!rigid) {
+    stages.push_back({"colour", p.colour, format("%.3g contact colours", per_step(p.contact_colours))});
+    stages.push_back({"relax", p.relax, format("%.4g position sweeps", per_step(p.position_sweeps))});
+    stages.push_back({"velocity", p.velocity, format("%.4g velocity sweeps", per_step(p.velocity_sweeps))});
+    stages.push_back({"restitution", p.restitution, ""});
+    stages.push_back({"sleep", p.sleep, ""});
+  }
+  double staged = 0;
+  for (const Stage& stage : stages) staged += stage.seconds;
+  stages.push_back({"rest", p.step - staged, rigid ? "contact response, projections, sleep" : "outside the stages"});
+  stages.push_back({"step", p.step, ""});
+  std::string lines = "profile     stage        total ms  % of step    us/step  per step\n";
+  for (const Stage& stage : stages) {
+    lines += format("profile     %-11s %9.3f %9.1f%% %10.2f", stage.name, 1e3 * stage.seconds, p.step > 0 ? 100 * stage.seconds / p.step : 0.0,
+                    1e6 * stage.seconds / steps);
+    lines += (stage.counts.empty() ? "" : "  " + stage.counts) + "\n";
+  }
+  return lines;
+}
+
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
 int simulate(State& state, MethodState& variant, const Model& model, const RunFlags& flags, const std::string& source,
@@ -376,6 +416,7 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   for (const std::string& event : record.sleep_events) out << "; " << event;
   out << "; " << (end.body_sleeping ? "asleep" : "awake") << " at end\n";
   out << "status      " << status_name(record.status) << accuracy_flags(record, drift / bounds.energy_scale) << "\n";
+  if (flags.profile) out << profile_lines(record, flags.rigid());
   if (csv) csv->commit();  // a diverged run's trajectory is a result too: kept up to the divergence
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }

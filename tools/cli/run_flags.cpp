@@ -121,6 +121,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       ->check(CLI::IsMember({"depth-parity", "breadth-first", "rcm", "shuffled"}))
       ->capture_default_str();
   run.add_flag("--scalar", flags.scalar, "Relax one constraint at a time instead of in SIMD lanes");
+  run.add_flag("--profile", flags.profile,
+               "Time each stage of the step and print, after the summary, where the time went (a few clock reads a substep)");
   for (const char* name : {"--iterations", "--projection", "--substeps", "--tolerance", "--budget-us", "--over-relaxation",
                            "--solver", "--sweep", "--pinned",
                            "--threads", "--threading", "--layout", "--ordering", "--scalar", "--newton-iterations",
@@ -332,6 +334,7 @@ WorldOptions method_options(const RunFlags& flags, const MethodSettings& scene) 
     options.method = Method::particles, options.particles = verlet_options(flags, scene);
     options.single_precision = flags.precision == "float";
   }
+  options.particles.profile = options.springs.profile = options.lagrange.profile = options.featherstone.profile = flags.profile;
   return options;
 }
 
