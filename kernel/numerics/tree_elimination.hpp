@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <span>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -96,6 +97,8 @@ class TreeElimination {
   std::size_t node_count() const { return ordering_.parent.size(); }
   std::int32_t body_count() const { return body_count_; }
   int rows(std::size_t constraint) const { return rows_[constraint]; }
+  /// Changes a constraint's row count (1…BodySize) before an eliminate(): an active set.
+  void set_rows(std::size_t constraint, int rows) { rows_[constraint] = static_cast<std::uint8_t>(rows); }
 
   /// Inputs, set before eliminate() for every node of the components solved: a body's block of M
   /// (its lower triangle is read), a constraint's −A in the top-left rows × rows corner (zero for
@@ -105,17 +108,25 @@ class TreeElimination {
   BodyVector& work(std::size_t node) { return work_[node]; }
   const BodyVector& work(std::size_t node) const { return work_[node]; }
 
-  /// Factors and solves the nodes order[begin, end) (whole components). edge(constraint, body)
-  /// returns the constraint's J block on that body, of which the top rows(constraint) rows are
-  /// read. Returns false when a body's block is not positive definite (the solution is then
-  /// meaningless).
+  /// Factors and solves the nodes order[begin, end) (whole components): factor() then solve().
+  /// edge(constraint, body) returns the constraint's J block on that body, of which the top
+  /// rows(constraint) rows are read. Returns false when a body's block is not positive definite
+  /// (the solution is then meaningless).
   template <typename Edge>
   bool eliminate(std::uint32_t begin, std::uint32_t end, Edge&& edge) {
+    const bool definite = factor(begin, end, std::forward<Edge>(edge));
+    solve(begin, end);
+    return definite;
+  }
+
+  /// Factors the nodes order[begin, end), children first: L = H_{parent,node}·D⁻¹, then
+  /// D_parent −= L·H_{node,parent}. The diagonal inputs are consumed; the work vectors are not
+  /// read. Returns false as eliminate() does.
+  template <typename Edge>
+  bool factor(std::uint32_t begin, std::uint32_t end, Edge&& edge) {
     const auto& order = ordering_.order;
     const auto& parent_of = ordering_.parent;
     bool definite = true;
-    // Factor and forward-substitute, children first: L = H_{parent,node}·D⁻¹, then
-    // D_parent −= L·H_{node,parent} and y_parent −= L·y_node.
     for (std::uint32_t k = begin; k < end; ++k) {
       const std::int32_t node = order[k], parent = parent_of[node];
       BodyMatrix& block_d = diagonal_[node];
@@ -143,7 +154,6 @@ class TreeElimination {
           }
           to_parent.template topRows<m>() = l;
           diagonal_[parent].template topLeftCorner<m, m>().noalias() -= l * block.transpose();
-          work_[parent].template head<m>().noalias() -= l * work_[node];
         });
       } else {
         const auto constraint = static_cast<std::size_t>(node - body_count_);
@@ -164,6 +174,31 @@ class TreeElimination {
           const Eigen::Matrix<Scalar, BodySize, m> l = block.transpose() * inverse;
           to_parent.template leftCols<m>() = l;
           diagonal_[parent].noalias() -= l * block;
+        });
+      }
+    }
+    return definite;
+  }
+
+  /// Solves the factored nodes order[begin, end) for the right-hand sides in work(): forward,
+  /// children first, y_parent −= L·y_node; back, parents first, x_node = D⁻¹·y_node − Lᵀ·x_parent.
+  /// A factor serves any number of solves (a chord iteration: new right-hand sides, one matrix).
+  void solve(std::uint32_t begin, std::uint32_t end) {
+    const auto& order = ordering_.order;
+    const auto& parent_of = ordering_.parent;
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const std::int32_t node = order[k], parent = parent_of[node];
+      if (parent < 0) continue;
+      if (node < body_count_) {
+        with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          const Eigen::Matrix<Scalar, m, BodySize> l = to_parent_[node].template topRows<m>();
+          work_[parent].template head<m>().noalias() -= l * work_[node];
+        });
+      } else {
+        with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          const Eigen::Matrix<Scalar, BodySize, m> l = to_parent_[node].template leftCols<m>();
           work_[parent].noalias() -= l * work_[node].template head<m>();
         });
       }
@@ -195,7 +230,6 @@ class TreeElimination {
         });
       }
     }
-    return definite;
   }
 
  private:

@@ -4,6 +4,7 @@
 // elimination tree and multipliers (DirectProjection).
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include "limber/kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/particles/joint_rows.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
 #include "limber/layouts/aligned_array.hpp"
 #include "limber/layouts/constraints/constraint_batches.hpp"
@@ -77,6 +79,60 @@ struct DirectProjection {
   double multiplier_time_step = 0;  ///< Δt the multipliers were computed with (warm start rescales by (Δt/this)²)
 };
 
+/// The exact joint-tree solve's structure (kernel/relaxation/joint_trees.hpp), built at compile;
+/// its per-solve arrays are scratch sized there, so nothing is allocated while stepping.
+struct JointTrees {
+  /// Most particles of one limb (head, tail, F⁺, F⁻, centre) and of one side of a point joint.
+  static constexpr int kLimbParticles = 5;
+  /// Bodies are state.limbs (rigid clusters of their particles: Δp, Δφ about the centre of
+  /// mass); constraints are the tree joints, one per pair of joined limbs (or limb and world).
+  TreeElimination<double, 6> elimination;
+  std::vector<std::array<std::uint32_t, kLimbParticles>> limb_particles;  ///< the null particle past the last
+  std::vector<std::uint8_t> limb_framed;  ///< carries F⁺, F⁻ (else a stick: on-axis particles only)
+  /// Per limb particle: its place in the limb's rest shape, in the limb's frame (v, w, u)
+  /// about its centre of mass (a stick: (0, 0, z) along u), m.
+  std::vector<std::array<Eigen::Vector3d, kLimbParticles>> rest_offset;
+  /// A tree joint: its limbs (−1: the world), its point constraint C = Σ c_k x_k over up to
+  /// 2·kLimbParticles particles (a world pin is a particle of inverse mass 0; no point part: the
+  /// null particle), and its hinge axis (align rows: −1 if none): t₁, t₂ ⟂ the axis in A's
+  /// frame (v, w, u) coordinates, e the axis in B's, C = (t₁·e, t₂·e).
+  struct Joint {
+    std::int32_t limb_a = -1, limb_b = -1;
+    std::array<std::uint32_t, 2 * kLimbParticles> particle{};
+    std::array<double, 2 * kLimbParticles> coefficient{};
+    bool point = false;
+    std::int32_t align_row = -1;
+    Eigen::Vector3d t1 = Eigen::Vector3d::Zero(), t2 = Eigen::Vector3d::Zero(), e = Eigen::Vector3d::Zero();
+    /// Its limits (swing, twist, hinge range): slots of `limits` (−1: none), rows of the active
+    /// set only while reached.
+    std::array<std::int32_t, 2> limit{-1, -1};
+    int rows() const { return (point ? 3 : 0) + (align_row >= 0 ? 2 : 0); }
+  };
+  std::vector<Joint> joints;
+  /// The tree joints' limit rows, one slot each (their directions and bounds, as the sweeps hold
+  /// them: joint_projection::measure reads them).
+  JointRowBatches<double> limits;
+  std::vector<JointRowKind> limit_kind;
+  /// What the sweeps leave to the tree: per distance constraint and per joint row, 1 if a tree
+  /// joint holds it (the loops' and the rows' of islands that cannot be solved stay 0).
+  std::vector<std::uint8_t> tree_constraint, tree_row;
+  /// Per island: its components (indices into elimination.ordering().components).
+  CompressedRows<std::uint32_t> island_components;
+  /// Scratch per solve: each limb's centre of mass (m), frame (v, w, u columns) and rigid
+  /// velocity (v of the centre, m/s; ω, rad/s), each joint's J blocks on A and B (rows × 6:
+  /// [linear | angular]).
+  std::vector<Eigen::Vector3d> centre;
+  std::vector<Eigen::Matrix<double, 6, 1>> rate;
+  std::vector<double> mass;                 ///< kg
+  std::vector<Eigen::Matrix3d> inertia;     ///< kg·m², about the centre (a stick's regularized)
+  /// Per joint: its active limits now and when its component was factored (bit k: limit k), and
+  /// its rows now; per component: factored this substep (begin_joint_trees clears it).
+  std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
+  std::vector<Eigen::Matrix3d> frame;
+  std::vector<Eigen::Matrix<double, 6, 6>> block_a, block_b;
+  bool active() const { return !joints.empty(); }
+};
+
 template <typename Scalar>
 struct RelaxationPlan {
   ConstraintBatches<Scalar> batches;
@@ -115,6 +171,8 @@ struct RelaxationPlan {
   std::vector<std::uint32_t> joint_row_order, joint_bucket;
   Scalar joint_step = 0;
   std::uint64_t joint_built_for = ~std::uint64_t{0};  ///< state.awake_generation the joint batches hold
+  /// The exact joint-tree solve (VerletOptions::joint_solve tree).
+  JointTrees joint_trees;
   /// Contact rows (kernel/particles/contact_rows.hpp), coloured and batched every substep.
   ContactRowBatches<Scalar> contact_batches;
 };

@@ -138,14 +138,17 @@ void build_joint_batches(VerletState<Scalar>& state) {
   const auto bucket_of = [&](std::size_t r) {
     return rows.colour[r] == kNoColour ? overflow : rows.colour[r] * kKinds + static_cast<std::size_t>(rows.rows[r].kind);
   };
+  // Rows of sleeping islands, and rows a joint tree holds (joint_trees.hpp), are left out.
+  const std::vector<std::uint8_t>& held = plan.joint_trees.tree_row;
+  const auto skipped = [&](std::size_t r) { return state.islands[rows.rows[r].island].sleeping || (!held.empty() && held[r]); };
   std::size_t awake = 0;
   for (std::size_t r = 0; r < rows.rows.size(); ++r) {
-    if (state.islands[rows.rows[r].island].sleeping) continue;
+    if (skipped(r)) continue;
     ++bucket[bucket_of(r) + 1], ++awake;
   }
   for (std::size_t k = 1; k < bucket.size(); ++k) bucket[k] += bucket[k - 1];
   for (std::size_t r = 0; r < rows.rows.size(); ++r) {
-    if (state.islands[rows.rows[r].island].sleeping) continue;
+    if (skipped(r)) continue;
     plan.joint_row_order[bucket[bucket_of(r)]++] = static_cast<std::uint32_t>(r);
   }
   // bucket[k] is now the end of bucket k; bucket k begins where k − 1 ended.

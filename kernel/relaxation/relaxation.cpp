@@ -16,6 +16,7 @@
 #include "limber/kernel/relaxation/distance_projection.hpp"
 #include "limber/kernel/relaxation/gauss_seidel.hpp"
 #include "limber/kernel/relaxation/joint_relaxation.hpp"
+#include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
 
@@ -58,7 +59,7 @@ void build_batches(VerletState<Scalar>& state, const std::vector<std::uint32_t>&
   const bool forward = state.options.direction == SweepDirection::pinned_first;
   const auto push_overflow = [&](std::uint32_t c) {
     const bool movable = inverse_mass[constraints.particle_i[c]] > 0 || inverse_mass[constraints.particle_j[c]] > 0;
-    if (state.constraint_colour[c] == kNoColour && movable) push(c);
+    if (state.constraint_colour[c] == kNoColour && movable && !held_by_joint_tree(state, c)) push(c);
   };
   for (std::size_t n = 0; n < islands.size(); ++n) {
     const Island& island = state.islands[islands[forward ? n : islands.size() - 1 - n]];
@@ -250,6 +251,7 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
     throw std::invalid_argument("options: threads must be 0 (automatic) or in [1, " + std::to_string(kMaxThreads) + "]");
   }
   prepare_joint_rows(state);
+  prepare_joint_trees(state);
   if (options.compliance != 0 && options.solver != RelaxationSolver::direct) {
     throw std::invalid_argument("options: compliance needs the direct solver (Gauss-Seidel and Jacobi sweeps treat every constraint as rigid)");
   }
@@ -282,11 +284,12 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
   std::vector<bool> movable(state.particles.size());
   for (std::size_t p = 0; p < movable.size(); ++p) movable[p] = state.particles.inverse_mass[p] > 0;
-  // Only constraints between two movable particles enter a colour: the others go to the overflow.
+  // Only constraints between two movable particles enter a colour: the others go to the overflow
+  // (and those a joint tree holds, to neither).
   std::vector<std::uint32_t> order;
   order.reserve(constraints.size());
   for (std::uint32_t c = 0; c < constraints.size(); ++c) {
-    if (movable[constraints.particle_i[c]] && movable[constraints.particle_j[c]]) order.push_back(c);
+    if (movable[constraints.particle_i[c]] && movable[constraints.particle_j[c]] && !held_by_joint_tree(state, c)) order.push_back(c);
   }
   ConstraintColouring colouring =
       colour_constraints({constraints.particle_i.data(), constraints.size()},
@@ -317,8 +320,9 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   if (threads == 1) plan.parallel_minimum_slots = ~std::uint32_t{0};
   plan.layout = options.layout;
   if (options.layout == ParticleLayout::automatic) {
-    // Joint rows read and write the SoA arrays.
-    plan.layout = options.long_range_attachments || !state.joint_rows.empty() ? ParticleLayout::soa : automatic_layout(state);
+    // Joint rows and trees read and write the SoA arrays.
+    const bool soa = options.long_range_attachments || !state.joint_rows.empty() || plan.joint_trees.active();
+    plan.layout = soa ? ParticleLayout::soa : automatic_layout(state);
   }
   plan.built_for = ~std::uint64_t{0};
   with_interleaved(state, [&](auto& store) {
@@ -349,6 +353,7 @@ void begin_relaxation(VerletState<Scalar>& state, double dt) {
   }
   if (uses_rattle(state)) store_gradients(state, previous_positions(state.particles));
   if (state.options.solver == RelaxationSolver::direct) begin_direct_projection(state, dt);
+  if (plan.joint_trees.active()) begin_joint_trees(state);
 }
 
 template <typename Scalar>

@@ -8,6 +8,7 @@
 #include "limber/kernel/collision/limb_contacts.hpp"
 #include "limber/kernel/relaxation/contact_relaxation.hpp"
 #include "limber/kernel/relaxation/direct_projection.hpp"
+#include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
@@ -305,6 +306,7 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
   const bool has_rows = !state.contact_rows.empty();
   const bool copies = !state.plane_contacts.empty() || !state.ball_contacts.empty() || has_rows || has_centres;
   const bool direct = state.options.solver == RelaxationSolver::direct;
+  const bool trees = state.plan.joint_trees.active();
   const int iterations = direct ? state.options.newton_iterations : relaxation.iterations;
   for (int iteration = 1; iteration <= iterations; ++iteration) {
     // The first sweep starts from the unconstrained prediction, far from the solution;
@@ -317,6 +319,9 @@ void relax_positions(VerletState<Scalar>& state, double dt, double budget_us, St
     if (has_ball) largest = std::max(largest, project_ball_contacts(state, dt));
     if (has_rows) largest = std::max(largest, contact_position_sweep(state));
     if (interleaved && copies) contact_particles_from_buffer(state);
+    // Last, so every sweep leaves the tree joints closed (joint_trees.hpp); the contacts it
+    // disturbs are the next sweep's.
+    if (trees) largest = std::max(largest, project_joint_trees(state));
     report.iterations += 1;
     report.largest_correction = largest;
     report.stop = RelaxationStop::iterations;
@@ -361,12 +366,14 @@ int project_velocities(VerletState<Scalar>& state, double dt, int sweeps) {
     return 0;
   }
   const bool has_centres = has_limb_centres(state);
+  const bool trees = state.plan.joint_trees.active();
   const double settled = resting_speed(state, dt);
   bool contact_acted = false;
   begin_velocity_projection(state);
   int sweep = 1;
   for (;; ++sweep) {
     double largest = velocity_sweep(state);
+    if (trees) largest = std::max(largest, project_joint_tree_velocities(state));
     if (has_centres) largest = std::max(largest, project_limb_centres(state, VelocityField<Scalar>{state.particles}));
     double contact_change = 0;
     if (contacts) contact_change = apply_restitution(state, dt);

@@ -58,6 +58,12 @@ TEST(Allocation, JointRowsAllocateNothing) {
   rattle.relaxation.projection = ProjectionRule::rattle, rattle.relaxation.substeps = 2, rattle.threads = 2;
   rattle.parallel_minimum_slots = 1;
   EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 600, false, rattle), 0);
+  // Joint trees (joint_trees.hpp), both rules: factors, active sets and Newton steps.
+  VerletOptions trees = testing::with_scene_settings(ragdoll);
+  trees.joint_solve = JointSolve::tree, trees.relaxation.substeps = 2;
+  EXPECT_EQ(allocations_while_stepping<float>(ragdoll.model, 600, false, trees), 0);
+  trees.relaxation.projection = ProjectionRule::rattle;
+  EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 600, false, trees), 0);
   const Scene active = testing::shipped_scene("active_ragdoll.json");
   World world(active.model, world_options(Method::particles, active.methods));
   world.step();

@@ -98,6 +98,11 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
                                 ->check(CLI::NonNegativeNumber);
   flags.warm_start_option =
       run.add_flag("--warm-start", flags.warm_start, "--solver direct: start from the previous step's multipliers");
+  run.add_option("--joint-solve", flags.joint_solve,
+                 "Joints: rows (projected one by one in the sweeps) or tree (each limb tree solved exactly after every sweep, "
+                 "limbs as rigid bodies)")
+      ->check(CLI::IsMember({"rows", "tree"}))
+      ->capture_default_str();
   run.add_flag("--long-range-attachments", flags.long_range_attachments,
                "Also hold every particle within the rest length of its path to the pin (Kim et al. 2012)");
   run.add_option("--sweep", flags.sweep,
@@ -126,7 +131,7 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   for (const char* name : {"--iterations", "--projection", "--substeps", "--tolerance", "--budget-us", "--over-relaxation",
                            "--solver", "--sweep", "--pinned",
                            "--threads", "--threading", "--layout", "--ordering", "--scalar", "--newton-iterations",
-                           "--compliance", "--warm-start", "--long-range-attachments"}) {
+                           "--compliance", "--warm-start", "--long-range-attachments", "--joint-solve"}) {
     flags.verlet_only_options.push_back(run.get_option(name));
   }
 }
@@ -259,6 +264,7 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
     }
   }
   options.order = flags.sweep == "sequential" ? SweepOrder::sequential : SweepOrder::coloured;
+  options.joint_solve = flags.joint_solve == "tree" ? JointSolve::tree : JointSolve::rows;
   options.direction = flags.pinned == "last" ? SweepDirection::pinned_last : SweepDirection::pinned_first;
   options.threads = flags.threads;
   options.threading = flags.threading == "parallel-for" ? Threading::parallel_for : Threading::workers;

@@ -1,0 +1,206 @@
+// The exact joint-tree solve (VerletOptions::joint_solve = JointSolve::tree,
+// kernel/relaxation/joint_trees.hpp): a ragdoll's joints and limits close in one solve whatever
+// its mass ratios, momentum is kept, and the solve changes no bits between the scalar and SIMD
+// paths or one and two threads.
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/relaxation/joint_trees.hpp"
+#include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/verlet/compile.hpp"
+#include "limber/kernel/verlet/step.hpp"
+#include "tests/support/models.hpp"
+
+namespace limber {
+namespace {
+
+// ragdoll.json's ragdoll in the air (no ground, no stairs, no ball), every limb 1 kg but the
+// upper torso, `heavy` kg: the mass ratio across its joints is `heavy`:1.
+Model ragdoll(double heavy, bool gravity = false) {
+  Model model = testing::load_shipped_scene("ragdoll.json");
+  model.colliders.clear();
+  model.balls.clear();
+  model.ground.reset();
+  model.settings.sleep.enabled = false;
+  if (!gravity) model.settings.gravity.setZero();
+  for (Body& body : model.bodies) {
+    body.mass = body.name == "upper_torso" ? heavy : 1.0;
+    body.point_masses.clear();
+  }
+  return model;
+}
+
+VerletOptions tree_options() {
+  VerletOptions options;
+  options.joint_solve = JointSolve::tree;
+  options.relaxation.iterations = 4;
+  return options;
+}
+
+// Moves every particle by up to `size` m in each coordinate: joints open and limbs bend.
+template <typename Scalar>
+void shake(VerletState<Scalar>& state, double size, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> offset(-size, size);
+  for (std::size_t p = 0; p < state.particles.size(); ++p) {
+    if (!(state.particles.inverse_mass[p] > 0)) continue;
+    const Eigen::Vector3d moved = state.particles.position(p).template cast<double>() + Eigen::Vector3d(offset(random), offset(random), offset(random));
+    state.particles.set_position(p, moved.template cast<Scalar>());
+  }
+}
+
+template <typename Scalar>
+Eigen::Vector3d centre_of_mass(const VerletState<Scalar>& state) {
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  double mass = 0;
+  for (std::size_t p = 0; p < state.particles.size(); ++p) {
+    const double m = 1.0 / static_cast<double>(state.particles.inverse_mass[p]);
+    moment += m * state.particles.position(p).template cast<double>(), mass += m;
+  }
+  return moment / mass;
+}
+
+// Each call takes Newton steps until one moves no particle by 1e-5 m (leaving ~1e-9 m): the
+// next call's steps converge quadratically from there, so two calls close the joints to rounding.
+TEST(JointTrees, TwoSolvesCloseARagdollsJointsAndLimitsToRoundingWhateverItsMassRatios) {
+  for (const double heavy : {1.0, 10.0, 100.0, 1000.0}) {
+    SCOPED_TRACE("mass ratio " + std::to_string(heavy) + ":1");
+    VerletState<double> state = compile<double>(ragdoll(heavy), tree_options());
+    ASSERT_TRUE(state.plan.joint_trees.active());
+    state.awake_islands = {0};
+    shake(state, 0.01, 7);
+    const Observation before = observe(state);
+    ASSERT_GT(before.max_joint_gap, 1e-2);  // the shake opened the joints by a tenth of a link or so
+    project_joint_trees(state);
+    EXPECT_LT(observe(state).max_joint_gap, 1e-6);  // 1e-7 m of a 0.1 m link: one solve is nearly there
+    project_joint_trees(state);
+    const Observation after = observe(state);
+    EXPECT_LT(after.max_joint_gap, 1e-10);
+    EXPECT_LT(after.joints.limit_violation, 1e-9);
+  }
+}
+
+TEST(JointTrees, APositionSolveKeepsTheCentreOfMass) {
+  VerletState<double> state = compile<double>(ragdoll(100), tree_options());
+  state.awake_islands = {0};
+  shake(state, 0.01, 11);
+  const Eigen::Vector3d before = centre_of_mass(state);
+  ASSERT_GT(project_joint_trees(state), 1e-3);
+  EXPECT_LT((centre_of_mass(state) - before).norm(), 1e-12);
+}
+
+TEST(JointTrees, AVelocitySolveKeepsLinearAndAngularMomentumAndLeavesTheJointsNoRate) {
+  VerletState<double> state = compile<double>(ragdoll(100), tree_options());
+  state.awake_islands = {0};
+  // Each limb a random rigid motion: v + ω × r on its particles.
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> draw(-1, 1);
+  const JointTrees& trees = state.plan.joint_trees;
+  for (std::size_t limb = 0; limb < trees.limb_particles.size(); ++limb) {
+    const Eigen::Vector3d v(draw(random), draw(random), draw(random)), omega(3 * draw(random), 3 * draw(random), 3 * draw(random));
+    const Eigen::Vector3d centre = state.particles.position(state.limbs.head[limb]);
+    for (const std::uint32_t p : trees.limb_particles[limb]) {
+      if (p == state.particles.null_particle()) break;
+      state.particles.set_velocity(p, v + omega.cross(state.particles.position(p) - centre));
+    }
+  }
+  const auto momenta = [&] {
+    Eigen::Vector3d linear = Eigen::Vector3d::Zero(), angular = Eigen::Vector3d::Zero();
+    for (std::size_t p = 0; p < state.particles.size(); ++p) {
+      const double m = 1.0 / state.particles.inverse_mass[p];
+      linear += m * state.particles.velocity(p), angular += m * state.particles.position(p).cross(state.particles.velocity(p));
+    }
+    return std::make_pair(linear, angular);
+  };
+  // Rounding's scale: Σ m|v| and Σ m|x||v|.
+  double linear_scale = 0, angular_scale = 0;
+  for (std::size_t p = 0; p < state.particles.size(); ++p) {
+    const double m = 1.0 / state.particles.inverse_mass[p], speed = state.particles.velocity(p).norm();
+    linear_scale += m * speed, angular_scale += m * speed * state.particles.position(p).norm();
+  }
+  const auto [linear, angular] = momenta();
+  ASSERT_GT(project_joint_tree_velocities(state), 0.1);
+  const auto [linear_after, angular_after] = momenta();
+  EXPECT_LT((linear_after - linear).norm(), 1e-13 * linear_scale);
+  EXPECT_LT((angular_after - angular).norm(), 1e-11 * angular_scale);
+  // Every zero-length joint's two particles now move alike.
+  for (const auto& [c, reference] : state.joint_constraints) {
+    const Eigen::Vector3d rate = state.particles.velocity(state.constraints.particle_i[c]) - state.particles.velocity(state.constraints.particle_j[c]);
+    EXPECT_LT(rate.norm(), 1e-12) << "constraint " << c;
+  }
+}
+
+TEST(JointTrees, AFallingRagdollFallsFreelyUnderBothRules) {
+  for (const ProjectionRule rule : {ProjectionRule::pbd, ProjectionRule::rattle}) {
+    SCOPED_TRACE(rule == ProjectionRule::pbd ? "pbd" : "rattle");
+    VerletOptions options = tree_options();
+    options.relaxation.projection = rule;
+    const Model model = ragdoll(30, true);
+    VerletState<double> state = compile<double>(model, options);
+    const Eigen::Vector3d start = observe(state).linear_momentum;
+    const int steps = 120;
+    for (int k = 0; k < steps; ++k) ASSERT_EQ(step(state, model.settings.time_step).status, StepStatus::ok);
+    const Observation seen = observe(state);
+    double mass = 0;
+    for (const Body& body : model.bodies) mass += body.mass;
+    const Eigen::Vector3d expected = start + mass * model.settings.gravity * steps * model.settings.time_step;
+    EXPECT_LT((seen.linear_momentum - expected).norm(), 1e-3 * expected.norm()) << seen.linear_momentum.transpose() << " vs " << expected.transpose();
+    EXPECT_LT(seen.max_joint_gap, 1e-9);
+  }
+}
+
+// A pile of four ragdolls for the bit tests: two layers falling onto the ground.
+Model four_ragdolls() {
+  SceneOptions scene;
+  scene.copies = 4;
+  Model model = testing::load_shipped_scene("ragdoll_pile.json", scene);
+  model.settings.sleep.enabled = false;
+  return model;
+}
+
+template <typename Scalar>
+std::vector<Scalar> run_positions(const Model& model, VerletOptions options, int steps) {
+  VerletState<Scalar> state = compile<Scalar>(model, options);
+  for (int k = 0; k < steps; ++k) step(state, model.settings.time_step);
+  std::vector<Scalar> out;
+  for (std::size_t p = 0; p < state.particles.size(); ++p) {
+    for (int i = 0; i < 3; ++i) out.push_back(state.particles.position(p)[i]);
+  }
+  return out;
+}
+
+TEST(JointTrees, ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads) {
+  const Model model = four_ragdolls();
+  VerletOptions options = tree_options();
+  options.relaxation.substeps = 2;
+  const std::vector<float> reference = run_positions<float>(model, options, 150);
+  VerletOptions scalar = options;
+  scalar.simd = false;
+  EXPECT_EQ(run_positions<float>(model, scalar, 150), reference);
+  VerletOptions threads = options;
+  threads.threads = 2;
+  threads.parallel_minimum_slots = 1;  // split every colour, so the second thread works
+  EXPECT_EQ(run_positions<float>(model, threads, 150), reference);
+}
+
+TEST(JointTrees, OptionsItCannotRunWithAreRefusedByName) {
+  const Model model = ragdoll(10);
+  for (const RelaxationSolver solver : {RelaxationSolver::jacobi, RelaxationSolver::direct}) {
+    VerletOptions options = tree_options();
+    options.solver = solver;
+    try {
+      compile<double>(model, options);
+      ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("Gauss-Seidel"), std::string::npos) << error.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace limber
