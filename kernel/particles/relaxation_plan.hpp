@@ -118,18 +118,18 @@ struct JointTrees {
   std::vector<std::uint8_t> tree_constraint, tree_row;
   /// Per island: its components (indices into elimination.ordering().components).
   CompressedRows<std::uint32_t> island_components;
-  /// Scratch per solve: each limb's centre of mass (m), frame (v, w, u columns) and rigid
-  /// velocity (v of the centre, m/s; ω, rad/s), each joint's J blocks on A and B (rows × 6:
-  /// [linear | angular]).
+  /// Scratch per solve. Per limb: its centre of mass (m), frame (v, w, u columns), mass (kg),
+  /// inertia about the centre (kg·m²; a stick's regularized) and rigid velocity (v of the
+  /// centre, m/s; ω, rad/s). Per joint: its J blocks on A and B (rows × 6: [linear | angular]),
+  /// its active limits now and when its component was factored (bit k: limit k), and its rows
+  /// now. Per component: factored this substep (begin_joint_trees clears it).
   std::vector<Eigen::Vector3d> centre;
-  std::vector<Eigen::Matrix<double, 6, 1>> rate;
-  std::vector<double> mass;                 ///< kg
-  std::vector<Eigen::Matrix3d> inertia;     ///< kg·m², about the centre (a stick's regularized)
-  /// Per joint: its active limits now and when its component was factored (bit k: limit k), and
-  /// its rows now; per component: factored this substep (begin_joint_trees clears it).
-  std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
   std::vector<Eigen::Matrix3d> frame;
+  std::vector<double> mass;
+  std::vector<Eigen::Matrix3d> inertia;
+  std::vector<Eigen::Matrix<double, 6, 1>> rate;
   std::vector<Eigen::Matrix<double, 6, 6>> block_a, block_b;
+  std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
   bool active() const { return !joints.empty(); }
 };
 

@@ -1,13 +1,13 @@
 #include "limber/kernel/relaxation/joint_trees.hpp"
 
-#include "limber/kernel/relaxation/joint_projection.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <tuple>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
+
+#include "limber/kernel/relaxation/joint_projection.hpp"
 
 namespace limber {
 namespace {

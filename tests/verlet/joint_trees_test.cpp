@@ -178,6 +178,7 @@ TEST(JointTrees, ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads) {
   const Model model = four_ragdolls();
   VerletOptions options = tree_options();
   options.relaxation.substeps = 2;
+  ASSERT_TRUE(compile<float>(model, options).plan.joint_trees.active());  // the trees are what is compared
   const std::vector<float> reference = run_positions<float>(model, options, 150);
   VerletOptions scalar = options;
   scalar.simd = false;
