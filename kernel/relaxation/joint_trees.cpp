@@ -296,15 +296,6 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
   trees.elimination.solve(component.begin, component.end);
 }
 
-// Calls solve(index) for every component of the awake islands' trees.
-template <typename Scalar, typename Solve>
-void for_each_awake_tree(VerletState<Scalar>& state, Solve&& solve) {
-  const JointTrees& trees = state.plan.joint_trees;
-  for (const std::uint32_t island : state.awake_islands) {
-    for (const std::uint32_t index : trees.island_components.row(island)) solve(index);
-  }
-}
-
 // Calls visit(limb) for every limb of `component`.
 template <typename Visit>
 void for_each_limb(const JointTrees& trees, const TreeOrdering::Component& component, Visit&& visit) {
@@ -549,46 +540,82 @@ void begin_joint_trees(VerletState<Scalar>& state) {
   std::fill(state.plan.joint_trees.factored.begin(), state.plan.joint_trees.factored.end(), std::uint8_t{0});
 }
 
+namespace {
+
+// Newton (chord) steps of one component's tree on the positions; returns the largest move, m.
 template <typename Scalar>
-double project_joint_trees(VerletState<Scalar>& state) {
+double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
   JointTrees& trees = state.plan.joint_trees;
-  if (!trees.active()) return 0;
+  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   double largest = 0;
-  for_each_awake_tree(state, [&](std::uint32_t index) {
-    const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-    for (int newton = 0; newton < kNewtonSteps; ++newton) {
-      if (newton > 0) trees.factored[index] = 0;
-      solve_component(state, trees, index, false);
-      double moved = 0;
-      for_each_limb(trees, component, [&](std::size_t limb) { moved = std::max(moved, move_limb(state, trees, limb)); });
-      largest = std::max(largest, moved);
-      if (moved < kNewtonMove) break;
+  for (int newton = 0; newton < kNewtonSteps; ++newton) {
+    if (newton > 0) trees.factored[index] = 0;
+    solve_component(state, trees, index, false);
+    double moved = 0;
+    for_each_limb(trees, component, [&](std::size_t limb) { moved = std::max(moved, move_limb(state, trees, limb)); });
+    largest = std::max(largest, moved);
+    if (moved < kNewtonMove) break;
+  }
+  return largest;
+}
+
+// One component's tree on the velocities; returns the largest |Δv|, m/s.
+template <typename Scalar>
+double solve_velocities(VerletState<Scalar>& state, std::uint32_t index) {
+  JointTrees& trees = state.plan.joint_trees;
+  const std::uint32_t null_particle = state.particles.null_particle();
+  solve_component(state, trees, index, true);
+  double largest = 0;
+  for_each_limb(trees, trees.elimination.ordering().components[index], [&](std::size_t limb) {
+    const Vector6& change = trees.elimination.work(limb);
+    for (const std::uint32_t p : trees.limb_particles[limb]) {
+      if (p == null_particle) break;
+      const Eigen::Vector3d r = state.particles.position(p).template cast<double>() - trees.centre[limb];
+      const Eigen::Vector3d dv = change.head<3>() + change.tail<3>().cross(r);
+      largest = std::max(largest, dv.norm());
+      state.particles.set_velocity(p, (state.particles.velocity(p).template cast<double>() + dv).template cast<Scalar>());
     }
   });
   return largest;
 }
 
+// The awake islands' trees as tasks, one an island, on the relaxation's threads: islands share
+// no limb, particle, joint or elimination node, so any split gives the same bits.
+template <typename Scalar>
+struct IslandStage {
+  VerletState<Scalar>* state;
+  bool velocities;
+  static double run(const void* context, std::size_t task) {
+    const auto& stage = *static_cast<const IslandStage*>(context);
+    VerletState<Scalar>& state = *stage.state;
+    double largest = 0;
+    for (const std::uint32_t index : state.plan.joint_trees.island_components.row(state.awake_islands[task])) {
+      largest = std::max(largest, stage.velocities ? solve_velocities(state, index) : solve_positions(state, index));
+    }
+    return largest;
+  }
+};
+
+template <typename Scalar>
+double solve_awake_islands(VerletState<Scalar>& state, bool velocities) {
+  const IslandStage<Scalar> stage{&state, velocities};
+  const std::size_t count = state.awake_islands.size();
+  if (joint_trees_on_threads(state.plan) && count > 1) return state.plan.runner->run(count, &IslandStage<Scalar>::run, &stage);
+  double largest = 0;
+  for (std::size_t task = 0; task < count; ++task) largest = std::max(largest, IslandStage<Scalar>::run(&stage, task));
+  return largest;
+}
+
+}  // namespace
+
+template <typename Scalar>
+double project_joint_trees(VerletState<Scalar>& state) {
+  return state.plan.joint_trees.active() ? solve_awake_islands(state, false) : 0.0;
+}
+
 template <typename Scalar>
 double project_joint_tree_velocities(VerletState<Scalar>& state) {
-  JointTrees& trees = state.plan.joint_trees;
-  if (!trees.active()) return 0;
-  double largest = 0;
-  const std::uint32_t null_particle = state.particles.null_particle();
-  for_each_awake_tree(state, [&](std::uint32_t index) {
-    solve_component(state, trees, index, true);
-    const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-    for_each_limb(trees, component, [&](std::size_t limb) {
-      const Vector6& change = trees.elimination.work(limb);
-      for (const std::uint32_t p : trees.limb_particles[limb]) {
-        if (p == null_particle) break;
-        const Eigen::Vector3d r = state.particles.position(p).template cast<double>() - trees.centre[limb];
-        const Eigen::Vector3d dv = change.head<3>() + change.tail<3>().cross(r);
-        largest = std::max(largest, dv.norm());
-        state.particles.set_velocity(p, (state.particles.velocity(p).template cast<double>() + dv).template cast<Scalar>());
-      }
-    });
-  });
-  return largest;
+  return state.plan.joint_trees.active() ? solve_awake_islands(state, true) : 0.0;
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                               \

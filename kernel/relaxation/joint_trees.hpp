@@ -47,13 +47,21 @@ bool held_by_joint_tree(const VerletState<Scalar>& state, std::uint32_t constrai
   return !held.empty() && held[constraint];
 }
 
+/// Whether the trees run on the relaxation's threads: one task per awake island (islands share
+/// nothing a solve writes, so 1 and 2 threads give the same bits), when the runner has more
+/// than one thread.
+template <typename Scalar>
+bool joint_trees_on_threads(const RelaxationPlan<Scalar>& plan) {
+  return plan.joint_trees.active() && plan.runner.operator->() != nullptr && plan.runner->threads() > 1;
+}
+
 /// Starts a substep: the trees are factored afresh at their next solve (begin_relaxation).
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state);
 
-/// Newton (chord) steps of every awake island's joint trees on the positions, until a step moves
-/// no particle by 1e-5 m or more (at most 4; the first reuses the substep's factor while the
-/// active set stays). Returns the largest
+/// Newton (chord) steps of every awake island's joint trees on the positions (an island a task
+/// when joint_trees_on_threads), until a step moves no particle by 1e-5 m or more (at most 4;
+/// the first reuses the substep's factor while the active set stays). Returns the largest
 /// particle displacement made, m (0 when there are no trees).
 template <typename Scalar>
 double project_joint_trees(VerletState<Scalar>& state);

@@ -30,6 +30,8 @@ using coloured::kParticlesPerTask;
 // for the second core from ~12k slots; chains of 10^4 links (5k per colour) ran 1.6x slower
 // on two threads, 10^5 links 1.9x faster.
 constexpr std::uint32_t kDefaultParallelMinimumSlots = 16384;
+// Tree components (a ragdoll is one) from which automatic threads start for the joint trees.
+constexpr std::size_t kParallelMinimumTreeIslands = 8;
 
 // Fills the batches with the constraints of `islands` (state.awake_islands when stepping).
 template <typename Scalar>
@@ -187,7 +189,7 @@ void begin_helpers(RelaxationPlan<Scalar>& plan) {
   for (std::size_t k = 0; k < plan.joint_batches.colour_count(); ++k) {
     parallel = parallel || plan.joint_batches.colour_begin[k + 1] - plan.joint_batches.colour_begin[k] >= plan.parallel_minimum_slots;
   }
-  if (parallel) plan.runner->begin();
+  if (parallel || joint_trees_on_threads(plan)) plan.runner->begin();
 }
 
 // The previous positions and the velocities as the coloured kernels read them (SoA).
@@ -312,7 +314,10 @@ void prepare_relaxation_plan(VerletState<Scalar>& state) {
   for (const std::uint8_t colour : state.constraint_colour) {
     if (colour != kNoColour) ++colour_size[colour];
   }
-  const bool big = std::any_of(colour_size.begin(), colour_size.end(), [&](std::uint32_t n) { return n >= plan.parallel_minimum_slots; });
+  // A crowd of joint trees (kParallelMinimumTreeIslands islands or more) is big as well: its
+  // islands are the tasks (joint_trees.hpp).
+  const bool crowd = plan.joint_trees.island_components.entries.size() >= kParallelMinimumTreeIslands;
+  const bool big = crowd || std::any_of(colour_size.begin(), colour_size.end(), [&](std::uint32_t n) { return n >= plan.parallel_minimum_slots; });
   const int threads = options.threads > 0 ? options.threads
                       : big               ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency()))
                                           : 1;

@@ -184,9 +184,14 @@ TEST(JointTrees, ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads) {
   scalar.simd = false;
   EXPECT_EQ(run_positions<float>(model, scalar, 150), reference);
   VerletOptions threads = options;
-  threads.threads = 2;
-  threads.parallel_minimum_slots = 1;  // split every colour, so the second thread works
+  threads.threads = 2;  // each island's trees a task (joint_trees_on_threads)
+  threads.parallel_minimum_slots = 1;  // and every colour split, so the second thread works
+  ASSERT_TRUE(joint_trees_on_threads(compile<float>(model, threads).plan));
   EXPECT_EQ(run_positions<float>(model, threads, 150), reference);
+  // The rattle rule's velocity stage solves the trees on the threads too.
+  VerletOptions rattle = options, rattle_threads = threads;
+  rattle.relaxation.projection = rattle_threads.relaxation.projection = ProjectionRule::rattle;
+  EXPECT_EQ(run_positions<float>(model, rattle_threads, 150), run_positions<float>(model, rattle, 150));
 }
 
 TEST(JointTrees, OptionsItCannotRunWithAreRefusedByName) {

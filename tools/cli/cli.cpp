@@ -22,6 +22,7 @@
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/kernel/lagrange/step.hpp"
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
@@ -92,24 +93,27 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
                   direct.elimination.ordering().loop_constraints.size());
   }
   std::vector<std::size_t> sizes(state.colour_count, 0);
-  std::size_t overflow = 0;
+  std::size_t overflow = 0, held = 0;
   for (std::size_t c = 0; c < state.constraints.size(); ++c) {
     const std::uint8_t colour = state.constraint_colour[c];
     const bool movable = state.particles.inverse_mass[state.constraints.particle_i[c]] > 0 ||
                          state.particles.inverse_mass[state.constraints.particle_j[c]] > 0;
     if (colour != kNoColour) ++sizes[colour];
+    else if (held_by_joint_tree(state, static_cast<std::uint32_t>(c))) ++held;
     else if (movable) ++overflow;
   }
+  const JointTrees& trees = state.plan.joint_trees;
+  const std::string in_trees = trees.active() ? format(", %zu held by the joint trees of %zu islands", held, trees.island_components.entries.size()) : "";
   std::string batches;
   for (std::size_t k = 0; k < sizes.size() && k < 8; ++k) batches += (k ? " " : "") + std::to_string(sizes[k]);
   if (sizes.size() > 8) batches += " …";
   if (flags.sweep == "sequential") return format("solver      sequential gauss-seidel, pinned end %s, scalar, 1 thread\n", flags.pinned.c_str());
   const int threads = state.plan.runner->threads();
   const std::string threading = threads == 1 ? "1 thread"
-      : format("%d threads (%s) on colours of %u+ constraints", threads, flags.threading.c_str(),
-               state.plan.parallel_minimum_slots);
-  return format("solver      %s by colour: %u colours (batches %s), %zu overflow; pinned end %s; %s, %s layout, %s\n",
-                flags.solver.c_str(), state.colour_count, batches.c_str(), overflow, flags.pinned.c_str(),
+      : format("%d threads (%s) on %scolours of %u+ constraints", threads, flags.threading.c_str(),
+               joint_trees_on_threads(state.plan) ? "the joint trees' islands and " : "", state.plan.parallel_minimum_slots);
+  return format("solver      %s by colour: %u colours (batches %s), %zu overflow%s; pinned end %s; %s, %s layout, %s\n",
+                flags.solver.c_str(), state.colour_count, batches.c_str(), overflow, in_trees.c_str(), flags.pinned.c_str(),
                 flags.scalar ? "scalar" : "SIMD", layout_name(state.plan.layout), threading.c_str());
 }
 
