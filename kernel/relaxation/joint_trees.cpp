@@ -150,15 +150,16 @@ void load_limb(VerletState<Scalar>& state, JointTrees& trees, std::size_t limb, 
   trees.mass[limb] = total, trees.inertia[limb] = inertia;
 }
 
-// Writes joint j's J blocks into the scratch (if `blocks`), its active limits into trees.active_limits[j] (the limits
-// reached: violated, or in the velocity stage at their bound and turning past it; bit k for
-// limit k) and returns its rows' C (position level; a limit's C is its violation).
+// Writes joint j's J blocks into the scratch (read only if its component is factored afresh),
+// its active limits into trees.active_limits[j] (the limits reached: violated, or in the
+// velocity stage at their bound and turning past it; bit k for limit k) and returns its rows'
+// C (position level; a limit's C is its violation).
 template <typename Scalar>
-Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std::size_t j, bool velocities, bool blocks) {
+Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std::size_t j, bool velocities) {
   const JointTrees::Joint& joint = trees.joints[j];
   Matrix6& block_a = trees.block_a[j];
   Matrix6& block_b = trees.block_b[j];
-  if (blocks) block_a.setZero(), block_b.setZero();
+  block_a.setZero(), block_b.setZero();
   Vector6 c = Vector6::Zero();
   int row = 0;
   if (joint.point) {
@@ -173,7 +174,7 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
         value += joint.coefficient[k] * x;
         if (limb >= 0) sum += joint.coefficient[k], lever += joint.coefficient[k] * (x - trees.centre[limb]);
       }
-      if (limb < 0 || !blocks) continue;
+      if (limb < 0) continue;
       Matrix6& block = side == 0 ? block_a : block_b;
       block.block<3, 3>(0, 0) = sum * Eigen::Matrix3d::Identity();
       block.block<3, 3>(0, 3) = -skew(lever);
@@ -187,7 +188,7 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
     for (const Eigen::Vector3d& t_local : {joint.t1, joint.t2}) {
       const Eigen::Vector3d t = frame_a * t_local;
       c[row] = t.dot(e);
-      if (blocks) block_a.block<1, 3>(row, 3) = t.cross(e).transpose(), block_b.block<1, 3>(row, 3) = e.cross(t).transpose();
+      block_a.block<1, 3>(row, 3) = t.cross(e).transpose(), block_b.block<1, 3>(row, 3) = e.cross(t).transpose();
       ++row;
     }
   }
@@ -210,7 +211,7 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
     if (!active || row >= 6) continue;
     active_limits |= static_cast<std::uint8_t>(1u << k);
     c[row] = violation;
-    if (blocks) block_a.block<1, 3>(row, 3) = -axis.transpose(), block_b.block<1, 3>(row, 3) = axis.transpose();
+    block_a.block<1, 3>(row, 3) = -axis.transpose(), block_b.block<1, 3>(row, 3) = axis.transpose();
     ++row;
   }
   trees.active_limits[j] = active_limits;
@@ -262,7 +263,7 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
       continue;
     }
     const auto j = static_cast<std::size_t>(node - limbs);
-    const Vector6 c = assemble_joint(state, trees, j, velocities, velocities);
+    const Vector6 c = assemble_joint(state, trees, j, velocities);
     refactor = refactor || trees.active_limits[j] != trees.factored_limits[j];
     Vector6& rhs = trees.elimination.work(static_cast<std::size_t>(node));
     if (!velocities) {
@@ -278,7 +279,6 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
       const std::int32_t node = order[k];
       Matrix6& block = trees.elimination.diagonal(static_cast<std::size_t>(node));
       block.setZero();
-      if (node >= limbs && !velocities) assemble_joint(state, trees, static_cast<std::size_t>(node - limbs), false, true);
       if (node < limbs) {
         block.topLeftCorner<3, 3>() = trees.mass[node] * Eigen::Matrix3d::Identity();
         block.bottomRightCorner<3, 3>() = trees.inertia[node];

@@ -341,7 +341,14 @@ template <typename Scalar>
 void begin_relaxation(VerletState<Scalar>& state, double dt) {
   RelaxationPlan<Scalar>& plan = state.plan;
   plan.awake_constraints = 0;
-  for (std::uint32_t k : state.awake_islands) plan.awake_constraints += state.islands[k].constraint_end - state.islands[k].constraint_begin;
+  for (std::uint32_t k : state.awake_islands) {
+    const Island& island = state.islands[k];
+    plan.awake_constraints += island.constraint_end - island.constraint_begin;
+    // What the joint trees hold, the sweeps do not project.
+    for (std::uint32_t c = island.constraint_begin; c < island.constraint_end && plan.joint_trees.active(); ++c) {
+      plan.awake_constraints -= held_by_joint_tree(state, c) ? 1 : 0;
+    }
+  }
   // Joint rows first: whether to wake the helpers depends on their colours too.
   if (!state.joint_rows.empty()) {
     if (plan.joint_built_for != state.awake_generation) build_joint_batches(state), plan.joint_built_for = state.awake_generation;

@@ -194,6 +194,16 @@ TEST(JointTrees, ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads) {
   EXPECT_EQ(run_positions<float>(model, rattle_threads, 150), run_positions<float>(model, rattle, 150));
 }
 
+TEST(JointTrees, TheSweepsProjectNothingTheTreesHold) {
+  // The ragdolls' links, limb centres and joints are all the trees': the work counter of the
+  // sweeps (constraint projections) stays at zero while the trees keep the joints.
+  const Model model = four_ragdolls();
+  VerletState<double> state = compile<double>(model, tree_options());
+  for (int k = 0; k < 20; ++k) step(state, model.settings.time_step);
+  EXPECT_EQ(state.counters.constraint_projections, 0u);
+  EXPECT_LT(observe(state).max_joint_gap, 1e-6);
+}
+
 TEST(JointTrees, OptionsItCannotRunWithAreRefusedByName) {
   const Model model = ragdoll(10);
   for (const RelaxationSolver solver : {RelaxationSolver::jacobi, RelaxationSolver::direct}) {
