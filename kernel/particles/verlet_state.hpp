@@ -85,7 +85,8 @@ struct VerletOptions {
   ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
   /// Threads for relaxation, the calling one included, in [0, kMaxThreads]: 1 (the default)
   /// starts none; 0 takes the hardware's, and only when some colour is big enough to pay for them
-  /// (parallel_minimum_slots); a small scene then starts none either.
+  /// (parallel_minimum_slots) or the joint trees have 8 islands or more (a crowd: an island is a
+  /// task); a small scene then starts none either.
   int threads = 1;
   Threading threading = Threading::workers;  ///< how a colour is split across threads
   /// Threading::tasks: the engine's task system (or tbb_task_system(arena)); `threads` then only
