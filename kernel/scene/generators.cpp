@@ -212,22 +212,18 @@ double footprint(const Model& model) {
 
 double vertical_extent(const Model& model) { return model.bodies.empty() ? 0.0 : body_bounds(model).sizes().z(); }
 
-Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
-                std::size_t layers, double layer_height) {
-  const std::string at(path);
-  require_count(count, 1, at + ".count");
-  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
+namespace {
+
+// copies_of and copies_in_layers_of: `count` copies, `per_layer` to a lattice, lattices from the bottom up.
+Model lay_copies(const Model& model, std::size_t count, double spacing, std::string_view prefix, const std::string& at,
+                 std::size_t per_layer, double layer_height) {
   const double least = footprint(model);
   require_finite(spacing, at + ".spacing");
   if (!(spacing >= least)) {
     fail(at + ".spacing", "must be >= " + format_number(least) +
                               " (the bodies' footprint in x and y, m) so copies do not overlap, got " + format_number(spacing));
   }
-  require_count(layers, 1, at + ".layers");
-  if (layers > count) {
-    fail(at + ".layers", "must be <= count (" + std::to_string(count) + "), got " + std::to_string(layers));
-  }
-  if (layers > 1) {
+  if (count > per_layer) {
     const double tallest = vertical_extent(model);
     require_finite(layer_height, at + ".layer_height");
     if (!(layer_height >= tallest)) {
@@ -235,7 +231,6 @@ Model copies_of(const Model& model, std::size_t count, double spacing, std::stri
                                      " (the bodies' height, m) so layers do not overlap, got " + format_number(layer_height));
     }
   }
-  const std::size_t per_layer = (count + layers - 1) / layers;
   std::size_t per_row = 1;
   while (per_row * per_row < per_layer) ++per_row;
 
@@ -252,6 +247,29 @@ Model copies_of(const Model& model, std::size_t count, double spacing, std::stri
     append_model(copies, model, std::string(prefix) + std::to_string(k) + ".", offset);
   }
   return copies;
+}
+
+}  // namespace
+
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                std::size_t layers, double layer_height) {
+  const std::string at(path);
+  require_count(count, 1, at + ".count");
+  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
+  require_count(layers, 1, at + ".layers");
+  if (layers > count) {
+    fail(at + ".layers", "must be <= count (" + std::to_string(count) + "), got " + std::to_string(layers));
+  }
+  return lay_copies(model, count, spacing, prefix, at, (count + layers - 1) / layers, layer_height);
+}
+
+Model copies_in_layers_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                          std::size_t per_layer, double layer_height) {
+  const std::string at(path);
+  require_count(count, 1, at + ".count");
+  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
+  require_count(per_layer, 1, at + ".per_layer");
+  return lay_copies(model, count, spacing, prefix, at, per_layer, layer_height);
 }
 
 TriangleMesh make_stairs_mesh(const StairsSpec& spec) {

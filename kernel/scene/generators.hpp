@@ -122,6 +122,14 @@ double vertical_extent(const Model& model);
 Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
                 std::size_t layers = 1, double layer_height = 0);
 
+/// `count` ≥ 1 copies of `model` in layers of `per_layer` ≥ 1 copies each, as many layers as the
+/// count needs (a crowd that grows upward with its count, as a rain of bodies does): the lattices,
+/// offsets, names and staggering of copies_of with m = `per_layer`. `layer_height` (m) must be at
+/// least vertical_extent(model) when count > per_layer. Errors name `path`.count, `path`.spacing,
+/// `path`.per_layer and `path`.layer_height.
+Model copies_in_layers_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                          std::size_t per_layer, double layer_height);
+
 /// copies_of the embedded humanoid scene (scene_file.hpp) with prefix "h", its ball and bounds
 /// left out; `spacing` must be at least the humanoid's footprint (≈ 0.2 m). Its ground and
 /// settings are kept — including sleep.start_asleep: with no ball, the copies start asleep and

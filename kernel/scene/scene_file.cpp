@@ -764,20 +764,27 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
 
   // Copies last, of everything above (generators.hpp's copies_of; the balls and ground stay as they are).
   // --copies on a scene without "copies" lays them out 1 m apart beyond their footprint.
-  long copies = 1, layers = 1;
+  long copies = 1, layers = 1, per_layer = 0;  // per_layer 0: the copies spread over `layers`
   double spacing = footprint(model) + 1.0, layer_height = 0;
   if (const Json* copies_json = root.find("copies")) {
     const Object object(*copies_json, "copies");
-    object.allow_only({"count", "spacing", "layers", "layer_height"});
+    object.allow_only({"count", "spacing", "layers", "per_layer", "layer_height"});
     copies = object.integer("count");
     require_at_least(copies, 1, object.path("count"));
     spacing = object.number("spacing");
+    if (object.find("layers") && object.find("per_layer")) {
+      fail(object.path("per_layer"), "is used only without \"layers\" (give one of them)");
+    }
     if (object.find("layers")) {
       layers = object.integer("layers");
       require_at_least(layers, 1, object.path("layers"));
       layer_height = object.number("layer_height");  // required with layers
+    } else if (object.find("per_layer")) {
+      per_layer = object.integer("per_layer");
+      require_at_least(per_layer, 1, object.path("per_layer"));
+      layer_height = object.number("layer_height");  // required with per_layer
     } else if (object.find("layer_height")) {
-      fail(object.path("layer_height"), "is used only with \"layers\"");
+      fail(object.path("layer_height"), "is used only with \"layers\" or \"per_layer\"");
     }
   }
   if (options.copies) {
@@ -785,7 +792,10 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
     copies = *options.copies;
   }
   require_generated(double(copies) * double(model.bodies.size()), "copies.count", options);
-  if (copies > 1) {
+  if (per_layer > 0 && copies > 1) {
+    model = copies_in_layers_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies", static_cast<std::size_t>(per_layer),
+                                layer_height);
+  } else if (copies > 1) {
     model = copies_of(model, static_cast<std::size_t>(copies), spacing, "c", "copies", static_cast<std::size_t>(layers), layer_height);
   } else if (layers > 1) {
     fail("copies.layers", "must be <= count (1), got " + std::to_string(layers));

@@ -123,6 +123,9 @@
 //                                              m above the one below (≥ the bodies' height), odd ones
 //                                              half a spacing across (a pile to drop; generators.hpp's
 //                                              copies_of). Colliders, ground and balls stay as given.
+//     "per_layer": 100, "layer_height": 1.4    optional, together, in place of layers: lattices of
+//                                              per_layer (integer ≥ 1) copies, as many as the count
+//                                              needs, so --copies grows the crowd upward (copies_in_layers_of)
 //     A scene may generate at most 10⁷ bodies (chain, tree, grid and copies together; SceneOptions::max_bodies).
 //   "colliders": [ {                           optional (none): static level geometry (model.hpp's StaticCollider)
 //       "name": "bar",                         required, unique, non-empty, no body's name

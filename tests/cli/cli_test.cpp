@@ -142,6 +142,14 @@ TEST(Cli, EverySolverPathGivesTheSameSummaryOfAChain) {
     EXPECT_EQ(physics(r.out), physics(reference.out)) << variant[0] << " " << variant[1];
   }
 }
+TEST(Cli, TheRainRunsItsLowestLayerOntoTheStairsAndTheGround) {
+  // 30 copies: the first three rows of the lowest layer, 0.1 m above the stairs' top, land within 120 steps.
+  const Result r = run({"run", scene("rain.json"), "--copies", "30", "--steps", "120", "--iterations", "20", "--joint-solve", "tree"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("390 limbs, 360 joints"));
+  EXPECT_THAT(r.out, Not(HasSubstr("contacts    0 at end")));
+}
+
 TEST(Cli, ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes) {
   // 32 self-colliding ragdolls: by step 120 hundreds of contact rows are coloured and swept.
   const auto trajectory = [](const std::vector<std::string>& variant, const std::string& name) {

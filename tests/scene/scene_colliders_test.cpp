@@ -294,11 +294,36 @@ TEST(SceneCopies, LayersStackTheLatticesAndKeepOneSetOfColliders) {
   EXPECT_EQ(flat.bodies[6].position, Vector3(0, 2, 1.3));
 }
 
+TEST(SceneCopies, PerLayerFillsFullLatticesFromTheBottomWhateverTheCount) {
+  // 3 to a layer (2 by 2 lattices): copy 3 opens the second layer, copy 6 the third.
+  const Model model = load(copies(R"({"count": 7, "spacing": 1, "per_layer": 3, "layer_height": 0.5})"));
+  ASSERT_EQ(model.bodies.size(), 7u);
+  EXPECT_EQ(model.bodies[2].position, Vector3(0, 1, 1.3));
+  EXPECT_EQ(model.bodies[3].position, Vector3(0.5, 0.5, 1.8));
+  EXPECT_EQ(model.bodies[6].position, Vector3(0, 0, 2.3));
+  // A count from --copies keeps the layers' size: 2 copies are one layer's first two.
+  SceneOptions two;
+  two.copies = 2;
+  const Model fewer = load_scene_text(copies(R"({"count": 7, "spacing": 1, "per_layer": 3, "layer_height": 0.5})"), "test.json", two).model;
+  ASSERT_EQ(fewer.bodies.size(), 2u);
+  EXPECT_EQ(fewer.bodies[1].position, Vector3(1, 0, 1.3));
+  // So does one copy, where "layers" would refuse a count below it.
+  two.copies = 1;
+  EXPECT_EQ(load_scene_text(copies(R"({"count": 7, "spacing": 1, "per_layer": 3, "layer_height": 0.5})"), "test.json", two).model.bodies.size(), 1u);
+}
+
 TEST(SceneCopies, BadLayersAreNamed) {
   EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 0, "layer_height": 1})")), "test.json: copies.layers: must be >= 1, got 0");
   EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 5, "layer_height": 1})")), "test.json: copies.layers: must be <= count (4), got 5");
   EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 2})")), "test.json: copies.layer_height: missing required field");
-  EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layer_height": 1})")), "test.json: copies.layer_height: is used only with \"layers\"");
+  EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layer_height": 1})")),
+            "test.json: copies.layer_height: is used only with \"layers\" or \"per_layer\"");
+  EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 2, "per_layer": 2, "layer_height": 1})")),
+            "test.json: copies.per_layer: is used only without \"layers\" (give one of them)");
+  EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "per_layer": 0, "layer_height": 1})")), "test.json: copies.per_layer: must be >= 1, got 0");
+  EXPECT_EQ(load_error(copies(R"({"count": 4, "spacing": 1, "per_layer": 2})")), "test.json: copies.layer_height: missing required field");
+  EXPECT_THAT(load_error(copies(R"({"count": 4, "spacing": 1, "per_layer": 2, "layer_height": 0.2})")),
+              StartsWith("test.json: copies.layer_height: must be >= 0.4"));
   EXPECT_THAT(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 2, "layer_height": 0.2})")),
               StartsWith("test.json: copies.layer_height: must be >= 0.4"));  // 0.44 m, the limb's height
   EXPECT_THAT(load_error(copies(R"({"count": 4, "spacing": 1, "layers": 2, "layer_height": 0.2})")),
@@ -361,6 +386,47 @@ TEST(PileScene, ThirtyTwoRagdollsStartApartAboveTheStairsInEveryVariant) {
       }
     }
   }
+}
+
+TEST(RainScene, ThreeHundredRagdollsStartApartAboveTheStairsTopTumblingAThirdOfThemOverTheStairs) {
+  const Model ragdoll = shipped_scene("ragdoll.json").model;
+  for (const char* variant : {"thin", "wide"}) {
+    SceneOptions options;
+    options.variant = variant;
+    const Model model = shipped_scene("rain.json", options).model;
+    ASSERT_EQ(model.bodies.size(), 300 * ragdoll.bodies.size()) << variant;
+    EXPECT_EQ(model.joints.size(), 300 * ragdoll.joints.size());
+    ASSERT_EQ(model.colliders.size(), 1u);
+    double top = -1;
+    Eigen::AlignedBox3d stairs_box;
+    for (const Vector3& vertex : model.colliders[0].mesh.vertices) stairs_box.extend(vertex), top = std::max(top, vertex.z());
+    const std::vector<Eigen::AlignedBox3d> boxes = copy_boxes(model);
+    ASSERT_EQ(boxes.size(), 300u);
+    std::size_t over_stairs = 0;
+    for (std::size_t a = 0; a < boxes.size(); ++a) {
+      EXPECT_GT(boxes[a].min().z(), top) << variant << " copy " << a;
+      const Eigen::Vector2d centre = boxes[a].center().head<2>();
+      over_stairs += (centre.array() >= stairs_box.min().head<2>().array()).all() && (centre.array() <= stairs_box.max().head<2>().array()).all();
+      for (std::size_t b = a + 1; b < boxes.size(); ++b) {
+        EXPECT_TRUE(boxes[a].intersection(boxes[b]).isEmpty()) << variant << " copies " << a << " and " << b << " overlap";
+      }
+    }
+    EXPECT_EQ(over_stairs, 95u) << variant;  // as its description says (centres over the stairs)
+    // Each copy tumbles as one rigid body: both sides of every joint start at one velocity.
+    for (const Joint& joint : model.joints) {
+      const Body& inboard = model.bodies[std::size_t(joint.inboard)];
+      const Body& outboard = model.bodies[std::size_t(joint.outboard)];
+      EXPECT_LT((inboard.velocity_at(joint.inboard_anchor) - outboard.velocity_at(joint.outboard_anchor)).norm(), 1e-9) << joint.name;
+      EXPECT_GT(inboard.angular_velocity.norm(), 1.0) << joint.name;
+    }
+  }
+  // --copies N fills the lowest layers first: 150 are a full layer and half of the next.
+  SceneOptions crowd;
+  crowd.copies = 150;
+  const std::vector<Eigen::AlignedBox3d> boxes = copy_boxes(shipped_scene("rain.json", crowd).model);
+  ASSERT_EQ(boxes.size(), 150u);
+  EXPECT_NEAR(boxes[100].min().z() - boxes[99].min().z(), 1.4, 1e-9);
+  EXPECT_NEAR(boxes[149].min().z(), boxes[100].min().z(), 1e-9);
 }
 
 TEST(RopeScene, AnUnpinnedRopeStartsAboveABarAndASlab) {
