@@ -4,8 +4,15 @@
 // btConeTwistConstraint for spherical joints with swing and twist limits, btHingeConstraint for
 // knees and elbows, collisions between jointed limbs off.
 //
-//   build/bench/bullet_ragdolls [SCENE] [--stack N] [--steps N] [--repeats R] [--sleep]
+//   build/bench/bullet_ragdolls [SCENE] [--copies N] [--stack N] [--steps N] [--repeats R] [--sleep]
+//                               [--limber SxN[:rows|:tree][:1t|:2t][:double|:float] ...] [--bullet SxN ...]
 //                               [--cylinders cylinder|capsule]
+//
+// Each --limber setting is substeps × sweeps (with the joint solve and the threads), each --bullet
+// setting substeps × solver iterations; every setting runs in each round, round after round, so a
+// busy machine slows them alike. A row gives the median over rounds of the stepping thread's CPU
+// time and of wall time, and, from the first round, the largest joint gap, limit violation and
+// penetration, measured on both engines' poses by the same functions.
 //
 // SCENE defaults to tools/scenes/ragdoll_pile.json, or, while that file does not exist, to
 // tools/scenes/ragdoll.json stacked 32 times (--stack N: N copies of the scene's bodies laid in
@@ -29,23 +36,25 @@
 //   planes) and the ball (a sphere; this bench drops the ball, which its measure does not see);
 // - materials as limber pairs them (a contact callback): a static surface's friction and
 //   restitution, Settings::limb_friction and restitution 0 between limbs.
-// One Bullet step per limber step (stepSimulation(Δt, 0)), Bullet's default solver settings.
+// Bullet's default solver settings but for the iterations; a substep is stepSimulation(Δt / S, 0).
 //
-// Both engines run in this process, alternately, one thread each; each repetition rebuilds the
-// world, and the time is the sum of the step() calls only (measuring happens outside them, in the
-// first repetition). The deepest penetration is measured on both engines' poses by the same
-// function (deepest_penetration below), and Bullet's own contact distances are reported beside it.
+// Both engines run in this process, alternately; each repetition rebuilds the world, and the time
+// is the sum of the step() calls only (measuring happens outside them, in the first repetition).
+// The deepest penetration is measured on both engines' poses by the same function
+// (deepest_penetration below), and Bullet's own contact distances are reported beside it.
 #include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <numbers>
 #include <optional>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -305,6 +314,8 @@ bool combine_materials(btManifoldPoint& point, const btCollisionObjectWrapper* f
 struct BulletOptions {
   bool sleep = false;            // Bullet's deactivation, as limber's sleeping
   bool cylinders_as_capsules = false;
+  int substeps = 1;              // Bullet steps of Δt / substeps in one limber step
+  int iterations = 10;           // btContactSolverInfo::m_numIterations (Bullet's default 10)
 };
 
 class BulletScene {
@@ -314,7 +325,10 @@ class BulletScene {
   BulletScene(const BulletScene&) = delete;
   BulletScene& operator=(const BulletScene&) = delete;
 
-  void step(double dt) { world_->stepSimulation(btScalar(dt), 0); }
+  // `substeps` steps of Δt / substeps, each a variable step (no interpolation, no accumulator).
+  void step(double dt) {
+    for (int k = 0; k < substeps_; ++k) world_->stepSimulation(btScalar(dt / substeps_), 0);
+  }
   // Body b's limber body frame (origin at the shape's centre, z along its axis), world.
   FramePose pose(std::size_t b) const;
   bool finite() const;
@@ -342,11 +356,15 @@ class BulletScene {
   std::vector<btTransform> body_in_principal_;  // limber body frame in Bullet's (principal) frame
   std::vector<std::unique_ptr<btTypedConstraint>> constraints_;
   std::unique_ptr<btDiscreteDynamicsWorld> world_;
+  int substeps_ = 1;
 };
 
 BulletScene::BulletScene(const Model& model, const PairRules& rules, const BulletOptions& options) {
   world_ = std::make_unique<btDiscreteDynamicsWorld>(&dispatcher_, &broadphase_, &solver_, &configuration_);
   world_->setGravity(bt(model.settings.gravity));
+  world_->getSolverInfo().m_numIterations = options.iterations;
+  substeps_ = options.substeps;
+  const double substep = model.settings.time_step / options.substeps;
   g_limb_friction = model.settings.limb_friction;
   gContactAddedCallback = combine_materials;
   // limber's damping: speed × exp(−damping·t); Bullet's: speed × (1 − d)^t.
@@ -459,7 +477,7 @@ BulletScene::BulletScene(const Model& model, const PairRules& rules, const Bulle
           const double low = sign * joint.limits.range->min, high = sign * joint.limits.range->max;
           hinge->setLimit(btScalar(std::min(low, high)), btScalar(std::max(low, high)));
         }
-        if (joint.friction > 0) hinge->enableAngularMotor(true, 0, btScalar(joint.friction * model.settings.time_step));
+        if (joint.friction > 0) hinge->enableAngularMotor(true, 0, btScalar(joint.friction * substep));
         constraint = std::move(hinge);
         ++hinges;
         break;
@@ -606,31 +624,92 @@ std::string BulletScene::margins() const {
 // ---------------------------------------------------------------------------------------------
 // The runs.
 
-struct Run {
-  std::vector<double> seconds;  // per repetition: the sum of its step() calls
-  double penetration = 0;       // deepest_penetration over the first repetition, m
-  double contact = 0;           // Bullet: the deepest btManifoldPoint distance, m
-  JointErrors joints;           // over the first repetition
-  std::string status = "ok";
-  double per_step(int steps) const {
-    std::vector<double> sorted = seconds;
-    std::sort(sorted.begin(), sorted.end());
-    return sorted[sorted.size() / 2] / steps;
+// One engine at one setting: limber "SxN[:rows|:tree][:1t|:2t][:double|:float]" (substeps ×
+// sweeps, joint solve, threads, precision) or Bullet "SxN" (substeps × iterations).
+struct Setting {
+  bool bullet = false;
+  int substeps = 1, iterations = 10, threads = 1;
+  bool tree = false, single_precision = false;
+  std::string label;  // as given on the command line
+  std::string name() const { return (bullet ? "Bullet " : "limber ") + label; }
+};
+
+Setting parse_setting(const std::string& text, bool bullet) {
+  const auto bad = [&](const std::string& why) {
+    return CLI::ValidationError(std::string(bullet ? "--bullet" : "--limber") + " " + text + ": " + why);
+  };
+  Setting setting;
+  setting.bullet = bullet;
+  setting.label = text;
+  std::vector<std::string> parts;
+  for (std::size_t at = 0;;) {
+    const std::size_t colon = text.find(':', at);
+    parts.push_back(text.substr(at, colon - at));
+    if (colon == std::string::npos) break;
+    at = colon + 1;
   }
+  const std::size_t x = parts[0].find('x');
+  try {
+    std::size_t used = 0;
+    setting.substeps = std::stoi(parts[0].substr(0, x), &used);
+    if (x == std::string::npos || used != x) throw bad("expected SUBSTEPSxITERATIONS, like 4x10");
+    setting.iterations = std::stoi(parts[0].substr(x + 1), &used);
+    if (used != parts[0].size() - x - 1) throw bad("expected SUBSTEPSxITERATIONS, like 4x10");
+  } catch (const std::logic_error&) {
+    throw bad("expected SUBSTEPSxITERATIONS, like 4x10");
+  }
+  if (setting.substeps < 1 || setting.substeps > 64 || setting.iterations < 1 || setting.iterations > 1000) {
+    throw bad("substeps must be in [1, 64] and iterations in [1, 1000]");
+  }
+  for (std::size_t k = 1; k < parts.size(); ++k) {
+    if (bullet) throw bad("Bullet takes SUBSTEPSxITERATIONS only");
+    if (parts[k] == "tree" || parts[k] == "rows") {
+      setting.tree = parts[k] == "tree";
+    } else if (parts[k] == "1t" || parts[k] == "2t") {
+      setting.threads = parts[k][0] - '0';
+    } else if (parts[k] == "float" || parts[k] == "double") {
+      setting.single_precision = parts[k] == "float";
+    } else {
+      throw bad("unknown suffix \"" + parts[k] + "\" (rows, tree, 1t, 2t, double, float)");
+    }
+  }
+  return setting;
+}
+
+// The calling thread's CPU time, s: what the stepping thread spent, whatever else the machine runs.
+double thread_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
+}
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+struct Run {
+  std::vector<double> cpu, wall;  // per repetition: the sum of its step() calls, s
+  double penetration = 0;         // deepest_penetration over the first repetition, m
+  double contact = 0;             // Bullet: the deepest btManifoldPoint distance, m
+  JointErrors joints;             // over the first repetition
+  std::string status = "ok";
 };
 
 template <typename Step, typename Poses>
-bool run_steps(int steps, bool measure, const Model& model, LimbCollisions& collisions, const JointControls& controls, Run& run, Step&& step,
+void run_steps(int steps, bool measure, const Model& model, LimbCollisions& collisions, const JointControls& controls, Run& run, Step&& step,
                Poses&& poses) {
-  double elapsed = 0;
+  double cpu = 0, wall = 0;
   std::vector<FramePose> now(model.bodies.size());
   for (int s = 0; s < steps; ++s) {
-    const auto start = Clock::now();
+    const double cpu_start = thread_seconds();
+    const auto wall_start = Clock::now();
     const bool ok = step();
-    elapsed += std::chrono::duration<double>(Clock::now() - start).count();
+    wall += std::chrono::duration<double>(Clock::now() - wall_start).count();
+    cpu += thread_seconds() - cpu_start;
     if (!ok) {
       run.status = "diverged at step " + std::to_string(s);
-      return false;
+      break;
     }
     if (measure) {
       poses(now);
@@ -640,22 +719,76 @@ bool run_steps(int steps, bool measure, const Model& model, LimbCollisions& coll
       if (errors.limit_violation > run.joints.limit_violation) run.joints.limit_violation = errors.limit_violation, run.joints.worst_limit = errors.worst_limit;
     }
   }
-  run.seconds.push_back(elapsed);
-  return true;
+  run.cpu.push_back(cpu);
+  run.wall.push_back(wall);
+}
+
+// Articulated bodies: the connected groups of bodies the joints join (a ragdoll is one).
+std::size_t articulated_bodies(const Model& model) {
+  std::vector<std::size_t> root(model.bodies.size());
+  for (std::size_t b = 0; b < root.size(); ++b) root[b] = b;
+  const auto find = [&](std::size_t b) {
+    while (root[b] != b) b = root[b] = root[root[b]];
+    return b;
+  };
+  std::size_t groups = root.size();
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard == kWorld) continue;
+    const std::size_t a = find(std::size_t(joint.inboard)), b = find(std::size_t(joint.outboard));
+    if (a != b) root[a] = b, --groups;
+  }
+  return groups;
+}
+
+void print_header(const std::string& scene_label, const Model& model, const PairRules& rules, const WorldOptions& world, int steps, bool sleep,
+                  BulletScene& bullet) {
+  const btContactSolverInfo& info = bullet.solver_info();
+  const double dt = model.settings.time_step;
+  std::printf("# bullet_ragdolls\n\nscene: %s, %zu bodies in %zu articulated bodies, %zu joints, Δt = %.6g s, %d steps (%.3g s), sleep %s\n",
+              scene_label.c_str(), model.bodies.size(), articulated_bodies(model), model.joints.size(), dt, steps, steps * dt,
+              sleep ? "on" : "off (both engines)");
+  std::printf("limb pairs that never collide: %zu jointed, %zu overlapping at rest, %zu filtered\n", rules.jointed, rules.overlapping, rules.filtered);
+  std::printf("limber: particles, weighted Gauss-Seidel (%s), %s projection, limb masses %s, joints %s\n",
+              world.particles.order == SweepOrder::coloured ? "coloured" : "sequential",
+              world.particles.relaxation.projection == ProjectionRule::rattle ? "rattle" : "pbd",
+              world.particles.verlet.limb_masses == LimbMasses::ends ? "ends" : world.particles.verlet.limb_masses == LimbMasses::inertia ? "inertia" : "lumps",
+              world.particles.verlet.joints == ParticleJoints::shared_particle ? "shared particles" : "zero-length constraints");
+  std::printf("Bullet %d.%02d (%s precision): btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver, ERP %.2g, ERP2 %.2g, "
+              "split impulse %s (threshold %.3g m), warm starting %.2g, linear slop %.3g m, contact breaking threshold %.3g m, "
+              "substeps as stepSimulation(Δt / substeps, 0) each\n",
+              btGetVersion() / 100, btGetVersion() % 100, sizeof(btScalar) == 4 ? "single" : "double", double(info.m_erp), double(info.m_erp2),
+              info.m_splitImpulse ? "on" : "off", double(info.m_splitImpulsePenetrationThreshold), double(info.m_warmstartingFactor),
+              double(info.m_linearSlop), double(gContactBreakingThreshold));
+  std::printf("Bullet shapes (collision margins, m): %s; %d compound (centre of mass off the shape's centre)\n", bullet.margins().c_str(),
+              bullet.compound_bodies);
+  std::printf("Bullet joints: %d btConeTwistConstraint, %d btHingeConstraint, %d btPoint2PointConstraint, %d other\n", bullet.cone_twists,
+              bullet.hinges, bullet.point_to_points, bullet.others);
+  std::size_t shown = 0;
+  for (const std::string& note : bullet.notes) {
+    if (shown++ < 3) std::printf("Bullet note: %s\n", note.c_str());
+  }
+  if (bullet.notes.size() > 3) std::printf("Bullet note: ... %zu in all\n", bullet.notes.size());
+  std::fflush(stdout);
 }
 
 int run(int argc, char** argv) {
-  CLI::App app{"A ragdoll pile in limber's particle method and in Bullet's btRigidBody, time per step and penetration"};
+  CLI::App app{"Ragdolls in limber's particle method and in Bullet's btRigidBody, settings raced in one run: steps/s against joint gap and penetration"};
   const std::filesystem::path source = LIMBER_SOURCE_DIR;
   std::string scene_path;
-  std::optional<int> stack, steps_flag;
+  std::optional<int> stack, steps_flag, copies;
   int repeats = 3;
   bool sleep = false;
   std::string cylinders = "cylinder";
+  std::vector<std::string> limber_texts, bullet_texts{"1x10"};
   app.add_option("scene", scene_path, "scene file (default tools/scenes/ragdoll_pile.json, or ragdoll.json --stack 32 while it is missing)");
   app.add_option("--stack", stack, "stack this many copies of the scene's bodies, each on its back, in crossed layers of four")->check(CLI::Range(1, 100000));
+  app.add_option("--copies", copies, "the scene's copies count (its \"copies\" layout)")->check(CLI::Range(1, 100000));
   app.add_option("--steps", steps_flag, "steps per run (default: the scene's duration / time step)")->check(CLI::PositiveNumber);
-  app.add_option("--repeats", repeats, "timed runs of each engine; the median is reported")->check(CLI::Range(1, 100));
+  app.add_option("--repeats", repeats, "timed runs of each setting, interleaved; the median is reported")->check(CLI::Range(1, 100));
+  app.add_option("--limber", limber_texts,
+                 "limber settings SxN[:rows|:tree][:1t|:2t][:double|:float]: substeps × sweeps, joint solve, threads, precision "
+                 "(default: the scene's settings, double)");
+  app.add_option("--bullet", bullet_texts, "Bullet settings SxN: substeps × iterations (default 1x10, Bullet's own)");
   app.add_flag("--sleep", sleep, "let islands sleep (limber) and bodies deactivate (Bullet); default: both off");
   app.add_option("--cylinders", cylinders, "Bullet shape of cylinder limbs")->check(CLI::IsMember({"cylinder", "capsule"}));
   CLI11_PARSE(app, argc, argv);
@@ -667,7 +800,9 @@ int run(int argc, char** argv) {
       if (!stack) stack = 32;
     }
   }
-  Scene scene = load_scene_file(scene_path);
+  SceneOptions scene_options;
+  if (copies) scene_options.copies = *copies;
+  Scene scene = load_scene_file(scene_path, scene_options);
   if (stack) scene.model = stack_ragdolls(scene.model, static_cast<std::size_t>(*stack));
   Model& model = scene.model;
   model.settings.sleep.enabled = sleep;
@@ -677,84 +812,83 @@ int run(int argc, char** argv) {
   const PairRules rules = pair_rules(model);
   LimbCollisions collisions(model);
   const JointControls controls = joint_controls(model);
-  WorldOptions world = world_options(Method::particles, scene.methods);
-  world.particles.threads = 1;
+  const WorldOptions scene_world = world_options(Method::particles, scene.methods);
+  const std::string scene_label = scene_path + (stack ? " stacked ×" + std::to_string(*stack) : "") +
+                                  (copies ? " (" + std::to_string(*copies) + " copies)" : "");
 
-  const BulletOptions bullet_options{sleep, cylinders == "capsule"};
-  Run limber_run, bullet_run;
-  int bullet_constraints = 0;
-  for (int rep = 0; rep < repeats; ++rep) {
-    const bool measure = rep == 0;
-    {
-      World limber_world(model, world);
-      const std::vector<BodyId> ids = limber_world.bodies();
-      run_steps(steps, measure, model, collisions, controls, limber_run, [&] { return limber_world.step(dt) == StepStatus::ok; },
-                [&](std::vector<FramePose>& poses) {
-                  for (std::size_t b = 0; b < ids.size(); ++b) {
-                    const Pose pose = limber_world.pose(ids[b]);
-                    poses[b] = {pose.orientation, pose.position};
-                  }
-                });
+  std::vector<Setting> settings;
+  try {
+    if (limber_texts.empty()) {
+      const auto& relaxation = scene_world.particles.relaxation;
+      limber_texts.push_back(std::to_string(relaxation.substeps) + "x" + std::to_string(relaxation.iterations) +
+                             (scene_world.particles.joint_solve == JointSolve::tree ? ":tree" : ":rows"));
     }
-    {
-      BulletScene bullet(model, rules, bullet_options);
-      bullet_constraints = bullet.constraints();
-      if (rep == 0) {
-        const btContactSolverInfo& info = bullet.solver_info();
-        std::printf("# bullet_ragdolls\n\nscene: %s%s, %zu bodies, %zu joints, Δt = %.6g s, %d steps (%.3g s), sleep %s\n",
-                    scene_path.c_str(), stack ? (" stacked ×" + std::to_string(*stack)).c_str() : "", model.bodies.size(),
-                    model.joints.size(), dt, steps, steps * dt, sleep ? "on" : "off (both engines)");
-        std::printf("limb pairs that never collide: %zu jointed, %zu overlapping at rest, %zu filtered\n", rules.jointed, rules.overlapping,
-                    rules.filtered);
-        std::printf("limber: particles, weighted Gauss-Seidel (%s), %s projection, %d substep(s) × %d sweeps, limb masses %s, joints %s, "
-                    "1 thread\n",
-                    world.particles.order == SweepOrder::coloured ? "coloured" : "sequential",
-                    world.particles.relaxation.projection == ProjectionRule::rattle ? "rattle" : "pbd", world.particles.relaxation.substeps,
-                    world.particles.relaxation.iterations,
-                    world.particles.verlet.limb_masses == LimbMasses::ends ? "ends" : world.particles.verlet.limb_masses == LimbMasses::inertia ? "inertia" : "lumps",
-                    world.particles.verlet.joints == ParticleJoints::shared_particle ? "shared particles" : "zero-length constraints");
-        std::printf("Bullet %d.%02d (%s precision): btDiscreteDynamicsWorld, btSequentialImpulseConstraintSolver, %d iterations, "
-                    "ERP %.2g, ERP2 %.2g, split impulse %s (threshold %.3g m), warm starting %.2g, linear slop %.3g m, "
-                    "contact breaking threshold %.3g m, stepSimulation(Δt, 0)\n",
-                    btGetVersion() / 100, btGetVersion() % 100, sizeof(btScalar) == 4 ? "single" : "double", info.m_numIterations,
-                    double(info.m_erp), double(info.m_erp2), info.m_splitImpulse ? "on" : "off", double(info.m_splitImpulsePenetrationThreshold),
-                    double(info.m_warmstartingFactor), double(info.m_linearSlop), double(gContactBreakingThreshold));
-        std::printf("Bullet shapes (collision margins, m): %s; %d compound (centre of mass off the shape's centre)\n", bullet.margins().c_str(),
-                    bullet.compound_bodies);
-        std::printf("Bullet joints: %d btConeTwistConstraint, %d btHingeConstraint, %d btPoint2PointConstraint, %d other\n",
-                    bullet.cone_twists, bullet.hinges, bullet.point_to_points, bullet.others);
-        std::size_t shown = 0;
-        for (const std::string& note : bullet.notes) {
-          if (shown++ < 3) std::printf("Bullet note: %s\n", note.c_str());
-        }
-        if (bullet.notes.size() > 3) std::printf("Bullet note: ... %zu in all\n", bullet.notes.size());
-        std::fflush(stdout);
+    for (const std::string& text : limber_texts) settings.push_back(parse_setting(text, false));
+    for (const std::string& text : bullet_texts) settings.push_back(parse_setting(text, true));
+  } catch (const CLI::Error& error) {
+    return app.exit(error);
+  }
+
+  std::vector<Run> runs(settings.size());
+  for (int rep = 0; rep < repeats; ++rep) {
+    for (std::size_t k = 0; k < settings.size(); ++k) {
+      const Setting& setting = settings[k];
+      const bool measure = rep == 0;
+      if (runs[k].status != "ok") continue;  // diverged: not timed again
+      if (setting.bullet) {
+        BulletOptions options{sleep, cylinders == "capsule", setting.substeps, setting.iterations};
+        BulletScene bullet(model, rules, options);
+        if (rep == 0 && k == limber_texts.size()) print_header(scene_label, model, rules, scene_world, steps, sleep, bullet);
+        run_steps(
+            steps, measure, model, collisions, controls, runs[k],
+            [&] {
+              bullet.step(dt);
+              return bullet.finite();
+            },
+            [&](std::vector<FramePose>& poses) {
+              runs[k].contact = std::max(runs[k].contact, bullet.deepest_contact());
+              for (std::size_t b = 0; b < poses.size(); ++b) poses[b] = bullet.pose(b);
+            });
+      } else {
+        WorldOptions world = scene_world;
+        world.particles.threads = setting.threads;
+        world.particles.relaxation.substeps = setting.substeps;
+        world.particles.relaxation.iterations = setting.iterations;
+        world.particles.joint_solve = setting.tree ? JointSolve::tree : JointSolve::rows;
+        world.single_precision = setting.single_precision;
+        World limber_world(model, world);
+        const std::vector<BodyId> ids = limber_world.bodies();
+        run_steps(steps, measure, model, collisions, controls, runs[k], [&] { return limber_world.step(dt) == StepStatus::ok; },
+                  [&](std::vector<FramePose>& poses) {
+                    for (std::size_t b = 0; b < ids.size(); ++b) {
+                      const Pose pose = limber_world.pose(ids[b]);
+                      poses[b] = {pose.orientation, pose.position};
+                    }
+                  });
       }
-      run_steps(
-          steps, measure, model, collisions, controls, bullet_run,
-          [&] {
-            bullet.step(dt);
-            return bullet.finite();
-          },
-          [&](std::vector<FramePose>& poses) {
-            bullet_run.contact = std::max(bullet_run.contact, bullet.deepest_contact());
-            for (std::size_t b = 0; b < poses.size(); ++b) poses[b] = bullet.pose(b);
-          });
+      std::fprintf(stderr, "round %d: %s %.2f s\n", rep + 1, setting.name().c_str(), runs[k].cpu.back());
     }
   }
 
-  std::printf("\n| engine | steps/s | µs/step | deepest penetration (m) | Bullet contact distance (m) | largest joint gap (m) | "
-              "largest limit violation (rad) | bodies | joints | status |\n|---|---|---|---|---|---|---|---|---|---|\n");
-  const double limber_step = limber_run.per_step(steps), bullet_step = bullet_run.per_step(steps);
-  std::printf("| limber particles | %.0f | %.0f | %.3g | — | %.3g | %.3g | %zu | %zu | %s |\n", 1 / limber_step, 1e6 * limber_step,
-              limber_run.penetration, limber_run.joints.gap, limber_run.joints.limit_violation, model.bodies.size(), model.joints.size(),
-              limber_run.status.c_str());
-  std::printf("| Bullet btRigidBody | %.0f | %.0f | %.3g | %.3g | %.3g | %.3g | %zu | %d | %s |\n", 1 / bullet_step, 1e6 * bullet_step,
-              bullet_run.penetration, bullet_run.contact, bullet_run.joints.gap, bullet_run.joints.limit_violation, model.bodies.size(),
-              bullet_constraints, bullet_run.status.c_str());
-  std::printf("\nlargest limit violation at: limber %s, Bullet %s\n", limber_run.joints.worst_limit.c_str(), bullet_run.joints.worst_limit.c_str());
-  std::printf("limber / Bullet steps/s: %.2f (median of %d runs each)\n", bullet_step / limber_step, repeats);
-  return limber_run.status == "ok" && bullet_run.status == "ok" ? 0 : 1;
+  // Cost per articulated body per 1/60 s of simulated time, from the stepping thread's CPU time.
+  const double per_body_per_frame = (1.0 / 60) / dt / double(articulated_bodies(model));
+  std::printf("\n| engine and setting | steps/s (CPU) | steps/s (wall) | µs per ragdoll per 1/60 s (CPU) | largest joint gap (m) | "
+              "largest limit violation (rad) | deepest penetration (m) | Bullet contact distance (m) | status |\n"
+              "|---|---|---|---|---|---|---|---|---|\n");
+  for (std::size_t k = 0; k < settings.size(); ++k) {
+    const Run& run = runs[k];
+    const double cpu = median(run.cpu) / steps, wall = median(run.wall) / steps;
+    char contact[32] = "—";
+    if (settings[k].bullet) std::snprintf(contact, sizeof contact, "%.3g", run.contact);
+    std::printf("| %s%s | %.3g | %.3g | %.0f | %.3g | %.3g | %.3g | %s | %s |\n", settings[k].name().c_str(),
+                settings[k].bullet ? "" : (settings[k].threads == 1 ? ", 1 thread" : ", 2 threads"), 1 / cpu, 1 / wall,
+                1e6 * cpu * per_body_per_frame, run.joints.gap, run.joints.limit_violation, run.penetration, contact, run.status.c_str());
+  }
+  std::printf("\nmedian of %d interleaved runs each; the CPU time is the stepping thread's (a second thread's work is in wall time only)\n",
+              repeats);
+  bool ok = true;
+  for (const Run& run : runs) ok = ok && run.status == "ok";
+  return ok ? 0 : 1;
 }
 
 }  // namespace
