@@ -212,11 +212,23 @@ double footprint(const Model& model) {
 
 double vertical_extent(const Model& model) { return model.bodies.empty() ? 0.0 : body_bounds(model).sizes().z(); }
 
-namespace {
+Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                std::size_t layers, double layer_height) {
+  const std::string at(path);
+  require_count(count, 1, at + ".count");
+  require_count(layers, 1, at + ".layers");
+  if (layers > count) {
+    fail(at + ".layers", "must be <= count (" + std::to_string(count) + "), got " + std::to_string(layers));
+  }
+  return copies_in_layers_of(model, count, spacing, prefix, path, (count + layers - 1) / layers, layer_height);
+}
 
-// copies_of and copies_in_layers_of: `count` copies, `per_layer` to a lattice, lattices from the bottom up.
-Model lay_copies(const Model& model, std::size_t count, double spacing, std::string_view prefix, const std::string& at,
-                 std::size_t per_layer, double layer_height) {
+Model copies_in_layers_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
+                          std::size_t per_layer, double layer_height) {
+  const std::string at(path);
+  require_count(count, 1, at + ".count");
+  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
+  require_count(per_layer, 1, at + ".per_layer");
   const double least = footprint(model);
   require_finite(spacing, at + ".spacing");
   if (!(spacing >= least)) {
@@ -247,29 +259,6 @@ Model lay_copies(const Model& model, std::size_t count, double spacing, std::str
     append_model(copies, model, std::string(prefix) + std::to_string(k) + ".", offset);
   }
   return copies;
-}
-
-}  // namespace
-
-Model copies_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
-                std::size_t layers, double layer_height) {
-  const std::string at(path);
-  require_count(count, 1, at + ".count");
-  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
-  require_count(layers, 1, at + ".layers");
-  if (layers > count) {
-    fail(at + ".layers", "must be <= count (" + std::to_string(count) + "), got " + std::to_string(layers));
-  }
-  return lay_copies(model, count, spacing, prefix, at, (count + layers - 1) / layers, layer_height);
-}
-
-Model copies_in_layers_of(const Model& model, std::size_t count, double spacing, std::string_view prefix, std::string_view path,
-                          std::size_t per_layer, double layer_height) {
-  const std::string at(path);
-  require_count(count, 1, at + ".count");
-  require_int_indices(double(count) * double(model.bodies.size()), at + ".count");
-  require_count(per_layer, 1, at + ".per_layer");
-  return lay_copies(model, count, spacing, prefix, at, per_layer, layer_height);
 }
 
 TriangleMesh make_stairs_mesh(const StairsSpec& spec) {
