@@ -48,7 +48,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <ctime>
 #include <filesystem>
 #include <memory>
 #include <numbers>
@@ -69,6 +68,7 @@
 #include "limber/kernel/scene/generators.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "thread_time.hpp"
 
 namespace limber {
 namespace {
@@ -676,13 +676,6 @@ Setting parse_setting(const std::string& text, bool bullet) {
   return setting;
 }
 
-// The calling thread's CPU time, s: what the stepping thread spent, whatever else the machine runs.
-double thread_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
-}
-
 double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
   return values[values.size() / 2];
@@ -723,29 +716,29 @@ void run_steps(int steps, bool measure, const Model& model, LimbCollisions& coll
   run.wall.push_back(wall);
 }
 
-// Articulated bodies: the connected groups of bodies the joints join (a ragdoll is one).
-std::size_t articulated_bodies(const Model& model) {
-  std::vector<std::size_t> root(model.bodies.size());
-  for (std::size_t b = 0; b < root.size(); ++b) root[b] = b;
-  const auto find = [&](std::size_t b) {
-    while (root[b] != b) b = root[b] = root[root[b]];
-    return b;
-  };
-  std::size_t groups = root.size();
-  for (const Joint& joint : model.joints) {
-    if (joint.inboard == kWorld) continue;
-    const std::size_t a = find(std::size_t(joint.inboard)), b = find(std::size_t(joint.outboard));
-    if (a != b) root[a] = b, --groups;
-  }
-  return groups;
-}
+// What every setting of a race shares: the scene, its measures and the run's length.
+struct Race {
+  const Model& model;
+  const PairRules& rules;
+  LimbCollisions& collisions;
+  const JointControls& controls;
+  const WorldOptions& scene_world;
+  int steps;
+  bool sleep, capsules;
+};
 
-void print_header(const std::string& scene_label, const Model& model, const PairRules& rules, const WorldOptions& world, int steps, bool sleep,
-                  BulletScene& bullet) {
+// The race's scene and both engines' fixed settings (Bullet's read from a world built for it).
+void print_header(const std::string& scene_label, const Race& race) {
+  const Model& model = race.model;
+  const PairRules& rules = race.rules;
+  const WorldOptions& world = race.scene_world;
+  const int steps = race.steps;
+  const bool sleep = race.sleep;
+  BulletScene bullet(model, rules, {sleep, race.capsules});
   const btContactSolverInfo& info = bullet.solver_info();
   const double dt = model.settings.time_step;
-  std::printf("# bullet_ragdolls\n\nscene: %s, %zu bodies in %zu articulated bodies, %zu joints, Δt = %.6g s, %d steps (%.3g s), sleep %s\n",
-              scene_label.c_str(), model.bodies.size(), articulated_bodies(model), model.joints.size(), dt, steps, steps * dt,
+  std::printf("# bullet_ragdolls\n\nscene: %s, %zu bodies in %zu islands (a ragdoll is one), %zu joints, Δt = %.6g s, %d steps (%.3g s), sleep %s\n",
+              scene_label.c_str(), model.bodies.size(), body_islands(model).count, model.joints.size(), dt, steps, steps * dt,
               sleep ? "on" : "off (both engines)");
   std::printf("limb pairs that never collide: %zu jointed, %zu overlapping at rest, %zu filtered\n", rules.jointed, rules.overlapping, rules.filtered);
   std::printf("limber: particles, weighted Gauss-Seidel (%s), %s projection, limb masses %s, joints %s\n",
@@ -769,6 +762,41 @@ void print_header(const std::string& scene_label, const Model& model, const Pair
   }
   if (bullet.notes.size() > 3) std::printf("Bullet note: ... %zu in all\n", bullet.notes.size());
   std::fflush(stdout);
+}
+
+// One run of `setting`: a fresh world stepped race.steps times, timed into `run` (and, with
+// `measure`, its joint errors and penetration).
+void run_setting(const Race& race, const Setting& setting, bool measure, Run& run) {
+  const double dt = race.model.settings.time_step;
+  if (setting.bullet) {
+    BulletScene bullet(race.model, race.rules, {race.sleep, race.capsules, setting.substeps, setting.iterations});
+    run_steps(
+        race.steps, measure, race.model, race.collisions, race.controls, run,
+        [&] {
+          bullet.step(dt);
+          return bullet.finite();
+        },
+        [&](std::vector<FramePose>& poses) {
+          run.contact = std::max(run.contact, bullet.deepest_contact());
+          for (std::size_t b = 0; b < poses.size(); ++b) poses[b] = bullet.pose(b);
+        });
+    return;
+  }
+  WorldOptions world = race.scene_world;
+  world.particles.threads = setting.threads;
+  world.particles.relaxation.substeps = setting.substeps;
+  world.particles.relaxation.iterations = setting.iterations;
+  world.particles.joint_solve = setting.tree ? JointSolve::tree : JointSolve::rows;
+  world.single_precision = setting.single_precision;
+  World limber_world(race.model, world);
+  const std::vector<BodyId> ids = limber_world.bodies();
+  run_steps(race.steps, measure, race.model, race.collisions, race.controls, run, [&] { return limber_world.step(dt) == StepStatus::ok; },
+            [&](std::vector<FramePose>& poses) {
+              for (std::size_t b = 0; b < ids.size(); ++b) {
+                const Pose pose = limber_world.pose(ids[b]);
+                poses[b] = {pose.orientation, pose.position};
+              }
+            });
 }
 
 int run(int argc, char** argv) {
@@ -829,49 +857,19 @@ int run(int argc, char** argv) {
     return app.exit(error);
   }
 
+  const Race race{model, rules, collisions, controls, scene_world, steps, sleep, cylinders == "capsule"};
+  print_header(scene_label, race);
   std::vector<Run> runs(settings.size());
   for (int rep = 0; rep < repeats; ++rep) {
     for (std::size_t k = 0; k < settings.size(); ++k) {
-      const Setting& setting = settings[k];
-      const bool measure = rep == 0;
       if (runs[k].status != "ok") continue;  // diverged: not timed again
-      if (setting.bullet) {
-        BulletOptions options{sleep, cylinders == "capsule", setting.substeps, setting.iterations};
-        BulletScene bullet(model, rules, options);
-        if (rep == 0 && k == limber_texts.size()) print_header(scene_label, model, rules, scene_world, steps, sleep, bullet);
-        run_steps(
-            steps, measure, model, collisions, controls, runs[k],
-            [&] {
-              bullet.step(dt);
-              return bullet.finite();
-            },
-            [&](std::vector<FramePose>& poses) {
-              runs[k].contact = std::max(runs[k].contact, bullet.deepest_contact());
-              for (std::size_t b = 0; b < poses.size(); ++b) poses[b] = bullet.pose(b);
-            });
-      } else {
-        WorldOptions world = scene_world;
-        world.particles.threads = setting.threads;
-        world.particles.relaxation.substeps = setting.substeps;
-        world.particles.relaxation.iterations = setting.iterations;
-        world.particles.joint_solve = setting.tree ? JointSolve::tree : JointSolve::rows;
-        world.single_precision = setting.single_precision;
-        World limber_world(model, world);
-        const std::vector<BodyId> ids = limber_world.bodies();
-        run_steps(steps, measure, model, collisions, controls, runs[k], [&] { return limber_world.step(dt) == StepStatus::ok; },
-                  [&](std::vector<FramePose>& poses) {
-                    for (std::size_t b = 0; b < ids.size(); ++b) {
-                      const Pose pose = limber_world.pose(ids[b]);
-                      poses[b] = {pose.orientation, pose.position};
-                    }
-                  });
-      }
-      std::fprintf(stderr, "round %d: %s %.2f s\n", rep + 1, setting.name().c_str(), runs[k].cpu.back());
+      run_setting(race, settings[k], rep == 0, runs[k]);
+      std::fprintf(stderr, "round %d: %s %.2f s\n", rep + 1, settings[k].name().c_str(), runs[k].cpu.back());
     }
   }
 
-  // Cost per articulated body per 1/60 s of simulated time, from the stepping thread's CPU time.
-  const double per_body_per_frame = (1.0 / 60) / dt / double(articulated_bodies(model));
+  // Cost per island (a ragdoll) per 1/60 s of simulated time, from the stepping thread's CPU time.
+  const double per_body_per_frame = (1.0 / 60) / dt / double(body_islands(model).count);
   std::printf("\n| engine and setting | steps/s (CPU) | steps/s (wall) | µs per ragdoll per 1/60 s (CPU) | largest joint gap (m) | "
               "largest limit violation (rad) | deepest penetration (m) | Bullet contact distance (m) | status |\n"
               "|---|---|---|---|---|---|---|---|---|\n");

@@ -32,8 +32,6 @@
 #include <new>
 #include <string>
 
-#include <time.h>
-
 #include <benchmark/benchmark.h>
 
 #include "limber/kernel/collision/limb_contacts.hpp"
@@ -45,6 +43,7 @@
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
+#include "thread_time.hpp"
 
 // ---------------------------------------------------------------------------------------------
 // Allocation counting.
@@ -87,13 +86,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// The calling thread's CPU time, s: what the one-thread timings use, since this shared 2-core
-// machine preempts the process (load 3–6 while these ran); a preempted stretch does not count.
-double thread_seconds() {
-  timespec now{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
+// The one-thread timings use thread_seconds (thread_time.hpp): this shared 2-core machine
+// preempted the process (load 3–6 while these ran).
 
 // ---------------------------------------------------------------------------------------------
 // The pile.
