@@ -160,13 +160,17 @@ class TreeElimination {
         with_rows<BodySize>(rows_[constraint], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
           // D is negative definite (−A minus the Schur complement J M⁻¹ Jᵀ of its children):
-          // Eigen's closed form inverts up to 4×4, and −D has a Cholesky factor beyond.
+          // Eigen's closed form inverts up to 4×4, and −D has a Cholesky factor beyond
+          // (SmallCholesky: Eigen's LLT solves a matrix right-hand side by its general blocked
+          // path, which was 4 % of a ragdoll pile's step).
           using Square = Eigen::Matrix<Scalar, m, m>;
           Square inverse;
           if constexpr (m <= 4) {
             inverse = block_d.template topLeftCorner<m, m>().inverse();
           } else {
-            inverse = -Eigen::LLT<Square>(-block_d.template topLeftCorner<m, m>()).solve(Square::Identity());
+            SmallCholesky<m, Scalar> negative;
+            negative.compute(-block_d.template topLeftCorner<m, m>());
+            inverse = -negative.solve(Square(Square::Identity()));
           }
           block_d.template topLeftCorner<m, m>() = inverse;
           if (parent < 0) return;
