@@ -1,19 +1,13 @@
-// Cholesky factorization of a small symmetric positive definite matrix of fixed size N, in its
-// square-root-free form A = L·D·Lᵀ (L unit lower triangular, D diagonal: Golub & Van Loan,
-// "Matrix Computations", §4.1, the LDLᵀ factorization), with solves for fixed-size right-hand
-// sides, written out so the compiler unrolls them.
-//
-// Why without square roots: a factor's pivots form a dependent chain, and a square root on it
-// is some 20 cycles a column; the joint trees factor a 6×6 block per limb at every Newton step
-// (kernel/relaxation/joint_trees.hpp), where the L·Lᵀ form's compute() was 7.9 % of a ragdoll
-// pile's profile and this one's is 6.5 % (`perf record` on `limber run
-// tools/scenes/ragdoll_pile.json --joint-solve tree --substeps 2 --iterations 2 --threads 1`).
+// Cholesky factorization A = L·Lᵀ of a small symmetric positive definite matrix of fixed size N,
+// with solves for fixed-size right-hand sides, written out so the compiler unrolls them.
 //
 // Why not Eigen::LLT: for N = 6 its fixed-size solve with a matrix right-hand side takes the
 // general blocked triangular-solve path (packing included). In the Lagrange tree solve, where each
 // body's 6×6 block is factored and solved against a joint's 6×3 block, Eigen's LLT factor and
 // solves were a third of a chain step (perf, lagrange_bench).
 #pragma once
+
+#include <cmath>
 
 #include <Eigen/Core>
 
@@ -30,33 +24,31 @@ class SmallCholesky {
   /// (a not positive definite); the factor is then unusable.
   bool compute(const Matrix& a) {
     for (int j = 0; j < N; ++j) {
-      Scalar scaled[N];  // L(j, k)·D(k) for k < j
       Scalar pivot = a(j, j);
-      for (int k = 0; k < j; ++k) {
-        scaled[k] = lower_(j, k) * diagonal_[k];
-        pivot -= lower_(j, k) * scaled[k];
-      }
+      for (int k = 0; k < j; ++k) pivot -= lower_(j, k) * lower_(j, k);
       if (!(pivot > 0)) return false;
-      diagonal_[j] = pivot;
-      inverse_diagonal_[j] = 1 / pivot;
+      const Scalar diagonal = std::sqrt(pivot);
+      lower_(j, j) = diagonal;
+      inverse_diagonal_[j] = 1 / diagonal;
       for (int i = j + 1; i < N; ++i) {
         Scalar value = a(i, j);
-        for (int k = 0; k < j; ++k) value -= lower_(i, k) * scaled[k];
+        for (int k = 0; k < j; ++k) value -= lower_(i, k) * lower_(j, k);
         lower_(i, j) = value * inverse_diagonal_[j];
       }
     }
     return true;
   }
 
-  /// Overwrites x (N × M) with A⁻¹·x: forward substitution with L, D⁻¹, then back with Lᵀ.
+  /// Overwrites x (N × M) with A⁻¹·x: forward substitution with L, then back with Lᵀ.
   template <int M>
   void solve_in_place(Eigen::Matrix<Scalar, N, M>& x) const {
     for (int i = 0; i < N; ++i) {
       for (int k = 0; k < i; ++k) x.row(i) -= lower_(i, k) * x.row(k);
+      x.row(i) *= inverse_diagonal_[i];
     }
-    for (int i = 0; i < N; ++i) x.row(i) *= inverse_diagonal_[i];
     for (int i = N - 1; i >= 0; --i) {
       for (int k = i + 1; k < N; ++k) x.row(i) -= lower_(k, i) * x.row(k);
+      x.row(i) *= inverse_diagonal_[i];
     }
   }
 
@@ -67,8 +59,8 @@ class SmallCholesky {
   }
 
  private:
-  Matrix lower_ = Matrix::Zero();  ///< L below the diagonal (its unit diagonal is not stored)
-  Eigen::Matrix<Scalar, N, 1> diagonal_ = Eigen::Matrix<Scalar, N, 1>::Zero(), inverse_diagonal_ = Eigen::Matrix<Scalar, N, 1>::Zero();
+  Matrix lower_ = Matrix::Zero();  ///< L in the lower triangle
+  Eigen::Matrix<Scalar, N, 1> inverse_diagonal_ = Eigen::Matrix<Scalar, N, 1>::Zero();
 };
 
 }  // namespace limber

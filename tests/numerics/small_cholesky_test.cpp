@@ -1,7 +1,7 @@
-// SmallCholesky (kernel/numerics/small_cholesky.hpp): the square-root-free factor A = L·D·Lᵀ
-// solves A·x = b to rounding for symmetric positive definite blocks of every size it serves
-// (1–6: a limb's 6 × 6 articulated inertia, a hinge's 5 × 5 joint block), across the mass and
-// inertia scales of a ragdoll, and refuses a block that is not positive definite.
+// SmallCholesky (kernel/numerics/small_cholesky.hpp): the factor A = L·Lᵀ solves A·x = b to
+// rounding for symmetric positive definite blocks of every size it serves (1–6: a limb's 6 × 6
+// articulated inertia, a hinge's 5 × 5 joint block), across the mass and inertia scales of a
+// ragdoll, and refuses a block that is not positive definite.
 #include <cmath>
 #include <limits>
 #include <random>
