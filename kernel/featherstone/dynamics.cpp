@@ -7,7 +7,6 @@
 #include <string>
 #include <type_traits>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
 namespace limber {
@@ -189,19 +188,10 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
         const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
         Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
         if (armature) d.diagonal() += Eigen::Matrix<double, k, 1>::Map(armature + offset);
-        Eigen::Matrix<double, k, k> d_inverse;
-        // D is symmetric positive definite. Eigen's LLT solve against a matrix takes its blocked
-        // path (a fifth of a spherical chain's ABA in perf); the closed-form inverse serves up to
-        // 3×3 and a written-out Cholesky the floating base's 6×6.
-        if constexpr (k == 1) {
-          d_inverse(0, 0) = 1 / d(0, 0);
-        } else if constexpr (k <= 4) {
-          d_inverse = d.inverse();
-        } else {
-          SmallCholesky<k> factor;
-          factor.compute(d);
-          d_inverse = factor.solve(Eigen::Matrix<double, k, k>(Eigen::Matrix<double, k, k>::Identity()));
-        }
+        // D is symmetric positive definite: closed form up to 4×4, a written-out Cholesky for the
+        // floating base's 6×6 (Eigen's LLT solves a matrix by its blocked path, which was a fifth
+        // of a spherical chain's ABA in perf).
+        const Eigen::Matrix<double, k, k> d_inverse = positive_definite_inverse<k, double>(d);
         const Eigen::Matrix<double, k, 1> u = joint_forces.template segment<k>(offset) - s.transpose() * pa;
         w.projected_inertia.template middleCols<k>(offset) = u_matrix;
         w.joint_inertia_inverse.template block<k, k>(0, offset) = d_inverse;

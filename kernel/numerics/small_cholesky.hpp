@@ -10,6 +10,7 @@
 #include <cmath>
 
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 
@@ -62,5 +63,21 @@ class SmallCholesky {
   Matrix lower_ = Matrix::Zero();  ///< L in the lower triangle
   Eigen::Matrix<Scalar, N, 1> inverse_diagonal_ = Eigen::Matrix<Scalar, N, 1>::Zero();
 };
+
+/// The inverse of a small symmetric positive definite N × N matrix: Eigen's closed form up to
+/// 4×4 (cheaper than a factor's square roots and triangular solves), a SmallCholesky factor
+/// beyond (Eigen's LLT would solve the identity by its general blocked path). The caller
+/// vouches for definiteness; a matrix that is not gives a meaningless result.
+template <int N, typename Scalar>
+Eigen::Matrix<Scalar, N, N> positive_definite_inverse(const Eigen::Matrix<Scalar, N, N>& a) {
+  using Square = Eigen::Matrix<Scalar, N, N>;
+  if constexpr (N <= 4) {
+    return a.inverse();
+  } else {
+    SmallCholesky<N, Scalar> factor;
+    factor.compute(a);
+    return factor.solve(Square(Square::Identity()));
+  }
+}
 
 }  // namespace limber

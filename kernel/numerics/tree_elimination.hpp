@@ -27,7 +27,6 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/Cholesky>
 #include <Eigen/LU>
 
 #include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
@@ -160,18 +159,10 @@ class TreeElimination {
         with_rows<BodySize>(rows_[constraint], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
           // D is negative definite (−A minus the Schur complement J M⁻¹ Jᵀ of its children):
-          // Eigen's closed form inverts up to 4×4, and −D has a Cholesky factor beyond
-          // (SmallCholesky: Eigen's LLT solves a matrix right-hand side by its general blocked
-          // path, which was 7.5 % of a ragdoll pile's profile with trees at 2 × 2).
+          // D⁻¹ = −(−D)⁻¹. (Beyond 4×4 through SmallCholesky: Eigen's LLT, with its general
+          // blocked solve, was 7.5 % of a ragdoll pile's profile with trees at 2 × 2.)
           using Square = Eigen::Matrix<Scalar, m, m>;
-          Square inverse;
-          if constexpr (m <= 4) {
-            inverse = block_d.template topLeftCorner<m, m>().inverse();
-          } else {
-            SmallCholesky<m, Scalar> negative;
-            negative.compute(-block_d.template topLeftCorner<m, m>());
-            inverse = -negative.solve(Square(Square::Identity()));
-          }
+          const Square inverse = -positive_definite_inverse<m, Scalar>(Square(-block_d.template topLeftCorner<m, m>()));
           block_d.template topLeftCorner<m, m>() = inverse;
           if (parent < 0) return;
           const Eigen::Matrix<Scalar, m, BodySize> block = edge(constraint, parent).template topRows<m>();

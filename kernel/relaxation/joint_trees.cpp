@@ -7,6 +7,8 @@
 #include <tuple>
 #include <utility>
 
+#include <Eigen/Cholesky>
+
 #include "limber/kernel/relaxation/joint_projection.hpp"
 
 namespace limber {

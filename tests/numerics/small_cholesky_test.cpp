@@ -1,7 +1,8 @@
-// SmallCholesky (kernel/numerics/small_cholesky.hpp): the factor A = L·Lᵀ solves A·x = b to
-// rounding for symmetric positive definite blocks of every size it serves (1–6: a limb's 6 × 6
-// articulated inertia, a hinge's 5 × 5 joint block), across the mass and inertia scales of a
-// ragdoll, and refuses a block that is not positive definite.
+// SmallCholesky (kernel/numerics/small_cholesky.hpp): the factor A = L·Lᵀ, and
+// positive_definite_inverse (which uses it past 4×4), solve A·x = b to rounding for symmetric
+// positive definite blocks of every size they serve (1–6: a limb's 6 × 6 articulated inertia, a
+// hinge's 5 × 5 joint block), well to badly conditioned; the factor refuses a block that is not
+// positive definite.
 #include <cmath>
 #include <limits>
 #include <random>
@@ -48,11 +49,15 @@ void expect_solves(double spread) {
     const Eigen::Matrix<double, N, 3> solved = factor.solve(Eigen::Matrix<double, N, 3>(a * x));
     // Backward-stable: the error is rounding times the condition number (≈ spread).
     EXPECT_LT((solved - x).norm(), 1e-14 * spread * x.norm()) << "N = " << N << ", trial " << trial;
+    // positive_definite_inverse: closed form up to 4×4, the factor beyond; A⁻¹·A = I to
+    // rounding times the condition number (the 4×4 cofactor form loses up to ~500 roundings).
+    const Eigen::Matrix<double, N, N> identity = positive_definite_inverse<N, double>(a) * a;
+    EXPECT_LT((identity - Eigen::Matrix<double, N, N>::Identity()).norm(), 1e-12 * spread) << "N = " << N << ", trial " << trial;
   }
 }
 
 TEST(SmallCholesky, SolvesPositiveDefiniteBlocksOfEverySizeToRounding) {
-  for (const double spread : {1.0, 1e3, 1e6}) {  // up to a 63.5 kg torso's inertia against a 2.3 kg spine's
+  for (const double spread : {1.0, 1e3, 1e6}) {  // well to badly conditioned
     SCOPED_TRACE("eigenvalue spread " + std::to_string(spread));
     expect_solves<1>(spread);
     expect_solves<2>(spread);
