@@ -70,6 +70,9 @@ struct StepProfile {
   int contact_colours = 0;   ///< colours of those rows (the overflow not counted)
   int candidate_pairs = 0;   ///< pairs of limbs (and balls) the sweep-and-prune broadphase gave
   int contacts = 0;          ///< StepReport::contacts' count, summed over the substeps (≥ StepReport::contacts)
+  int tree_solves = 0;       ///< exact joint trees (JointSolve::tree): one component's position solves
+  int tree_newton_steps = 0; ///< their Newton steps (a fresh or reused factor and a solve each)
+  int tree_capped = 0;       ///< solves that stopped at the cap of Newton steps unconverged
 
   /// Adds `part` (a substep's) field by field.
   StepProfile& operator+=(const StepProfile& part) {
@@ -78,6 +81,7 @@ struct StepProfile {
     substeps += part.substeps, position_sweeps += part.position_sweeps, velocity_sweeps += part.velocity_sweeps;
     contact_rows += part.contact_rows, contact_colours += part.contact_colours;
     candidate_pairs += part.candidate_pairs, contacts += part.contacts;
+    tree_solves += part.tree_solves, tree_newton_steps += part.tree_newton_steps, tree_capped += part.tree_capped;
     return *this;
   }
 };

@@ -130,6 +130,10 @@ struct JointTrees {
   std::vector<Eigen::Matrix<double, 6, 1>> rate;
   std::vector<Eigen::Matrix<double, 6, 6>> block_a, block_b;
   std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
+  /// Counts since the substep began (begin_joint_trees), per component, for the step's profile
+  /// (each written by its island's task only): position solves (project_joint_trees calls),
+  /// their Newton steps, and the solves that stopped at the cap with a move still ≥ 1e-5 m.
+  std::vector<std::uint32_t> solves, newton_steps, capped;
   bool active() const { return !joints.empty(); }
 };
 

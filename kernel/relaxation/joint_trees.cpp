@@ -386,14 +386,16 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
     }
   }
   // Components of more than one limb, by island (a limb's island from the islands' limb ranges).
+  std::vector<std::uint32_t> island_of_limb(limb_count, 0);
+  for (std::size_t i = 0; i < state.islands.size(); ++i) {
+    std::fill(island_of_limb.begin() + state.islands[i].limb_begin, island_of_limb.begin() + state.islands[i].limb_end,
+              static_cast<std::uint32_t>(i));
+  }
   std::vector<std::pair<std::uint32_t, std::uint32_t>> island_components;
   for (std::size_t k = 0; k < ordering.components.size(); ++k) {
     const TreeOrdering::Component& component = ordering.components[k];
     if (component.end - component.begin < 2) continue;
-    const auto limb = static_cast<std::uint32_t>(component.body);
-    const auto island = std::find_if(state.islands.begin(), state.islands.end(),
-                                     [&](const Island& i) { return limb >= i.limb_begin && limb < i.limb_end; });
-    island_components.emplace_back(static_cast<std::uint32_t>(island - state.islands.begin()), static_cast<std::uint32_t>(k));
+    island_components.emplace_back(island_of_limb[static_cast<std::size_t>(component.body)], static_cast<std::uint32_t>(k));
   }
   trees.island_components = group_by_row(state.islands.size(), island_components);
   // The limbs of those components are rigid bodies: their rest shapes, and their own
@@ -438,6 +440,9 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.factored_limits.assign(trees.joints.size(), 0);
   trees.rows.assign(trees.joints.size(), 0);
   trees.factored.assign(trees.elimination.ordering().components.size(), 0);
+  trees.solves.assign(trees.factored.size(), 0);
+  trees.newton_steps.assign(trees.factored.size(), 0);
+  trees.capped.assign(trees.factored.size(), 0);
 }
 
 }  // namespace
@@ -539,7 +544,19 @@ constexpr double kNewtonMove = 1e-5;
 
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state) {
-  std::fill(state.plan.joint_trees.factored.begin(), state.plan.joint_trees.factored.end(), std::uint8_t{0});
+  JointTrees& trees = state.plan.joint_trees;
+  std::fill(trees.factored.begin(), trees.factored.end(), std::uint8_t{0});
+  for (auto* counts : {&trees.solves, &trees.newton_steps, &trees.capped}) std::fill(counts->begin(), counts->end(), 0u);
+}
+
+template <typename Scalar>
+JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
+  const JointTrees& trees = state.plan.joint_trees;
+  JointTreeCounts counts;
+  for (std::size_t k = 0; k < trees.solves.size(); ++k) {
+    counts.solves += trees.solves[k], counts.newton_steps += trees.newton_steps[k], counts.capped += trees.capped[k];
+  }
+  return counts;
 }
 
 namespace {
@@ -550,14 +567,17 @@ double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
   JointTrees& trees = state.plan.joint_trees;
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   double largest = 0;
+  ++trees.solves[index];
   for (int newton = 0; newton < kNewtonSteps; ++newton) {
     if (newton > 0) trees.factored[index] = 0;
     solve_component(state, trees, index, false);
+    ++trees.newton_steps[index];
     double moved = 0;
     for_each_limb(trees, component, [&](std::size_t limb) { moved = std::max(moved, move_limb(state, trees, limb)); });
     largest = std::max(largest, moved);
-    if (moved < kNewtonMove) break;
+    if (moved < kNewtonMove) return largest;
   }
+  ++trees.capped[index];
   return largest;
 }
 
@@ -623,6 +643,7 @@ double project_joint_tree_velocities(VerletState<Scalar>& state) {
 #define LIMBER_INSTANTIATE(Scalar)                                               \
   template void prepare_joint_trees<Scalar>(VerletState<Scalar>&);              \
   template void begin_joint_trees<Scalar>(VerletState<Scalar>&);                \
+  template JointTreeCounts joint_tree_counts<Scalar>(const VerletState<Scalar>&); \
   template double project_joint_trees<Scalar>(VerletState<Scalar>&);            \
   template double project_joint_tree_velocities<Scalar>(VerletState<Scalar>&);
 LIMBER_INSTANTIATE(float)

@@ -59,6 +59,14 @@ bool joint_trees_on_threads(const RelaxationPlan<Scalar>& plan) {
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state);
 
+/// What the trees did since the substep began, over every component (StepProfile's tree
+/// counts): position solves, their Newton steps, and the solves capped unconverged.
+struct JointTreeCounts {
+  int solves = 0, newton_steps = 0, capped = 0;
+};
+template <typename Scalar>
+JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state);
+
 /// Newton (chord) steps of every awake island's joint trees on the positions (an island a task
 /// when joint_trees_on_threads), until a step moves no particle by 1e-5 m or more (at most 4;
 /// the first reuses the substep's factor while the active set stays). Returns the largest
@@ -76,6 +84,8 @@ extern template void prepare_joint_trees<float>(VerletState<float>&);
 extern template void prepare_joint_trees<double>(VerletState<double>&);
 extern template void begin_joint_trees<float>(VerletState<float>&);
 extern template void begin_joint_trees<double>(VerletState<double>&);
+extern template JointTreeCounts joint_tree_counts<float>(const VerletState<float>&);
+extern template JointTreeCounts joint_tree_counts<double>(const VerletState<double>&);
 extern template double project_joint_trees<float>(VerletState<float>&);
 extern template double project_joint_trees<double>(VerletState<double>&);
 extern template double project_joint_tree_velocities<float>(VerletState<float>&);

@@ -448,6 +448,8 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     profile.contact_colours = rows.empty() ? 0 : static_cast<int>(rows.colour_count);
     profile.candidate_pairs = limb_contacts ? static_cast<int>(state.collisions.candidate_pairs()) : 0;
     profile.contacts = report.contacts;
+    const JointTreeCounts trees = joint_tree_counts(state);
+    profile.tree_solves = trees.solves, profile.tree_newton_steps = trees.newton_steps, profile.tree_capped = trees.capped;
   }
   return report;
 }

@@ -87,6 +87,38 @@ TEST(JointTrees, TwoSolvesCloseARagdollsJointsAndLimitsToRoundingWhateverItsMass
   }
 }
 
+// The profile's tree counts (joint_tree_counts): a shaken ragdoll's first solve takes Newton
+// steps until one moves less than 1e-5 m or the cap of 4 is reached (a shake of 1 cm needs at
+// least two), the next call one; a substep starts them from zero, and a profiled step counts
+// one solve a sweep.
+TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
+  VerletState<double> state = compile<double>(ragdoll(100), tree_options());
+  state.awake_islands = {0};
+  shake(state, 0.01, 13);
+  begin_joint_trees(state);
+  project_joint_trees(state);
+  const JointTreeCounts first = joint_tree_counts(state);
+  EXPECT_EQ(first.solves, 1);
+  EXPECT_GE(first.newton_steps, 2);
+  EXPECT_LE(first.newton_steps, 4);
+  EXPECT_LE(first.capped, 1);
+  if (first.capped == 1) EXPECT_EQ(first.newton_steps, 4);  // only a solve at the cap is capped
+  project_joint_trees(state);
+  const JointTreeCounts second = joint_tree_counts(state);
+  EXPECT_EQ(second.solves, 2);
+  EXPECT_EQ(second.newton_steps, first.newton_steps + 1);
+  begin_joint_trees(state);
+  EXPECT_EQ(joint_tree_counts(state).newton_steps, 0);
+
+  VerletOptions options = tree_options();
+  options.profile = true;
+  options.relaxation.substeps = 2;
+  VerletState<double> stepped = compile<double>(ragdoll(100, true), options);
+  const StepReport report = step(stepped);
+  EXPECT_EQ(report.profile.tree_solves, 2 * options.relaxation.iterations);
+  EXPECT_GE(report.profile.tree_newton_steps, report.profile.tree_solves);
+}
+
 TEST(JointTrees, APositionSolveKeepsTheCentreOfMass) {
   VerletState<double> state = compile<double>(ragdoll(100), tree_options());
   state.awake_islands = {0};

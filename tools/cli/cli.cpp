@@ -348,7 +348,12 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
                                           per_step(p.contact_rows), per_step(p.contacts))}};
   if (!rigid) {
     stages.push_back({"colour", p.colour, format("%.3g contact colours", per_step(p.contact_colours))});
-    stages.push_back({"relax", p.relax, format("%.4g position sweeps", per_step(p.position_sweeps))});
+    std::string relax = format("%.4g position sweeps", per_step(p.position_sweeps));
+    if (p.tree_solves > 0) {
+      relax += format(", %.4g tree solves of %.3g Newton steps (%.3g%% capped)", per_step(p.tree_solves),
+                      static_cast<double>(p.tree_newton_steps) / p.tree_solves, 100.0 * p.tree_capped / p.tree_solves);
+    }
+    stages.push_back({"relax", p.relax, relax});
     stages.push_back({"velocity", p.velocity, format("%.4g velocity sweeps", per_step(p.velocity_sweeps))});
     stages.push_back({"restitution", p.restitution, ""});
     stages.push_back({"sleep", p.sleep, ""});
