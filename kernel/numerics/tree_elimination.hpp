@@ -18,6 +18,11 @@
 // - the Verlet family's direct projection (kernel/relaxation/direct_projection.hpp): particles
 //   (BodySize 3, M = m·I), distance constraints of one row and zero-length joints of three, A
 //   the compliance α̃ = α/Δt² (XPBD); x the position change, μ = −Δλ.
+//
+// Values are numbers (double, float) or SIMD lanes of numbers (xsimd::batch): with lanes, each
+// lane is its own system of the same shape (same ordering, same rows per constraint: instances
+// of one skeleton side by side), and lane k gives the bits a number-valued elimination gives on
+// lane k's system (lane_blocks.hpp). The block products are written as loops for that reason.
 #pragma once
 
 #include <cstdint>
@@ -27,9 +32,9 @@
 #include <vector>
 
 #include <Eigen/Core>
-#include <Eigen/LU>
 
 #include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+#include "limber/kernel/numerics/lane_blocks.hpp"
 #include "limber/kernel/numerics/small_cholesky.hpp"
 
 namespace limber {
@@ -73,12 +78,13 @@ struct TreeOrdering {
 /// constraints are reported, not ordered. O(nodes).
 TreeOrdering order_tree(std::size_t body_count, std::span<const std::int32_t> inboard, std::span<const std::int32_t> outboard);
 
-/// Factor-and-solve storage and arithmetic for a TreeOrdering. Allocates only in assign().
-template <typename Scalar, int BodySize>
+/// Factor-and-solve storage and arithmetic for a TreeOrdering. Value: a floating-point type, or
+/// a SIMD batch of one (one system per lane). Allocates only in assign().
+template <typename Value, int BodySize>
 class TreeElimination {
  public:
-  using BodyMatrix = Eigen::Matrix<Scalar, BodySize, BodySize>;
-  using BodyVector = Eigen::Matrix<Scalar, BodySize, 1>;
+  using BodyMatrix = Block<Value, BodySize, BodySize>;
+  using BodyVector = Block<Value, BodySize, 1>;
 
   /// Takes the ordering and each constraint's row count (1…BodySize).
   void assign(TreeOrdering ordering, std::size_t body_count, std::vector<std::uint8_t> constraint_rows) {
@@ -108,9 +114,10 @@ class TreeElimination {
   const BodyVector& work(std::size_t node) const { return work_[node]; }
 
   /// Factors and solves the nodes order[begin, end) (whole components): factor() then solve().
-  /// edge(constraint, body) returns the constraint's J block on that body, of which the top
-  /// rows(constraint) rows are read. Returns false when a body's block is not positive definite
-  /// (the solution is then meaningless).
+  /// edge(constraint, body) returns the constraint's J block on that body (BodySize × BodySize,
+  /// a BodyMatrix or any block read by (i, j)), of which the top rows(constraint) rows are read.
+  /// Returns false when a body's block is not positive definite in some lane (that lane's
+  /// solution is then meaningless).
   template <typename Edge>
   bool eliminate(std::uint32_t begin, std::uint32_t end, Edge&& edge) {
     const bool definite = factor(begin, end, std::forward<Edge>(edge));
@@ -123,53 +130,13 @@ class TreeElimination {
   /// read. Returns false as eliminate() does.
   template <typename Edge>
   bool factor(std::uint32_t begin, std::uint32_t end, Edge&& edge) {
-    const auto& order = ordering_.order;
-    const auto& parent_of = ordering_.parent;
     bool definite = true;
     for (std::uint32_t k = begin; k < end; ++k) {
-      const std::int32_t node = order[k], parent = parent_of[node];
-      BodyMatrix& block_d = diagonal_[node];
-      BodyMatrix& to_parent = to_parent_[node];
+      const std::int32_t node = ordering_.order[k];
       if (node < body_count_) {
-        // Up to 4×4, Eigen's closed-form inverse (kept in place of D) is cheaper than a
-        // Cholesky factor's square roots and triangular solves; beyond, the factor.
-        if constexpr (kInvertBodies) {
-          definite = block_d.determinant() > Scalar(0) && definite;
-          block_d = BodyMatrix(block_d.inverse());
-        } else {
-          definite = body_factor_[node].compute(block_d) && definite;
-        }
-        if (parent < 0) continue;
-        const auto& block_edge = edge(static_cast<std::size_t>(parent - body_count_), node);
-        with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
-          constexpr int m = decltype(rows)::value;
-          const Eigen::Matrix<Scalar, m, BodySize> block = block_edge.template topRows<m>();  // H_{constraint,body}
-          // B·D⁻¹ = (D⁻¹·Bᵀ)ᵀ, D symmetric.
-          Eigen::Matrix<Scalar, m, BodySize> l;
-          if constexpr (kInvertBodies) {
-            l.noalias() = block * block_d;
-          } else {
-            l = body_factor_[node].solve(Eigen::Matrix<Scalar, BodySize, m>(block.transpose())).transpose();
-          }
-          to_parent.template topRows<m>() = l;
-          diagonal_[parent].template topLeftCorner<m, m>().noalias() -= l * block.transpose();
-        });
+        factor_body(node, edge, definite);
       } else {
-        const auto constraint = static_cast<std::size_t>(node - body_count_);
-        with_rows<BodySize>(rows_[constraint], [&](auto rows) {
-          constexpr int m = decltype(rows)::value;
-          // D is negative definite (−A minus the Schur complement J M⁻¹ Jᵀ of its children):
-          // D⁻¹ = −(−D)⁻¹. (Beyond 4×4 through SmallCholesky: Eigen's LLT, with its general
-          // blocked solve, was 7.5 % of a ragdoll pile's profile with trees at 2 × 2.)
-          using Square = Eigen::Matrix<Scalar, m, m>;
-          const Square inverse = -positive_definite_inverse<m, Scalar>(Square(-block_d.template topLeftCorner<m, m>()));
-          block_d.template topLeftCorner<m, m>() = inverse;
-          if (parent < 0) return;
-          const Eigen::Matrix<Scalar, m, BodySize> block = edge(constraint, parent).template topRows<m>();
-          const Eigen::Matrix<Scalar, BodySize, m> l = block.transpose() * inverse;
-          to_parent.template leftCols<m>() = l;
-          diagonal_[parent].noalias() -= l * block;
-        });
+        factor_constraint(node, edge);
       }
     }
     return definite;
@@ -184,60 +151,153 @@ class TreeElimination {
     for (std::uint32_t k = begin; k < end; ++k) {
       const std::int32_t node = order[k], parent = parent_of[node];
       if (parent < 0) continue;
+      const BodyMatrix& l = to_parent_[node];
+      const BodyVector& y = work_[node];
+      BodyVector& up = work_[parent];
       if (node < body_count_) {
         with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
-          const Eigen::Matrix<Scalar, m, BodySize> l = to_parent_[node].template topRows<m>();
-          work_[parent].template head<m>().noalias() -= l * work_[node];
+          for (int i = 0; i < m; ++i) up(i, 0) -= dot<BodySize>([&](int c) { return l(i, c) * y(c, 0); });
         });
       } else {
         with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
-          const Eigen::Matrix<Scalar, BodySize, m> l = to_parent_[node].template leftCols<m>();
-          work_[parent].noalias() -= l * work_[node].template head<m>();
+          for (int i = 0; i < BodySize; ++i) up(i, 0) -= dot<m>([&](int c) { return l(i, c) * y(c, 0); });
         });
       }
     }
-    // Back-substitute, parents first: x_node = D⁻¹·y_node − Lᵀ·x_parent.
     for (std::uint32_t k = end; k-- > begin;) {
       const std::int32_t node = order[k], parent = parent_of[node];
       if (node < body_count_) {
-        BodyVector x;
-        if constexpr (kInvertBodies) {
-          x.noalias() = diagonal_[node] * work_[node];
-        } else {
-          x = work_[node];
-          body_factor_[node].solve_in_place(x);
-        }
-        if (parent >= 0) {
-          with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
-            constexpr int m = decltype(rows)::value;
-            x.noalias() -= to_parent_[node].template topRows<m>().transpose() * work_[parent].template head<m>();
-          });
-        }
-        work_[node] = x;
-      } else {
-        with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
-          constexpr int m = decltype(rows)::value;
-          Eigen::Matrix<Scalar, m, 1> x = diagonal_[node].template topLeftCorner<m, m>() * work_[node].template head<m>();
-          if (parent >= 0) x.noalias() -= to_parent_[node].template leftCols<m>().transpose() * work_[parent];
-          work_[node].template head<m>() = x;
-        });
+        back_substitute_body(node, parent);
+        continue;
       }
+      with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        const BodyMatrix& d = diagonal_[node];
+        const BodyMatrix& l = to_parent_[node];
+        BodyVector& y = work_[node];
+        Value x[m];
+        for (int i = 0; i < m; ++i) {
+          x[i] = dot<m>([&](int c) { return d(i, c) * y(c, 0); });
+          if (parent >= 0) x[i] -= dot<BodySize>([&](int c) { return l(c, i) * work_[parent](c, 0); });
+        }
+        for (int i = 0; i < m; ++i) y(i, 0) = x[i];
+      });
     }
   }
 
  private:
-  static constexpr bool kInvertBodies = BodySize <= 4;
+  static constexpr bool kInvertBodies = BodySize <= 3;
+
+  /// Σ_{c<n} term(c), summed in order.
+  template <int n, typename Term>
+  static Value dot(Term&& term) {
+    Value sum = term(0);
+    for (int c = 1; c < n; ++c) sum += term(c);
+    return sum;
+  }
+
+  // A body: D⁻¹ (in place, or its Cholesky factor), then into its parent constraint's D:
+  // L = B·D⁻¹ (top m rows), D_parent −= L·Bᵀ, B = H_{constraint,body}.
+  template <typename Edge>
+  void factor_body(std::int32_t node, Edge& edge, bool& definite) {
+    BodyMatrix& block_d = diagonal_[node];
+    if constexpr (kInvertBodies) {
+      block_d = positive_definite_inverse<BodySize, Value>(block_d, definite);
+    } else {
+      definite = body_factor_[node].compute(block_d) && definite;
+    }
+    const std::int32_t parent = ordering_.parent[node];
+    if (parent < 0) return;
+    const auto& block = edge(static_cast<std::size_t>(parent - body_count_), node);
+    BodyMatrix& l = to_parent_[node];
+    with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+      constexpr int m = decltype(rows)::value;
+      if constexpr (kInvertBodies) {
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < BodySize; ++j) l(i, j) = dot<BodySize>([&](int c) { return block(i, c) * block_d(c, j); });
+        }
+      } else {
+        Block<Value, BodySize, m> transposed;  // D⁻¹·Bᵀ = (B·D⁻¹)ᵀ, D symmetric
+        for (int i = 0; i < BodySize; ++i) {
+          for (int j = 0; j < m; ++j) transposed(i, j) = block(j, i);
+        }
+        body_factor_[node].solve_in_place(transposed);
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < BodySize; ++j) l(i, j) = transposed(j, i);
+        }
+      }
+      BodyMatrix& up = diagonal_[parent];
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < m; ++j) up(i, j) -= dot<BodySize>([&](int c) { return l(i, c) * block(j, c); });
+      }
+    });
+  }
+
+  // A constraint: D is negative definite (−A minus the Schur complement J M⁻¹ Jᵀ of its
+  // children), D⁻¹ = −(−D)⁻¹ in place; then into its parent body's D: L = Bᵀ·D⁻¹ (left m
+  // columns), D_parent −= L·B, B = H_{constraint,parent}.
+  template <typename Edge>
+  void factor_constraint(std::int32_t node, Edge& edge) {
+    const auto constraint = static_cast<std::size_t>(node - body_count_);
+    const std::int32_t parent = ordering_.parent[node];
+    BodyMatrix& block_d = diagonal_[node];
+    with_rows<BodySize>(rows_[constraint], [&](auto rows) {
+      constexpr int m = decltype(rows)::value;
+      Block<Value, m, m> negative;
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < m; ++j) negative(i, j) = -block_d(i, j);
+      }
+      bool constraint_definite = true;  // −D is positive definite by construction
+      const Block<Value, m, m> inverse = positive_definite_inverse<m, Value>(negative, constraint_definite);
+      for (int i = 0; i < m; ++i) {
+        for (int j = 0; j < m; ++j) block_d(i, j) = -inverse(i, j);
+      }
+      if (parent < 0) return;
+      const auto& block = edge(constraint, parent);
+      BodyMatrix& l = to_parent_[node];
+      for (int i = 0; i < BodySize; ++i) {
+        for (int j = 0; j < m; ++j) l(i, j) = dot<m>([&](int c) { return block(c, i) * block_d(c, j); });
+      }
+      BodyMatrix& up = diagonal_[parent];
+      for (int i = 0; i < BodySize; ++i) {
+        for (int j = 0; j < BodySize; ++j) up(i, j) -= dot<m>([&](int c) { return l(i, c) * block(c, j); });
+      }
+    });
+  }
+
+  // x_body = D⁻¹·y − Lᵀ·x_parent (L: the top m rows).
+  void back_substitute_body(std::int32_t node, std::int32_t parent) {
+    BodyVector& y = work_[node];
+    BodyVector x;
+    if constexpr (kInvertBodies) {
+      const BodyMatrix& d = diagonal_[node];
+      for (int i = 0; i < BodySize; ++i) x(i, 0) = dot<BodySize>([&](int c) { return d(i, c) * y(c, 0); });
+    } else {
+      x = y;
+      body_factor_[node].solve_in_place(x);
+    }
+    if (parent >= 0) {
+      const BodyMatrix& l = to_parent_[node];
+      const BodyVector& up = work_[parent];
+      with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        for (int i = 0; i < BodySize; ++i) x(i, 0) -= dot<m>([&](int c) { return l(c, i) * up(c, 0); });
+      });
+    }
+    y = x;
+  }
+
   TreeOrdering ordering_;
   std::int32_t body_count_ = 0;
   std::vector<std::uint8_t> rows_;
-  /// Per node: D (inverted in place when it is eliminated, except a body's of more than 4 rows,
+  /// Per node: D (inverted in place when it is eliminated, except a body's of more than 3 rows,
   /// whose Cholesky factor body_factor_ keeps) and L = H_{parent,node}·D⁻¹ (top rows for a body,
   /// left columns for a constraint).
   std::vector<BodyMatrix> diagonal_, to_parent_;
   std::vector<BodyVector> work_;
-  std::vector<SmallCholesky<BodySize, Scalar>> body_factor_;
+  std::vector<SmallCholesky<BodySize, Value>> body_factor_;
 };
 
 }  // namespace limber

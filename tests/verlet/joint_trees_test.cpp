@@ -102,7 +102,9 @@ TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
   EXPECT_GE(first.newton_steps, 2);
   EXPECT_LE(first.newton_steps, 4);
   EXPECT_LE(first.capped, 1);
-  if (first.capped == 1) EXPECT_EQ(first.newton_steps, 4);  // only a solve at the cap is capped
+  if (first.capped == 1) {
+    EXPECT_EQ(first.newton_steps, 4);  // only a solve at the cap is capped
+  }
   project_joint_trees(state);
   const JointTreeCounts second = joint_tree_counts(state);
   EXPECT_EQ(second.solves, 2);

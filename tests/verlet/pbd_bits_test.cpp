@@ -68,7 +68,10 @@ std::vector<Case> cases() {
   rods_options.verlet.limb_masses = LimbMasses::inertia;
   out.push_back({"humanoid gauss-seidel", humanoid, with_relaxation(gauss_seidel, thesis), 400, 0x12081e55ebefbc8dull, 0x2fb32d49679b29e6ull});
   out.push_back({"humanoid jacobi", humanoid, with_relaxation(jacobi, thesis), 400, 0x5c268cd0f4bfc9b0ull, 0xcb4474e5ff78731bull});
-  out.push_back({"humanoid direct", humanoid, with_relaxation(direct, thesis), 400, 0x4767f7bde942ddffull, 0xb8d5b1669e869b40ull});
+  // Retaken when the tree elimination's block products became loops written once for numbers
+  // and SIMD lanes (a change of rounding order only: `limber run tools/scenes/humanoid.json
+  // --solver direct --steps 600` prints the same gaps and energies to its last digit).
+  out.push_back({"humanoid direct", humanoid, with_relaxation(direct, thesis), 400, 0x8c61979a6e6ee27full, 0xf6c799529bcfc513ull});
   out.push_back({"chain gauss-seidel", chain, with_relaxation(gauss_seidel, over), 300, 0x737203bc81c5e931ull, 0x9d3e370e8ed86d0eull});
   out.push_back({"chain sequential", chain, with_relaxation(sequential, over), 300, 0xf20cc64821cfa54dull, 0x010f797ece2253e1ull});
   out.push_back({"chain unweighted", chain, with_relaxation(unweighted, over), 300, 0x460cecf72a8fe9dfull, 0x3fdeccdc17c528c1ull});

@@ -1,0 +1,50 @@
+// Small fixed-size blocks whose entries are either numbers or SIMD lanes of numbers, for the
+// arithmetic the tree elimination and SmallCholesky write once for both.
+//
+// A "value" is a floating-point type (float, double) or a SIMD batch of one (xsimd::batch<double>:
+// one independent system per lane, the instances of one shape solved side by side). The
+// arithmetic here uses only +, −, ×, ÷, sqrt and comparisons, one operation sequence per entry
+// whatever the value type: with -ffp-contract=off (CMakeLists.txt) and IEEE division and sqrt
+// in every lane, lane k of a batch gives the same bits as the same code on lane k's numbers.
+// That is why the products below are plain loops, not Eigen expressions: Eigen sums a product
+// in an order that depends on whether it can vectorize the scalar type.
+//
+// Storage: a block of numbers is an Eigen matrix (its users fill it with Eigen expressions);
+// a block of lanes is a LaneBlock. Both are read and written through block(i, j).
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <type_traits>
+
+#include <Eigen/Core>
+
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
+namespace limber {
+
+/// Rows × Cols lanes, row-major.
+template <typename Value, int Rows, int Cols>
+struct LaneBlock {
+  std::array<Value, static_cast<std::size_t>(Rows * Cols)> entries;
+  Value& operator()(int i, int j) { return entries[static_cast<std::size_t>(i * Cols + j)]; }
+  const Value& operator()(int i, int j) const { return entries[static_cast<std::size_t>(i * Cols + j)]; }
+  static LaneBlock Zero() {
+    LaneBlock block;
+    block.entries.fill(Value(0));
+    return block;
+  }
+};
+
+/// A Rows × Cols block of `Value`s: an Eigen matrix for numbers, a LaneBlock for lanes.
+template <typename Value, int Rows, int Cols>
+using Block = std::conditional_t<std::is_arithmetic_v<Value>, Eigen::Matrix<Value, Rows, Cols>, LaneBlock<Value, Rows, Cols>>;
+
+/// Whether a comparison holds in every lane (a number's comparison is one lane).
+inline bool all_lanes(bool holds) { return holds; }
+template <typename Mask>
+bool all_lanes(const Mask& holds) {
+  return all(holds);  // xsimd::all, found by argument-dependent lookup
+}
+
+}  // namespace limber
