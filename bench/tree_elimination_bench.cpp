@@ -47,18 +47,6 @@ Shape rope() {
   return shape;
 }
 
-template <typename Value>
-void set_lane(Value& value, std::size_t lane, double number) {
-  if constexpr (std::is_arithmetic_v<Value>) {
-    value = number;
-  } else {
-    alignas(64) double lanes[Value::size];
-    value.store_aligned(lanes);
-    lanes[lane] = number;
-    value = Value::load_aligned(lanes);
-  }
-}
-
 // `instances` systems of one shape, `width` to an elimination: the inputs kept to reload them.
 template <typename Value, int B>
 struct Batch {

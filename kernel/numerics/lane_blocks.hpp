@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <type_traits>
 
 #include <Eigen/Core>
@@ -45,6 +46,30 @@ inline bool all_lanes(bool holds) { return holds; }
 template <typename Mask>
 bool all_lanes(const Mask& holds) {
   return all(holds);  // xsimd::all, found by argument-dependent lookup
+}
+
+/// Lane `lane` of a value (a number is its only lane), read or written on its own: for loading
+/// lanes and reading them back outside the arithmetic (tests, benchmarks, gathers).
+template <typename Value>
+auto get_lane(const Value& value, std::size_t lane) {
+  if constexpr (std::is_arithmetic_v<Value>) {
+    return value;
+  } else {
+    alignas(64) typename Value::value_type lanes[Value::size];
+    value.store_aligned(lanes);
+    return lanes[lane];
+  }
+}
+template <typename Value, typename Number>
+void set_lane(Value& value, std::size_t lane, Number number) {
+  if constexpr (std::is_arithmetic_v<Value>) {
+    value = number;
+  } else {
+    alignas(64) typename Value::value_type lanes[Value::size];
+    value.store_aligned(lanes);
+    lanes[lane] = number;
+    value = Value::load_aligned(lanes);
+  }
 }
 
 }  // namespace limber

@@ -101,29 +101,6 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> dense_system(const Shape& shape, con
   return {kkt, right};
 }
 
-// Lane `lane` of a value (a number is one lane).
-template <typename Value>
-double get_lane(const Value& value, std::size_t lane) {
-  if constexpr (std::is_arithmetic_v<Value>) {
-    return value;
-  } else {
-    alignas(64) double lanes[Value::size];
-    value.store_aligned(lanes);
-    return lanes[lane];
-  }
-}
-template <typename Value>
-void set_lane(Value& value, std::size_t lane, double number) {
-  if constexpr (std::is_arithmetic_v<Value>) {
-    value = number;
-  } else {
-    alignas(64) double lanes[Value::size];
-    value.store_aligned(lanes);
-    lanes[lane] = number;
-    value = Value::load_aligned(lanes);
-  }
-}
-
 // Loads lane `lane` of the elimination's inputs from `system`.
 template <typename Value, int B>
 void load(TreeElimination<Value, B>& elimination, const Shape& shape, const System<B>& system, std::size_t lane) {
