@@ -188,9 +188,9 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
         const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
         Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
         if (armature) d.diagonal() += Eigen::Matrix<double, k, 1>::Map(armature + offset);
-        // D is symmetric positive definite: closed form up to 4×4, a written-out Cholesky for the
-        // floating base's 6×6 (Eigen's LLT solves a matrix by its blocked path, which was a fifth
-        // of a spherical chain's ABA in perf).
+        // D is symmetric positive definite: cofactors up to 3×3, a written-out Cholesky beyond,
+        // the floating base's 6×6 (Eigen's LLT solves a matrix by its blocked path, which was a
+        // fifth of a spherical chain's ABA in perf).
         const Eigen::Matrix<double, k, k> d_inverse = positive_definite_inverse<k, double>(d);
         const Eigen::Matrix<double, k, 1> u = joint_forces.template segment<k>(offset) - s.transpose() * pa;
         w.projected_inertia.template middleCols<k>(offset) = u_matrix;

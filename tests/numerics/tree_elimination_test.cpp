@@ -3,6 +3,8 @@
 // to rounding, for rigid bodies (6 × 6 blocks) and particles (3 × 3), constraints of 1 to 6 rows,
 // rigid and compliant; and in SIMD lanes, each lane its own system of the same shape, every
 // lane gives the bits the number-valued elimination gives on that lane's system.
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <string>
