@@ -30,6 +30,9 @@ Aabb segment_box(const LimbSegment& limb, double grow) {
   return {limb.head.cwiseMin(limb.tail).array() - reach, limb.head.cwiseMax(limb.tail).array() + reach};
 }
 
+// How far the segment may move before the next broadphase search, m.
+double search_reach(const LimbSegment& limb) { return std::max(limb.reach, limb.search_reach); }
+
 BoundingSphere segment_sphere(const LimbSegment& limb) {
   return {0.5 * (limb.head + limb.tail), 0.5 * (limb.head - limb.tail).norm() + limb.radius};
 }
@@ -232,10 +235,11 @@ LimbCollisions::LimbCollisions(const Model& model)
   limb_pairs_ = some_pair_tested(false) || some_pair_tested(true);
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
-  // Room for a typical scene's search: four candidate pairs per segment (a limb among its
-  // neighbours in a pile or a fallen figure), one contact per segment and three per segment
+  // Room for a typical scene's search: four candidate (and kept) pairs per segment (a limb among
+  // its neighbours in a pile or a fallen figure), one contact per segment and three per segment
   // against static geometry, four candidates per ball; more grow them once.
   broadphase_.reserve(segments, 0, 4 * segments);
+  kept_limb_pairs_.reserve(4 * segments), kept_static_pairs_.reserve(3 * segments), searched_.reserve(segments);
   scratch_.reserve(3 * segments);
   ball_candidates_.reserve(limb_count_, model.balls.size(), 4 * model.balls.size());
 }
@@ -292,52 +296,106 @@ bool LimbCollisions::pair_tested(std::uint32_t first, std::uint32_t second) cons
 
 void LimbCollisions::find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                           std::vector<LimbContact>& out) {
+  search(limbs, awake, margin, out, /*keep=*/true);
+}
+
+bool LimbCollisions::find_kept_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                                     std::vector<LimbContact>& out) {
   out.clear();
+  check_sizes(limbs, awake);
+  candidate_pairs_ = 0;
+  if (!active_) return true;
+  if (searched_.size() != limbs.size()) return false;
+  for (std::size_t s = 0; s < limbs.size(); ++s) {
+    // A pair the search left out was farther apart than margin + both search reaches (boxes,
+    // spheres); the pair's distance has since shrunk by at most the two segments' moves.
+    if (!awake[s]) continue;
+    const LimbSegment& now = limbs[s];
+    const LimbSegment& then = searched_[s];
+    const BoundingSphere sphere = segment_sphere(now), searched_sphere = segment_sphere(then);
+    const double ends = std::max((now.head - then.head).norm(), (now.tail - then.tail).norm());
+    const double spheres = (sphere.centre - searched_sphere.centre).norm() + std::max(0.0, sphere.radius - searched_sphere.radius);
+    if (std::max(ends, spheres) + now.reach > search_reach(then)) return false;
+  }
+  for (const auto& [i, j] : kept_limb_pairs_) {
+    if (awake[i] || awake[j]) add_limb_pair(i, j, limbs, margin, out);
+  }
+  for (const auto& [s, k] : kept_static_pairs_) {
+    if (awake[s]) add_static_pair(s, limbs[s], statics_.primitives()[k], margin, out);
+  }
+  std::sort(out.begin(), out.end(), contact_before);
+  return true;
+}
+
+void LimbCollisions::check_sizes(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake) const {
   const std::size_t segments = filters_.size();
   if (limbs.size() != segments || awake.size() != segments) {
     throw std::invalid_argument("LimbCollisions::find: expected " + std::to_string(segments) + " segments and awake flags, got " +
                                 std::to_string(limbs.size()) + " and " + std::to_string(awake.size()));
   }
+}
+
+void LimbCollisions::search(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                            std::vector<LimbContact>& out, bool keep) {
+  out.clear();
+  check_sizes(limbs, awake);
   candidate_pairs_ = 0;
+  if (keep) kept_limb_pairs_.clear(), kept_static_pairs_.clear(), searched_.assign(limbs.begin(), limbs.end());
   if (!active_) return;
-  if (limb_pairs_) find_limb_pairs(limbs, awake, margin, out);
-  if (!statics_.empty()) find_static(limbs, awake, margin, out);
+  if (limb_pairs_) find_limb_pairs(limbs, awake, margin, out, keep);
+  if (!statics_.empty()) find_static(limbs, awake, margin, out, keep);
   std::sort(out.begin(), out.end(), contact_before);
 }
 
+void LimbCollisions::add_limb_pair(std::uint32_t i, std::uint32_t j, std::span<const LimbSegment> limbs, double margin,
+                                   std::vector<LimbContact>& out) const {
+  const double reach = margin + limbs[i].reach + limbs[j].reach;
+  if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), reach)) return;
+  const std::size_t begin = out.size();
+  add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
+  // Limbs have no restitution and rub with the limbs' friction; balls have no friction.
+  const double friction = i < limb_count_ ? limb_friction_ : 0.0;
+  const double restitution = std::max(restitution_[i], restitution_[j]);
+  for (std::size_t k = begin; k < out.size(); ++k) out[k].friction = friction, out[k].restitution = restitution;
+}
+
+void LimbCollisions::add_static_pair(std::uint32_t s, const LimbSegment& limb, const StaticPrimitive& primitive, double margin,
+                                     std::vector<LimbContact>& out) const {
+  const double reach = margin + limb.reach;
+  if (!spheres_within(segment_sphere(limb), primitive.sphere, reach)) return;
+  const std::size_t begin = out.size();
+  add_static_contacts(s, limb, primitive, reach, out);
+  // A ball bounces with the larger of its restitution and the collider's, as on the ground.
+  for (std::size_t k = begin; k < out.size(); ++k) out[k].restitution = std::max(out[k].restitution, restitution_[s]);
+}
+
 void LimbCollisions::find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                                     std::vector<LimbContact>& out) {
-  for (std::size_t i = 0; i < limbs.size(); ++i) boxes_[i] = segment_box(limbs[i], margin + limbs[i].reach);
+                                     std::vector<LimbContact>& out, bool keep) {
+  for (std::size_t i = 0; i < limbs.size(); ++i) boxes_[i] = segment_box(limbs[i], margin + search_reach(limbs[i]));
   const std::vector<CandidatePair>& pairs = broadphase_.find_pairs(boxes_);
   candidate_pairs_ = pairs.size();
   for (const auto& [i, j] : pairs) {
     if (!awake[i] && !awake[j]) continue;
     if (!pair_tested(i, j)) continue;
-    const double reach = margin + limbs[i].reach + limbs[j].reach;
-    if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), reach)) continue;
-    const std::size_t begin = out.size();
-    add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
-    // Limbs have no restitution and rub with the limbs' friction; balls have no friction.
-    const double friction = i < limb_count_ ? limb_friction_ : 0.0;
-    const double restitution = std::max(restitution_[i], restitution_[j]);
-    for (std::size_t k = begin; k < out.size(); ++k) out[k].friction = friction, out[k].restitution = restitution;
+    if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), margin + search_reach(limbs[i]) + search_reach(limbs[j]))) continue;
+    if (keep) kept_limb_pairs_.emplace_back(i, j);
+    add_limb_pair(i, j, limbs, margin, out);
   }
 }
 
 void LimbCollisions::find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                                 std::vector<LimbContact>& out) const {
+                                 std::vector<LimbContact>& out, bool keep) {
+  const StaticPrimitive* first = statics_.primitives().data();
   for (std::uint32_t s = 0; s < filters_.size(); ++s) {
     if (!awake[s]) continue;
     const LimbSegment& limb = limbs[s];
     const BoundingSphere sphere = segment_sphere(limb);
-    const double reach = margin + limb.reach;
+    const double reach = margin + search_reach(limb);
     statics_.query(segment_box(limb, reach), [&](const StaticPrimitive& primitive) {
       if (!filters_collide(filters_[s], primitive.filter)) return;
       if (!spheres_within(sphere, primitive.sphere, reach)) return;
-      const std::size_t begin = out.size();
-      add_static_contacts(s, limb, primitive, reach, out);
-      // A ball bounces with the larger of its restitution and the collider's, as on the ground.
-      for (std::size_t k = begin; k < out.size(); ++k) out[k].restitution = std::max(out[k].restitution, restitution_[s]);
+      if (keep) kept_static_pairs_.emplace_back(s, static_cast<std::uint32_t>(&primitive - first));
+      add_static_pair(s, limb, primitive, margin, out);
     });
   }
 }
@@ -364,7 +422,7 @@ SweptTouch LimbCollisions::first_static_touch(std::uint32_t segment, const Vecto
 }
 
 double LimbCollisions::deepest_penetration(std::span<const LimbSegment> limbs) {
-  find(limbs, all_awake_, 0, scratch_);
+  search(limbs, all_awake_, 0, scratch_, /*keep=*/false);
   double deepest = 0;
   for (const LimbContact& contact : scratch_) deepest = std::max(deepest, -contact.separation);
   return deepest;

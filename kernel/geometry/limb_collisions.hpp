@@ -10,7 +10,9 @@
 // Limbs are capsules here, a cylinder by the capsule around it (its caps stick out r past its
 // flat ends; the ground and the bounds still see a cylinder's exact rim, geometry.hpp).
 // Pairs a filter rejects, joined by a joint or overlapping in the Model's poses never reach the
-// broadphase's answer (CollisionFilter, model.hpp).
+// broadphase's answer (CollisionFilter, model.hpp). A search keeps the pairs within each
+// segment's search_reach, so that the next few (a step's substeps) can run the narrowphase on
+// them alone (find_kept_pairs) and get the same contacts, as long as no segment outruns it.
 //
 // A contact is reported while the surfaces are closer than a margin, not only when they overlap
 // (speculative contacts, as Box2D and Jolt do): a method that holds C ≥ 0 through the step then
@@ -43,8 +45,11 @@ struct LimbSegment {
   Eigen::Vector3d tail = Eigen::Vector3d::Zero();  ///< m, world
   double radius = 0;                               ///< m
   /// m, ≥ 0: its own speculative margin, added to find()'s (how far it may move before the next
-  /// search), so one fast limb widens its own search and not every pair's.
+  /// contacts are made), so one fast limb widens its own search and not every pair's.
   double reach = 0;
+  /// m, ≥ reach: how far it may move before the next broadphase search; find() keeps the pairs
+  /// within it for find_kept_pairs() (0: reach).
+  double search_reach = 0;
 };
 
 /// Two shapes closer than the margin. For a limb–limb contact, first < second (Model body
@@ -94,6 +99,16 @@ class LimbCollisions {
   void find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
             std::vector<LimbContact>& out);
 
+  /// find()'s contacts without the broadphase: the same narrowphase over the pairs the last
+  /// find() kept — pairs of segments, and of a segment and a static primitive, whose bounding
+  /// spheres were within margin + their search_reach — at `limbs` now (their reach), the same
+  /// contacts find() would give. That holds while every segment's move since the search (the
+  /// larger of its ends' moves, and of its bounding sphere's centre move plus its growth) plus
+  /// its reach now is within the search_reach it had: otherwise this returns false and finds
+  /// nothing (call find()). `awake` must be the search's. candidate_pairs() is then 0.
+  bool find_kept_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+                       std::vector<LimbContact>& out);
+
   /// The deepest overlap among `limbs` now (m, ≥ 0; 0 when nothing overlaps), between limbs and
   /// static geometry and between limbs — the run summary's measure (every method alike).
   double deepest_penetration(std::span<const LimbSegment> limbs);
@@ -126,10 +141,19 @@ class LimbCollisions {
 
  private:
   // A value type (states are copied): no shared buffers.
+  // find(), keeping its pairs for find_kept_pairs() or not (deepest_penetration).
+  void search(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
+              std::vector<LimbContact>& out, bool keep);
+  void check_sizes(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake) const;
   void find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                       std::vector<LimbContact>& out);
+                       std::vector<LimbContact>& out, bool keep);
   void find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                   std::vector<LimbContact>& out) const;
+                   std::vector<LimbContact>& out, bool keep);
+  // The narrowphase of one pair found: its contacts within margin + the segments' reach.
+  void add_limb_pair(std::uint32_t i, std::uint32_t j, std::span<const LimbSegment> limbs, double margin,
+                     std::vector<LimbContact>& out) const;
+  void add_static_pair(std::uint32_t s, const LimbSegment& limb, const StaticPrimitive& primitive, double margin,
+                       std::vector<LimbContact>& out) const;
   bool excluded(std::uint32_t first, std::uint32_t second) const;
   // Whether some pair of limbs (or of balls) left after the exclusions has filters that collide.
   bool some_pair_tested(bool balls);
@@ -146,6 +170,9 @@ class LimbCollisions {
   StaticTree statics_;
   SweepAndPrune broadphase_;
   std::vector<Aabb> boxes_;                 // per segment, this call's
+  std::vector<CandidatePair> kept_limb_pairs_;    // find()'s pairs within the search reach
+  std::vector<CandidatePair> kept_static_pairs_;  // (segment, StaticTree primitive) within the search reach
+  std::vector<LimbSegment> searched_;             // the segments find() kept its pairs for
   std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
   BallCandidates ball_candidates_;

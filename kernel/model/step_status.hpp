@@ -69,6 +69,7 @@ struct StepProfile {
   int contact_rows = 0;      ///< limb–limb, limb–static and ball–static rows detected
   int contact_colours = 0;   ///< colours of those rows (the overflow not counted)
   int candidate_pairs = 0;   ///< pairs of limbs (and balls) the sweep-and-prune broadphase gave
+  int limb_searches = 0;     ///< broadphase searches for the limbs' contacts (the other substeps reuse their pairs)
   int contacts = 0;          ///< StepReport::contacts' count, summed over the substeps (≥ StepReport::contacts)
   int tree_solves = 0;       ///< exact joint trees (JointSolve::tree): one component's position solves
   int tree_newton_steps = 0; ///< their Newton steps (a fresh or reused factor and a solve each)
@@ -80,7 +81,7 @@ struct StepProfile {
     velocity += part.velocity, restitution += part.restitution, sleep += part.sleep, step += part.step;
     substeps += part.substeps, position_sweeps += part.position_sweeps, velocity_sweeps += part.velocity_sweeps;
     contact_rows += part.contact_rows, contact_colours += part.contact_colours;
-    candidate_pairs += part.candidate_pairs, contacts += part.contacts;
+    candidate_pairs += part.candidate_pairs, limb_searches += part.limb_searches, contacts += part.contacts;
     tree_solves += part.tree_solves, tree_newton_steps += part.tree_newton_steps, tree_capped += part.tree_capped;
     return *this;
   }

@@ -292,6 +292,9 @@ struct VerletState {
   std::vector<LimbSegment> limb_segments;
   std::vector<std::uint8_t> limb_awake, limb_island_awake;
   std::vector<LimbContact> limb_contacts;
+  /// state.awake_generation of the broadphase pairs the collision world keeps for the step's
+  /// later substeps (~0: none kept).
+  std::uint64_t pairs_searched_for = ~std::uint64_t{0};
   bool ball_touched = false;  ///< a ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
   std::vector<KinematicTarget> kinematic_targets;  ///< pinned particles only; next step, then cleared

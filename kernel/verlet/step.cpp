@@ -410,8 +410,8 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     state.ball_touched = state.ball_touched || !state.ball_contacts.empty();
   }
   if (has_planes) detect_plane_contacts(state, dt);
-  const bool limb_contacts = state.collisions.active() && !state.awake_islands.empty();  // detect_limb_contacts runs find()
-  if (state.collisions.active()) detect_limb_contacts(state, dt);
+  // The first substep's broadphase serves the step's substeps while no limb outruns it.
+  const bool searched = state.collisions.active() && detect_limb_contacts(state, dt, count - index, index > 0);
   profile.detect = clock.lap();
   if (state.collisions.active()) build_contact_batches(state);
   if (state.plan.layout != ParticleLayout::soa) collect_contact_particles(state);
@@ -446,7 +446,8 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     profile.substeps = 1, profile.position_sweeps = report.iterations, profile.velocity_sweeps = velocity_sweeps;
     profile.contact_rows = static_cast<int>(rows.rows.size());
     profile.contact_colours = rows.empty() ? 0 : static_cast<int>(rows.colour_count);
-    profile.candidate_pairs = limb_contacts ? static_cast<int>(state.collisions.candidate_pairs()) : 0;
+    profile.candidate_pairs = searched ? static_cast<int>(state.collisions.candidate_pairs()) : 0;
+    profile.limb_searches = searched ? 1 : 0;
     profile.contacts = report.contacts;
     const JointTreeCounts trees = joint_tree_counts(state);
     profile.tree_solves = trees.solves, profile.tree_newton_steps = trees.newton_steps, profile.tree_capped = trees.capped;

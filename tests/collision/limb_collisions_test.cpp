@@ -435,6 +435,91 @@ TEST(LimbCollisions, TwoHundredLimbsAgreeWithBruteForceOverEveryPair) {
   EXPECT_EQ(collisions.deepest_penetration(scene.limbs), deepest);
 }
 
+// Whether two contact lists are the same, field by field and bit for bit.
+void expect_same_contacts(const std::vector<LimbContact>& found, const std::vector<LimbContact>& expected, const std::string& where) {
+  ASSERT_EQ(found.size(), expected.size()) << where;
+  for (std::size_t k = 0; k < found.size(); ++k) {
+    const LimbContact &a = found[k], &b = expected[k];
+    EXPECT_EQ(std::tie(a.first, a.second, a.collider, a.triangle), std::tie(b.first, b.second, b.collider, b.triangle)) << where;
+    EXPECT_EQ(std::tie(a.separation, a.axial_first, a.axial_second, a.offset, a.friction, a.restitution),
+              std::tie(b.separation, b.axial_first, b.axial_second, b.offset, b.friction, b.restitution))
+        << where;
+    EXPECT_EQ(a.normal, b.normal) << where;
+    EXPECT_EQ(a.point, b.point) << where;
+  }
+}
+
+// The limb pairs of a contact list (static contacts left out).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> limb_pairs(const std::vector<LimbContact>& contacts) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  for (const LimbContact& c : contacts) {
+    if (c.second != kStaticShape) pairs.emplace_back(c.first, c.second);
+  }
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  return pairs;
+}
+
+// A step's later substeps reuse the pairs of its first substep's search (limb_contacts.hpp):
+// moved by less than their search reach, the segments get from the kept pairs exactly the
+// contacts a fresh search finds — including pairs that were not yet within the margin.
+TEST(LimbCollisions, KeptPairsFindWhatASearchFindsWhileNoSegmentOutrunsThem) {
+  std::mt19937 rng(5);
+  RandomScene scene = random_scene(200, 1.5, rng);
+  std::vector<std::uint8_t> awake(scene.limbs.size());
+  for (std::uint8_t& flag : awake) flag = std::uniform_int_distribution<int>(0, 3)(rng) != 0;  // a quarter asleep
+  constexpr double kMargin = 0.005, kReach = 0.01, kSearchReach = 0.06;
+  for (LimbSegment& limb : scene.limbs) limb.reach = kReach, limb.search_reach = kSearchReach;
+  LimbCollisions collisions(scene.model);
+  std::vector<LimbContact> searched, kept, fresh;
+  collisions.find(scene.limbs, awake, kMargin, searched);
+  // Three substeps on: each awake segment shifted by up to 2.5 cm and stretched by up to 6 mm at
+  // each end (its bounding sphere's centre moves 2.5 cm, its radius 6 mm): within 6 cm − 1 cm of reach.
+  std::uniform_real_distribution<double> step(-0.0144, 0.0144);  // per coordinate: |Δ| ≤ 2.5 cm
+  std::vector<LimbSegment> moved = scene.limbs;
+  std::size_t new_pairs = 0;
+  for (int substep = 1; substep <= 3; ++substep) {
+    for (std::size_t s = 0; s < moved.size(); ++s) {
+      if (!awake[s]) continue;
+      const Vector3d shift(step(rng), step(rng), step(rng)), stretch(step(rng), step(rng), step(rng));
+      moved[s].head = scene.limbs[s].head + shift + 0.25 * stretch, moved[s].tail = scene.limbs[s].tail + shift - 0.25 * stretch;
+    }
+    const std::string where = "substep " + std::to_string(substep);
+    ASSERT_TRUE(collisions.find_kept_pairs(moved, awake, kMargin, kept)) << where;
+    LimbCollisions search(scene.model);
+    search.find(moved, awake, kMargin, fresh);
+    expect_same_contacts(kept, fresh, where);
+    const auto before = limb_pairs(searched), after = limb_pairs(fresh);
+    for (const auto& pair : after) new_pairs += !std::binary_search(before.begin(), before.end(), pair);
+  }
+  EXPECT_GT(searched.size(), 50u);
+  EXPECT_GT(new_pairs, 5u);  // the moves brought pairs into the margin that the search had not found in it
+}
+
+// A segment that moved farther than its search reach may meet what the search did not keep: the
+// kept pairs refuse (and a fresh search finds the contact they would have missed).
+TEST(LimbCollisions, KeptPairsRefuseASegmentThatOutranThem) {
+  Model model;
+  model.bodies = {capsule_limb({0, 0, 0.5}, {0, 0, 0}, 0.05), capsule_limb({0.4, 0, 0.5}, {0.4, 0, 0}, 0.05)};
+  model.bodies[0].position.y() = 10, model.bodies[1].position.y() = -10;  // apart in the Model
+  LimbCollisions collisions(model);
+  std::vector<LimbSegment> limbs = {{{0, 0, 0.5}, {0, 0, 0}, 0.05, 0.01, 0.05}, {{0.4, 0, 0.5}, {0.4, 0, 0}, 0.05, 0.01, 0.05}};
+  const std::vector<std::uint8_t> awake(2, 1);
+  std::vector<LimbContact> contacts;
+  collisions.find(limbs, awake, 0.005, contacts);
+  EXPECT_TRUE(contacts.empty());  // 30 cm apart
+  // The first moves 4 cm towards the second (plus its 1 cm of reach: within 5 cm), then 33 cm
+  // (into it).
+  for (const double x : {0.04, 0.33}) {
+    limbs[0].head.x() = limbs[0].tail.x() = x;
+    const bool kept = collisions.find_kept_pairs(limbs, awake, 0.005, contacts);
+    EXPECT_EQ(kept, x < 0.05) << "moved " << x << " m";
+    collisions.find(limbs, awake, 0.005, contacts);
+    EXPECT_EQ(contacts.empty(), x < 0.05) << "moved " << x << " m";
+    limbs[0].head.x() = limbs[0].tail.x() = 0;
+    collisions.find(limbs, awake, 0.005, contacts);  // the search again at the start
+  }
+}
+
 TEST(LimbCollisions, FindAllocatesNothingOnceWarm) {
   std::mt19937 rng(3);
   RandomScene scene = random_scene(100, 1.0, rng);

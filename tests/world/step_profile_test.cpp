@@ -97,7 +97,7 @@ double stages(const StepProfile& p) {
 bool all_zero(const StepProfile& p) {
   return p.integrate == 0 && p.detect == 0 && p.colour == 0 && p.relax == 0 && p.velocity == 0 && p.restitution == 0 &&
          p.sleep == 0 && p.step == 0 && p.substeps == 0 && p.position_sweeps == 0 && p.velocity_sweeps == 0 &&
-         p.contact_rows == 0 && p.contact_colours == 0 && p.candidate_pairs == 0 && p.contacts == 0;
+         p.contact_rows == 0 && p.contact_colours == 0 && p.candidate_pairs == 0 && p.limb_searches == 0 && p.contacts == 0;
 }
 
 // The stages are laps of one clock inside the step's own: their sum can pass the step's time only
@@ -156,6 +156,25 @@ TEST(StepProfile, ParticleStagesPartitionTheStepAndCountWhatTheReportCounts) {
       EXPECT_GT(contact_rows, 0);
     }
   }
+}
+
+// The broadphase runs at a step's first substep; the others run the narrowphase on its pairs
+// unless a limb outran them or an island woke or slept (kernel/collision/limb_contacts.hpp).
+TEST(StepProfile, AStepOfSubstepsSearchesTheBroadphaseAboutOnce) {
+  Case c = particle_cases().front();  // the pile, landing on the stairs and on one another
+  ASSERT_EQ(c.scene.model.name, "ragdoll_pile");
+  constexpr int kSubsteps = 4, kSteps = 60;
+  c.options.particles.relaxation.substeps = kSubsteps;
+  c.options.particles.relaxation.iterations = 4;
+  int searches = 0, candidate_pairs = 0;
+  run(c, true, kSteps, [&](const StepReport& report) {
+    const StepProfile& p = report.profile;
+    EXPECT_GE(p.limb_searches, 1);  // every step's first substep
+    EXPECT_LE(p.limb_searches, kSubsteps);
+    searches += p.limb_searches, candidate_pairs += p.candidate_pairs;
+  });
+  EXPECT_GT(candidate_pairs, 0);
+  EXPECT_LT(searches, kSteps * 3 / 2);  // a search a substep would be 4 a step
 }
 
 TEST(StepProfile, RigidMethodsTimeTheStepTheirIntegratorAndDetection) {

@@ -344,8 +344,9 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
   std::vector<Stage> stages{
       {"integrate", p.integrate, format("%.3g substeps", per_step(p.substeps))},
       {"detect", p.detect, rigid ? format("%.4g candidate pairs, %.4g contacts", per_step(p.candidate_pairs), per_step(p.contacts))
-                                 : format("%.4g candidate pairs, %.4g contact rows, %.4g contacts", per_step(p.candidate_pairs),
-                                          per_step(p.contact_rows), per_step(p.contacts))}};
+                                 : format("%.3g searches, %.4g candidate pairs, %.4g contact rows, %.4g contacts",
+                                          per_step(p.limb_searches), per_step(p.candidate_pairs), per_step(p.contact_rows),
+                                          per_step(p.contacts))}};
   if (!rigid) {
     stages.push_back({"colour", p.colour, format("%.3g contact colours", per_step(p.contact_colours))});
     std::string relax = format("%.4g position sweeps", per_step(p.position_sweeps));
