@@ -200,21 +200,51 @@ struct Measure {
   Vec3<V> axis;
 };
 
-// A twist-like angle: `reference` (fixed in A) against `e` (fixed in B) about `axis`.
+// θ = atan2(y, x) and its gradient (x·∇y − y·∇x)/(x² + y²) from those of x and y.
 template <typename Lanes>
-typename Lanes::value angle_about(const Vec3<typename Lanes::value>& reference, const Vec3<typename Lanes::value>& e,
-                                  const Vec3<typename Lanes::value>& axis) {
-  return atan2_lanes<Lanes>(dot(cross(reference, e), axis), dot(reference, e));
+Measure<typename Lanes::value> angle_of(typename Lanes::value y, typename Lanes::value x, const Vec3<typename Lanes::value>& gradient_y,
+                                        const Vec3<typename Lanes::value>& gradient_x) {
+  using V = typename Lanes::value;
+  const V radius2 = x * x + y * y;
+  const auto valid = radius2 > Lanes::broadcast(0);
+  const V inverse = Lanes::select(valid, Lanes::broadcast(1) / Lanes::select(valid, radius2, Lanes::broadcast(1)), Lanes::broadcast(0));
+  return {atan2_lanes<Lanes>(y, x), (inverse * x) * gradient_y - (inverse * y) * gradient_x};
 }
 
-// The swing-transported reference for a twist: d2 (fixed in A, ⟂ a0) carried by the shortest
-// rotation taking a0 (B's rest axis, carried by A) onto u_B.
+// A hinge angle: `reference` r (fixed in A) against `e` (fixed in B) about `axis` d (fixed in
+// A): θ = atan2((r × e)·d, r·e). Turning B by δ moves e by δ × e, so ∇x = e × r and
+// ∇y = e × (d × r): the exact axis, d itself only while e ⟂ d.
 template <typename Lanes>
-Vec3<typename Lanes::value> transported(const Vec3<typename Lanes::value>& reference, const Vec3<typename Lanes::value>& a0,
-                                        const Vec3<typename Lanes::value>& u_b) {
+Measure<typename Lanes::value> hinge_angle(const Vec3<typename Lanes::value>& reference, const Vec3<typename Lanes::value>& e,
+                                           const Vec3<typename Lanes::value>& axis) {
+  return angle_of<Lanes>(dot(cross(reference, e), axis), dot(reference, e), cross(e, cross(axis, reference)), cross(e, reference));
+}
+
+// The twist of B about its axis u against the swing-transported reference: d₂ (fixed in A, ⟂ a₀)
+// carried by the shortest rotation taking a₀ (B's rest axis, carried by A) onto u,
+// r = d₂ − k(a₀ + u), k = (d₂·u)/D, D = 1 + a₀·u; θ = atan2((r × e)·u, r·e), e fixed in B.
+// Its exact gradient (B turned by δ: u → u + δ × u, e → e + δ × e): with
+// q = u × (d₂ − k a₀), dk = δ·q/D and dr = −dk (a₀ + u) − k δ × u, so
+//   ∇x = −((a₀ + u)·e/D) q − k u × e + e × r,
+//   ∇y = −((a₀ + u)·(e × u)/D) q − k u × (e × u) + e × (u × r) + u × (r × e).
+// It is u alone only while B has not swung; the rows and the trees used u, and the error in
+// their projections fed energy into a swung joint at its twist limit (kernel/relaxation/README.md,
+// "Limits with their exact gradients").
+template <typename Lanes>
+Measure<typename Lanes::value> twist_angle(const Vec3<typename Lanes::value>& a0, const Vec3<typename Lanes::value>& d2,
+                                           const Vec3<typename Lanes::value>& e, const Vec3<typename Lanes::value>& u) {
   using V = typename Lanes::value;
-  const V denominator = Lanes::max(Lanes::broadcast(1) + dot(a0, u_b), Lanes::broadcast(1e-6));
-  return reference - (dot(reference, u_b) / denominator) * (a0 + u_b);
+  const V zero = Lanes::broadcast(0);
+  const V denominator = Lanes::max(Lanes::broadcast(1) + dot(a0, u), Lanes::broadcast(1e-6));
+  const V k = dot(d2, u) / denominator;
+  const Vec3<V> sum = a0 + u;
+  const Vec3<V> reference = d2 - k * sum;
+  const Vec3<V> q = cross(u, d2 - k * a0);
+  const Vec3<V> e_cross_u = cross(e, u);
+  const Vec3<V> gradient_x = (zero - dot(sum, e) / denominator) * q - k * cross(u, e) + cross(e, reference);
+  const Vec3<V> gradient_y = (zero - dot(sum, e_cross_u) / denominator) * q - k * cross(u, e_cross_u) + cross(e, cross(u, reference)) +
+                             cross(u, cross(reference, e));
+  return angle_of<Lanes>(dot(cross(reference, e), u), dot(reference, e), gradient_y, gradient_x);
 }
 
 // The kind's coordinate from frames of A (va, wa, ua) and B (vb, wb, ub) (scalar kinds only).
@@ -238,17 +268,11 @@ Measure<typename Lanes::value> measure(JointRowKind kind, const JointRowBatches<
       const Vec3<V> e = fixed_direction<Lanes>(batches, slot, 3, vb, wb, ub);
       return {dot(d1, e), cross(e, d1)};
     }
-    case JointRowKind::twist: {
-      const Vec3<V> reference = transported<Lanes>(fixed_direction<Lanes>(batches, slot, 3, va, wa, ua), d1, ub);
-      const Vec3<V> e = fixed_direction<Lanes>(batches, slot, 6, vb, wb, ub);
-      return {angle_about<Lanes>(reference, e, ub), ub};
-    }
+    case JointRowKind::twist:
+      return twist_angle<Lanes>(d1, fixed_direction<Lanes>(batches, slot, 3, va, wa, ua), fixed_direction<Lanes>(batches, slot, 6, vb, wb, ub), ub);
     case JointRowKind::hinge:
-    default: {
-      const Vec3<V> reference = fixed_direction<Lanes>(batches, slot, 3, va, wa, ua);
-      const Vec3<V> e = fixed_direction<Lanes>(batches, slot, 6, vb, wb, ub);
-      return {angle_about<Lanes>(reference, e, d1), d1};
-    }
+    default:
+      return hinge_angle<Lanes>(fixed_direction<Lanes>(batches, slot, 3, va, wa, ua), fixed_direction<Lanes>(batches, slot, 6, vb, wb, ub), d1);
   }
 }
 

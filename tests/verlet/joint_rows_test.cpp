@@ -11,6 +11,7 @@
 
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/relaxation/joint_projection.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
 
@@ -369,6 +370,47 @@ TYPED_TEST(ParticleJointRows, JointRowsGiveTheSameBitsForOneOrTwoThreadsAndScala
   const auto one = run_positions<TypeParam>(model, 1, true);
   EXPECT_EQ(one, run_positions<TypeParam>(model, 2, true)) << "two threads";
   EXPECT_EQ(one, run_positions<TypeParam>(model, 1, false)) << "scalar lanes";
+}
+
+// A limit's measure (joint_projection::measure) gives its angle and the axis B turns about to
+// increase it, which the rows and the trees project along: it must be the angle's gradient with
+// respect to B's rotation (A held), or a projection along it moves the joint off the path that
+// closes the limit, and a joint pressed against its limit gains energy step after step. Checked
+// against central differences at random frames, swung up to 2.5 rad, for every kind of limit.
+TEST(ParticleJoints, EachLimitsAxisIsTheGradientOfItsAngle) {
+  using Lanes = ScalarLanes<double>;
+  using Vec = joint_projection::Vec3<double>;
+  std::mt19937 random(17);
+  std::uniform_real_distribution<double> draw(-1, 1);
+  const auto unit = [&] { return Eigen::Vector3d(draw(random), draw(random), draw(random)).normalized(); };
+  const auto vec = [](const Eigen::Vector3d& x) { return Vec{x.x(), x.y(), x.z()}; };
+  JointRowBatches<double> batches;
+  const std::size_t slot = batches.push(0);
+  for (const JointRowKind kind : {JointRowKind::swing, JointRowKind::twist, JointRowKind::hinge}) {
+    for (int trial = 0; trial < 200; ++trial) {
+      // Directions in each side's frame coordinates: the limit's axis (and the hinge's, the twist's
+      // rest axis, along A's u), a reference ⟂ it in A, one in B.
+      const Eigen::Vector3d d1 = kind == JointRowKind::swing ? unit() : Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d d2 = Eigen::Vector3d(draw(random), draw(random), 0).normalized();
+      const Eigen::Vector3d e = Eigen::Vector3d(draw(random), draw(random), kind == JointRowKind::hinge ? 0.3 * draw(random) : 0).normalized();
+      for (int k = 0; k < 3; ++k) batches.direction[k][slot] = d1[k], batches.direction[3 + k][slot] = d2[k], batches.direction[6 + k][slot] = e[k];
+      const Eigen::Matrix3d a = Eigen::AngleAxisd(3 * draw(random), unit()).toRotationMatrix();
+      const Eigen::Matrix3d b = Eigen::AngleAxisd(2.5 * std::abs(draw(random)), unit()).toRotationMatrix() * a;
+      const auto angle = [&](const Eigen::Matrix3d& frame_b) {
+        return joint_projection::measure<Lanes, double>(kind, batches, slot, vec(a.col(0)), vec(a.col(1)), vec(a.col(2)), vec(frame_b.col(0)),
+                                                        vec(frame_b.col(1)), vec(frame_b.col(2)));
+      };
+      const joint_projection::Measure<double> measured = angle(b);
+      const double step = 1e-6;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Matrix3d turn = Eigen::AngleAxisd(step, Eigen::Vector3d::Unit(k)).toRotationMatrix();
+        const double plus = angle(turn * b).value, minus = angle(turn.transpose() * b).value;
+        if (std::abs(plus - minus) > 1) continue;  // across the ±π cut of the angle
+        const double axis[3] = {measured.axis.x, measured.axis.y, measured.axis.z};
+        EXPECT_NEAR(axis[k], (plus - minus) / (2 * step), 1e-6) << "kind " << int(kind) << ", trial " << trial << ", component " << k;
+      }
+    }
+  }
 }
 
 TEST(ParticleJoints, WhatParticlesCannotRepresentIsRefusedByName) {
