@@ -87,7 +87,7 @@ void BM_Rows(benchmark::State& run) {
   double moved = 0;  // the tree's largest move: under 1e-5 m, one Newton step a call
   for (auto _ : run) {
     if (tree) {
-      begin_joint_trees(state);
+      begin_joint_trees(state, state.settings.time_step);
       benchmark::DoNotOptimize(moved = project_joint_trees(state));
     } else {
       benchmark::DoNotOptimize(rows ? joint_position_sweep(state) : relaxation_sweep(state, 1.0));

@@ -318,6 +318,7 @@ double project_plane_contacts(VerletState<Scalar>& state, double dt) {
   auto& particles = state.particles;
   double largest = 0;
   for (PlaneContact& contact : state.plane_contacts) {
+    if (contact.held_by_trees) continue;  // tree_contacts.hpp
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
     const double push = allowed_separation(contact.start_separation, recovery) - constraint.separation;
@@ -377,6 +378,7 @@ double restitution_pass(VerletState<Scalar>& state, double dt) {
   auto& particles = state.particles;
   double largest = 0;
   for (PlaneContact& contact : state.plane_contacts) {
+    if (contact.held_by_trees) continue;  // tree_contacts.hpp: no bounce
     const ContactFeature& feature = state.features[contact.feature];
     const PlaneFeatureConstraint constraint = plane_constraint(state, contact.feature, contact.plane);
     const double restitution = std::max(state.planes[contact.plane].restitution, feature.restitution);

@@ -95,6 +95,7 @@ class TreeElimination {
     diagonal_.assign(nodes, BodyMatrix::Zero());
     to_parent_.assign(nodes, BodyMatrix::Zero());
     work_.assign(nodes, BodyVector::Zero());
+    inverse_.assign(nodes, BodyMatrix::Zero());
     if constexpr (!kInvertBodies) body_factor_.resize(body_count);
   }
 
@@ -187,8 +188,69 @@ class TreeElimination {
     }
   }
 
+  /// After factor() of the nodes order[begin, end) (whole components): each body's diagonal
+  /// block of H⁻¹ into mobility(body), parents first by Takahashi's recursion on the factor
+  /// H = L·D·Lᵀ (Takahashi, Fagan & Chen 1973; on a tree no other block is needed):
+  ///   Z_root = D_root⁻¹,   Z_node = D_node⁻¹ + L_{parent,node}ᵀ·Z_parent·L_{parent,node}.
+  /// A body's block is its mobility in the constrained system, M⁻¹ − M⁻¹Jᵀ(J M⁻¹ Jᵀ + A)⁻¹J M⁻¹
+  /// restricted to that body: the motion x = Z·f its load f alone makes with every constraint
+  /// kept (an articulated body's inverse inertia, seen from that body). O(nodes), about the work
+  /// of a factor. A constraint's block, Z over its μ, is kept in the scratch only.
+  void inverse_diagonal(std::uint32_t begin, std::uint32_t end) {
+    const auto& order = ordering_.order;
+    const auto& parent_of = ordering_.parent;
+    for (std::uint32_t k = end; k-- > begin;) {
+      const std::int32_t node = order[k], parent = parent_of[node];
+      BodyMatrix& z = inverse_[node];
+      if (node < body_count_) {
+        z = body_inverse(node);
+        if (parent < 0) continue;
+        with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+          constexpr int m = decltype(rows)::value;
+          add_congruent<m, BodySize>(z, to_parent_[node], inverse_[parent], [](const BodyMatrix& l, int i, int j) { return l(i, j); });
+        });
+        continue;
+      }
+      with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        for (int i = 0; i < m; ++i) {
+          for (int j = 0; j < m; ++j) z(i, j) = diagonal_[node](i, j);
+        }
+        if (parent < 0) return;
+        add_congruent<BodySize, m>(z, to_parent_[node], inverse_[parent], [](const BodyMatrix& l, int i, int j) { return l(i, j); });
+      });
+    }
+  }
+
+  /// A body's block of H⁻¹ (inverse_diagonal()), BodySize × BodySize.
+  const BodyMatrix& mobility(std::size_t body) const { return inverse_[body]; }
+
  private:
   static constexpr bool kInvertBodies = BodySize <= 3;
+
+  // z (cols × cols) += Lᵀ·Z_p·L, L = entry(l, i, j) for i < rows, j < cols; Z_p rows × rows.
+  template <int rows, int cols, typename Entry>
+  static void add_congruent(BodyMatrix& z, const BodyMatrix& l, const BodyMatrix& parent, Entry&& entry) {
+    Block<Value, rows, cols> product;  // Z_p·L
+    for (int i = 0; i < rows; ++i) {
+      for (int j = 0; j < cols; ++j) product(i, j) = dot<rows>([&](int c) { return parent(i, c) * entry(l, c, j); });
+    }
+    for (int i = 0; i < cols; ++i) {
+      for (int j = 0; j < cols; ++j) z(i, j) += dot<rows>([&](int c) { return entry(l, c, i) * product(c, j); });
+    }
+  }
+
+  // D⁻¹ of a factored body.
+  BodyMatrix body_inverse(std::int32_t node) const {
+    if constexpr (kInvertBodies) {
+      return diagonal_[node];
+    } else {
+      BodyMatrix identity = BodyMatrix::Zero();
+      for (int i = 0; i < BodySize; ++i) identity(i, i) = Value(1);
+      body_factor_[node].solve_in_place(identity);
+      return identity;
+    }
+  }
 
   /// Σ_{c<n} term(c), summed in order.
   template <int n, typename Term>
@@ -297,6 +359,7 @@ class TreeElimination {
   /// left columns for a constraint).
   std::vector<BodyMatrix> diagonal_, to_parent_;
   std::vector<BodyVector> work_;
+  std::vector<BodyMatrix> inverse_;  // inverse_diagonal()'s Z blocks, per node
   std::vector<SmallCholesky<BodySize, Value>> body_factor_;
 };
 

@@ -43,15 +43,16 @@ struct ContactRow {
 /// The substep's contact rows and the colouring's scratch (capacities kept between substeps).
 struct ContactRowSet {
   std::vector<ContactRow> rows;
-  std::vector<std::uint8_t> colour;             ///< per row; kNoContactColour: overflow
+  std::vector<std::uint8_t> colour;             ///< per row; kNoContactColour: overflow; kTreeContact
   std::vector<std::uint64_t> particle_colours;  ///< per particle: the colours that already move it
   std::vector<std::uint32_t> order;             ///< rows sorted by colour, static ones first (scratch)
   std::uint32_t colour_count = 0;
   bool empty() const { return rows.empty(); }
 };
 
-/// ContactRowSet::colour of a row in the overflow.
+/// ContactRowSet::colour of a row in the overflow, and of one the joint trees solve.
 inline constexpr std::uint8_t kNoContactColour = 0xFF;
+inline constexpr std::uint8_t kTreeContact = 0xFE;
 /// Colours the greedy colouring may open (one bit each in particle_colours).
 inline constexpr std::uint32_t kMaxContactColours = 64;
 

@@ -79,6 +79,36 @@ struct DirectProjection {
   double multiplier_time_step = 0;  ///< Δt the multipliers were computed with (warm start rescales by (Δt/this)²)
 };
 
+/// A contact of a tree limb, solved with the joint trees (kernel/relaxation/tree_contacts.hpp):
+/// a contact row (kernel/particles/contact_rows.hpp) whose moving sides are all tree limbs, or a
+/// plane contact of a tree limb's feature. Found each substep; the sweeps leave it alone.
+struct TreeContact {
+  enum class Source : std::uint8_t { row, plane };
+  Source source = Source::row;
+  std::uint32_t index = 0;                   ///< its ContactRow or PlaneContact
+  std::array<std::int32_t, 2> limb{-1, -1};  ///< the tree limb of each side; −1: static, or asleep
+  double friction = 0;
+  Eigen::Vector3d start = Eigen::Vector3d::Zero();  ///< its point Σ c_k x_k at the substep's start, m
+  /// Accumulated over the substep's sweeps: the normal push λ (kg·m, ≥ 0) and the tangential
+  /// friction impulse (kg·m, |·| ≤ μλ), as the contact rows' batches keep them.
+  double lambda = 0;
+  Eigen::Vector3d tangent = Eigen::Vector3d::Zero();
+  // A round's (scratch). At the round's start: the normal, separation C (m) and slip since the
+  // substep began (m), each side's normal row J (1 × 6) and point map P (3 × 6) on its limb.
+  // The impulses asked (kg·m) before the components' scaling, whether each side acts (its
+  // component not settled), and each side's load (6: force | torque) with the motion of its
+  // point it asked for, along n (m).
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(), slip = Eigen::Vector3d::Zero();
+  double separation = 0;
+  std::array<Eigen::Matrix<double, 6, 1>, 2> normal_jacobian{};
+  std::array<Eigen::Matrix<double, 3, 6>, 2> point_jacobian{};
+  double push = 0;
+  Eigen::Vector3d slide = Eigen::Vector3d::Zero();
+  std::array<bool, 2> acting{};
+  std::array<Eigen::Matrix<double, 6, 1>, 2> load{};
+  std::array<double, 2> wanted{};
+};
+
 /// The exact joint-tree solve's structure (kernel/relaxation/joint_trees.hpp), built at compile;
 /// its per-solve arrays are scratch sized there, so nothing is allocated while stepping.
 struct JointTrees {
@@ -130,10 +160,29 @@ struct JointTrees {
   std::vector<Eigen::Matrix<double, 6, 1>> rate;
   std::vector<Eigen::Matrix<double, 6, 6>> block_a, block_b;
   std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
+  /// Per joint: its active limits at their upper bound (bit k), and those a call holds at its
+  /// next Newton step (bit 2k: at the upper bound, 2k + 1: at the lower; hold_pushing_limits).
+  std::vector<std::uint8_t> limit_upper, limit_held;
   /// Counts since the substep began (begin_joint_trees), per component, for the step's profile
   /// (each written by its island's task only): position solves (project_joint_trees calls),
   /// their Newton steps, and the solves that stopped at the cap with a move still ≥ 1e-5 m.
   std::vector<std::uint32_t> solves, newton_steps, capped;
+  /// Contacts solved with the trees (tree_contacts.hpp; the pbd rule only): per particle, the
+  /// tree limb it belongs to (−1: none); per limb its component (−1: none); per component its
+  /// island. Per substep: the contacts, and by component the ones it has a side in.
+  std::vector<std::int32_t> limb_of_particle, component_of_limb;
+  std::vector<std::uint32_t> component_island;
+  bool with_contacts = false;
+  std::vector<TreeContact> contacts;
+  CompressedRows<std::uint32_t> component_contacts;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> contact_pairs;  ///< scratch for component_contacts
+  double recovery = 0;  ///< the substep's push-out allowance for an overlap it began with, m
+  /// Per limb: the joints' motion of a sweep's first Newton step (Δp, Δφ), before the contacts'
+  /// loads are added to it. Per component: its tree's inverse diagonal is the current factor's,
+  /// and the factor by which the contacts' motion was scaled down this sweep (≥ 1).
+  std::vector<Eigen::Matrix<double, 6, 1>> joint_motion;
+  std::vector<std::uint8_t> mobility_current, settled;
+  std::vector<double> load_scale;
   bool active() const { return !joints.empty(); }
 };
 

@@ -168,6 +168,7 @@ struct PlaneContact {
   double start_separation = 0;  ///< at the previous positions, m (< 0: it began the step inside)
   double position_impulse = 0;  ///< the pushes of this (sub)step's relaxation, kg·m (≥ 0)
   double velocity_impulse = 0;  ///< the rattle rule's velocity stage so far, N·s (contact_impulse, contacts.hpp)
+  bool held_by_trees = false;   ///< solved with the joint trees (tree_contacts.hpp), not by the sweeps
 };
 /// A ball as the particle method holds it: one particle, its own island.
 struct BallParticle {

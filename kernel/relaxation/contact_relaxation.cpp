@@ -6,6 +6,7 @@
 
 #include "limber/kernel/relaxation/coloured_sweep.hpp"
 #include "limber/kernel/relaxation/contact_projection.hpp"
+#include "limber/kernel/relaxation/tree_contacts.hpp"
 
 namespace limber {
 namespace {
@@ -121,8 +122,9 @@ void build_contact_batches(VerletState<Scalar>& state) {
   set.colour.resize(set.rows.size());
   set.colour_count = 0;
   for (std::size_t r = 0; r < set.rows.size(); ++r) {
-    set.colour[r] = colour_row(state, set.rows[r], max_colours);
-    if (set.colour[r] != kNoContactColour) set.colour_count = std::max<std::uint32_t>(set.colour_count, set.colour[r] + 1u);
+    // The joint trees' contacts are theirs (tree_contacts.hpp): in no colour and no batch.
+    set.colour[r] = held_by_joint_trees(state, set.rows[r]) ? kTreeContact : colour_row(state, set.rows[r], max_colours);
+    if (set.colour[r] < kTreeContact) set.colour_count = std::max<std::uint32_t>(set.colour_count, set.colour[r] + 1u);
   }
   for (const ContactRow& row : set.rows) {
     for (std::uint32_t p : row.particle) set.particle_colours[p] = 0;
@@ -132,6 +134,7 @@ void build_contact_batches(VerletState<Scalar>& state) {
   // changes no bit: its rows share no particle they move.
   std::array<std::uint32_t, 2 * kMaxContactColours + 2> start{};
   const auto bucket_of = [&](std::size_t r) -> std::uint32_t {
+    if (set.colour[r] == kTreeContact) return 2 * set.colour_count + 1;
     if (set.colour[r] == kNoContactColour) return 2 * set.colour_count;
     return 2 * set.colour[r] + (moves_second_side(set.rows[r]) ? 1u : 0u);
   };
@@ -151,7 +154,7 @@ void build_contact_batches(VerletState<Scalar>& state) {
     fill_until(next, start[2 * colour + 1]);
     batches.close_colour(null_particle, pairs);
   }
-  fill_until(next, set.rows.size());
+  fill_until(next, start[2 * set.colour_count]);  // the overflow; the trees' rows are left out
 }
 
 template <typename Scalar>

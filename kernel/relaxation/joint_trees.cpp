@@ -10,6 +10,7 @@
 #include <Eigen/Cholesky>
 
 #include "limber/kernel/relaxation/joint_projection.hpp"
+#include "limber/kernel/relaxation/tree_contacts.hpp"
 
 namespace limber {
 namespace {
@@ -194,7 +195,7 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
       ++row;
     }
   }
-  std::uint8_t active_limits = 0;
+  std::uint8_t active_limits = 0, limit_upper = 0;
   for (std::size_t k = 0; k < joint.limit.size(); ++k) {
     const std::int32_t slot = joint.limit[k];
     if (slot < 0) continue;
@@ -203,7 +204,11 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
     const Eigen::Vector3d axis(axis_lanes.x, axis_lanes.y, axis_lanes.z);
     const double lower = trees.limits.lower[slot], upper = trees.limits.upper[slot];
     const double violation = angle - std::clamp(angle, lower, upper);
-    bool active = violation != 0;
+    // Held (the call's last Newton step had it active and pushing): it stays a row, holding its
+    // angle where it is (C = 0) while inside, so that the active set does not flip every step.
+    const bool held_upper = trees.limit_held[j] & (1u << (2 * k)), held_lower = trees.limit_held[j] & (1u << (2 * k + 1));
+    bool active = violation != 0 || held_upper || held_lower;
+    const bool at_upper = violation > 0 || (violation == 0 && held_upper);
     if (velocities) {
       Eigen::Vector3d turn = trees.rate[static_cast<std::size_t>(joint.limb_b)].tail<3>();
       if (joint.limb_a >= 0) turn -= trees.rate[static_cast<std::size_t>(joint.limb_a)].tail<3>();
@@ -212,13 +217,36 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
     }
     if (!active || row >= 6) continue;
     active_limits |= static_cast<std::uint8_t>(1u << k);
+    if (at_upper) limit_upper |= static_cast<std::uint8_t>(1u << k);
     c[row] = violation;
     block_a.block<1, 3>(row, 3) = -axis.transpose(), block_b.block<1, 3>(row, 3) = axis.transpose();
     ++row;
   }
   trees.active_limits[j] = active_limits;
+  trees.limit_upper[j] = limit_upper;
   trees.rows[j] = static_cast<std::uint8_t>(row);
   return c;
+}
+
+// After a position solve: each active limit whose multiplier pushes (μ > 0 at an upper bound,
+// μ < 0 at a lower, as M·Δq = −Jᵀμ) is held at the call's next Newton step (assemble_joint).
+void hold_pushing_limits(JointTrees& trees, const TreeOrdering::Component& component) {
+  const auto& order = trees.elimination.ordering().order;
+  const std::int32_t limbs = trees.elimination.body_count();
+  for (std::uint32_t k = component.begin; k < component.end; ++k) {
+    if (order[k] < limbs) continue;
+    const auto j = static_cast<std::size_t>(order[k] - limbs);
+    const JointTrees::Joint& joint = trees.joints[j];
+    int row = joint.rows();
+    std::uint8_t held = 0;
+    for (std::size_t l = 0; l < joint.limit.size(); ++l) {
+      if (!(trees.active_limits[j] & (1u << l))) continue;
+      const double mu = trees.elimination.work(static_cast<std::size_t>(order[k]))(row++);
+      const bool upper = trees.limit_upper[j] & (1u << l);
+      if (upper ? mu > 0 : mu < 0) held |= static_cast<std::uint8_t>(1u << (2 * l + (upper ? 0 : 1)));
+    }
+    trees.limit_held[j] = held;
+  }
 }
 
 // Loads one component's limbs and joints at the current positions and solves it: work(limb) =
@@ -293,9 +321,11 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
     trees.elimination.factor(component.begin, component.end, [&](std::size_t j, std::int32_t limb) -> const Matrix6& {
       return trees.joints[j].limb_a == limb ? trees.block_a[j] : trees.block_b[j];
     });
+    trees.mobility_current[index] = 0;
   }
   trees.factored[index] = velocities ? 0 : 1;  // the velocity stage's factor is not the positions'
   trees.elimination.solve(component.begin, component.end);
+  if (!velocities) hold_pushing_limits(trees, component);
 }
 
 // Calls visit(limb) for every limb of `component`.
@@ -428,6 +458,20 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
     const JointRow& row = rows.rows[r];
     if (row.joint < 0 && row.kind == JointRowKind::point && own(row.particle[0])) trees.tree_row[r] = 1;  // a frame's row
   }
+  trees.limb_of_particle.assign(limb_of.size(), -1);
+  for (std::size_t p = 0; p < limb_of.size(); ++p) {
+    if (own(static_cast<std::uint32_t>(p))) trees.limb_of_particle[p] = limb_of[p];
+  }
+  trees.component_of_limb.assign(limb_count, -1);
+  trees.component_island.assign(ordering.components.size(), 0);
+  for (const auto& [island, k] : island_components) {
+    trees.component_island[k] = island;
+    const TreeOrdering::Component& component = ordering.components[k];
+    for (std::uint32_t n = component.begin; n < component.end; ++n) {
+      const std::int32_t node = ordering.order[n];
+      if (node < static_cast<std::int32_t>(limb_count)) trees.component_of_limb[static_cast<std::size_t>(node)] = static_cast<std::int32_t>(k);
+    }
+  }
   trees.elimination.assign(std::move(ordering), limb_count, std::move(joint_rows));
   trees.centre.assign(limb_count, Eigen::Vector3d::Zero());
   trees.frame.assign(limb_count, Eigen::Matrix3d::Identity());
@@ -437,12 +481,18 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.mass.assign(limb_count, 0.0);
   trees.inertia.assign(limb_count, Eigen::Matrix3d::Zero());
   trees.active_limits.assign(trees.joints.size(), 0);
+  trees.limit_upper.assign(trees.joints.size(), 0);
+  trees.limit_held.assign(trees.joints.size(), 0);
   trees.factored_limits.assign(trees.joints.size(), 0);
   trees.rows.assign(trees.joints.size(), 0);
   trees.factored.assign(trees.elimination.ordering().components.size(), 0);
   trees.solves.assign(trees.factored.size(), 0);
   trees.newton_steps.assign(trees.factored.size(), 0);
   trees.capped.assign(trees.factored.size(), 0);
+  trees.mobility_current.assign(trees.factored.size(), 0);
+  trees.load_scale.assign(trees.factored.size(), 1.0);
+  trees.settled.assign(trees.factored.size(), 0);
+  trees.joint_motion.assign(limb_count, Vector6::Zero());
 }
 
 }  // namespace
@@ -534,6 +584,8 @@ void prepare_joint_trees(VerletState<Scalar>& state) {
   attach_limits(state, trees, side, joint_of_pair, sources);
   order_trees(state, trees, limb_of, sources);
   if (trees.island_components.entries.empty()) trees.joints.clear();  // nothing to solve: inactive
+  // The rattle rule's contacts are inequalities of its velocity stage too: they stay rows there.
+  trees.with_contacts = trees.active() && !uses_rattle(state);
 }
 
 // Newton steps a tree takes in one call at most, and the largest move after which it takes
@@ -543,9 +595,10 @@ constexpr int kNewtonSteps = 4;
 constexpr double kNewtonMove = 1e-5;
 
 template <typename Scalar>
-void begin_joint_trees(VerletState<Scalar>& state) {
+void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   JointTrees& trees = state.plan.joint_trees;
   std::fill(trees.factored.begin(), trees.factored.end(), std::uint8_t{0});
+  gather_tree_contacts(state, dt);
   for (auto* counts : {&trees.solves, &trees.newton_steps, &trees.capped}) std::fill(counts->begin(), counts->end(), 0u);
 }
 
@@ -561,24 +614,106 @@ JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
 
 namespace {
 
-// Newton (chord) steps of one component's tree on the positions; returns the largest move, m.
+// Moves every limb of component `index` by its work(); returns the largest particle move, m.
 template <typename Scalar>
-double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
+double move_component(VerletState<Scalar>& state, std::uint32_t index) {
+  const JointTrees& trees = state.plan.joint_trees;
+  double moved = 0;
+  for_each_limb(trees, trees.elimination.ordering().components[index], [&](std::size_t limb) { moved = std::max(moved, move_limb(state, trees, limb)); });
+  return moved;
+}
+
+// Newton steps `first`… of one component's tree on the positions, each solved and moved (the
+// first a chord step while the substep's factor serves); returns the largest move, m (`largest`
+// so far included).
+template <typename Scalar>
+double newton_steps(VerletState<Scalar>& state, std::uint32_t index, int first, double largest) {
   JointTrees& trees = state.plan.joint_trees;
-  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-  double largest = 0;
-  ++trees.solves[index];
-  for (int newton = 0; newton < kNewtonSteps; ++newton) {
+  for (int newton = first; newton < kNewtonSteps; ++newton) {
     if (newton > 0) trees.factored[index] = 0;
     solve_component(state, trees, index, false);
     ++trees.newton_steps[index];
-    double moved = 0;
-    for_each_limb(trees, component, [&](std::size_t limb) { moved = std::max(moved, move_limb(state, trees, limb)); });
+    const double moved = move_component(state, index);
     largest = std::max(largest, moved);
     if (moved < kNewtonMove) return largest;
   }
   ++trees.capped[index];
   return largest;
+}
+
+// Forgets the limits held in component `index`'s last call (hold_pushing_limits).
+void release_limits(JointTrees& trees, std::uint32_t index) {
+  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
+  const auto& order = trees.elimination.ordering().order;
+  for (std::uint32_t k = component.begin; k < component.end; ++k) {
+    if (order[k] >= trees.elimination.body_count()) trees.limit_held[static_cast<std::size_t>(order[k] - trees.elimination.body_count())] = 0;
+  }
+}
+
+// One component's tree on the positions, without contacts; returns the largest move, m.
+template <typename Scalar>
+double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
+  ++state.plan.joint_trees.solves[index];
+  release_limits(state.plan.joint_trees, index);
+  return newton_steps(state, index, 0, 0.0);
+}
+
+// A round of a component with contacts (tree_contacts.hpp), stage 1: a Newton step of its joints
+// (the first round's a chord step while the substep's factor serves), solved but not applied
+// (JointTrees::joint_motion), and its tree's inverse diagonal. A component without contacts is
+// solved whole in the first round.
+template <typename Scalar>
+double contact_round_joints(VerletState<Scalar>& state, std::uint32_t index, int round) {
+  JointTrees& trees = state.plan.joint_trees;
+  if (trees.component_contacts.row(index).empty()) return round == 0 ? solve_positions(state, index) : 0.0;
+  if (trees.settled[index]) return 0;
+  if (round == 0) ++trees.solves[index], release_limits(trees, index);
+  if (round > 0) trees.factored[index] = 0;
+  solve_component(state, trees, index, false);
+  ++trees.newton_steps[index];
+  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
+  if (!trees.mobility_current[index]) trees.elimination.inverse_diagonal(component.begin, component.end);
+  trees.mobility_current[index] = 1;
+  for_each_limb(trees, component, [&](std::size_t limb) { trees.joint_motion[limb] = trees.elimination.work(limb); });
+  return 0;
+}
+
+// Stage 3 of a round: the component's contacts' loads solved with the same factor, their motion
+// scaled so that no contact overshoots, added to the joints' step and applied. The component is
+// settled when that moves no particle by kNewtonMove.
+template <typename Scalar>
+double contact_round_finish(VerletState<Scalar>& state, std::uint32_t index, int round) {
+  JointTrees& trees = state.plan.joint_trees;
+  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
+  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
+  for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
+  const bool loads = add_tree_contact_loads(trees, index);
+  double scale = 1;
+  if (loads) {
+    trees.elimination.solve(component.begin, component.end);
+    scale = tree_contact_overshoot(trees, index);
+  }
+  trees.load_scale[index] = scale;
+  for_each_limb(trees, component, [&](std::size_t limb) {
+    Vector6& motion = trees.elimination.work(limb);
+    motion = loads ? Vector6(trees.joint_motion[limb] + motion / scale) : trees.joint_motion[limb];
+  });
+  const double moved = move_component(state, index);
+  trees.settled[index] = moved < kNewtonMove ? 1 : 0;
+  if (!trees.settled[index] && round == kNewtonSteps - 1) ++trees.capped[index];
+  return moved;
+}
+
+// After the rounds, a component they left unsettled takes one more Newton step of its joints
+// alone, so that every sweep still ends with the joints closed (its contacts' next sweep's).
+template <typename Scalar>
+double close_joints(VerletState<Scalar>& state, std::uint32_t index) {
+  JointTrees& trees = state.plan.joint_trees;
+  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
+  trees.factored[index] = 0;
+  solve_component(state, trees, index, false);
+  ++trees.newton_steps[index];
+  return move_component(state, index);
 }
 
 // One component's tree on the velocities; returns the largest |Δv|, m/s.
@@ -603,24 +738,33 @@ double solve_velocities(VerletState<Scalar>& state, std::uint32_t index) {
 
 // The awake islands' trees as tasks, one an island, on the relaxation's threads: islands share
 // no limb, particle, joint or elimination node, so any split gives the same bits.
+enum class TreeStage { positions, contact_joints, contact_finish, close_joints, velocities };
+
 template <typename Scalar>
 struct IslandStage {
   VerletState<Scalar>* state;
-  bool velocities;
+  TreeStage kind;
+  int round = 0;
   static double run(const void* context, std::size_t task) {
     const auto& stage = *static_cast<const IslandStage*>(context);
     VerletState<Scalar>& state = *stage.state;
     double largest = 0;
     for (const std::uint32_t index : state.plan.joint_trees.island_components.row(state.awake_islands[task])) {
-      largest = std::max(largest, stage.velocities ? solve_velocities(state, index) : solve_positions(state, index));
+      switch (stage.kind) {
+        case TreeStage::positions: largest = std::max(largest, solve_positions(state, index)); break;
+        case TreeStage::contact_joints: largest = std::max(largest, contact_round_joints(state, index, stage.round)); break;
+        case TreeStage::contact_finish: largest = std::max(largest, contact_round_finish(state, index, stage.round)); break;
+        case TreeStage::close_joints: largest = std::max(largest, close_joints(state, index)); break;
+        case TreeStage::velocities: largest = std::max(largest, solve_velocities(state, index)); break;
+      }
     }
     return largest;
   }
 };
 
 template <typename Scalar>
-double solve_awake_islands(VerletState<Scalar>& state, bool velocities) {
-  const IslandStage<Scalar> stage{&state, velocities};
+double solve_awake_islands(VerletState<Scalar>& state, TreeStage kind, int round = 0) {
+  const IslandStage<Scalar> stage{&state, kind, round};
   const std::size_t count = state.awake_islands.size();
   if (joint_trees_on_threads(state.plan) && count > 1) return state.plan.runner->run(count, &IslandStage<Scalar>::run, &stage);
   double largest = 0;
@@ -632,17 +776,37 @@ double solve_awake_islands(VerletState<Scalar>& state, bool velocities) {
 
 template <typename Scalar>
 double project_joint_trees(VerletState<Scalar>& state) {
-  return state.plan.joint_trees.active() ? solve_awake_islands(state, false) : 0.0;
+  JointTrees& trees = state.plan.joint_trees;
+  if (!trees.active()) return 0.0;
+  if (trees.contacts.empty()) return solve_awake_islands(state, TreeStage::positions);
+  // Rounds of the stages of tree_contacts.hpp (contacts between islands read both sides' steps),
+  // each a Newton step of every component not yet settled, its contacts with it.
+  std::fill(trees.settled.begin(), trees.settled.end(), std::uint8_t{0});
+  double largest = 0;
+  for (int round = 0; round < kNewtonSteps; ++round) {
+    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_joints, round));
+    tree_contact_impulses(state);
+    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_finish, round));
+    accumulate_tree_contact_impulses(trees);
+    bool settled = true;
+    for (const std::uint32_t island : state.awake_islands) {
+      for (const std::uint32_t index : trees.island_components.row(island)) {
+        settled = settled && (trees.settled[index] || trees.component_contacts.row(index).empty());
+      }
+    }
+    if (settled) return largest;
+  }
+  return std::max(largest, solve_awake_islands(state, TreeStage::close_joints));
 }
 
 template <typename Scalar>
 double project_joint_tree_velocities(VerletState<Scalar>& state) {
-  return state.plan.joint_trees.active() ? solve_awake_islands(state, true) : 0.0;
+  return state.plan.joint_trees.active() ? solve_awake_islands(state, TreeStage::velocities) : 0.0;
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                               \
   template void prepare_joint_trees<Scalar>(VerletState<Scalar>&);              \
-  template void begin_joint_trees<Scalar>(VerletState<Scalar>&);                \
+  template void begin_joint_trees<Scalar>(VerletState<Scalar>&, double);        \
   template JointTreeCounts joint_tree_counts<Scalar>(const VerletState<Scalar>&); \
   template double project_joint_trees<Scalar>(VerletState<Scalar>&);            \
   template double project_joint_tree_velocities<Scalar>(VerletState<Scalar>&);

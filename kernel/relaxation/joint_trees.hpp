@@ -55,9 +55,10 @@ bool joint_trees_on_threads(const RelaxationPlan<Scalar>& plan) {
   return plan.joint_trees.active() && plan.runner.operator->() != nullptr && plan.runner->threads() > 1;
 }
 
-/// Starts a substep: the trees are factored afresh at their next solve (begin_relaxation).
+/// Starts a substep of dt s: the trees are factored afresh at their next solve, and the
+/// contacts they solve are gathered (begin_relaxation, after the contact rows are built).
 template <typename Scalar>
-void begin_joint_trees(VerletState<Scalar>& state);
+void begin_joint_trees(VerletState<Scalar>& state, double dt);
 
 /// What the trees did since the substep began, over every component (StepProfile's tree
 /// counts): position solves, their Newton steps, and the solves capped unconverged.
@@ -82,8 +83,8 @@ double project_joint_tree_velocities(VerletState<Scalar>& state);
 
 extern template void prepare_joint_trees<float>(VerletState<float>&);
 extern template void prepare_joint_trees<double>(VerletState<double>&);
-extern template void begin_joint_trees<float>(VerletState<float>&);
-extern template void begin_joint_trees<double>(VerletState<double>&);
+extern template void begin_joint_trees<float>(VerletState<float>&, double);
+extern template void begin_joint_trees<double>(VerletState<double>&, double);
 extern template JointTreeCounts joint_tree_counts<float>(const VerletState<float>&);
 extern template JointTreeCounts joint_tree_counts<double>(const VerletState<double>&);
 extern template double project_joint_trees<float>(VerletState<float>&);

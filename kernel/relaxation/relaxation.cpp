@@ -365,7 +365,7 @@ void begin_relaxation(VerletState<Scalar>& state, double dt) {
   }
   if (uses_rattle(state)) store_gradients(state, previous_positions(state.particles));
   if (state.options.solver == RelaxationSolver::direct) begin_direct_projection(state, dt);
-  if (plan.joint_trees.active()) begin_joint_trees(state);
+  if (plan.joint_trees.active()) begin_joint_trees(state, dt);
 }
 
 template <typename Scalar>

@@ -10,6 +10,7 @@
 #include "limber/kernel/relaxation/direct_projection.hpp"
 #include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/relaxation/tree_contacts.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 
 namespace limber {
@@ -194,7 +195,7 @@ template <typename Scalar>
 int substep_contacts(const VerletState<Scalar>& state) {
   std::size_t count = state.plane_contacts.size() + state.ball_contacts.size();
   for (const auto lambda : state.plan.contact_batches.lambda) count += lambda > 0 ? 1 : 0;
-  return static_cast<int>(count);
+  return static_cast<int>(count) + tree_contact_rows_pushed(state.plan.joint_trees);
 }
 
 // Whether the limbs have centre particles (LimbMasses::inertia), which project_limb_centres keeps

@@ -23,15 +23,23 @@ struct CompressedRows {
 
 /// Groups (row, value) pairs by row, keeping their order within each row (a stable counting
 /// sort, O(rows + pairs)). Rows must be < `rows`.
+/// The same into `grouped`, reusing its storage: allocates only when it outgrows what it held.
+template <typename T>
+void group_by_row_into(CompressedRows<T>& grouped, std::size_t rows, const std::vector<std::pair<std::uint32_t, T>>& pairs) {
+  // Counts go two places on: after the prefix sums offsets[r + 1] is where row r starts, and
+  // placing moves it to where row r ends, which is where row r + 1 starts.
+  grouped.offsets.assign(rows + 2, 0);
+  for (const auto& pair : pairs) ++grouped.offsets[pair.first + 2];
+  for (std::size_t r = 2; r < rows + 2; ++r) grouped.offsets[r] += grouped.offsets[r - 1];
+  grouped.entries.resize(pairs.size());
+  for (const auto& pair : pairs) grouped.entries[grouped.offsets[pair.first + 1]++] = pair.second;
+  grouped.offsets.pop_back();
+}
+
 template <typename T>
 CompressedRows<T> group_by_row(std::size_t rows, const std::vector<std::pair<std::uint32_t, T>>& pairs) {
   CompressedRows<T> grouped;
-  grouped.offsets.assign(rows + 1, 0);
-  for (const auto& pair : pairs) ++grouped.offsets[pair.first + 1];
-  for (std::size_t r = 0; r < rows; ++r) grouped.offsets[r + 1] += grouped.offsets[r];
-  grouped.entries.resize(pairs.size());
-  std::vector<std::uint32_t> next(grouped.offsets.begin(), grouped.offsets.end() - 1);
-  for (const auto& pair : pairs) grouped.entries[next[pair.first]++] = pair.second;
+  group_by_row_into(grouped, rows, pairs);
   return grouped;
 }
 

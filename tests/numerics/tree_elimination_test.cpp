@@ -184,6 +184,32 @@ TEST(TreeElimination, AgreesWithADenseSolveOfTheWholeSystem) {
   expect_agrees_with_dense_solve<6>();
 }
 
+// inverse_diagonal(): each body's block of the inverse of the whole saddle-point matrix (its
+// mobility with every constraint kept) agrees with the dense inverse's.
+template <int B>
+void expect_body_blocks_of_the_inverse() {
+  std::mt19937 random(13 + B);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Shape shape = random_shape<B>(random);
+    const System<B> system = random_system<B>(shape, random);
+    TreeElimination<double, B> elimination = prepared<double, B>(shape);
+    load(elimination, shape, system, 0);
+    eliminate(elimination, shape, {system});
+    elimination.inverse_diagonal(elimination.ordering().components[0].begin, elimination.ordering().components[0].end);
+    const Eigen::MatrixXd inverse = dense_system(shape, system).first.inverse();
+    for (int body = 0; body < kBodies; ++body) {
+      const Eigen::Matrix<double, B, B> expected = inverse.block<B, B>(body * B, body * B);
+      const Eigen::Matrix<double, B, B> got = elimination.mobility(static_cast<std::size_t>(body));
+      EXPECT_LT((got - expected).norm(), 1e-9 * inverse.norm()) << "B = " << B << ", trial " << trial << ", body " << body;
+    }
+  }
+}
+
+TEST(TreeElimination, InverseDiagonalGivesEachBodysBlockOfTheInverse) {
+  expect_body_blocks_of_the_inverse<3>();
+  expect_body_blocks_of_the_inverse<6>();
+}
+
 template <int B>
 void expect_lanes_give_each_systems_bits() {
   using Lanes = xsimd::batch<double>;

@@ -1,0 +1,79 @@
+// Contacts solved with the joint trees: a tree limb's contacts push its whole tree, with the
+// mobility the tree gives the contact, instead of the limb's own particles (the pbd rule, with
+// VerletOptions::joint_solve = JointSolve::tree; kernel/relaxation/README.md, "Contacts with the
+// trees").
+//
+// Why: a contact row pushes one limb's particles and the tree, solved after it, moves the limb
+// back to its joints; under a heavy body, a light limb's contact then holds only m/(M + m) of its
+// push each sweep (the pile's tibias sank 13 cm into the stairs at 2 × 2). Pushed through the
+// tree, the contact moves the limb *and* what hangs on it, as far as closing it needs.
+//
+// How, in each sweep (joint_trees.cpp runs the stages):
+// 1. each awake component's first Newton step of its joints is solved (its motion Δq₀ kept, not
+//    yet applied) and, for a component with contacts, the diagonal of its tree's inverse Z
+//    (TreeElimination::inverse_diagonal): Z_l is limb l's mobility with every joint kept;
+// 2. each contact, from its separation and slip once the joints' motion is counted,
+//    C' = C + Σ_s J_s·Δq₀_s, takes the position impulses a contact row would with the
+//    articulated mobility in place of its particles' inverse masses:
+//      push λ = −C'/a_n where C' < 0,  a_n = Σ_s J_s Z_s J_sᵀ  (J_s: n along its point, 1 × 6),
+//      friction as the rows' (accumulated, clamped to μ times the accumulated push), with
+//      a_t = ½ (tr W − nᵀWn),  W = Σ_s P_s Z_s P_sᵀ  (P_s: its point's motion, 3 × 6);
+//    on each side's limb the load J_sᵀλ + P_sᵀΔP_t (tree_contact_impulses);
+// 3. each component solves its loads with the same factor (one more back-substitution) and
+//    adds that motion to Δq₀, scaled down so that no contact of it moves past what it asked
+//    for (several contacts on one tree, each solved alone, would push it several times over:
+//    the loads are Jacobi's within a tree and across trees); the later Newton steps close the
+//    joints alone;
+// 4. each contact keeps the impulses it took, at the smaller of its sides' scales
+//    (accumulate_tree_contact_impulses).
+// A contact with one side static (stairs, ground) or asleep acts on one tree; one between two
+// trees splits its push by their mobilities. A contact between two limbs of one tree closes a
+// loop, whose coupling the sum of their mobilities misjudges: it stays a row of the sweeps, as do
+// rows and plane contacts between a tree limb and anything else (a ball, a limb outside the
+// trees).
+#pragma once
+
+#include "limber/kernel/particles/verlet_state.hpp"
+
+namespace limber {
+
+/// Whether the trees solve contact row `row` (every side it moves is a tree limb of an awake
+/// island). False when the trees take no contacts (JointTrees::with_contacts).
+template <typename Scalar>
+bool held_by_joint_trees(const VerletState<Scalar>& state, const ContactRow& row);
+
+/// A substep's start (after detection and build_contact_batches): collects the tree contacts —
+/// the contact rows held_by_joint_trees, and the plane contacts of tree limbs, which it marks
+/// held (the sweeps and restitution skip them) — grouped by component. h: the substep, s.
+template <typename Scalar>
+void gather_tree_contacts(VerletState<Scalar>& state, double h);
+
+/// Stage 2: every tree contact's impulses and loads, from the joints' first Newton step
+/// (JointTrees::joint_motion of its components) and their inverse diagonals.
+template <typename Scalar>
+void tree_contact_impulses(VerletState<Scalar>& state);
+
+/// Stage 3, for component `component`: adds its contacts' loads to the elimination's body
+/// right-hand sides (which the caller has zeroed). Returns whether there were any.
+bool add_tree_contact_loads(JointTrees& trees, std::uint32_t component);
+
+/// Stage 3, after the loads' solve: the factor by which their motion must be scaled down so that
+/// no contact side of `component` moves past the motion it asked for (≥ 1).
+double tree_contact_overshoot(const JointTrees& trees, std::uint32_t component);
+
+/// Stage 4: each contact adds the impulses it took, scaled by the larger of its acting sides'
+/// components' load_scale.
+void accumulate_tree_contact_impulses(JointTrees& trees);
+
+/// The contact rows the trees pushed this substep (λ > 0), for StepReport::contacts (plane
+/// contacts are counted with the step's plane contacts).
+int tree_contact_rows_pushed(const JointTrees& trees);
+
+extern template bool held_by_joint_trees<float>(const VerletState<float>&, const ContactRow&);
+extern template bool held_by_joint_trees<double>(const VerletState<double>&, const ContactRow&);
+extern template void gather_tree_contacts<float>(VerletState<float>&, double);
+extern template void gather_tree_contacts<double>(VerletState<double>&, double);
+extern template void tree_contact_impulses<float>(VerletState<float>&);
+extern template void tree_contact_impulses<double>(VerletState<double>&);
+
+}  // namespace limber
