@@ -207,7 +207,7 @@ class TreeElimination {
         if (parent < 0) continue;
         with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
           constexpr int m = decltype(rows)::value;
-          add_congruent<m, BodySize>(z, to_parent_[node], inverse_[parent], [](const BodyMatrix& l, int i, int j) { return l(i, j); });
+          add_congruent<m, BodySize>(z, to_parent_[node], inverse_[parent]);
         });
         continue;
       }
@@ -217,7 +217,7 @@ class TreeElimination {
           for (int j = 0; j < m; ++j) z(i, j) = diagonal_[node](i, j);
         }
         if (parent < 0) return;
-        add_congruent<BodySize, m>(z, to_parent_[node], inverse_[parent], [](const BodyMatrix& l, int i, int j) { return l(i, j); });
+        add_congruent<BodySize, m>(z, to_parent_[node], inverse_[parent]);
       });
     }
   }
@@ -228,15 +228,15 @@ class TreeElimination {
  private:
   static constexpr bool kInvertBodies = BodySize <= 3;
 
-  // z (cols × cols) += Lᵀ·Z_p·L, L = entry(l, i, j) for i < rows, j < cols; Z_p rows × rows.
-  template <int rows, int cols, typename Entry>
-  static void add_congruent(BodyMatrix& z, const BodyMatrix& l, const BodyMatrix& parent, Entry&& entry) {
+  // z (cols × cols) += Lᵀ·Z_p·L: L the top-left rows × cols of l, Z_p of parent rows × rows.
+  template <int rows, int cols>
+  static void add_congruent(BodyMatrix& z, const BodyMatrix& l, const BodyMatrix& parent) {
     Block<Value, rows, cols> product;  // Z_p·L
     for (int i = 0; i < rows; ++i) {
-      for (int j = 0; j < cols; ++j) product(i, j) = dot<rows>([&](int c) { return parent(i, c) * entry(l, c, j); });
+      for (int j = 0; j < cols; ++j) product(i, j) = dot<rows>([&](int c) { return parent(i, c) * l(c, j); });
     }
     for (int i = 0; i < cols; ++i) {
-      for (int j = 0; j < cols; ++j) z(i, j) += dot<rows>([&](int c) { return entry(l, c, i) * product(c, j); });
+      for (int j = 0; j < cols; ++j) z(i, j) += dot<rows>([&](int c) { return l(c, i) * product(c, j); });
     }
   }
 

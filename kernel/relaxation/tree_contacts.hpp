@@ -8,7 +8,7 @@
 // push each sweep (the pile's tibias sank 13 cm into the stairs at 2 × 2). Pushed through the
 // tree, the contact moves the limb *and* what hangs on it, as far as closing it needs.
 //
-// How, in each sweep (joint_trees.cpp runs the stages):
+// How, in each sweep (joint_tree_solve.cpp runs the stages):
 // 1. each awake component's first Newton step of its joints is solved (its motion Δq₀ kept, not
 //    yet applied) and, for a component with contacts, the diagonal of its tree's inverse Z
 //    (TreeElimination::inverse_diagonal): Z_l is limb l's mobility with every joint kept;

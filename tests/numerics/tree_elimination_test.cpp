@@ -157,15 +157,23 @@ void eliminate(TreeElimination<Value, B>& elimination, const Shape& shape, const
   EXPECT_TRUE(definite);
 }
 
-template <int B>
-void expect_agrees_with_dense_solve() {
-  std::mt19937 random(7 + B);
+// Calls visit(shape, system, elimination, trial) for 20 random systems, each factored and solved.
+template <int B, typename Visit>
+void for_random_systems(unsigned seed, Visit&& visit) {
+  std::mt19937 random(seed);
   for (int trial = 0; trial < 20; ++trial) {
     const Shape shape = random_shape<B>(random);
     const System<B> system = random_system<B>(shape, random);
     TreeElimination<double, B> elimination = prepared<double, B>(shape);
     load(elimination, shape, system, 0);
     eliminate(elimination, shape, {system});
+    visit(shape, system, elimination, trial);
+  }
+}
+
+template <int B>
+void expect_agrees_with_dense_solve() {
+  for_random_systems<B>(7 + B, [](const Shape& shape, const System<B>& system, const TreeElimination<double, B>& elimination, int trial) {
     const auto [kkt, right] = dense_system(shape, system);
     const Eigen::VectorXd expected = kkt.partialPivLu().solve(right);
     Eigen::VectorXd got(expected.size());
@@ -176,7 +184,7 @@ void expect_agrees_with_dense_solve() {
     }
     // The systems' condition numbers are 10⁶–10⁸ (masses 1 to 1000): 1e-9 is rounding times that.
     EXPECT_LT((got - expected).norm(), 1e-9 * expected.norm()) << "B = " << B << ", trial " << trial;
-  }
+  });
 }
 
 TEST(TreeElimination, AgreesWithADenseSolveOfTheWholeSystem) {
@@ -188,13 +196,7 @@ TEST(TreeElimination, AgreesWithADenseSolveOfTheWholeSystem) {
 // mobility with every constraint kept) agrees with the dense inverse's.
 template <int B>
 void expect_body_blocks_of_the_inverse() {
-  std::mt19937 random(13 + B);
-  for (int trial = 0; trial < 20; ++trial) {
-    const Shape shape = random_shape<B>(random);
-    const System<B> system = random_system<B>(shape, random);
-    TreeElimination<double, B> elimination = prepared<double, B>(shape);
-    load(elimination, shape, system, 0);
-    eliminate(elimination, shape, {system});
+  for_random_systems<B>(13 + B, [](const Shape& shape, const System<B>& system, TreeElimination<double, B>& elimination, int trial) {
     elimination.inverse_diagonal(elimination.ordering().components[0].begin, elimination.ordering().components[0].end);
     const Eigen::MatrixXd inverse = dense_system(shape, system).first.inverse();
     for (int body = 0; body < kBodies; ++body) {
@@ -202,7 +204,7 @@ void expect_body_blocks_of_the_inverse() {
       const Eigen::Matrix<double, B, B> got = elimination.mobility(static_cast<std::size_t>(body));
       EXPECT_LT((got - expected).norm(), 1e-9 * inverse.norm()) << "B = " << B << ", trial " << trial << ", body " << body;
     }
-  }
+  });
 }
 
 TEST(TreeElimination, InverseDiagonalGivesEachBodysBlockOfTheInverse) {
