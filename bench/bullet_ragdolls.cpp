@@ -786,7 +786,7 @@ void run_setting(const Race& race, const Setting& setting, bool measure, Run& ru
   world.particles.threads = setting.threads;
   world.particles.relaxation.substeps = setting.substeps;
   world.particles.relaxation.iterations = setting.iterations;
-  world.particles.joint_solve = setting.tree ? JointSolve::tree : JointSolve::rows;
+  world.particles.verlet.joint_solve = setting.tree ? JointSolve::tree : JointSolve::rows;
   world.single_precision = setting.single_precision;
   World limber_world(race.model, world);
   const std::vector<BodyId> ids = limber_world.bodies();
@@ -849,7 +849,7 @@ int run(int argc, char** argv) {
     if (limber_texts.empty()) {
       const auto& relaxation = scene_world.particles.relaxation;
       limber_texts.push_back(std::to_string(relaxation.substeps) + "x" + std::to_string(relaxation.iterations) +
-                             (scene_world.particles.joint_solve == JointSolve::tree ? ":tree" : ":rows"));
+                             (scene_world.particles.verlet.joint_solve == JointSolve::tree ? ":tree" : ":rows"));
     }
     for (const std::string& text : limber_texts) settings.push_back(parse_setting(text, false));
     for (const std::string& text : bullet_texts) settings.push_back(parse_setting(text, true));

@@ -75,7 +75,7 @@ void BM_Rows(benchmark::State& run) {
   options.threads = static_cast<int>(run.range(2));
   options.relaxation.iterations = 1;
   const bool tree = variant == cone_twist_tree;
-  if (tree) options.joint_solve = JointSolve::tree;
+  if (tree) options.verlet.joint_solve = JointSolve::tree;
   auto state = compile<Scalar>(jointed_bodies(joints, variant), options);
   if (tree && !state.plan.joint_trees.active()) {
     run.SkipWithError("the joints formed no tree");

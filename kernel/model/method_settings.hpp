@@ -69,9 +69,20 @@ enum class LimbMasses {
             ///< (exact for lumps at the ends; every lump must lie on the axis, between the ends)
 };
 
+/// How the particle (Verlet) methods hold the joints of a limb tree.
+enum class JointSolve : std::uint8_t {
+  rows,  ///< every joint's constraint and rows are projected one by one in the sweeps
+  tree,  ///< each island's joints solved exactly after every sweep, limbs as rigid bodies, by tree
+         ///< elimination (kernel/relaxation/joint_trees.hpp); limits join while reached; friction
+         ///< and drives stay rows; under pbd the tree limbs' contacts go through the trees
+};
+
 struct VerletSettings {
   ParticleJoints joints = ParticleJoints::zero_length_constraint;
   LimbMasses limb_masses = LimbMasses::ends;
+  /// Rows, or the exact trees (the weighted rule, Gauss-Seidel in colours, zero-length joints;
+  /// other options are refused by name). A scene file's "settings.verlet.joint_solve".
+  JointSolve joint_solve = JointSolve::rows;
   /// The thesis's drag (3.2.1, [Jak03]): x' = f·x − (f − 1)·x* + a·Δt², e.g. f = 1.99. Depends on
   /// Δt; prefer Settings::damping. When set it replaces the damping.
   std::optional<double> drag_factor;

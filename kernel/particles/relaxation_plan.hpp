@@ -224,7 +224,7 @@ struct RelaxationPlan {
   std::vector<std::uint32_t> joint_row_order, joint_bucket;
   Scalar joint_step = 0;
   std::uint64_t joint_built_for = ~std::uint64_t{0};  ///< state.awake_generation the joint batches hold
-  /// The exact joint-tree solve (VerletOptions::joint_solve tree).
+  /// The exact joint-tree solve (settings.verlet.joint_solve tree).
   JointTrees joint_trees;
   /// Contact rows (kernel/particles/contact_rows.hpp), coloured and batched every substep.
   ContactRowBatches<Scalar> contact_batches;

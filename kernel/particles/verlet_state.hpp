@@ -46,13 +46,6 @@ enum class RelaxationSolver : std::uint8_t {
                  ///< (kernel/relaxation/direct_projection.hpp)
 };
 
-/// How the joints of a limb tree are held (VerletOptions::joint_solve).
-enum class JointSolve : std::uint8_t {
-  rows,  ///< every joint's constraint and rows are projected one by one in the sweeps
-  tree,  ///< each island's joints are solved exactly, limbs as rigid bodies, by tree elimination
-         ///< (kernel/relaxation/joint_trees.hpp); limits, friction, drives and contacts stay rows
-};
-
 /// The order of a Gauss-Seidel sweep.
 enum class SweepOrder : std::uint8_t {
   coloured,    ///< colour after colour, SIMD lanes and threads inside a colour (the default)
@@ -107,11 +100,9 @@ struct VerletOptions {
   /// Long-range attachments (Kim, Chentanez, Müller 2012): after every sweep, each particle
   /// joined to a pinned one is pulled back within the rest length of the path between them.
   bool long_range_attachments = false;
-  /// How joints are held: projected as rows in the sweeps, or solved exactly per limb tree after
-  /// every sweep (JointSolve::tree: the weighted rule, Gauss-Seidel in colours, zero-length joints).
-  JointSolve joint_solve = JointSolve::rows;
   /// Sweeps, tolerance, over-relaxation, projection rule and substeps (a scene file's
-  /// "settings.relaxation"), and how limbs become particles ("settings.verlet").
+  /// "settings.relaxation"), and how limbs become particles and joints are held
+  /// ("settings.verlet").
   RelaxationSettings relaxation{};
   VerletSettings verlet{};
   /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads

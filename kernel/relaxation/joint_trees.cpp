@@ -224,7 +224,7 @@ void prepare_joint_trees(VerletState<Scalar>& state) {
   JointTrees empty;  // (g++ 12 fails on `trees = JointTrees{}`: an internal compiler error)
   trees = std::move(empty);
   const VerletOptions& options = state.options;
-  if (options.joint_solve != JointSolve::tree) return;
+  if (options.verlet.joint_solve != JointSolve::tree) return;
   const auto refuse = [](const char* what) { throw std::invalid_argument(std::string("options: joint_solve tree needs ") + what); };
   if (options.rule != RelaxationRule::weighted) refuse("the weighted rule (limbs keep their masses)");
   if (options.solver != RelaxationSolver::gauss_seidel || options.order != SweepOrder::coloured) {

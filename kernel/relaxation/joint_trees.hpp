@@ -1,4 +1,4 @@
-// The exact solve of each limb tree's joints (VerletOptions::joint_solve = JointSolve::tree), as
+// The exact solve of each limb tree's joints (VerletSettings::joint_solve = JointSolve::tree), as
 // one block of a block Gauss-Seidel iteration whose other rows — limb-internal constraints,
 // limits, friction, drives, contacts — are the sweeps' (kernel/relaxation/README.md, "Joint
 // trees").
@@ -34,7 +34,7 @@
 namespace limber {
 
 /// Builds the limb trees of state's islands (called by prepare_relaxation_plan when
-/// options.joint_solve is JointSolve::tree) and marks the constraints and rows they hold. Throws
+/// options.verlet.joint_solve is JointSolve::tree) and marks the constraints and rows they hold. Throws
 /// std::invalid_argument for options it does not work with (a rule other than weighted, Jacobi,
 /// the direct solver, the sequential sweep or an interleaved layout).
 template <typename Scalar>

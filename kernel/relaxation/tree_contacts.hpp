@@ -1,6 +1,6 @@
 // Contacts solved with the joint trees: a tree limb's contacts push its whole tree, with the
 // mobility the tree gives the contact, instead of the limb's own particles (the pbd rule, with
-// VerletOptions::joint_solve = JointSolve::tree; kernel/relaxation/README.md, "Contacts with the
+// VerletSettings::joint_solve = JointSolve::tree; kernel/relaxation/README.md, "Contacts with the
 // trees").
 //
 // Why: a contact row pushes one limb's particles and the tree, solved after it, moves the limb

@@ -119,7 +119,7 @@ MethodSettings read_method_settings(const Object& object) {
   }
   if (const Json* json = object.find("verlet")) {
     const Object verlet(*json, object.path("verlet"));
-    verlet.allow_only({"joints", "limb_masses", "drag_factor"});
+    verlet.allow_only({"joints", "limb_masses", "drag_factor", "joint_solve"});
     if (verlet.find("joints")) {
       const std::string joints = verlet.string("joints");
       if (joints == "zero_length_constraint") {
@@ -141,6 +141,16 @@ MethodSettings read_method_settings(const Object& object) {
         methods.verlet.limb_masses = LimbMasses::lumps;
       } else {
         fail(verlet.path("limb_masses"), "must be \"ends\", \"inertia\" or \"lumps\", got " + in_quotes(limb_masses));
+      }
+    }
+    if (verlet.find("joint_solve")) {
+      const std::string joint_solve = verlet.string("joint_solve");
+      if (joint_solve == "rows") {
+        methods.verlet.joint_solve = JointSolve::rows;
+      } else if (joint_solve == "tree") {
+        methods.verlet.joint_solve = JointSolve::tree;
+      } else {
+        fail(verlet.path("joint_solve"), "must be \"rows\" or \"tree\", got " + in_quotes(joint_solve));
       }
     }
     if (verlet.find("drag_factor")) {

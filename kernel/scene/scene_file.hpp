@@ -38,6 +38,8 @@
 //                                              particles keeping mass, centre of mass, transverse inertia,
 //                                              or "lumps": each point mass (on the axis) to head and tail
 //                                              by the lever rule
+//       "joint_solve": "rows",                 ("rows": projected in the sweeps) or "tree": each ragdoll's
+//                                              joints, limits and contacts solved exactly per limb tree
 //       "drag_factor": 1.99 } },               (absent) in (1, 2]
 //   "ground": { "height": 0, "restitution": 0.1, "friction": 0.6 },      optional object; all fields required;
 //                                              restitution in [0, 1], friction ≥ 0

@@ -643,6 +643,13 @@ TEST(SceneLoading, LimbMassesSettingIsReadAndCheckedByName) {
   EXPECT_EQ(load_error(with_limb_masses(R"("centre")")),
             "test.json: settings.verlet.limb_masses: must be \"ends\", \"inertia\" or \"lumps\", got \"centre\"");
   EXPECT_EQ(load_error(with_limb_masses("3")), "test.json: settings.verlet.limb_masses: must be a string, got number");
+  const auto with_joint_solve = [](std::string_view value) {
+    return with(kPendulum, R"("duration": 1)", R"("duration": 1, "verlet": {"joint_solve": )" + std::string(value) + "}");
+  };
+  EXPECT_EQ(load_scene_text(kPendulum, "test.json").methods.verlet.joint_solve, JointSolve::rows);
+  EXPECT_EQ(load_scene_text(with_joint_solve(R"("tree")"), "test.json").methods.verlet.joint_solve, JointSolve::tree);
+  EXPECT_EQ(load_scene_text(with_joint_solve(R"("rows")"), "test.json").methods.verlet.joint_solve, JointSolve::rows);
+  EXPECT_EQ(load_error(with_joint_solve(R"("trees")")), "test.json: settings.verlet.joint_solve: must be \"rows\" or \"tree\", got \"trees\"");
 }
 
 TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {

@@ -60,7 +60,7 @@ TEST(Allocation, JointRowsAllocateNothing) {
   EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 600, false, rattle), 0);
   // Joint trees (joint_trees.hpp), both rules: factors, active sets and Newton steps.
   VerletOptions trees = testing::with_scene_settings(ragdoll);
-  trees.joint_solve = JointSolve::tree, trees.relaxation.substeps = 2;
+  trees.verlet.joint_solve = JointSolve::tree, trees.relaxation.substeps = 2;
   EXPECT_EQ(allocations_while_stepping<float>(ragdoll.model, 600, false, trees), 0);
   trees.relaxation.projection = ProjectionRule::rattle;
   EXPECT_EQ(allocations_while_stepping<double>(ragdoll.model, 600, false, trees), 0);

@@ -1,4 +1,4 @@
-// The exact joint-tree solve (VerletOptions::joint_solve = JointSolve::tree,
+// The exact joint-tree solve (VerletSettings::joint_solve = JointSolve::tree,
 // kernel/relaxation/joint_trees.hpp): a ragdoll's joints and limits close in one solve whatever
 // its mass ratios, momentum is kept, and the solve changes no bits between the scalar and SIMD
 // paths or one and two threads.
@@ -39,7 +39,7 @@ Model ragdoll(double heavy, bool gravity = false) {
 
 VerletOptions tree_options() {
   VerletOptions options;
-  options.joint_solve = JointSolve::tree;
+  options.verlet.joint_solve = JointSolve::tree;
   options.relaxation.iterations = 4;
   return options;
 }

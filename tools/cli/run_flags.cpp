@@ -100,9 +100,8 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
       run.add_flag("--warm-start", flags.warm_start, "--solver direct: start from the previous step's multipliers");
   run.add_option("--joint-solve", flags.joint_solve,
                  "Joints: rows (projected one by one in the sweeps) or tree (each limb tree solved exactly after every sweep, "
-                 "limbs as rigid bodies)")
-      ->check(CLI::IsMember({"rows", "tree"}))
-      ->capture_default_str();
+                 "limbs as rigid bodies, their contacts pushed through it); default: the scene's settings.verlet.joint_solve")
+      ->check(CLI::IsMember({"rows", "tree"}));
   run.add_flag("--long-range-attachments", flags.long_range_attachments,
                "Also hold every particle within the rest length of its path to the pin (Kim et al. 2012)");
   run.add_option("--sweep", flags.sweep,
@@ -264,7 +263,7 @@ VerletOptions verlet_options(const RunFlags& flags, const MethodSettings& scene)
     }
   }
   options.order = flags.sweep == "sequential" ? SweepOrder::sequential : SweepOrder::coloured;
-  options.joint_solve = flags.joint_solve == "tree" ? JointSolve::tree : JointSolve::rows;
+  if (!flags.joint_solve.empty()) options.verlet.joint_solve = flags.joint_solve == "tree" ? JointSolve::tree : JointSolve::rows;
   options.direction = flags.pinned == "last" ? SweepDirection::pinned_last : SweepDirection::pinned_first;
   options.threads = flags.threads;
   options.threading = flags.threading == "parallel-for" ? Threading::parallel_for : Threading::workers;

@@ -38,7 +38,7 @@ struct RunFlags {
   double dt = 0, tolerance = 0, budget_us = 0, over_relaxation = 1;
   std::string out_path;
   std::string solver = "gauss-seidel", sweep = "coloured", pinned = "first", layout = "auto", threading = "workers";
-  std::string joint_solve = "rows";
+  std::string joint_solve;  ///< --joint-solve: rows or tree (empty: the scene's settings.verlet.joint_solve)
   std::string ordering = "depth-parity";
   int threads = 0;
   bool scalar = false;
