@@ -93,6 +93,9 @@ struct TreeContact {
   /// friction impulse (kg·m, |·| ≤ μλ), as the contact rows' batches keep them.
   double lambda = 0;
   Eigen::Vector3d tangent = Eigen::Vector3d::Zero();
+  /// What the current round's iterations have taken so far (kg·m), added to the above when it ends.
+  double round_push = 0;
+  Eigen::Vector3d round_slide = Eigen::Vector3d::Zero();
   // A round's (scratch). At the round's start: the normal, separation C (m) and slip since the
   // substep began (m), each side's normal row J (1 × 6) and point map P (3 × 6) on its limb.
   // The impulses asked (kg·m) before the components' scaling, whether each side acts (its
@@ -107,6 +110,7 @@ struct TreeContact {
   std::array<bool, 2> acting{};
   std::array<Eigen::Matrix<double, 6, 1>, 2> load{};
   std::array<double, 2> wanted{};
+  std::array<Eigen::Vector3d, 2> wanted_slide{};  ///< the tangential motion of the side's point asked for, m
 };
 
 /// The exact joint-tree solve's structure (kernel/relaxation/joint_trees.hpp), built at compile;
@@ -181,6 +185,7 @@ struct JointTrees {
   /// loads are added to it. Per component: its tree's inverse diagonal is the current factor's,
   /// and the factor by which the contacts' motion was scaled down this sweep (≥ 1).
   std::vector<Eigen::Matrix<double, 6, 1>> joint_motion;
+  std::vector<Eigen::Matrix<double, 6, 1>> load_motion;  ///< per limb: the contacts' motion so far this round
   std::vector<std::uint8_t> mobility_current, settled;
   std::vector<double> load_scale;
   bool active() const { return !joints.empty(); }

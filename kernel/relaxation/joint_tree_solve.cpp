@@ -291,6 +291,10 @@ constexpr double kNewtonMove = 1e-5;
 // "Exact limits and contacts with the trees"); what it leaves of the joints, ~(5e-5)²/0.1 m, is
 // rounding.
 constexpr double kContactRoundMove = 5e-5;
+// Jacobi iterations of the contacts in a round, each a back-substitution with the round's factor
+// (no new factor): four brought the pile's penetration at 2 × 2 from 1 cm to 2 mm at the same
+// steps a second (fewer rounds), and let a ragdoll lying across another come to rest.
+constexpr int kContactIterations = 4;
 
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state, double dt) {
@@ -372,30 +376,38 @@ double contact_round_joints(VerletState<Scalar>& state, std::uint32_t index, int
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   if (!trees.mobility_current[index]) trees.elimination.inverse_diagonal(component.begin, component.end);
   trees.mobility_current[index] = 1;
-  for_each_limb(trees, component, [&](std::size_t limb) { trees.joint_motion[limb] = trees.elimination.work(limb); });
+  for_each_limb(trees, component, [&](std::size_t limb) {
+    trees.joint_motion[limb] = trees.elimination.work(limb);
+    trees.load_motion[limb].setZero();
+  });
   return 0;
 }
 
-// Stage 3 of a round: the component's contacts' loads solved with the same factor, their motion
-// scaled so that no contact overshoots, added to the joints' step and applied. The component is
-// settled when that moves no particle by kContactRoundMove.
+// Stage 3 of a round's iteration: the component's contacts' loads solved with the same factor,
+// their motion scaled so that no contact overshoots and added to the round's (load_motion).
 template <typename Scalar>
-double contact_round_finish(VerletState<Scalar>& state, std::uint32_t index, int round) {
+double contact_iteration_loads(VerletState<Scalar>& state, std::uint32_t index) {
   JointTrees& trees = state.plan.joint_trees;
+  trees.load_scale[index] = 1;
   if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
-  const bool loads = add_tree_contact_loads(trees, index);
-  double scale = 1;
-  if (loads) {
-    trees.elimination.solve(component.begin, component.end);
-    scale = tree_contact_overshoot(trees, index);
-  }
+  if (!add_tree_contact_loads(trees, index)) return 0;
+  trees.elimination.solve(component.begin, component.end);
+  const double scale = tree_contact_overshoot(trees, index);
   trees.load_scale[index] = scale;
-  for_each_limb(trees, component, [&](std::size_t limb) {
-    Vector6& motion = trees.elimination.work(limb);
-    motion = loads ? Vector6(trees.joint_motion[limb] + motion / scale) : trees.joint_motion[limb];
-  });
+  for_each_limb(trees, component, [&](std::size_t limb) { trees.load_motion[limb] += trees.elimination.work(limb) / scale; });
+  return 0;
+}
+
+// A round's end: the component moves by its joint step and its contacts' motion. It is settled
+// when that moves no particle by kContactRoundMove.
+template <typename Scalar>
+double contact_round_move(VerletState<Scalar>& state, std::uint32_t index, int round) {
+  JointTrees& trees = state.plan.joint_trees;
+  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
+  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
+  for_each_limb(trees, component, [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
   const double moved = move_component(state, index);
   trees.settled[index] = moved < kContactRoundMove ? 1 : 0;
   if (!trees.settled[index] && round == kNewtonSteps - 1) ++trees.capped[index];
@@ -436,7 +448,7 @@ double solve_velocities(VerletState<Scalar>& state, std::uint32_t index) {
 
 // The awake islands' trees as tasks, one an island, on the relaxation's threads: islands share
 // no limb, particle, joint or elimination node, so any split gives the same bits.
-enum class TreeStage { positions, contact_joints, contact_finish, close_joints, velocities };
+enum class TreeStage { positions, contact_joints, contact_loads, contact_move, close_joints, velocities };
 
 template <typename Scalar>
 struct IslandStage {
@@ -451,7 +463,8 @@ struct IslandStage {
       switch (stage.kind) {
         case TreeStage::positions: largest = std::max(largest, solve_positions(state, index)); break;
         case TreeStage::contact_joints: largest = std::max(largest, contact_round_joints(state, index, stage.round)); break;
-        case TreeStage::contact_finish: largest = std::max(largest, contact_round_finish(state, index, stage.round)); break;
+        case TreeStage::contact_loads: largest = std::max(largest, contact_iteration_loads(state, index)); break;
+        case TreeStage::contact_move: largest = std::max(largest, contact_round_move(state, index, stage.round)); break;
         case TreeStage::close_joints: largest = std::max(largest, close_joints(state, index)); break;
         case TreeStage::velocities: largest = std::max(largest, solve_velocities(state, index)); break;
       }
@@ -483,9 +496,13 @@ double project_joint_trees(VerletState<Scalar>& state) {
   double largest = 0;
   for (int round = 0; round < kNewtonSteps; ++round) {
     largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_joints, round));
-    tree_contact_impulses(state);
-    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_finish, round));
-    accumulate_tree_contact_impulses(trees);
+    for (int iteration = 0; iteration < kContactIterations; ++iteration) {
+      tree_contact_impulses(state, iteration == 0);
+      solve_awake_islands(state, TreeStage::contact_loads, round);
+      accumulate_tree_contact_impulses(trees);
+    }
+    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_move, round));
+    end_tree_contact_round(trees);
     bool settled = true;
     for (const std::uint32_t island : state.awake_islands) {
       for (const std::uint32_t index : trees.island_components.row(island)) {

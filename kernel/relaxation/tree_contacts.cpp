@@ -114,20 +114,24 @@ Mobility mobility_of(const JointTrees& trees, const TreeContact& contact) {
 // (contact_projection.hpp) with the trees' mobilities: the push λ = −C/a_n where C < 0, and the
 // friction impulse accumulated over the substep, clamped to μ times the push so far, with
 // a_t = ½(tr W − nᵀWn). Into contact.push and contact.slide.
+// Within a round's iterations the pushes are Jacobi's on the round's linearization: a later
+// iteration may take back what an earlier one of the round pushed (its round total stays ≥ 0),
+// which is how the overshoot of contacts pushing one tree together is undone.
 void take_impulses(TreeContact& contact, double separation, Eigen::Vector3d slip, const Mobility& mobility) {
   contact.push = 0, contact.slide.setZero();
   const double normal_mobility = mobility.total_normal();
   if (!(normal_mobility > 0)) return;
-  if (separation < 0) contact.push = -separation / normal_mobility;
+  contact.push = std::max(-separation / normal_mobility, -contact.round_push);
   const Eigen::Vector3d& n = contact.normal;
   slip -= n.dot(slip) * n;
   const Eigen::Matrix3d point = mobility.total_point();
   const double tangent_mobility = 0.5 * (point.trace() - n.dot(point * n));
-  Eigen::Vector3d total = contact.tangent;
+  const Eigen::Vector3d taken = contact.tangent + contact.round_slide;
+  Eigen::Vector3d total = taken;
   if (tangent_mobility > 0) total -= slip / tangent_mobility;
-  const double size = total.norm(), grip = contact.friction * (contact.lambda + contact.push);
+  const double size = total.norm(), grip = contact.friction * (contact.lambda + contact.round_push + contact.push);
   if (size > grip) total *= grip / size;
-  contact.slide = total - contact.tangent;
+  contact.slide = total - taken;
 }
 
 // The loads of the contact's impulses on its acting sides' limbs.
@@ -215,25 +219,33 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
 }
 
 template <typename Scalar>
-void tree_contact_impulses(VerletState<Scalar>& state) {
+void tree_contact_impulses(VerletState<Scalar>& state, bool first) {
   JointTrees& trees = state.plan.joint_trees;
   for (TreeContact& contact : trees.contacts) {
     contact.push = 0, contact.slide.setZero();
-    for (std::size_t s = 0; s < 2; ++s) contact.acting[s] = contact.limb[s] >= 0 && !trees.settled[component_of(trees, contact.limb[s])];
+    if (first) {
+      for (std::size_t s = 0; s < 2; ++s) contact.acting[s] = contact.limb[s] >= 0 && !trees.settled[component_of(trees, contact.limb[s])];
+    }
     if (!contact.acting[0] && !contact.acting[1]) continue;
-    evaluate(state, contact);
-    // Its separation and slip once both sides' joint steps have moved them.
+    if (first) evaluate(state, contact);
+    // Its separation and slip once both sides' joint steps and the round's contact motion so far
+    // have moved them.
     double separation = contact.separation;
     Eigen::Vector3d slip = contact.slip;
     for (std::size_t s = 0; s < 2; ++s) {
       if (!contact.acting[s]) continue;
-      const Vector6& motion = trees.joint_motion[static_cast<std::size_t>(contact.limb[s])];
+      const auto limb = static_cast<std::size_t>(contact.limb[s]);
+      const Vector6 motion = trees.joint_motion[limb] + trees.load_motion[limb];
       separation += contact.normal_jacobian[s].dot(motion), slip += contact.point_jacobian[s] * motion;
     }
     const Mobility mobility = mobility_of(trees, contact);
     take_impulses(contact, separation, slip, mobility);
     set_loads(contact);
-    for (std::size_t s = 0; s < 2; ++s) contact.wanted[s] = contact.push * mobility.normal[s];
+    for (std::size_t s = 0; s < 2; ++s) {
+      contact.wanted[s] = contact.push * mobility.normal[s];
+      const Eigen::Vector3d slide = mobility.point[s] * contact.slide;
+      contact.wanted_slide[s] = slide - contact.normal.dot(slide) * contact.normal;
+    }
   }
 }
 
@@ -248,11 +260,19 @@ bool add_tree_contact_loads(JointTrees& trees, std::uint32_t component) {
 
 double tree_contact_overshoot(const JointTrees& trees, std::uint32_t component) {
   double most_wanted = 0;
-  for_each_side(trees, component, [&](const TreeContact& contact, std::size_t s, std::size_t) { most_wanted = std::max(most_wanted, std::abs(contact.wanted[s])); });
+  for_each_side(trees, component, [&](const TreeContact& contact, std::size_t s, std::size_t) {
+    most_wanted = std::max({most_wanted, std::abs(contact.wanted[s]), contact.wanted_slide[s].norm()});
+  });
   double largest = 1;
   for_each_side(trees, component, [&](const TreeContact& contact, std::size_t s, std::size_t limb) {
-    if (std::abs(contact.wanted[s]) <= kSignificantPush * most_wanted) return;
-    largest = std::max(largest, contact.normal_jacobian[s].dot(trees.elimination.work(limb)) / contact.wanted[s]);
+    const Eigen::Matrix<double, 6, 1>& motion = trees.elimination.work(limb);
+    if (std::abs(contact.wanted[s]) > kSignificantPush * most_wanted) {
+      largest = std::max(largest, contact.normal_jacobian[s].dot(motion) / contact.wanted[s]);
+    }
+    const double slide = contact.wanted_slide[s].squaredNorm();
+    if (slide > kSignificantPush * kSignificantPush * most_wanted * most_wanted) {
+      largest = std::max(largest, contact.wanted_slide[s].dot(contact.point_jacobian[s] * motion) / slide);
+    }
   });
   return largest;
 }
@@ -263,7 +283,14 @@ void accumulate_tree_contact_impulses(JointTrees& trees) {
     for (std::size_t s = 0; s < 2; ++s) {
       if (contact.acting[s]) scale = std::max(scale, trees.load_scale[component_of(trees, contact.limb[s])]);
     }
-    contact.lambda += contact.push / scale, contact.tangent += contact.slide / scale;
+    contact.round_push += contact.push / scale, contact.round_slide += contact.slide / scale;
+  }
+}
+
+void end_tree_contact_round(JointTrees& trees) {
+  for (TreeContact& contact : trees.contacts) {
+    contact.lambda += contact.round_push, contact.tangent += contact.round_slide;
+    contact.round_push = 0, contact.round_slide.setZero();
   }
 }
 
@@ -275,7 +302,7 @@ int tree_contact_rows_pushed(const JointTrees& trees) {
 #define LIMBER_INSTANTIATE(Scalar)                                                           \
   template bool held_by_joint_trees<Scalar>(const VerletState<Scalar>&, const ContactRow&); \
   template void gather_tree_contacts<Scalar>(VerletState<Scalar>&, double);                  \
-  template void tree_contact_impulses<Scalar>(VerletState<Scalar>&);
+  template void tree_contact_impulses<Scalar>(VerletState<Scalar>&, bool);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -48,10 +48,11 @@ bool held_by_joint_trees(const VerletState<Scalar>& state, const ContactRow& row
 template <typename Scalar>
 void gather_tree_contacts(VerletState<Scalar>& state, double h);
 
-/// Stage 2: every tree contact's impulses and loads, from the joints' first Newton step
-/// (JointTrees::joint_motion of its components) and their inverse diagonals.
+/// Stage 2: every tree contact's impulses and loads, from its components' joint step and
+/// contact motion so far this round (JointTrees::joint_motion, load_motion) and their inverse
+/// diagonals; `first` (a round's first iteration): its geometry measured afresh at the positions.
 template <typename Scalar>
-void tree_contact_impulses(VerletState<Scalar>& state);
+void tree_contact_impulses(VerletState<Scalar>& state, bool first);
 
 /// Stage 3, for component `component`: adds its contacts' loads to the elimination's body
 /// right-hand sides (which the caller has zeroed). Returns whether there were any.
@@ -61,9 +62,12 @@ bool add_tree_contact_loads(JointTrees& trees, std::uint32_t component);
 /// no contact side of `component` moves past the motion it asked for (≥ 1).
 double tree_contact_overshoot(const JointTrees& trees, std::uint32_t component);
 
-/// Stage 4: each contact adds the impulses it took, scaled by the larger of its acting sides'
-/// components' load_scale.
+/// Stage 4: each contact adds the impulses it took to its round's, scaled by the larger of its
+/// acting sides' components' load_scale.
 void accumulate_tree_contact_impulses(JointTrees& trees);
+
+/// A round's end: each contact's round impulses join the substep's (λ and the friction impulse).
+void end_tree_contact_round(JointTrees& trees);
 
 /// The contact rows the trees pushed this substep (λ > 0), for StepReport::contacts (plane
 /// contacts are counted with the step's plane contacts).
@@ -73,7 +77,7 @@ extern template bool held_by_joint_trees<float>(const VerletState<float>&, const
 extern template bool held_by_joint_trees<double>(const VerletState<double>&, const ContactRow&);
 extern template void gather_tree_contacts<float>(VerletState<float>&, double);
 extern template void gather_tree_contacts<double>(VerletState<double>&, double);
-extern template void tree_contact_impulses<float>(VerletState<float>&);
-extern template void tree_contact_impulses<double>(VerletState<double>&);
+extern template void tree_contact_impulses<float>(VerletState<float>&, bool);
+extern template void tree_contact_impulses<double>(VerletState<double>&, bool);
 
 }  // namespace limber
