@@ -8,29 +8,32 @@
 // push each sweep (the pile's tibias sank 13 cm into the stairs at 2 × 2). Pushed through the
 // tree, the contact moves the limb *and* what hangs on it, as far as closing it needs.
 //
-// How, in each sweep (joint_tree_solve.cpp runs the stages):
-// 1. each awake component's first Newton step of its joints is solved (its motion Δq₀ kept, not
-//    yet applied) and, for a component with contacts, the diagonal of its tree's inverse Z
+// How: a tree call is up to four rounds (joint_tree_solve.cpp runs the stages), each a Newton
+// step of the joints and the contacts together:
+// 1. each awake component's Newton step of its joints is solved (its motion Δq₀ kept, not yet
+//    applied) and, for a component with contacts, the diagonal of its tree's inverse Z
 //    (TreeElimination::inverse_diagonal): Z_l is limb l's mobility with every joint kept;
-// 2. each contact, from its separation and slip once the joints' motion is counted,
-//    C' = C + Σ_s J_s·Δq₀_s, takes the position impulses a contact row would with the
-//    articulated mobility in place of its particles' inverse masses:
-//      push λ = −C'/a_n where C' < 0,  a_n = Σ_s J_s Z_s J_sᵀ  (J_s: n along its point, 1 × 6),
+// 2. each contact, from its separation and slip once its sides' motion so far is counted,
+//    C' = C + Σ_s J_s·(Δq₀_s + Δq_s) (Δq: the round's contact motion so far), takes the position
+//    impulses a contact row would with the articulated mobility in place of its particles'
+//    inverse masses:
+//      push λ = −C'/a_n,  a_n = Σ_s J_s Z_s J_sᵀ  (J_s: n along its point, 1 × 6),
 //      friction as the rows' (accumulated, clamped to μ times the accumulated push), with
 //      a_t = ½ (tr W − nᵀWn),  W = Σ_s P_s Z_s P_sᵀ  (P_s: its point's motion, 3 × 6);
-//    on each side's limb the load J_sᵀλ + P_sᵀΔP_t (tree_contact_impulses);
-// 3. each component solves its loads with the same factor (one more back-substitution) and
-//    adds that motion to Δq₀, scaled down so that no contact of it moves past what it asked
-//    for (several contacts on one tree, each solved alone, would push it several times over:
-//    the loads are Jacobi's within a tree and across trees); the later Newton steps close the
-//    joints alone;
+//    on each side's limb the load J_sᵀλ + P_sᵀΔP_t (tree_contact_impulses); the round's pushes
+//    stay ≥ 0 in sum, a later iteration taking back what an earlier one overshot;
+// 3. each component solves its loads with the round's factor (one back-substitution) and adds
+//    that motion to Δq, scaled down so that no contact of it moves past what it asked for
+//    (several contacts on one tree, each solved alone, would push it several times over: the
+//    loads are Jacobi's within a tree and across trees);
 // 4. each contact keeps the impulses it took, at the smaller of its sides' scales
 //    (accumulate_tree_contact_impulses).
+// Stages 2–4 are four Jacobi iterations; then each component moves by Δq₀ + Δq, and the round's
+// impulses join the substep's (end_tree_contact_round).
 // A contact with one side static (stairs, ground) or asleep acts on one tree; one between two
-// trees splits its push by their mobilities. A contact between two limbs of one tree closes a
-// loop, whose coupling the sum of their mobilities misjudges: it stays a row of the sweeps, as do
-// rows and plane contacts between a tree limb and anything else (a ball, a limb outside the
-// trees).
+// trees splits its push by their mobilities; one between two limbs of one tree (a loop) takes the
+// sum of the two limbs' mobilities, which leaves out their coupling. Rows and plane contacts
+// between a tree limb and anything else (a ball, a limb outside the trees) stay in the sweeps.
 #pragma once
 
 #include "limber/kernel/particles/verlet_state.hpp"
