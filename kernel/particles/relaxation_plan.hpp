@@ -105,6 +105,9 @@ struct TreeContact {
   double separation = 0;
   std::array<Eigen::Matrix<double, 6, 1>, 2> normal_jacobian{};
   std::array<Eigen::Matrix<double, 3, 6>, 2> point_jacobian{};
+  /// Each acting side's mobility along n (J Z Jᵀ, 1/kg) and at its point (P Z Pᵀ), the round's.
+  std::array<double, 2> normal_mobility{};
+  std::array<Eigen::Matrix3d, 2> point_mobility{};
   double push = 0;
   Eigen::Vector3d slide = Eigen::Vector3d::Zero();
   std::array<bool, 2> acting{};

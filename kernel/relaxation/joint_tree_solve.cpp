@@ -499,7 +499,6 @@ double project_joint_trees(VerletState<Scalar>& state) {
     for (int iteration = 0; iteration < kContactIterations; ++iteration) {
       tree_contact_impulses(state, iteration == 0);
       solve_awake_islands(state, TreeStage::contact_loads, round);
-      accumulate_tree_contact_impulses(trees);
     }
     largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_move, round));
     end_tree_contact_round(trees);

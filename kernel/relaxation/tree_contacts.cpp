@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/relaxation/joint_trees.hpp"
 
 namespace limber {
 namespace {
@@ -91,23 +92,17 @@ void evaluate(const VerletState<Scalar>& state, TreeContact& contact) {
   }
 }
 
-// A contact's mobilities from its acting sides' blocks of their trees' inverses Z (the coupling
-// of two sides in one tree left out): along n, a_s = J_s Z_s J_sᵀ; at its point, W_s = P_s Z_s P_sᵀ.
-struct Mobility {
-  std::array<double, 2> normal{};
-  std::array<Eigen::Matrix3d, 2> point{Eigen::Matrix3d::Zero(), Eigen::Matrix3d::Zero()};
-  double total_normal() const { return normal[0] + normal[1]; }
-  Eigen::Matrix3d total_point() const { return point[0] + point[1]; }
-};
-Mobility mobility_of(const JointTrees& trees, const TreeContact& contact) {
-  Mobility mobility;
+// A contact's mobilities, the round's, from its acting sides' blocks of their trees' inverses Z
+// (the coupling of two sides in one tree left out): along n, a_s = J_s Z_s J_sᵀ; at its point,
+// W_s = P_s Z_s P_sᵀ.
+void take_mobilities(const JointTrees& trees, TreeContact& contact) {
   for (std::size_t s = 0; s < 2; ++s) {
+    contact.normal_mobility[s] = 0, contact.point_mobility[s].setZero();
     if (!contact.acting[s]) continue;
     const Eigen::Matrix<double, 6, 6>& z = trees.elimination.mobility(static_cast<std::size_t>(contact.limb[s]));
-    mobility.normal[s] = contact.normal_jacobian[s].dot(z * contact.normal_jacobian[s]);
-    mobility.point[s] = contact.point_jacobian[s] * z * contact.point_jacobian[s].transpose();
+    contact.normal_mobility[s] = contact.normal_jacobian[s].dot(z * contact.normal_jacobian[s]);
+    contact.point_mobility[s] = contact.point_jacobian[s] * z * contact.point_jacobian[s].transpose();
   }
-  return mobility;
 }
 
 // The position impulses that close a separation C and undo a slip, as the contact rows take them
@@ -117,14 +112,14 @@ Mobility mobility_of(const JointTrees& trees, const TreeContact& contact) {
 // Within a round's iterations the pushes are Jacobi's on the round's linearization: a later
 // iteration may take back what an earlier one of the round pushed (its round total stays ≥ 0),
 // which is how the overshoot of contacts pushing one tree together is undone.
-void take_impulses(TreeContact& contact, double separation, Eigen::Vector3d slip, const Mobility& mobility) {
+void take_impulses(TreeContact& contact, double separation, Eigen::Vector3d slip) {
   contact.push = 0, contact.slide.setZero();
-  const double normal_mobility = mobility.total_normal();
+  const double normal_mobility = contact.normal_mobility[0] + contact.normal_mobility[1];
   if (!(normal_mobility > 0)) return;
   contact.push = std::max(-separation / normal_mobility, -contact.round_push);
   const Eigen::Vector3d& n = contact.normal;
   slip -= n.dot(slip) * n;
-  const Eigen::Matrix3d point = mobility.total_point();
+  const Eigen::Matrix3d point = contact.point_mobility[0] + contact.point_mobility[1];
   const double tangent_mobility = 0.5 * (point.trace() - n.dot(point * n));
   const Eigen::Vector3d taken = contact.tangent + contact.round_slide;
   Eigen::Vector3d total = taken;
@@ -218,35 +213,78 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
   group_by_row_into(trees.component_contacts, trees.settled.size(), trees.contact_pairs);
 }
 
+namespace {
+
+// The impulses the last iteration took, at the larger of its acting sides' components' scales,
+// join the round's.
+void keep_iteration_impulses(const JointTrees& trees, TreeContact& contact) {
+  double scale = 1;
+  for (std::size_t s = 0; s < 2; ++s) {
+    if (contact.acting[s]) scale = std::max(scale, trees.load_scale[component_of(trees, contact.limb[s])]);
+  }
+  contact.round_push += contact.push / scale, contact.round_slide += contact.slide / scale;
+  contact.push = 0, contact.slide.setZero();
+}
+
+// One contact's impulses and loads in an iteration (tree_contact_impulses).
+template <typename Scalar>
+void contact_iteration(const VerletState<Scalar>& state, JointTrees& trees, TreeContact& contact, bool first) {
+  if (first) {
+    contact.push = 0, contact.slide.setZero();
+    for (std::size_t s = 0; s < 2; ++s) contact.acting[s] = contact.limb[s] >= 0 && !trees.settled[component_of(trees, contact.limb[s])];
+  } else {
+    keep_iteration_impulses(trees, contact);
+  }
+  if (!contact.acting[0] && !contact.acting[1]) return;
+  if (first) evaluate(state, contact), take_mobilities(trees, contact);
+  // Its separation and slip once both sides' joint steps and the round's contact motion so far
+  // have moved them.
+  double separation = contact.separation;
+  Eigen::Vector3d slip = contact.slip;
+  for (std::size_t s = 0; s < 2; ++s) {
+    if (!contact.acting[s]) continue;
+    const auto limb = static_cast<std::size_t>(contact.limb[s]);
+    const Vector6 motion = trees.joint_motion[limb] + trees.load_motion[limb];
+    separation += contact.normal_jacobian[s].dot(motion), slip += contact.point_jacobian[s] * motion;
+  }
+  take_impulses(contact, separation, slip);
+  set_loads(contact);
+  for (std::size_t s = 0; s < 2; ++s) {
+    contact.wanted[s] = contact.push * contact.normal_mobility[s];
+    const Eigen::Vector3d slide = contact.point_mobility[s] * contact.slide;
+    contact.wanted_slide[s] = slide - contact.normal.dot(slide) * contact.normal;
+  }
+}
+
+// Contacts a task of the impulses' stage takes on the relaxation's threads.
+constexpr std::size_t kContactsPerTask = 64;
+
+template <typename Scalar>
+struct ImpulseStage {
+  VerletState<Scalar>* state;
+  bool first;
+  static double run(const void* context, std::size_t task) {
+    const auto& stage = *static_cast<const ImpulseStage*>(context);
+    JointTrees& trees = stage.state->plan.joint_trees;
+    const std::size_t end = std::min(trees.contacts.size(), (task + 1) * kContactsPerTask);
+    for (std::size_t c = task * kContactsPerTask; c < end; ++c) contact_iteration(*stage.state, trees, trees.contacts[c], stage.first);
+    return 0;
+  }
+};
+
+}  // namespace
+
 template <typename Scalar>
 void tree_contact_impulses(VerletState<Scalar>& state, bool first) {
-  JointTrees& trees = state.plan.joint_trees;
-  for (TreeContact& contact : trees.contacts) {
-    contact.push = 0, contact.slide.setZero();
-    if (first) {
-      for (std::size_t s = 0; s < 2; ++s) contact.acting[s] = contact.limb[s] >= 0 && !trees.settled[component_of(trees, contact.limb[s])];
-    }
-    if (!contact.acting[0] && !contact.acting[1]) continue;
-    if (first) evaluate(state, contact);
-    // Its separation and slip once both sides' joint steps and the round's contact motion so far
-    // have moved them.
-    double separation = contact.separation;
-    Eigen::Vector3d slip = contact.slip;
-    for (std::size_t s = 0; s < 2; ++s) {
-      if (!contact.acting[s]) continue;
-      const auto limb = static_cast<std::size_t>(contact.limb[s]);
-      const Vector6 motion = trees.joint_motion[limb] + trees.load_motion[limb];
-      separation += contact.normal_jacobian[s].dot(motion), slip += contact.point_jacobian[s] * motion;
-    }
-    const Mobility mobility = mobility_of(trees, contact);
-    take_impulses(contact, separation, slip, mobility);
-    set_loads(contact);
-    for (std::size_t s = 0; s < 2; ++s) {
-      contact.wanted[s] = contact.push * mobility.normal[s];
-      const Eigen::Vector3d slide = mobility.point[s] * contact.slide;
-      contact.wanted_slide[s] = slide - contact.normal.dot(slide) * contact.normal;
-    }
+  // Each contact writes only its own fields and reads the trees' stage-1 and stage-3 results:
+  // any split over the threads gives the same bits.
+  const ImpulseStage<Scalar> stage{&state, first};
+  const std::size_t tasks = (state.plan.joint_trees.contacts.size() + kContactsPerTask - 1) / kContactsPerTask;
+  if (joint_trees_on_threads(state.plan) && tasks > 1) {
+    state.plan.runner->run(tasks, &ImpulseStage<Scalar>::run, &stage);
+    return;
   }
+  for (std::size_t task = 0; task < tasks; ++task) ImpulseStage<Scalar>::run(&stage, task);
 }
 
 bool add_tree_contact_loads(JointTrees& trees, std::uint32_t component) {
@@ -277,18 +315,9 @@ double tree_contact_overshoot(const JointTrees& trees, std::uint32_t component) 
   return largest;
 }
 
-void accumulate_tree_contact_impulses(JointTrees& trees) {
-  for (TreeContact& contact : trees.contacts) {
-    double scale = 1;
-    for (std::size_t s = 0; s < 2; ++s) {
-      if (contact.acting[s]) scale = std::max(scale, trees.load_scale[component_of(trees, contact.limb[s])]);
-    }
-    contact.round_push += contact.push / scale, contact.round_slide += contact.slide / scale;
-  }
-}
-
 void end_tree_contact_round(JointTrees& trees) {
   for (TreeContact& contact : trees.contacts) {
+    keep_iteration_impulses(trees, contact);
     contact.lambda += contact.round_push, contact.tangent += contact.round_slide;
     contact.round_push = 0, contact.round_slide.setZero();
   }

@@ -26,8 +26,8 @@
 //    that motion to Δq, scaled down so that no contact of it moves past what it asked for
 //    (several contacts on one tree, each solved alone, would push it several times over: the
 //    loads are Jacobi's within a tree and across trees);
-// 4. each contact keeps the impulses it took, at the smaller of its sides' scales
-//    (accumulate_tree_contact_impulses).
+// 4. each contact keeps the impulses it took, divided by the larger of its sides' scales (at the
+//    next iteration's stage 2, or the round's end).
 // Stages 2–4 are four Jacobi iterations; then each component moves by Δq₀ + Δq, and the round's
 // impulses join the substep's (end_tree_contact_round).
 // A contact with one side static (stairs, ground) or asleep acts on one tree; one between two
@@ -53,7 +53,9 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h);
 
 /// Stage 2: every tree contact's impulses and loads, from its components' joint step and
 /// contact motion so far this round (JointTrees::joint_motion, load_motion) and their inverse
-/// diagonals; `first` (a round's first iteration): its geometry measured afresh at the positions.
+/// diagonals; `first` (a round's first iteration): its geometry measured afresh at the positions,
+/// else the last iteration's impulses first join the round's (at the larger of its sides'
+/// components' load_scale). On the relaxation's threads when the trees are.
 template <typename Scalar>
 void tree_contact_impulses(VerletState<Scalar>& state, bool first);
 
@@ -65,11 +67,8 @@ bool add_tree_contact_loads(JointTrees& trees, std::uint32_t component);
 /// no contact side of `component` moves past the motion it asked for (≥ 1).
 double tree_contact_overshoot(const JointTrees& trees, std::uint32_t component);
 
-/// Stage 4: each contact adds the impulses it took to its round's, scaled by the larger of its
-/// acting sides' components' load_scale.
-void accumulate_tree_contact_impulses(JointTrees& trees);
-
-/// A round's end: each contact's round impulses join the substep's (λ and the friction impulse).
+/// A round's end: each contact's last iteration's impulses join the round's, and the round's the
+/// substep's (λ and the friction impulse).
 void end_tree_contact_round(JointTrees& trees);
 
 /// The contact rows the trees pushed this substep (λ > 0), for StepReport::contacts (plane
