@@ -216,22 +216,25 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.load_motion.assign(limb_count, Vector6::Zero());
 }
 
-}  // namespace
-
-
-template <typename Scalar>
-void prepare_joint_trees(VerletState<Scalar>& state) {
-  JointTrees& trees = state.plan.joint_trees;
-  JointTrees empty;  // (g++ 12 fails on `trees = JointTrees{}`: an internal compiler error)
-  trees = std::move(empty);
-  const VerletOptions& options = state.options;
-  if (options.verlet.joint_solve != JointSolve::tree) return;
+// Throws std::invalid_argument for the options the trees cannot run with.
+void refuse_unsupported(const VerletOptions& options) {
   const auto refuse = [](const char* what) { throw std::invalid_argument(std::string("options: joint_solve tree needs ") + what); };
   if (options.rule != RelaxationRule::weighted) refuse("the weighted rule (limbs keep their masses)");
   if (options.solver != RelaxationSolver::gauss_seidel || options.order != SweepOrder::coloured) {
     refuse("the coloured Gauss-Seidel sweep (not Jacobi, the sequential sweep or the direct solver)");
   }
   if (options.layout == ParticleLayout::aos || options.layout == ParticleLayout::aosoa) refuse("the SoA layout");
+}
+
+}  // namespace
+
+template <typename Scalar>
+void prepare_joint_trees(VerletState<Scalar>& state) {
+  JointTrees& trees = state.plan.joint_trees;
+  JointTrees empty;  // (g++ 12 fails on `trees = JointTrees{}`: an internal compiler error)
+  trees = std::move(empty);
+  if (state.options.verlet.joint_solve != JointSolve::tree) return;
+  refuse_unsupported(state.options);
 
   std::vector<bool> rigid;
   const std::vector<std::int32_t> limb_of = limb_of_particles(state, trees, rigid);
@@ -309,7 +312,6 @@ void prepare_joint_trees(VerletState<Scalar>& state) {
   // The rattle rule's contacts are inequalities of its velocity stage too: they stay rows there.
   trees.with_contacts = trees.active() && !uses_rattle(state);
 }
-
 
 #define LIMBER_INSTANTIATE(Scalar) template void prepare_joint_trees<Scalar>(VerletState<Scalar>&);
 LIMBER_INSTANTIATE(float)
