@@ -9,10 +9,13 @@
 // (100 particles, 3 × 3 blocks; 100 distance constraints of one row, the first to the world).
 // Each iteration loads the inputs (a copy), factors and solves every instance: the time per
 // instance and per joint (counters `instance`, `joint`). The label says scalar or the lane
-// count (xsimd's widest batch for this build: 8 doubles on AVX-512, 4 on AVX2).
+// count (xsimd's widest batch for this build: 8 doubles on AVX-512, 4 on AVX2). The `Packed`
+// rows feed the lanes from instances kept one at a time, as the joint trees keep their
+// ragdolls, and unpack the results (with `Inverse`: the inverse diagonal too).
 #include <array>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -106,7 +109,7 @@ std::vector<Batch<Value, B>> batches(const Shape& shape) {
 }
 
 template <typename Value, int B>
-void BM_Eliminate(benchmark::State& run, const Shape& shape) {
+void BM_Eliminate(benchmark::State& run, const Shape& shape, bool inverse = false) {
   std::vector<Batch<Value, B>> all = batches<Value, B>(shape);
   for (auto _ : run) {
     for (Batch<Value, B>& batch : all) {
@@ -120,22 +123,108 @@ void BM_Eliminate(benchmark::State& run, const Shape& shape) {
       });
       benchmark::DoNotOptimize(definite);
       benchmark::DoNotOptimize(elimination.work(0));
+      if (!inverse) continue;
+      elimination.inverse_diagonal(component.begin, component.end);
+      benchmark::DoNotOptimize(elimination.mobility(0));
     }
   }
   // Time per instance and per joint (printed in seconds with an SI prefix).
   run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   run.counters["joint"] = benchmark::Counter(static_cast<double>(kInstances * shape.inboard.size()),
                                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  run.SetLabel(std::is_arithmetic_v<Value> ? "scalar" : std::to_string(xsimd::batch<double>::size) + " lanes");
+  run.SetLabel((std::is_arithmetic_v<Value> ? "scalar" : std::to_string(xsimd::batch<double>::size) + " lanes") +
+               std::string(inverse ? ", with the inverse diagonal" : ""));
+}
+
+// Lanes fed from instances kept one at a time (as the joint trees keep each ragdoll's blocks):
+// each iteration packs `width` instances' inputs into the lanes (a lane-major gather per
+// entry), eliminates, and unpacks every node's solution and, with `inverse`, every body's block
+// of the inverse (what the trees' contacts read) back to the instances: what laning costs
+// beside the elimination itself.
+template <typename Lanes, typename Number>
+void pack(Lanes& lanes, const std::vector<const Number*>& instances) {
+  using Value = xsimd::batch<double>;
+  alignas(64) double values[Value::size];
+  for (int i = 0; i < Number::RowsAtCompileTime; ++i) {
+    for (int j = 0; j < Number::ColsAtCompileTime; ++j) {
+      for (std::size_t lane = 0; lane < Value::size; ++lane) values[lane] = (*instances[lane])(i, j);
+      lanes(i, j) = Value::load_aligned(values);
+    }
+  }
+}
+template <typename Lanes, typename Number>
+void unpack(const Lanes& lanes, const std::vector<Number*>& instances) {
+  using Value = xsimd::batch<double>;
+  alignas(64) double values[Value::size];
+  for (int i = 0; i < Number::RowsAtCompileTime; ++i) {
+    for (int j = 0; j < Number::ColsAtCompileTime; ++j) {
+      lanes(i, j).store_aligned(values);
+      for (std::size_t lane = 0; lane < Value::size; ++lane) (*instances[lane])(i, j) = values[lane];
+    }
+  }
+}
+
+template <int B>
+void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse) {
+  using Value = xsimd::batch<double>;
+  constexpr std::size_t width = Value::size;
+  std::vector<Batch<double, B>> instances = batches<double, B>(shape);
+  std::vector<Batch<Value, B>> lanes = batches<Value, B>(shape);
+  std::vector<std::vector<Block<double, B, 1>>> solution(kInstances, std::vector<Block<double, B, 1>>(instances[0].elimination.node_count()));
+  std::vector<std::vector<Block<double, B, B>>> mobility(kInstances, std::vector<Block<double, B, B>>(static_cast<std::size_t>(shape.bodies)));
+  std::vector<const Block<double, B, B>*> in_matrix(width);
+  std::vector<const Block<double, B, 1>*> in_vector(width);
+  std::vector<Block<double, B, 1>*> out_vector(width);
+  std::vector<Block<double, B, B>*> out_matrix(width);
+  for (auto _ : run) {
+    for (std::size_t k = 0; k < lanes.size(); ++k) {
+      Batch<Value, B>& batch = lanes[k];
+      TreeElimination<Value, B>& elimination = batch.elimination;
+      for (std::size_t node = 0; node < elimination.node_count(); ++node) {
+        for (std::size_t lane = 0; lane < width; ++lane) {
+          in_matrix[lane] = &instances[k * width + lane].diagonal[node], in_vector[lane] = &instances[k * width + lane].right[node];
+        }
+        pack(elimination.diagonal(node), in_matrix), pack(elimination.work(node), in_vector);
+      }
+      for (std::size_t c = 0; c < shape.inboard.size(); ++c) {
+        for (std::size_t side = 0; side < 2; ++side) {
+          for (std::size_t lane = 0; lane < width; ++lane) in_matrix[lane] = &instances[k * width + lane].edge[c][side];
+          pack(batch.edge[c][side], in_matrix);
+        }
+      }
+      const TreeOrdering::Component& component = elimination.ordering().components[0];
+      const bool definite = elimination.eliminate(component.begin, component.end, [&](std::size_t c, std::int32_t body) -> const Block<Value, B, B>& {
+        return batch.edge[c][shape.outboard[c] == body ? 1 : 0];
+      });
+      benchmark::DoNotOptimize(definite);
+      if (inverse) elimination.inverse_diagonal(component.begin, component.end);
+      for (std::size_t node = 0; node < elimination.node_count(); ++node) {
+        for (std::size_t lane = 0; lane < width; ++lane) out_vector[lane] = &solution[k * width + lane][node];
+        unpack(elimination.work(node), out_vector);
+        if (!inverse || node >= static_cast<std::size_t>(shape.bodies)) continue;
+        for (std::size_t lane = 0; lane < width; ++lane) out_matrix[lane] = &mobility[k * width + lane][node];
+        unpack(elimination.mobility(node), out_matrix);
+      }
+    }
+    benchmark::DoNotOptimize(solution.front().front());
+  }
+  run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.SetLabel(std::to_string(width) + " lanes, packed from instances" + (inverse ? ", with the inverse diagonal" : ""));
 }
 
 void BM_RagdollScalar(benchmark::State& run) { BM_Eliminate<double, 6>(run, ragdoll()); }
+void BM_RagdollScalarInverse(benchmark::State& run) { BM_Eliminate<double, 6>(run, ragdoll(), true); }
+void BM_RagdollLanesPacked(benchmark::State& run) { BM_EliminatePacked<6>(run, ragdoll(), false); }
+void BM_RagdollLanesPackedInverse(benchmark::State& run) { BM_EliminatePacked<6>(run, ragdoll(), true); }
 void BM_RagdollLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, ragdoll()); }
 void BM_RopeScalar(benchmark::State& run) { BM_Eliminate<double, 3>(run, rope()); }
 void BM_RopeLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 3>(run, rope()); }
 
 BENCHMARK(BM_RagdollScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollLanes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RagdollLanesPacked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RagdollScalarInverse)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeLanes)->Unit(benchmark::kMicrosecond);
 
