@@ -183,6 +183,37 @@ TEST(RagdollScene, HipAndShoulderConesCoverTheCitedRanges) {
   }
 }
 
+// A known failure, kept to reproduce it (--gtest_also_run_disabled_tests): the twist is measured
+// about the limb's axis against a reference carried from the limb's rest axis (joint_frame's
+// twist_axis), which is undefined where the limb points opposite its rest axis; the shoulder's
+// cone reaches that direction (an arm raised overhead: flexion and abduction to 180°, as cited),
+// so there a small swing turns the measured twist by up to a radian and the twist limit is
+// meaningless. On the rain the solvers then leave a shoulder 0.25–0.73 rad past its twist bound
+// (bench/README.md, "Ragdoll crowds today"). Measuring the twist about the cone's axis (as
+// Bullet's cone-twist does) would put the undefined direction 180° from the cone's centre,
+// outside every cone narrower than that. The bound: a reference carried along shortest arcs
+// from an axis gains a twist of about s·tan(θ/2) over a small swing s at θ from that axis (the
+// holonomy of the sphere): under 2s within 127° of it, which a cone of up to 120° about its own
+// axis keeps; from the rest axis it is 3.7s at 150° of flexion and 57s at 178°.
+TEST(RagdollScene, DISABLED_ASmallSwingInsideAShouldersConeTurnsItsTwistLittle) {
+  const Model model = shipped_scene("ragdoll.json").model;
+  for (const char* side : {"left", "right"}) {
+    const std::size_t shoulder = joint_index(model, std::string("upper_torso-upper_arm_") + side);
+    const Body& arm = model.bodies[static_cast<std::size_t>(model.joints[shoulder].outboard)];
+    for (const double flexion : {150 * kDegree, 170 * kDegree, 178 * kDegree}) {
+      // The arm raised forward by `flexion` (its shortest turn from hanging), then swung 0.05 rad
+      // sideways by the shortest turn from there: no turn about its own axis on the way.
+      const Vector3 raised = direction(flexion, 0), swung = direction(flexion, 0.05);
+      const Eigen::Quaterniond raise = Eigen::Quaterniond::FromTwoVectors(-arm.axis, raised);
+      const Eigen::Quaterniond swing = Eigen::Quaterniond::FromTwoVectors(raised, swung) * raise;
+      const JointCoordinates before = coordinates_at(model, shoulder, turned_outboard(model, shoulder, raise));
+      const JointCoordinates after = coordinates_at(model, shoulder, turned_outboard(model, shoulder, swing));
+      ASSERT_EQ(limit_violation(model.joints[shoulder], before), 0) << side << " at " << flexion / kDegree << "°";
+      EXPECT_LT(std::abs(after.twist - before.twist), 2 * 0.05) << side << " at " << flexion / kDegree << "°: twist " << before.twist << " -> " << after.twist;
+    }
+  }
+}
+
 // --- Runs ---
 
 template <typename Scalar>
