@@ -25,6 +25,7 @@
 // lane k's system (lane_blocks.hpp). The block products are written as loops for that reason.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <type_traits>
@@ -90,6 +91,8 @@ class TreeElimination {
   void assign(TreeOrdering ordering, std::size_t body_count, std::vector<std::uint8_t> constraint_rows) {
     ordering_ = std::move(ordering);
     body_count_ = static_cast<std::int32_t>(body_count);
+    position_.assign(ordering_.parent.size(), 0);
+    for (std::size_t k = 0; k < ordering_.order.size(); ++k) position_[static_cast<std::size_t>(ordering_.order[k])] = static_cast<std::uint32_t>(k);
     rows_ = std::move(constraint_rows);
     const std::size_t nodes = ordering_.parent.size();
     diagonal_.assign(nodes, BodyMatrix::Zero());
@@ -147,45 +150,37 @@ class TreeElimination {
   /// children first, y_parent −= L·y_node; back, parents first, x_node = D⁻¹·y_node − Lᵀ·x_parent.
   /// A factor serves any number of solves (a chord iteration: new right-hand sides, one matrix).
   void solve(std::uint32_t begin, std::uint32_t end) {
-    const auto& order = ordering_.order;
-    const auto& parent_of = ordering_.parent;
-    for (std::uint32_t k = begin; k < end; ++k) {
-      const std::int32_t node = order[k], parent = parent_of[node];
-      if (parent < 0) continue;
-      const BodyMatrix& l = to_parent_[node];
-      const BodyVector& y = work_[node];
-      BodyVector& up = work_[parent];
-      if (node < body_count_) {
-        with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
-          constexpr int m = decltype(rows)::value;
-          for (int i = 0; i < m; ++i) up(i, 0) -= dot<BodySize>([&](int c) { return l(i, c) * y(c, 0); });
-        });
-      } else {
-        with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
-          constexpr int m = decltype(rows)::value;
-          for (int i = 0; i < BodySize; ++i) up(i, 0) -= dot<m>([&](int c) { return l(i, c) * y(c, 0); });
-        });
+    for (std::uint32_t k = begin; k < end; ++k) forward_substitute(ordering_.order[k]);
+    for (std::uint32_t k = end; k-- > begin;) back_substitute(ordering_.order[k]);
+  }
+
+  /// solve() for a right-hand side that is zero outside `nodes`: nodes of factored components,
+  /// each one's parent listed too (unless a root), children first (path_to_root gives such a
+  /// list). Reads and writes work() of those nodes only, and gives there what solve() gives:
+  /// the rest of the tree adds nothing to them. O(the nodes listed): one load's response at a
+  /// few bodies costs the depth of the tree, not its size.
+  void solve_nodes(std::span<const std::int32_t> nodes) {
+    for (const std::int32_t node : nodes) forward_substitute(node);
+    for (std::size_t k = nodes.size(); k-- > 0;) back_substitute(nodes[k]);
+  }
+
+  /// The nodes on the paths from each of `from` (tree nodes of one component) up to its root,
+  /// each once, children first, into the front of `out` (room for the component's nodes);
+  /// returns their count: solve_nodes' list for loads at `from`.
+  std::size_t path_to_root(std::span<const std::int32_t> from, std::span<std::int32_t> out) const {
+    const auto before = [&](std::int32_t a, std::int32_t b) { return position_[a] < position_[b]; };
+    std::size_t count = 0;
+    for (const std::int32_t source : from) {
+      // Up from the source until the paths already listed (sorted: a binary search) are met.
+      const auto listed = out.begin() + static_cast<std::ptrdiff_t>(count);
+      for (std::int32_t node = source; node >= 0; node = ordering_.parent[node]) {
+        const auto found = std::lower_bound(out.begin(), listed, node, before);
+        if (found != listed && *found == node) break;
+        out[count++] = node;
       }
+      std::sort(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(count), before);
     }
-    for (std::uint32_t k = end; k-- > begin;) {
-      const std::int32_t node = order[k], parent = parent_of[node];
-      if (node < body_count_) {
-        back_substitute_body(node, parent);
-        continue;
-      }
-      with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
-        constexpr int m = decltype(rows)::value;
-        const BodyMatrix& d = diagonal_[node];
-        const BodyMatrix& l = to_parent_[node];
-        BodyVector& y = work_[node];
-        Value x[m];
-        for (int i = 0; i < m; ++i) {
-          x[i] = dot<m>([&](int c) { return d(i, c) * y(c, 0); });
-          if (parent >= 0) x[i] -= dot<BodySize>([&](int c) { return l(c, i) * work_[parent](c, 0); });
-        }
-        for (int i = 0; i < m; ++i) y(i, 0) = x[i];
-      });
-    }
+    return count;
   }
 
   /// After factor() of the nodes order[begin, end) (whole components): each body's diagonal
@@ -329,6 +324,47 @@ class TreeElimination {
     });
   }
 
+  // Forward, children first: y_parent −= L·y_node.
+  void forward_substitute(std::int32_t node) {
+    const std::int32_t parent = ordering_.parent[node];
+    if (parent < 0) return;
+    const BodyMatrix& l = to_parent_[node];
+    const BodyVector& y = work_[node];
+    BodyVector& up = work_[parent];
+    if (node < body_count_) {
+      with_rows<BodySize>(rows_[parent - body_count_], [&](auto rows) {
+        constexpr int m = decltype(rows)::value;
+        for (int i = 0; i < m; ++i) up(i, 0) -= dot<BodySize>([&](int c) { return l(i, c) * y(c, 0); });
+      });
+      return;
+    }
+    with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+      constexpr int m = decltype(rows)::value;
+      for (int i = 0; i < BodySize; ++i) up(i, 0) -= dot<m>([&](int c) { return l(i, c) * y(c, 0); });
+    });
+  }
+
+  // Back, parents first: x_node = D⁻¹·y_node − Lᵀ·x_parent.
+  void back_substitute(std::int32_t node) {
+    const std::int32_t parent = ordering_.parent[node];
+    if (node < body_count_) {
+      back_substitute_body(node, parent);
+      return;
+    }
+    with_rows<BodySize>(rows_[node - body_count_], [&](auto rows) {
+      constexpr int m = decltype(rows)::value;
+      const BodyMatrix& d = diagonal_[node];
+      const BodyMatrix& l = to_parent_[node];
+      BodyVector& y = work_[node];
+      Value x[m];
+      for (int i = 0; i < m; ++i) {
+        x[i] = dot<m>([&](int c) { return d(i, c) * y(c, 0); });
+        if (parent >= 0) x[i] -= dot<BodySize>([&](int c) { return l(c, i) * work_[parent](c, 0); });
+      }
+      for (int i = 0; i < m; ++i) y(i, 0) = x[i];
+    });
+  }
+
   // x_body = D⁻¹·y − Lᵀ·x_parent (L: the top m rows).
   void back_substitute_body(std::int32_t node, std::int32_t parent) {
     BodyVector& y = work_[node];
@@ -352,6 +388,7 @@ class TreeElimination {
   }
 
   TreeOrdering ordering_;
+  std::vector<std::uint32_t> position_;  // per tree node: its place in ordering_.order
   std::int32_t body_count_ = 0;
   std::vector<std::uint8_t> rows_;
   /// Per node: D (inverted in place when it is eliminated, except a body's of more than 3 rows,

@@ -87,6 +87,7 @@ struct TreeContact {
   Source source = Source::row;
   std::uint32_t index = 0;                   ///< its ContactRow or PlaneContact
   std::array<std::int32_t, 2> limb{-1, -1};  ///< the tree limb of each side; −1: static, or asleep
+  bool loop = false;  ///< both sides are limbs of one tree (a limb against its own body)
   double friction = 0;
   Eigen::Vector3d start = Eigen::Vector3d::Zero();  ///< its point Σ c_k x_k at the substep's start, m
   /// Accumulated over the substep's sweeps: the normal push λ (kg·m, ≥ 0) and the tangential
@@ -106,7 +107,8 @@ struct TreeContact {
   std::array<Eigen::Matrix<double, 6, 1>, 2> normal_jacobian{};
   std::array<Eigen::Matrix<double, 3, 6>, 2> point_jacobian{};
   /// Each acting side's mobility along n (J Z Jᵀ, 1/kg) and at its point (P Z Pᵀ), the round's.
-  std::array<double, 2> normal_mobility{};
+  /// A loop's along n is exact, its sides' coupling included (take_loop_mobilities): loop_mobility.
+  std::array<double, 2> normal_mobility{}, loop_mobility{};
   std::array<Eigen::Matrix3d, 2> point_mobility{};
   double push = 0;
   Eigen::Vector3d slide = Eigen::Vector3d::Zero();
@@ -190,6 +192,8 @@ struct JointTrees {
   std::vector<Eigen::Matrix<double, 6, 1>> joint_motion;
   std::vector<Eigen::Matrix<double, 6, 1>> load_motion;  ///< per limb: the contacts' motion so far this round
   std::vector<std::uint8_t> mobility_current, settled;
+  /// Per elimination node (a component's slice its own): the paths a loop's response runs on.
+  std::vector<std::int32_t> path_scratch;
   std::vector<double> load_scale;
   bool active() const { return !joints.empty(); }
 };

@@ -380,6 +380,7 @@ double contact_round_joints(VerletState<Scalar>& state, std::uint32_t index, int
     trees.joint_motion[limb] = trees.elimination.work(limb);
     trees.load_motion[limb].setZero();
   });
+  take_loop_mobilities(state, index);
   return 0;
 }
 

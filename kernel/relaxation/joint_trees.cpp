@@ -212,6 +212,7 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.mobility_current.assign(trees.factored.size(), 0);
   trees.load_scale.assign(trees.factored.size(), 1.0);
   trees.settled.assign(trees.factored.size(), 0);
+  trees.path_scratch.assign(trees.elimination.ordering().order.size(), -1);
   trees.joint_motion.assign(limb_count, Vector6::Zero());
   trees.load_motion.assign(limb_count, Vector6::Zero());
 }

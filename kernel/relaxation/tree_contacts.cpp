@@ -92,15 +92,15 @@ void evaluate(const VerletState<Scalar>& state, TreeContact& contact) {
   }
 }
 
-// A contact's mobilities, the round's, from its acting sides' blocks of their trees' inverses Z
-// (the coupling of two sides in one tree left out): along n, a_s = J_s Z_s J_sᵀ; at its point,
-// W_s = P_s Z_s P_sᵀ.
+// A contact's mobilities, the round's, from its acting sides' blocks of their trees' inverses Z:
+// along n, a_s = J_s Z_s J_sᵀ (a loop's exact, from take_loop_mobilities); at its point,
+// W_s = P_s Z_s P_sᵀ (a loop's without its sides' coupling).
 void take_mobilities(const JointTrees& trees, TreeContact& contact) {
   for (std::size_t s = 0; s < 2; ++s) {
     contact.normal_mobility[s] = 0, contact.point_mobility[s].setZero();
     if (!contact.acting[s]) continue;
     const Eigen::Matrix<double, 6, 6>& z = trees.elimination.mobility(static_cast<std::size_t>(contact.limb[s]));
-    contact.normal_mobility[s] = contact.normal_jacobian[s].dot(z * contact.normal_jacobian[s]);
+    contact.normal_mobility[s] = contact.loop ? contact.loop_mobility[s] : contact.normal_jacobian[s].dot(z * contact.normal_jacobian[s]);
     contact.point_mobility[s] = contact.point_jacobian[s] * z * contact.point_jacobian[s].transpose();
   }
 }
@@ -188,6 +188,7 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
     for (std::size_t s = 0; s < 2; ++s) {
       if (side_moves(state, row, s)) contact.limb[s] = trees.limb_of_particle[row.particle[s * kContactRowSideParticles]];
     }
+    contact.loop = contact.limb[0] >= 0 && contact.limb[1] >= 0 && component_of(trees, contact.limb[0]) == component_of(trees, contact.limb[1]);
     trees.contacts.push_back(contact);
   }
   for (std::size_t c = 0; c < state.plane_contacts.size(); ++c) {
@@ -203,14 +204,38 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
     contact.limb[0] = limb;
     trees.contacts.push_back(contact);
   }
+  // Each contact once under each component it has a side in: a loop (both sides in one tree) is
+  // listed once, or for_each_side would visit its sides twice and load its tree twice over.
   for (std::size_t c = 0; c < trees.contacts.size(); ++c) {
     const TreeContact& contact = trees.contacts[c];
     for (std::size_t s = 0; s < 2; ++s) {
       if (contact.limb[s] < 0) continue;
+      if (s == 1 && contact.loop) continue;
       trees.contact_pairs.emplace_back(static_cast<std::uint32_t>(component_of(trees, contact.limb[s])), static_cast<std::uint32_t>(c));
     }
   }
   group_by_row_into(trees.component_contacts, trees.settled.size(), trees.contact_pairs);
+}
+
+template <typename Scalar>
+void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component) {
+  JointTrees& trees = state.plan.joint_trees;
+  const TreeOrdering::Component& nodes = trees.elimination.ordering().components[component];
+  for (const std::uint32_t c : trees.component_contacts.row(component)) {
+    TreeContact& contact = trees.contacts[c];
+    if (!contact.loop) continue;
+    evaluate(state, contact);
+    // The paths from its two limbs to the root carry the response (solve_nodes): the component's
+    // slice of the scratch holds them.
+    const std::span<std::int32_t> room(trees.path_scratch.data() + nodes.begin, nodes.end - nodes.begin);
+    const std::span<const std::int32_t> path = room.first(trees.elimination.path_to_root(contact.limb, room));
+    for (const std::int32_t node : path) trees.elimination.work(static_cast<std::size_t>(node)).setZero();
+    for (std::size_t s = 0; s < 2; ++s) trees.elimination.work(static_cast<std::size_t>(contact.limb[s])) += contact.normal_jacobian[s];
+    trees.elimination.solve_nodes(path);
+    for (std::size_t s = 0; s < 2; ++s) {
+      contact.loop_mobility[s] = contact.normal_jacobian[s].dot(trees.elimination.work(static_cast<std::size_t>(contact.limb[s])));
+    }
+  }
 }
 
 namespace {
@@ -331,6 +356,7 @@ int tree_contact_rows_pushed(const JointTrees& trees) {
 #define LIMBER_INSTANTIATE(Scalar)                                                           \
   template bool held_by_joint_trees<Scalar>(const VerletState<Scalar>&, const ContactRow&); \
   template void gather_tree_contacts<Scalar>(VerletState<Scalar>&, double);                  \
+  template void take_loop_mobilities<Scalar>(VerletState<Scalar>&, std::uint32_t);           \
   template void tree_contact_impulses<Scalar>(VerletState<Scalar>&, bool);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)

@@ -31,8 +31,10 @@
 // Stages 2–4 are four Jacobi iterations; then each component moves by Δq₀ + Δq, and the round's
 // impulses join the substep's (end_tree_contact_round).
 // A contact with one side static (stairs, ground) or asleep acts on one tree; one between two
-// trees splits its push by their mobilities; one between two limbs of one tree (a loop) takes the
-// sum of the two limbs' mobilities, which leaves out their coupling. Rows and plane contacts
+// trees splits its push by their mobilities; one between two limbs of one tree (a loop: a forearm
+// on its own torso) takes its exact mobility along n, the two sides' coupling through the tree
+// included, from one back-substitution on the paths from its limbs to the root
+// (take_loop_mobilities, in stage 1), and is listed once under its tree. Rows and plane contacts
 // between a tree limb and anything else (a ball, a limb outside the trees) stay in the sweeps.
 #pragma once
 
@@ -50,6 +52,14 @@ bool held_by_joint_trees(const VerletState<Scalar>& state, const ContactRow& row
 /// held (the sweeps and restitution skip them) — grouped by component. h: the substep, s.
 template <typename Scalar>
 void gather_tree_contacts(VerletState<Scalar>& state, double h);
+
+/// Stage 1, after a component's factor (its joint step solved and kept): each of its loops — a
+/// contact whose two sides are limbs of its tree — measured at the positions, and its exact
+/// mobility along n, each side's share J_s·x_s of the motion x that a unit push makes (one
+/// back-substitution with the factor; the inverse diagonal's blocks leave out how the tree
+/// couples the two sides). Overwrites the component's work vectors.
+template <typename Scalar>
+void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component);
 
 /// Stage 2: every tree contact's impulses and loads, from its components' joint step and
 /// contact motion so far this round (JointTrees::joint_motion, load_motion) and their inverse

@@ -194,6 +194,44 @@ TEST(TreeElimination, AgreesWithADenseSolveOfTheWholeSystem) {
 
 // inverse_diagonal(): each body's block of the inverse of the whole saddle-point matrix (its
 // mobility with every constraint kept) agrees with the dense inverse's.
+// solve_nodes() on the paths from two loaded bodies to the root gives, at those bodies, the bits
+// solve() gives over the whole tree for the same loads (the other nodes only add zeros).
+template <int B>
+void expect_path_solves_to_match_whole_solves() {
+  for_random_systems<B>(17 + B, [](const Shape&, const System<B>& system, TreeElimination<double, B>& elimination, int trial) {
+    std::mt19937 random(static_cast<unsigned>(trial));
+    std::uniform_int_distribution<std::int32_t> pick(0, kBodies - 1);
+    const std::array<std::int32_t, 2> loaded{pick(random), pick(random)};
+    const TreeOrdering::Component& whole = elimination.ordering().components[0];
+    const auto load = [&] {
+      for (std::size_t s = 0; s < 2; ++s) elimination.work(static_cast<std::size_t>(loaded[s])) += system.force[s];
+    };
+    for (std::size_t node = 0; node < elimination.node_count(); ++node) elimination.work(node).setZero();
+    load();
+    elimination.solve(whole.begin, whole.end);
+    const std::array<Eigen::Matrix<double, B, 1>, 2> expected{elimination.work(static_cast<std::size_t>(loaded[0])),
+                                                              elimination.work(static_cast<std::size_t>(loaded[1]))};
+    std::vector<std::int32_t> room(elimination.node_count());
+    const std::size_t count = elimination.path_to_root(loaded, room);
+    EXPECT_LE(count, elimination.node_count());
+    const std::span<const std::int32_t> path(room.data(), count);
+    for (const std::int32_t node : path) elimination.work(static_cast<std::size_t>(node)).setConstant(7.0);  // stale values
+    for (const std::int32_t node : path) elimination.work(static_cast<std::size_t>(node)).setZero();
+    load();
+    elimination.solve_nodes(path);
+    for (std::size_t s = 0; s < 2; ++s) {
+      for (int i = 0; i < B; ++i) {
+        EXPECT_EQ(elimination.work(static_cast<std::size_t>(loaded[s]))(i), expected[s](i)) << "B = " << B << ", trial " << trial << ", body " << loaded[s];
+      }
+    }
+  });
+}
+
+TEST(TreeElimination, APathSolveGivesTheLoadedBodiesTheWholeSolvesBits) {
+  expect_path_solves_to_match_whole_solves<3>();
+  expect_path_solves_to_match_whole_solves<6>();
+}
+
 template <int B>
 void expect_body_blocks_of_the_inverse() {
   for_random_systems<B>(13 + B, [](const Shape& shape, const System<B>& system, TreeElimination<double, B>& elimination, int trial) {
