@@ -137,7 +137,8 @@ void set_loads(TreeContact& contact) {
   }
 }
 
-// Calls visit(contact, side, limb) for each acting side of `component`'s contacts that are not loops.
+// Calls visit(contact, side, limb) for each acting side of `component`'s contacts in it (both of a
+// loop's, once each: gather_tree_contacts lists a loop once).
 template <typename Visit>
 void for_each_side(const JointTrees& trees, std::uint32_t component, Visit&& visit) {
   for (const std::uint32_t c : trees.component_contacts.row(component)) {
@@ -261,7 +262,11 @@ void contact_iteration(const VerletState<Scalar>& state, JointTrees& trees, Tree
     keep_iteration_impulses(trees, contact);
   }
   if (!contact.acting[0] && !contact.acting[1]) return;
-  if (first) evaluate(state, contact), take_mobilities(trees, contact);
+  if (first) {
+    // A loop was measured at these positions in stage 1, with its component's limbs loaded.
+    if (!contact.loop) evaluate(state, contact);
+    take_mobilities(trees, contact);
+  }
   // Its separation and slip once both sides' joint steps and the round's contact motion so far
   // have moved them.
   double separation = contact.separation;

@@ -90,16 +90,7 @@ MethodSettings read_method_settings(const Object& object) {
     relaxation.optional("over_relaxation", target.over_relaxation);
     require_in_range(target.over_relaxation, 0, 2, relaxation.path("over_relaxation"),
                      /*low_open=*/true, /*high_open=*/true);
-    if (relaxation.find("projection")) {
-      const std::string projection = relaxation.string("projection");
-      if (projection == "pbd") {
-        target.projection = ProjectionRule::pbd;
-      } else if (projection == "rattle") {
-        target.projection = ProjectionRule::rattle;
-      } else {
-        fail(relaxation.path("projection"), "must be \"pbd\" or \"rattle\", got " + in_quotes(projection));
-      }
-    }
+    relaxation.optional_choice("projection", target.projection, {{"pbd", ProjectionRule::pbd}, {"rattle", ProjectionRule::rattle}});
     if (relaxation.find("substeps")) target.substeps = relaxation.integer("substeps");
     require_at_least(target.substeps, 1, relaxation.path("substeps"));
     require_at_most(target.substeps, kMaxSubsteps, relaxation.path("substeps"));
@@ -120,39 +111,11 @@ MethodSettings read_method_settings(const Object& object) {
   if (const Json* json = object.find("verlet")) {
     const Object verlet(*json, object.path("verlet"));
     verlet.allow_only({"joints", "limb_masses", "drag_factor", "joint_solve"});
-    if (verlet.find("joints")) {
-      const std::string joints = verlet.string("joints");
-      if (joints == "zero_length_constraint") {
-        methods.verlet.joints = ParticleJoints::zero_length_constraint;
-      } else if (joints == "shared_particle") {
-        methods.verlet.joints = ParticleJoints::shared_particle;
-      } else {
-        fail(verlet.path("joints"),
-             "must be \"zero_length_constraint\" or \"shared_particle\", got " + in_quotes(joints));
-      }
-    }
-    if (verlet.find("limb_masses")) {
-      const std::string limb_masses = verlet.string("limb_masses");
-      if (limb_masses == "ends") {
-        methods.verlet.limb_masses = LimbMasses::ends;
-      } else if (limb_masses == "inertia") {
-        methods.verlet.limb_masses = LimbMasses::inertia;
-      } else if (limb_masses == "lumps") {
-        methods.verlet.limb_masses = LimbMasses::lumps;
-      } else {
-        fail(verlet.path("limb_masses"), "must be \"ends\", \"inertia\" or \"lumps\", got " + in_quotes(limb_masses));
-      }
-    }
-    if (verlet.find("joint_solve")) {
-      const std::string joint_solve = verlet.string("joint_solve");
-      if (joint_solve == "rows") {
-        methods.verlet.joint_solve = JointSolve::rows;
-      } else if (joint_solve == "tree") {
-        methods.verlet.joint_solve = JointSolve::tree;
-      } else {
-        fail(verlet.path("joint_solve"), "must be \"rows\" or \"tree\", got " + in_quotes(joint_solve));
-      }
-    }
+    verlet.optional_choice("joints", methods.verlet.joints,
+                           {{"zero_length_constraint", ParticleJoints::zero_length_constraint}, {"shared_particle", ParticleJoints::shared_particle}});
+    verlet.optional_choice("limb_masses", methods.verlet.limb_masses,
+                           {{"ends", LimbMasses::ends}, {"inertia", LimbMasses::inertia}, {"lumps", LimbMasses::lumps}});
+    verlet.optional_choice("joint_solve", methods.verlet.joint_solve, {{"rows", JointSolve::rows}, {"tree", JointSolve::tree}});
     if (verlet.find("drag_factor")) {
       const double drag_factor = verlet.number("drag_factor");
       require_in_range(drag_factor, 1, 2, verlet.path("drag_factor"), /*low_open=*/true);

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "limber/kernel/model/checks.hpp"
@@ -151,6 +152,25 @@ class Object {
   }
   void optional(const std::string& key, Vector3& target) const {
     if (const Json* value = find(key)) target = read_vector(*value, path(key));
+  }
+  /// An optional string field naming one of `choices` (name, value): the value, or "must be "a",
+  /// "b" or "c", got …" for any other string.
+  template <typename Enum>
+  void optional_choice(const std::string& key, Enum& target, std::initializer_list<std::pair<std::string_view, Enum>> choices) const {
+    const Json* value = find(key);
+    if (value == nullptr) return;
+    const std::string name = read_string(*value, path(key));
+    std::string listed;
+    std::size_t k = 0;
+    for (const auto& [choice, meaning] : choices) {
+      if (name == choice) {
+        target = meaning;
+        return;
+      }
+      listed += (k == 0 ? "" : k + 1 == choices.size() ? " or " : ", ") + in_quotes(choice);
+      ++k;
+    }
+    fail(path(key), "must be " + listed + ", got " + in_quotes(name));
   }
 
  private:

@@ -266,9 +266,9 @@ double deepest_penetration(VerletState<Scalar>& state, const Model& model) {
 // The trees push each contact of their limbs with the mobility the whole tree gives it
 // (tree_contacts.hpp): four ragdolls of the pile landing on the stairs and on one another stay
 // out of the stairs, the ground and each other to within 1 mm at few sweeps (contact rows that
-// pushed a limb's own particles let them sink 3.2, 11 and 0.5 cm at 2 × 2, 4 × 1 and 8 × 2;
-// the trees today 0.02, 0.02 and 0.007 mm), and within 1 cm with torsos ten times heavier,
-// 635 kg on 1.6 kg forearms (rows: 12.5, 12.6 and 9.6 cm; trees today 0.06, 1.6 and 4.8 mm).
+// pushed a limb's own particles let them sink 3.2, 11 and 0.5 cm at 2 × 2, 4 × 1 and 8 × 2),
+// and within 1 cm with torsos ten times heavier, 635 kg on 1.6 kg forearms (rows: 12.5, 12.6
+// and 9.6 cm).
 TEST(JointTrees, TheTreesHoldTheirContactsAtFewSweepsWhateverTheMassRatio) {
   for (const double torso : {1.0, 10.0}) {
     Model model = four_ragdolls();
