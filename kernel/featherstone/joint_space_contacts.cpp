@@ -276,18 +276,18 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     }
     // Spherical: rates of the swing and twist as rows on the relative angular velocity ω
     // (inboard frame), carried onto v.
-    const Eigen::Vector3d rest_axis = frame.twist_axis;                       // a₀
-    const Eigen::Vector3d axis = (rotation_of(q.rotation) * rest_axis).normalized();  // a = D·a₀
+    const Eigen::Vector3d axis = (rotation_of(q.rotation) * frame.rest_axis).normalized();  // a = D·a₀
+    const Eigen::Vector3d& cone = frame.cone_axis;                                           // c
     if (joint.limits.swing) {
       // θ = acos(c·a), θ̇ = ω·(c × a)/|c × a|: the axis that turns the cone's axis to the outboard's.
-      const Eigen::Vector3d normal = frame.cone_axis.cross(axis);
+      const Eigen::Vector3d normal = cone.cross(axis);
       const double length = normal.norm();
       if (length > 1e-9) add(*joint.limits.swing - q.swing, -(measured.inboard_to_velocity * (normal / length)));
     }
-    if (joint.limits.twist && 1 + rest_axis.dot(axis) > 1e-6) {
-      // ψ = 2·atan2(D.vec·a₀, D.w) has ψ̇ = ω·(a₀ + a)/(1 + a₀·a): the outboard's axis a plus the
-      // swing's own turn about it (= a at zero swing).
-      const Eigen::Vector3d gradient = measured.inboard_to_velocity * ((rest_axis + axis) / (1 + rest_axis.dot(axis)));
+    if (joint.limits.twist && 1 + cone.dot(axis) > 1e-6) {
+      // ψ = 2·atan2((D·Q).vec·c, (D·Q).w) has ψ̇ = ω·(c + a)/(1 + c·a): the outboard's axis a plus
+      // the swing's own turn about it (= a where a = c).
+      const Eigen::Vector3d gradient = measured.inboard_to_velocity * ((cone + axis) / (1 + cone.dot(axis)));
       add(q.twist - joint.limits.twist->min, gradient);
       add(joint.limits.twist->max - q.twist, -gradient);
     }

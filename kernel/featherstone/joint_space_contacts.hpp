@@ -53,10 +53,10 @@
 // joint's cone swing_max − θ ≥ 0. Its row is ∂C/∂v on the joint's own velocities: ±1 for a
 // revolute or prismatic joint (signed by which way the tree holds the joint); for a spherical
 // joint, with ω the outboard's angular velocity relative to the inboard (inboard frame), c the
-// cone axis, a₀ and a the outboard's axis at rest and now, the swing θ = acos(c·a) has
-// θ̇ = ω·(c × a)/|c × a| (the axis turning the cone's axis to the outboard's), and the twist
-// ψ = 2·atan2(D.vec·a₀, D.w) has ψ̇ = ω·(a₀ + a)/(1 + a₀·a) (the outboard's axis plus the swing's
-// turn about it; a at zero swing) — each carried onto the joint's velocity coordinates (ω of
+// cone axis, a the outboard's axis now, the swing θ = acos(c·a) has θ̇ = ω·(c × a)/|c × a| (the
+// axis turning the cone's axis to the outboard's), and the twist about c (joint_coordinates.hpp)
+// has ψ̇ = ω·(c + a)/(1 + c·a) (the outboard's axis plus the swing's turn about it; a where
+// a = c) — each carried onto the joint's velocity coordinates (ω of
 // the tree child relative to its parent, child frame). A row joins the contacts' passes, after
 // the integrator, when it is violated or within 0.02 (rad or m) plus two steps of its approach of
 // its limit: an accumulated impulse λ ≥ 0 along the row through the articulated inertia keeps

@@ -287,7 +287,6 @@ JointControlSet compile_joint_controls(const RigidScene& scene, const Model& mod
         break;
       case JointType::spherical:
         controlled.outboard_axis = into(o, outboard_axis);
-        controlled.inboard_axis = into(i, outboard_axis);  // a₀, the twist axis at rest
         controlled.cone_axis = into(i, joint.limits.swing_axis.value_or(outboard_axis));
         if (rows.control_rows == 3) {
           if (joint.limits.swing) controlled.swing_row = 0;
@@ -339,7 +338,8 @@ void set_angular_row(ControlRow& row, const Eigen::Vector3d& n, const Eigen::Vec
 }
 
 // (a + a₀)/(1 + a·a₀): the gradient of the twist about a₀ of the rotation that took a₀ to a
-// (joint_coordinates.hpp's swing-twist decomposition) with respect to the relative angular velocity.
+// (joint_coordinates.hpp's swing-twist decomposition) with respect to the relative angular velocity;
+// a₀ is the hinge axis of a revolute joint, the cone axis of a spherical one.
 Eigen::Vector3d twist_gradient(const Eigen::Vector3d& a, const Eigen::Vector3d& rest) {
   const double denominator = 1 + a.dot(rest);
   return denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
@@ -409,12 +409,11 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
       }
       case JointType::spherical: {
         const Eigen::Vector3d a = out.orientation * controlled.outboard_axis;
-        const Eigen::Vector3d rest = in.orientation * controlled.inboard_axis;
-        const Eigen::Vector3d t = twist_gradient(a, rest);
+        const Eigen::Vector3d cone = in.orientation * controlled.cone_axis;  // the swing's and the twist's axis
+        const Eigen::Vector3d t = twist_gradient(a, cone);
         // e₁ the swing direction (with a swing limit), e₃ the twist direction across it.
         Eigen::Vector3d e1, e3;
         double twist_scale = 1;
-        const Eigen::Vector3d cone = in.orientation * controlled.cone_axis;
         const Eigen::Vector3d across = cone.cross(a);
         if (limits.swing && across.norm() > 1e-12) {
           e1 = across.normalized();
@@ -443,7 +442,7 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
         if (controlled.twist_row >= 0) {
           ControlRow& row = rows[controlled.twist_row];
           set_nearer_limit(row, q.twist, *limits.twist, twist_scale);
-          row.velocity_product = twist_gradient_rate(a, rest, w_i, w_o).dot(relative) / twist_scale;  // in the row's units
+          row.velocity_product = twist_gradient_rate(a, cone, w_i, w_o).dot(relative) / twist_scale;  // in the row's units
         }
         if (drive) {
           // The rotation still to go, E = D_target·D⁻¹ (inboard frame), as a rotation vector in world.

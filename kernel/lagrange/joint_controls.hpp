@@ -11,10 +11,10 @@
 // - prismatic: one row along the slide axis h (fixed in the inboard body): w is exactly the rate
 //   of the slide; J_o = [hᵀ, (r_o×h)ᵀ], J_i = [−hᵀ, −((p_o − x_i)×h)ᵀ];
 // - spherical: an orthonormal frame e₁ = c×a/|c×a| (the swing direction: c the cone axis, a the
-//   outboard's axis), e₃ the twist direction (a + a₀)/(1 + a·a₀) made orthogonal to e₁, e₂ = e₃×e₁;
-//   three rows (drive or friction) or only those carrying a limit (e₁ the swing, e₃ the twist).
-//   e₁ is the swing angle's exact gradient; e₃ is the twist's when the cone axis is the rest axis
-//   (the default), else its part across e₁;
+//   outboard's axis), e₃ the twist direction (a + c)/(1 + a·c), e₂ = e₃×e₁; three rows (drive or
+//   friction) or only those carrying a limit (e₁ the swing, e₃ the twist). e₁ and e₃ are the
+//   swing's and the twist's exact gradients (both about c, so (a + c) ⟂ c×a and the limits do
+//   not couple: joint_coordinates.hpp);
 // - universal: friction only, two rows along its two axes.
 //
 // Each row is, at each solve, in one mode (ControlMode), chosen by an active-set loop
@@ -77,7 +77,8 @@ struct ControlledJoint {
   JointType type = JointType::spherical;
   /// Rigid-body (principal) frames, or world for the world: revolute/prismatic/universal: the
   /// axis fixed in the inboard body and (revolute, universal) the one fixed in the outboard body;
-  /// spherical: the outboard's axis (local +z) and, in the inboard, the rest axis a₀ and cone axis c.
+  /// spherical: the outboard's axis (local +z) and, in the inboard, the cone axis c (the swing's
+  /// and the twist's axis).
   Eigen::Vector3d inboard_axis = Eigen::Vector3d::UnitZ(), outboard_axis = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();
   // The solve under way:

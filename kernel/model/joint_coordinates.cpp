@@ -37,8 +37,9 @@ JointFrame joint_frame(const Model& model, std::size_t k) {
   frame.inboard_rest = inboard ? inboard->orientation() : Eigen::Quaterniond::Identity();
   const Eigen::Quaterniond to_inboard = frame.inboard_rest.conjugate();
   frame.rest_relative = shorter(to_inboard * outboard.orientation());
-  frame.twist_axis = (to_inboard * outboard.axis).normalized();
+  frame.rest_axis = (to_inboard * outboard.axis).normalized();
   frame.cone_axis = (to_inboard * joint.limits.swing_axis.value_or(outboard.axis)).normalized();
+  frame.twist_rest = Eigen::Quaterniond::FromTwoVectors(frame.rest_axis, frame.cone_axis) * frame.rest_relative;
   frame.axis = (to_inboard * joint.axis).normalized();
   const Eigen::Vector3d inboard_anchor = inboard ? inboard->to_world(joint.inboard_anchor) : joint.inboard_anchor;
   frame.rest_slide = (outboard.to_world(joint.outboard_anchor) - inboard_anchor).dot(joint.axis);
@@ -68,7 +69,7 @@ JointCoordinates joint_coordinates(const Joint& joint, const JointFrame& frame, 
   JointCoordinates q;
   const Eigen::Vector3d outboard_axis = (relative * Eigen::Vector3d::UnitZ()).normalized();
   q.swing = std::acos(std::clamp(frame.cone_axis.dot(outboard_axis), -1.0, 1.0));
-  q.twist = twist_angle(deviation, frame.twist_axis);
+  q.twist = twist_angle(relative * frame.twist_rest.conjugate(), frame.cone_axis);
   q.angle = twist_angle(deviation, frame.axis);
   const Eigen::AngleAxisd turn(deviation);
   q.rotation = turn.angle() * turn.axis();

@@ -9,8 +9,14 @@
 // ones, and its deviation from rest, D = R·R₀⁻¹, is a rotation in the inboard frame. Then
 // - swing: the angle between the cone axis c (fixed in the inboard) and the outboard's axis
 //   a = R·ẑ (its local +z);
-// - twist: the swing-twist decomposition D = S·T, T a rotation about the outboard's axis at rest
-//   a₀ = R₀·ẑ by ψ = 2·atan2(D.vec·a₀, D.w) (Jolt's SwingTwistConstraint, PhysX's D6 joint);
+// - twist: about the cone axis c, by the swing-twist decomposition of the rotation that takes c
+//   to the outboard's axis: D·Q = S·T, Q the shortest turn from c to the outboard's axis at rest
+//   a₀ = R₀·ẑ, T a rotation about c by ψ = 2·atan2((D·Q).vec·c, (D·Q).w) (Bullet's cone-twist
+//   constraint, PhysX's D6 joint). ψ is 0 at rest (Q turns about c × a₀ ⟂ c) and undefined only
+//   where a points opposite c, outside every cone. Without a swing axis c = a₀ and Q = 1: the
+//   twist about the outboard's rest axis (Jolt's SwingTwistConstraint). Measured about a₀
+//   instead, the twist would be undefined at a = −a₀, which a cone off the rest axis can reach
+//   (a shoulder's arm overhead), and a small swing there would turn it by up to a radian;
 // - angle (revolute): the same twist formula about the hinge axis h (inboard frame), which is D's
 //   whole rotation when the hinge holds;
 // - slide (prismatic): (p_o − p_i)·(q_i·h) minus its value at rest, p the anchors (world).
@@ -31,8 +37,11 @@ namespace limber {
 struct JointFrame {
   Eigen::Quaterniond rest_relative = Eigen::Quaterniond::Identity();  ///< R₀ = q_i⁻¹·q_o at rest
   Eigen::Quaterniond inboard_rest = Eigen::Quaterniond::Identity();   ///< q_i at rest: world-at-rest axes → inboard frame
-  Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();      ///< c, unit, inboard frame (spherical)
-  Eigen::Vector3d twist_axis = Eigen::Vector3d::UnitZ();     ///< a₀ = R₀·ẑ, unit, inboard frame
+  /// Q⁻¹·R₀: the rest relative rotation with the outboard's axis turned onto the cone axis, so the
+  /// twist is that of R·(Q⁻¹·R₀)⁻¹ = D·Q about c (spherical).
+  Eigen::Quaterniond twist_rest = Eigen::Quaterniond::Identity();
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::UnitZ();      ///< c, unit, inboard frame (spherical): the swing's and the twist's axis
+  Eigen::Vector3d rest_axis = Eigen::Vector3d::UnitZ();      ///< a₀ = R₀·ẑ, unit, inboard frame: the outboard's axis at rest
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();           ///< h = Joint::axis, unit, inboard frame
   double rest_slide = 0;                                     ///< prismatic: (p_o − p_i)·h at rest, m
 };

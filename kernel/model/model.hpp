@@ -136,9 +136,9 @@ struct Range {
 /// bodies' poses in the Model) by joint_coordinates() (kernel/model/joint_coordinates.hpp).
 /// Every method holds them as one-sided constraints that act only when violated, with
 /// restitution 0 (a limit stops the motion into it; it does not bounce). The swing-twist
-/// decomposition is the one Jolt's SwingTwistConstraint and PhysX's D6 joint document: the
-/// relative rotation from rest is a swing (a turn of the outboard's axis) followed by a twist
-/// about that axis.
+/// decomposition is Bullet's cone-twist (and, for a cone centred on the rest pose, Jolt's
+/// SwingTwistConstraint): the relative rotation is a twist about the cone's axis followed by a
+/// swing (the shortest turn of the cone's axis onto the outboard's).
 struct JointLimits {
   /// Spherical: the half-angle of a cone, rad, in (0, π): the outboard body's axis (its local +z,
   /// tail → head) stays within this angle of `swing_axis`.
@@ -148,7 +148,9 @@ struct JointLimits {
   /// so the cone is centred on the rest pose. The outboard's axis at rest must lie inside the cone.
   std::optional<Vector3> swing_axis;
   /// Spherical: the twist of the outboard body about its own axis relative to the inboard, rad,
-  /// with −π < min ≤ 0 ≤ max < π (0 at rest).
+  /// with −π < min ≤ 0 ≤ max < π (0 at rest), measured against a reference carried by the
+  /// shortest arc from the cone's axis (`swing_axis`, else the rest axis), Bullet's cone-twist:
+  /// defined everywhere inside the cone (joint_coordinates.hpp).
   std::optional<Range> twist;
   /// Revolute: the hinge angle about `Joint::axis` (right hand, outboard relative to inboard),
   /// rad, with −π < min ≤ 0 ≤ max < π. Prismatic: the slide along `Joint::axis`, m, with

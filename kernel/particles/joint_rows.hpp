@@ -44,7 +44,7 @@ enum class JointRowKind : std::uint8_t {
                   ///< A, [0..8] (B's basis at the target in A coordinates); ω_t [9..11] (A coordinates)
   swing,          ///< θ = ∠(d, u_B), J = (d × u_B)/|·|; d [0..2] the cone's axis
   twist,          ///< ψ about u_B: e [6..8] against A's reference [3..5] carried by the swing from
-                  ///< a₀ [0..2] (B's rest axis, fixed in A) to u_B (Jolt's swing-twist); J = ∇ψ
+                  ///< c [0..2] (the cone axis, fixed in A) to u_B (Bullet's cone-twist); J = ∇ψ
                   ///< (u_B only while B has not swung: joint_projection.hpp's twist_angle)
   hinge,          ///< ψ about d [0..2]: e [6..8] against A's reference [3..5]; J = ∇ψ (d while e ⟂ d)
 };

@@ -221,7 +221,7 @@ Measure<typename Lanes::value> hinge_angle(const Vec3<typename Lanes::value>& re
 }
 
 // The twist of B about its axis u against the swing-transported reference: d₂ (fixed in A, ⟂ a₀)
-// carried by the shortest rotation taking a₀ (B's rest axis, carried by A) onto u,
+// carried by the shortest rotation taking a₀ (the cone axis c, carried by A) onto u,
 // r = d₂ − k(a₀ + u), k = (d₂·u)/D, D = 1 + a₀·u; θ = atan2((r × e)·u, r·e), e fixed in B.
 // Its exact gradient (B turned by δ: u → u + δ × u, e → e + δ × e): with
 // q = u × (d₂ − k a₀), dk = δ·q/D and dr = −dk (a₀ + u) − k δ × u, so

@@ -88,7 +88,7 @@
 //         "swing": 1.2,                        spherical: cone half-angle, rad, in (0, pi)
 //         "swing_axis": [0, 0, -1],            spherical: the cone's axis, world at rest, fixed in the
 //                                              inboard body (default: the outboard's axis at rest)
-//         "twist": [-0.5, 0.5],                spherical: twist about the outboard's axis, rad, min <= 0 <= max
+//         "twist": [-0.5, 0.5],                spherical: roll about the outboard's axis from the cone's axis, rad, min <= 0 <= max
 //         "range": [0, 2.6] },                 revolute: hinge angle, rad; prismatic: slide, m; min <= 0 <= max
 //       "friction": 0,                         optional (0): largest resisting torque, N·m (force, N, prismatic)
 //       "drive": {                             optional: a PD drive toward a target (spherical, revolute,

@@ -85,8 +85,8 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
     if (across.norm() > 1e-12) add_limit(across.normalized(), q.swing - *limits.swing);
   }
   if (limits.twist && (q.twist > limits.twist->max || q.twist < limits.twist->min)) {
-    // The twist's gradient (a + a₀)/(1 + a·a₀) (joint_coordinates.hpp's decomposition).
-    const Eigen::Vector3d rest = inboard.orientation * frame.twist_axis;
+    // The twist's gradient (a + c)/(1 + a·c), c the cone axis (joint_coordinates.hpp's decomposition).
+    const Eigen::Vector3d rest = inboard.orientation * frame.cone_axis;
     const double denominator = 1 + a.dot(rest);
     const Eigen::Vector3d gradient = denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
     if (q.twist > limits.twist->max) add_limit(gradient, q.twist - limits.twist->max);

@@ -29,7 +29,7 @@ void accumulate_forces(SpringState& state, const RigidBodyState& y, RigidForces&
 /// about the centres of mass), m the reduced mass:
 /// - the drive: τ = k·e + c·(Ω* − Ω), e the rotation vector of D_target·D⁻¹ (isotropic);
 /// - each limit past its bound: τ = −max(0, k_l·x + c_l·(d·Ω))·d, x the excess and d its
-///   gradient (the swing direction c×a/|c×a|; ±(a + a₀)/(1 + a·a₀) for the twist), with
+///   gradient (the swing direction c×a/|c×a|; ±(a + c)/(1 + a·c) for the twist, c the cone axis), with
 ///   k_l = k/(m·dᵀI⁻¹d) and c_l = c/(m·dᵀI⁻¹d) from the joint's spring (k, c): the excess then
 ///   rings at the joint spring's own √(k/m) with its damping ratio, so an integrator that holds
 ///   the joint holds the limit;

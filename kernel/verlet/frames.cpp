@@ -269,15 +269,19 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
         break;
       }
       case JointType::spherical: {
+        const Vector3 cone = joint.limits.swing_axis.value_or(outboard.axis).normalized();
         if (joint.limits.swing) {
           JointRow row = row_for(JointRowKind::swing);
-          put(row.direction, 0, a.to_side(joint.limits.swing_axis.value_or(outboard.axis)));
+          put(row.direction, 0, a.to_side(cone));
           row.upper = *joint.limits.swing;
           set.rows.push_back(row);
         }
         if (const auto& twist = joint.limits.twist) {
+          // About the cone axis (joint_coordinates.hpp): A's reference is B's v at rest turned by
+          // the shortest arc from B's axis onto the cone's, so carried back it meets v at rest.
           JointRow row = row_for(JointRowKind::twist);
-          put(row.direction, 0, a.to_side(outboard.axis)), put(row.direction, 3, a.to_side(rest_basis.col(0)));
+          const Vector3 reference = Eigen::Quaterniond::FromTwoVectors(rest_basis.col(2), cone) * rest_basis.col(0);
+          put(row.direction, 0, a.to_side(cone)), put(row.direction, 3, a.to_side(reference));
           put(row.direction, 6, Vector3::UnitX());
           row.lower = twist->min, row.upper = twist->max;
           set.rows.push_back(row);

@@ -139,19 +139,23 @@ TEST(FeatherstoneJointLimits, HingeRangeStopsAFallingLimbAtItsLimit) {
 }
 
 TEST(FeatherstoneJointLimits, ConeAndTwistHoldASpunLimbThrownOutOfTheCone) {
-  // A ball joint at the limb's tail, cone of 0.6 rad about its rest axis (+x), twist ±0.2 rad.
-  // Gravity pulls it π/2 out of the cone; it is also thrown sideways and spun about its own axis.
-  // At 1/60 s the spin (48 rad/s) makes the step take substeps.
+  // A ball joint at the limb's tail, cone of 0.6 rad about its rest axis (+x) or tilted 0.3 rad
+  // off it, twist ±0.2 rad about the cone's axis. Gravity pulls it π/2 out of the cone; it is
+  // also thrown sideways and spun about its own axis. At 1/60 s the spin (48 rad/s) makes the
+  // step take substeps.
   struct Case {
     double dt, spin, tolerance;
   };
+  const Vector3 tilted = Eigen::AngleAxisd(0.3, Vector3::UnitZ()) * Vector3::UnitX();
   for (const Case c : {Case{1.0 / 240, 12, 0.01}, Case{1.0 / 60, 48, 0.03}}) {
     for (const Integrator integrator : kIntegrators) {
-      for (const bool reversed : {false, true}) {
+      for (const int variant : {0, 1, 2}) {  // the cone at rest; turned round; the cone tilted
+        const bool reversed = variant == 1;
         Model model = pivoted_limb(JointType::spherical, Vector3::UnitX(), reversed);
         model.bodies[0].angular_velocity = Vector3(0, 0, 3) + c.spin * Vector3::UnitX();  // sideways and spinning
         model.bodies[0].linear_velocity = Vector3(0, 1.5, 0);
         model.joints[0].limits.swing = 0.6;
+        if (variant == 2) model.joints[0].limits.swing_axis = tilted;
         model.joints[0].limits.twist = Range{-0.2, 0.2};
         model.settings.sleep.enabled = false;
         FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
@@ -165,12 +169,12 @@ TEST(FeatherstoneJointLimits, ConeAndTwistHoldASpunLimbThrownOutOfTheCone) {
           widest_swing = std::max(widest_swing, q.swing);
           widest_twist = std::max(widest_twist, std::abs(q.twist));
         }
-        const std::string label = "dt " + number(c.dt) + ", " + integrator_name(integrator) + (reversed ? ", turned round" : "");
+        const std::string label = "dt " + number(c.dt) + ", " + integrator_name(integrator) + (reversed ? ", turned round" : variant == 2 ? ", tilted cone" : "");
         EXPECT_LT(worst_swing, c.tolerance) << label;
         EXPECT_LT(worst_twist, c.tolerance) << label;
         EXPECT_GT(widest_swing, 0.59) << label;  // both limits were reached
         EXPECT_GT(widest_twist, 0.19) << label;
-        RecordProperty("swing_twist_violation_rad_" + number(c.dt) + "_" + integrator_name(integrator) + (reversed ? "_reversed" : ""),
+        RecordProperty("swing_twist_violation_rad_" + number(c.dt) + "_" + integrator_name(integrator) + (reversed ? "_reversed" : variant == 2 ? "_tilted" : ""),
                        number(worst_swing) + " " + number(worst_twist));
       }
     }

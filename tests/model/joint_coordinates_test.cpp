@@ -1,5 +1,6 @@
 // The shared measure of joint coordinates: swing-twist, hinge angle, slide, limit violations and
 // drive errors on poses built from known rotations.
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -58,6 +59,35 @@ TEST(JointCoordinates, SwingAndTwistSeparate) {
   const JointCoordinates moved = joint_coordinates(model.joints[0], frame, inboard, outboard);
   EXPECT_NEAR(moved.swing, 0.5, 1e-12);
   EXPECT_NEAR(moved.twist, 0.3, 1e-12);
+}
+
+TEST(JointCoordinates, ATwistIsMeasuredAboutTheConesAxis) {
+  // A cone 1 rad off the outboard's rest axis (+z). A pose built as: the outboard's axis turned
+  // onto the cone's axis by the shortest arc, twisted by ψ about it, then swung by the shortest
+  // arc onto d. It reads ψ wherever d is in the cone, even 170° from the rest axis, where a twist
+  // about the rest axis is undefined (a small swing there would turn it by radians).
+  Model model = two_limbs(JointType::spherical);
+  const Vector3 cone = Eigen::AngleAxisd(1.0, Vector3::UnitY()) * Vector3::UnitZ();
+  model.joints[0].limits.swing = 2.5, model.joints[0].limits.swing_axis = cone;
+  model.joints[0].limits.twist = Range{-1, 1};
+  const JointFrame frame = joint_frame(model, 0);
+  EXPECT_NEAR(joint_coordinates(model.joints[0], frame, rest(model.bodies[0]), rest(model.bodies[1])).twist, 0, 1e-12);
+  const Eigen::Quaterniond onto_cone = Eigen::Quaterniond::FromTwoVectors(Vector3::UnitZ(), cone);
+  for (const double psi : {-0.7, 0.0, 0.4}) {
+    const Eigen::Quaterniond twist(Eigen::AngleAxisd(psi, cone));
+    for (const double away : {0.0, 0.5, 1.5, 2.4}) {
+      for (const double around : {0.0, 1.0, 2.5, 4.0}) {
+        // d at `away` rad from the cone's axis, `around` rad round it.
+        const Vector3 side = Eigen::AngleAxisd(around, cone) * Vector3::UnitY();
+        const Vector3 d = Eigen::AngleAxisd(away, side) * cone;
+        const Eigen::Quaterniond pose = Eigen::Quaterniond::FromTwoVectors(cone, d) * twist * onto_cone;
+        const JointCoordinates q = joint_coordinates(model.joints[0], frame, rest(model.bodies[0]), turned(model, pose));
+        EXPECT_NEAR(q.swing, away, 1e-9) << "away " << away << ", around " << around;
+        EXPECT_NEAR(q.twist, psi, 1e-9) << "away " << away << ", around " << around << ", rest-axis angle "
+                                        << std::acos(std::clamp(d.dot(Vector3::UnitZ()), -1.0, 1.0));
+      }
+    }
+  }
 }
 
 TEST(JointCoordinates, LimitViolationIsTheExcessOverTheNearestBound) {

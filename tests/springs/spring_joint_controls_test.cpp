@@ -4,7 +4,9 @@
 // joint coordinates (kernel/model/joint_coordinates.hpp).
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -57,12 +59,16 @@ TEST(SpringJointLimits, SwingConeAndTwistRangeHoldAsStiffAsTheJoint) {
   // axis at 12 rad/s, against a swing cone of 0.6 rad and twist range ±0.2 rad. A limit is a
   // spring ringing at the joint's √(k/m) for the limb's free turn (slower for the turn about the
   // held end, by √(I_centre/I_end) = 1/2 across a rod): reached at speed v, it gives way by about
-  // 2·v/√(k/m) at most.
-  for (const double stiffness : {2e4, 1e6}) {
+  // 2·v/√(k/m) at most. The cone centred on the rest axis, and tilted 0.3 rad off it (the twist
+  // is about the cone's axis).
+  const Vector3 tilted = Eigen::AngleAxisd(0.3, Vector3::UnitZ()) * -Vector3::UnitX();
+  for (const auto& [stiffness, cone] : {std::pair{2e4, std::optional<Vector3>()}, std::pair{1e6, std::optional<Vector3>()},
+                                        std::pair{2e4, std::optional<Vector3>(tilted)}, std::pair{1e6, std::optional<Vector3>(tilted)}}) {
     Model model = rod_on_ball_joint();
     model.joints[0].stiffness = stiffness;
     model.joints[0].damping = 0.2 * 2 * std::sqrt(stiffness);
     model.joints[0].limits.swing = 0.6;
+    model.joints[0].limits.swing_axis = cone;
     model.joints[0].limits.twist = Range{-0.2, 0.2};
     model.bodies[0].angular_velocity = Vector3(-12, 0, 3);
     model.bodies[0].linear_velocity = Vector3(0, 1.5, 0);
@@ -79,11 +85,12 @@ TEST(SpringJointLimits, SwingConeAndTwistRangeHoldAsStiffAsTheJoint) {
         twist = std::max(twist, std::abs(q.twist) - 0.2);
         largest = std::max(largest, q.swing);
       }
-      EXPECT_LT(swing, give) << test.name << ", k " << stiffness;
-      EXPECT_LT(twist, give) << test.name << ", k " << stiffness;
-      EXPECT_GT(largest, 0.6) << test.name;  // it reached the cone
+      const std::string name = test.name + std::string(", k ") + std::to_string(stiffness) + (cone ? ", tilted cone" : "");
+      EXPECT_LT(swing, give) << name;
+      EXPECT_LT(twist, give) << name;
+      EXPECT_GT(largest, 0.6) << name;  // it reached the cone
       // At rest it hangs on the cone's edge, pressed in by gravity's torque over the limit's stiffness.
-      EXPECT_LT(coordinates(state, 0).swing - 0.6, 0.01) << test.name;
+      EXPECT_LT(coordinates(state, 0).swing - 0.6, 0.01) << name;
     }
   }
 }
