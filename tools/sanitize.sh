@@ -14,9 +14,10 @@
 #                          e.g. `tools/sanitize.sh address -LE stress` for the shortened form).
 #   thread                 ThreadSanitizer, in build-tsan/: builds only the test programs that start
 #                          threads (the block runner's workers, parallel_for and task systems; the
-#                          coloured relaxation; the threaded Verlet steps; the World on an engine's
-#                          task system; the CLI's --threads) and runs each of them. Extra arguments
-#                          go to every program (e.g. --gtest_filter=...).
+#                          coloured relaxation; the threaded Verlet steps; the narrowphase on
+#                          threads; the World on an engine's task system; the CLI's --threads) and
+#                          runs each of them. Extra arguments go to every program (e.g.
+#                          --gtest_filter=...).
 #
 # Both build -O2 -g with NDEBUG (the release build's code paths, readable stacks; at -O1 xsimd's
 # batch operators stay calls and the SIMD tests run ~15× slower) and
@@ -77,7 +78,7 @@ if [ "$mode" = address ]; then
   ASAN_OPTIONS=$ASAN_OPTIONS:detect_leaks=0 ctest --test-dir "$build_dir" --output-on-failure -R "$rendering" "$@"
 else
   # The programs whose tests start threads (grep the tests for threads =, Threading::, std::thread).
-  programs=(threading_tests relaxation_tests verlet_tests limb_contact_tests allocation_tests world_tests cli_tests)
+  programs=(threading_tests relaxation_tests verlet_tests limb_contact_tests collision_tests allocation_tests world_tests cli_tests)
   stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 6 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${programs[@]}"
   stage "sanitizer run (thread): the tests"

@@ -14,6 +14,11 @@
 // segment's search_reach, so that the next few (a step's substeps) can run the narrowphase on
 // them alone (find_kept_pairs) and get the same contacts, as long as no segment outruns it.
 //
+// The narrowphase runs in blocks (of candidate pairs, or of limbs for the static tree's
+// queries), on a BlockRunner's threads when one is given: each block writes only its own lists,
+// joined in block order, so the contacts and the kept pairs are the serial search's to the bit
+// on any number of threads. The sweep and prune itself runs on the calling thread.
+//
 // A contact is reported while the surfaces are closer than a margin, not only when they overlap
 // (speculative contacts, as Box2D and Jolt do): a method that holds C ≥ 0 through the step then
 // catches what would pass through between two detections. Its normal points from the second
@@ -33,6 +38,7 @@
 #include "limber/kernel/geometry/static_geometry.hpp"
 #include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
 
@@ -94,10 +100,11 @@ class LimbCollisions {
   /// two for limbs lying along each other (within 15° of parallel: the ends of their shared length).
   /// A pair is tested only when at least one of its segments is `awake` (one flag per segment;
   /// static geometry is never awake). A contact's restitution is the larger of its two sides'
-  /// (a ball's, a collider's; a limb has none). Throws std::invalid_argument when `limbs` or
-  /// `awake` has the wrong size.
+  /// (a ball's, a collider's; a limb has none). The narrowphase runs on `runner`'s threads when
+  /// given (between its begin() and end(), or on the calling thread alone), with the same
+  /// result. Throws std::invalid_argument when `limbs` or `awake` has the wrong size.
   void find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-            std::vector<LimbContact>& out);
+            std::vector<LimbContact>& out, BlockRunner* runner = nullptr);
 
   /// find()'s contacts without the broadphase: the same narrowphase over the pairs the last
   /// find() kept — pairs of segments, and of a segment and a static primitive, whose bounding
@@ -106,8 +113,9 @@ class LimbCollisions {
   /// larger of its ends' moves, and of its bounding sphere's centre move plus its growth) plus
   /// its reach now is within the search_reach it had: otherwise this returns false and finds
   /// nothing (call find()). `awake` must be the search's. candidate_pairs() is then 0.
+  /// `runner` as for find().
   bool find_kept_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                       std::vector<LimbContact>& out);
+                       std::vector<LimbContact>& out, BlockRunner* runner = nullptr);
 
   /// The deepest overlap among `limbs` now (m, ≥ 0; 0 when nothing overlaps), between limbs and
   /// static geometry and between limbs — the run summary's measure (every method alike).
@@ -141,14 +149,42 @@ class LimbCollisions {
 
  private:
   // A value type (states are copied): no shared buffers.
+  // One narrowphase block's output: its contacts and the pairs it kept (limb pairs, or (segment,
+  // primitive) pairs), each block's own, so blocks run on any thread.
+  struct Block {
+    std::vector<LimbContact> contacts;
+    std::vector<CandidatePair> kept;
+  };
+  // A narrowphase pass in blocks: the first pair_blocks over `pairs` (a search's candidates, or
+  // the kept limb pairs), the rest over the segments' static queries (a search) or `static_pairs`
+  // (the kept ones). run() is a BlockRunner::BlockFunction.
+  struct Narrowphase {
+    const LimbCollisions* collisions = nullptr;
+    std::span<const LimbSegment> limbs;
+    std::span<const std::uint8_t> awake;
+    double margin = 0;
+    bool search = false, keep = false;
+    std::span<const CandidatePair> pairs, static_pairs;
+    std::size_t pair_blocks = 0, static_blocks = 0;
+    Block* blocks = nullptr;  // run_narrowphase's
+    static double run(const void* context, std::size_t index);
+  };
   // find(), keeping its pairs for find_kept_pairs() or not (deepest_penetration).
   void search(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-              std::vector<LimbContact>& out, bool keep);
+              std::vector<LimbContact>& out, bool keep, BlockRunner* runner);
   void check_sizes(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake) const;
-  void find_limb_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                       std::vector<LimbContact>& out, bool keep);
-  void find_static(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
-                   std::vector<LimbContact>& out, bool keep);
+  // Runs `pass`'s blocks, their contacts into `out` (and, when `keep`, their kept pairs into the
+  // kept lists) in block order — straight in on one thread, else joined from the blocks' own
+  // lists — and sorts `out`.
+  void run_narrowphase(const Narrowphase& pass, std::vector<LimbContact>& out, bool keep, BlockRunner* runner);
+  // Block `index` of `pass`: its contacts appended to `contacts`, its kept pairs to `kept`.
+  void run_block(const Narrowphase& pass, std::size_t index, std::vector<LimbContact>& contacts, std::vector<CandidatePair>& kept) const;
+  // One block of a search: its candidate pairs, filtered and tested.
+  void search_limb_pairs(std::span<const CandidatePair> pairs, std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake,
+                         double margin, bool keep, std::vector<LimbContact>& contacts, std::vector<CandidatePair>& kept) const;
+  // One block of a search: segments [begin, end)'s queries of the static tree.
+  void search_static(std::uint32_t begin, std::uint32_t end, std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake,
+                     double margin, bool keep, std::vector<LimbContact>& contacts, std::vector<CandidatePair>& kept) const;
   // The narrowphase of one pair found: its contacts within margin + the segments' reach.
   void add_limb_pair(std::uint32_t i, std::uint32_t j, std::span<const LimbSegment> limbs, double margin,
                      std::vector<LimbContact>& out) const;
@@ -157,7 +193,7 @@ class LimbCollisions {
   bool excluded(std::uint32_t first, std::uint32_t second) const;
   // Whether some pair of limbs (or of balls) left after the exclusions has filters that collide.
   bool some_pair_tested(bool balls);
-  // Whether find_limb_pairs tests segments first < second: limb–limb or ball–ball, filters allowing.
+  // Whether a search tests segments first < second: limb–limb or ball–ball, filters allowing.
   bool pair_tested(std::uint32_t first, std::uint32_t second) const;
 
   bool active_ = false;
@@ -173,6 +209,7 @@ class LimbCollisions {
   std::vector<CandidatePair> kept_limb_pairs_;    // find()'s pairs within the search reach
   std::vector<CandidatePair> kept_static_pairs_;  // (segment, StaticTree primitive) within the search reach
   std::vector<LimbSegment> searched_;             // the segments find() kept its pairs for
+  std::vector<Block> blocks_;               // the narrowphase's on threads, kept between calls
   std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
   std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
   BallCandidates ball_candidates_;

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "limber/kernel/geometry/limb_collisions.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 #include "tests/support/allocation_counter.hpp"
 
 namespace limber {
@@ -517,6 +518,41 @@ TEST(LimbCollisions, KeptPairsRefuseASegmentThatOutranThem) {
     EXPECT_EQ(contacts.empty(), x < 0.05) << "moved " << x << " m";
     limbs[0].head.x() = limbs[0].tail.x() = 0;
     collisions.find(limbs, awake, 0.005, contacts);  // the search again at the start
+  }
+}
+
+// The narrowphase runs in blocks on a BlockRunner's threads (limb_collisions.hpp): a search and
+// the kept pairs' narrowphase give a serial search's contacts bit for bit, and keep the same
+// pairs (the kept narrowphase after a move finds the same contacts), for each way of threading.
+TEST(LimbCollisions, TheNarrowphaseOnThreadsFindsTheSerialContactsBitForBit) {
+  std::mt19937 rng(9);
+  RandomScene scene = random_scene(400, 1.5, rng);
+  std::vector<std::uint8_t> awake(scene.limbs.size());
+  for (std::uint8_t& flag : awake) flag = std::uniform_int_distribution<int>(0, 3)(rng) != 0;  // a quarter asleep
+  for (LimbSegment& limb : scene.limbs) limb.reach = 0.01, limb.search_reach = 0.06;
+  std::vector<LimbSegment> moved = scene.limbs;
+  for (std::size_t s = 0; s < moved.size(); ++s) moved[s].head.x() += 0.02, moved[s].tail.y() -= 0.02;
+  LimbCollisions serial(scene.model);
+  std::vector<LimbContact> searched, kept;
+  serial.find(scene.limbs, awake, 0.005, searched);
+  ASSERT_TRUE(serial.find_kept_pairs(moved, awake, 0.005, kept));
+  ASSERT_GT(searched.size(), 200u);  // many blocks of pairs, and of static queries
+  for (const Threading threading : {Threading::workers, Threading::parallel_for}) {
+    const std::string where = threading == Threading::workers ? "workers" : "parallel_for";
+    BlockRunner runner(threading, 2);
+    LimbCollisions threaded(scene.model);
+    std::vector<LimbContact> contacts;
+    for (int round = 0; round < 3; ++round) {  // the blocks' buffers reused
+      runner.begin();
+      threaded.find(scene.limbs, awake, 0.005, contacts, &runner);
+      runner.end();
+      expect_same_contacts(contacts, searched, where + ", search");
+      runner.begin();
+      ASSERT_TRUE(threaded.find_kept_pairs(moved, awake, 0.005, contacts, &runner)) << where;
+      runner.end();
+      expect_same_contacts(contacts, kept, where + ", kept pairs");
+    }
+    EXPECT_EQ(threaded.candidate_pairs(), 0u);
   }
 }
 
