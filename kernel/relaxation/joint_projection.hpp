@@ -242,26 +242,26 @@ Measure<typename Lanes::value> hinge_angle(const Vec3<typename Lanes::value>& re
   return angle_of<Lanes>(dot(cross(reference, e), axis), dot(reference, e), cross(e, cross(axis, reference)), cross(e, reference));
 }
 
-// The twist of B about its axis u against the swing-transported reference: d₂ (fixed in A, ⟂ a₀)
-// carried by the shortest rotation taking a₀ (the cone axis c, carried by A) onto u,
-// r = d₂ − k(a₀ + u), k = (d₂·u)/D, D = 1 + a₀·u; θ = atan2((r × e)·u, r·e), e fixed in B.
+// The twist of B about its axis u against the swing-transported reference: d₂ (fixed in A, ⟂ c)
+// carried by the shortest rotation taking the cone's axis c (carried by A) onto u,
+// r = d₂ − k(c + u), k = (d₂·u)/D, D = 1 + c·u; θ = atan2((r × e)·u, r·e), e fixed in B.
 // Its exact gradient (B turned by δ: u → u + δ × u, e → e + δ × e): with
-// q = u × (d₂ − k a₀), dk = δ·q/D and dr = −dk (a₀ + u) − k δ × u, so
-//   ∇x = −((a₀ + u)·e/D) q − k u × e + e × r,
-//   ∇y = −((a₀ + u)·(e × u)/D) q − k u × (e × u) + e × (u × r) + u × (r × e).
+// q = u × (d₂ − k c), dk = δ·q/D and dr = −dk (c + u) − k δ × u, so
+//   ∇x = −((c + u)·e/D) q − k u × e + e × r,
+//   ∇y = −((c + u)·(e × u)/D) q − k u × (e × u) + e × (u × r) + u × (r × e).
 // It is u alone only while B has not swung; the rows and the trees used u, and the error in
 // their projections fed energy into a swung joint at its twist limit (kernel/relaxation/README.md,
 // "Limits with their exact gradients").
 template <typename Lanes>
-Measure<typename Lanes::value> twist_angle(const Vec3<typename Lanes::value>& a0, const Vec3<typename Lanes::value>& d2,
+Measure<typename Lanes::value> twist_angle(const Vec3<typename Lanes::value>& cone, const Vec3<typename Lanes::value>& d2,
                                            const Vec3<typename Lanes::value>& e, const Vec3<typename Lanes::value>& u) {
   using V = typename Lanes::value;
   const V zero = Lanes::broadcast(0);
-  const V denominator = Lanes::max(Lanes::broadcast(1) + dot(a0, u), Lanes::broadcast(1e-6));
+  const V denominator = Lanes::max(Lanes::broadcast(1) + dot(cone, u), Lanes::broadcast(1e-6));
   const V k = dot(d2, u) / denominator;
-  const Vec3<V> sum = a0 + u;
+  const Vec3<V> sum = cone + u;
   const Vec3<V> reference = d2 - k * sum;
-  const Vec3<V> q = cross(u, d2 - k * a0);
+  const Vec3<V> q = cross(u, d2 - k * cone);
   const Vec3<V> e_cross_u = cross(e, u);
   const Vec3<V> gradient_x = (zero - dot(sum, e) / denominator) * q - k * cross(u, e) + cross(e, reference);
   const Vec3<V> gradient_y = (zero - dot(sum, e_cross_u) / denominator) * q - k * cross(u, e_cross_u) + cross(e, cross(u, reference)) +
