@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
 
 namespace limber {
 namespace {
@@ -287,7 +288,7 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     if (joint.limits.twist && 1 + cone.dot(axis) > 1e-6) {
       // ψ = 2·atan2((D·Q).vec·c, (D·Q).w) has ψ̇ = ω·(c + a)/(1 + c·a): the outboard's axis a plus
       // the swing's own turn about it (= a where a = c).
-      const Eigen::Vector3d gradient = measured.inboard_to_velocity * ((cone + axis) / (1 + cone.dot(axis)));
+      const Eigen::Vector3d gradient = measured.inboard_to_velocity * twist_gradient(axis, cone);
       add(q.twist - joint.limits.twist->min, gradient);
       add(joint.limits.twist->max - q.twist, -gradient);
     }

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/rigid/anchor_jacobian.hpp"
 
 namespace limber {
@@ -337,15 +338,7 @@ void set_angular_row(ControlRow& row, const Eigen::Vector3d& n, const Eigen::Vec
   row.velocity_product = (w_o - w_i).dot(w_i.cross(n));
 }
 
-// (a + a₀)/(1 + a·a₀): the gradient of the twist about a₀ of the rotation that took a₀ to a
-// (joint_coordinates.hpp's swing-twist decomposition) with respect to the relative angular velocity;
-// a₀ is the hinge axis of a revolute joint, the cone axis of a spherical one.
-Eigen::Vector3d twist_gradient(const Eigen::Vector3d& a, const Eigen::Vector3d& rest) {
-  const double denominator = 1 + a.dot(rest);
-  return denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
-}
-
-// Its rate, with a turning at ω_o and a₀ at ω_i.
+// The rate of twist_gradient(a, a₀) (joint_coordinates.hpp), with a turning at ω_o and a₀ at ω_i.
 Eigen::Vector3d twist_gradient_rate(const Eigen::Vector3d& a, const Eigen::Vector3d& rest, const Eigen::Vector3d& w_i,
                                     const Eigen::Vector3d& w_o) {
   const double denominator = 1 + a.dot(rest);
@@ -411,21 +404,12 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
         const Eigen::Vector3d a = out.orientation * controlled.outboard_axis;
         const Eigen::Vector3d cone = in.orientation * controlled.cone_axis;  // the swing's and the twist's axis
         const Eigen::Vector3d t = twist_gradient(a, cone);
-        // e₁ the swing direction (with a swing limit), e₃ the twist direction across it.
-        Eigen::Vector3d e1, e3;
-        double twist_scale = 1;
+        // e₃ the twist direction (|t| ≥ 1), e₁ the swing direction c×a/|c×a| with a swing limit:
+        // both angles are about c, so e₁ ⟂ e₃ (joint_controls.hpp).
+        const double twist_scale = t.norm();
+        const Eigen::Vector3d e3 = t / twist_scale;
         const Eigen::Vector3d across = cone.cross(a);
-        if (limits.swing && across.norm() > 1e-12) {
-          e1 = across.normalized();
-          const Eigen::Vector3d t_across = t - t.dot(e1) * e1;
-          twist_scale = t_across.norm();
-          if (twist_scale > 1e-12) e3 = t_across / twist_scale;
-          else e3 = a, twist_scale = 1;
-        } else {
-          twist_scale = t.norm();
-          e3 = t / twist_scale;
-          e1 = e3.unitOrthogonal();
-        }
+        const Eigen::Vector3d e1 = limits.swing && across.norm() > 1e-12 ? Eigen::Vector3d(across.normalized()) : e3.unitOrthogonal();
         const Eigen::Vector3d frame_vectors[3] = {e1, e3.cross(e1), e3};
         for (int r = 0; r < controlled.count; ++r) set_angular_row(rows[r], frame_vectors[rows[r].direction], w_i, w_o);
         const Eigen::Vector3d relative = w_o - w_i;

@@ -62,6 +62,11 @@ double twist_angle(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& ax
   return wrapped(2 * std::atan2(q.vec().dot(axis), q.w()));
 }
 
+Eigen::Vector3d twist_gradient(const Eigen::Vector3d& a, const Eigen::Vector3d& c) {
+  const double denominator = 1 + a.dot(c);
+  return denominator > 1e-9 ? Eigen::Vector3d((a + c) / denominator) : a;
+}
+
 JointCoordinates joint_coordinates(const Joint& joint, const JointFrame& frame, const FramePose& inboard,
                                    const FramePose& outboard) {
   const Eigen::Quaterniond relative = inboard.orientation.conjugate() * outboard.orientation;

@@ -72,6 +72,13 @@ JointCoordinates joint_coordinates(const Joint& joint, const JointFrame& frame, 
 /// The angle of rotation D about unit axis `axis` by the swing-twist decomposition, rad, (−π, π].
 double twist_angle(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& axis);
 
+/// The gradient of the twist about unit `c` (fixed in the inboard body) of the rotation that took
+/// c to unit `a` (fixed in the outboard), with respect to the relative angular velocity ω_o − ω_i
+/// (world, rad/s → rad/s): (a + c)/(1 + a·c); a where a = −c, the decomposition's singularity.
+/// c is a spherical joint's cone axis or a revolute joint's hinge axis (then a is the hinge axis
+/// as the outboard carries it): the twist's and the hinge angle's rate is its dot with ω_o − ω_i.
+Eigen::Vector3d twist_gradient(const Eigen::Vector3d& a, const Eigen::Vector3d& c);
+
 /// How far `coordinates` are past the joint's limits: the largest excess over its swing, twist
 /// or range, ≥ 0 (rad; m for a prismatic range); 0 without limits.
 double limit_violation(const Joint& joint, const JointCoordinates& coordinates);

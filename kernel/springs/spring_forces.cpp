@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "limber/kernel/model/joint_coordinates.hpp"
+
 namespace limber {
 namespace {
 
@@ -48,8 +50,7 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
     // gradient g = (h_i + h_o)/(1 + h_i·h_o) (the twist formula of joint_coordinates.hpp about h).
     const Eigen::Vector3d axis_i = inboard.orientation * frame.axis;
     const Eigen::Vector3d axis_o = outboard.orientation * (frame.rest_relative.conjugate() * frame.axis);
-    const double denominator = 1 + axis_i.dot(axis_o);
-    const Eigen::Vector3d gradient = denominator > 1e-9 ? Eigen::Vector3d((axis_i + axis_o) / denominator) : axis_o;
+    const Eigen::Vector3d gradient = twist_gradient(axis_o, axis_i);
     const double rate = gradient.dot(relative);
     if (joint.drive) {
       const JointDrive& drive = *joint.drive;
@@ -86,9 +87,7 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
   }
   if (limits.twist && (q.twist > limits.twist->max || q.twist < limits.twist->min)) {
     // The twist's gradient (a + c)/(1 + a·c), c the cone axis (joint_coordinates.hpp's decomposition).
-    const Eigen::Vector3d rest = inboard.orientation * frame.cone_axis;
-    const double denominator = 1 + a.dot(rest);
-    const Eigen::Vector3d gradient = denominator > 1e-9 ? Eigen::Vector3d((a + rest) / denominator) : a;
+    const Eigen::Vector3d gradient = twist_gradient(a, inboard.orientation * frame.cone_axis);
     if (q.twist > limits.twist->max) add_limit(gradient, q.twist - limits.twist->max);
     else add_limit(-gradient, limits.twist->min - q.twist);
   }
