@@ -166,11 +166,9 @@ bool detect_limb_contacts(VerletState<Scalar>& state, double dt, int substeps_ah
   gather_segments(state, std::max(1, substeps_ahead));
   // The narrowphase on the relaxation's threads (the same contacts on any number).
   BlockRunner* runner = state.plan.runner.operator->();
-  if (runner != nullptr && runner->threads() > 1) runner->begin();
   const bool kept = reuse_pairs && state.pairs_searched_for == state.awake_generation &&
                     state.collisions.find_kept_pairs(state.limb_segments, state.limb_awake, kMarginSlop, state.limb_contacts, runner);
   if (!kept) state.collisions.find(state.limb_segments, state.limb_awake, kMarginSlop, state.limb_contacts, runner);
-  if (runner != nullptr) runner->end();
   // A wake below makes the next substep search again (a woken limb's pairs with sleeping ones).
   state.pairs_searched_for = substeps_ahead > 1 || kept ? state.awake_generation : ~std::uint64_t{0};
   for (const LimbContact& contact : state.limb_contacts) {

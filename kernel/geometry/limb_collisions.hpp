@@ -101,8 +101,8 @@ class LimbCollisions {
   /// A pair is tested only when at least one of its segments is `awake` (one flag per segment;
   /// static geometry is never awake). A contact's restitution is the larger of its two sides'
   /// (a ball's, a collider's; a limb has none). The narrowphase runs on `runner`'s threads when
-  /// given (between its begin() and end(), or on the calling thread alone), with the same
-  /// result. Throws std::invalid_argument when `limbs` or `awake` has the wrong size.
+  /// given and there are two blocks or more (waking its helpers for that stage if they sleep),
+  /// with the same result. Throws std::invalid_argument when `limbs` or `awake` has the wrong size.
   void find(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
             std::vector<LimbContact>& out, BlockRunner* runner = nullptr);
 

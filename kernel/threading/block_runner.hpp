@@ -70,6 +70,8 @@ class BlockRunner {
   /// (workers only; otherwise no-ops).
   void begin();
   void end();
+  /// Whether the helpers are awake: between begin() and end() (workers only).
+  bool active() const { return active_; }
 
   /// Runs blocks [0, count) and returns the largest value they returned (0 when count is 0).
   double run(std::size_t count, BlockFunction function, const void* context);

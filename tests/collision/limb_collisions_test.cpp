@@ -542,15 +542,16 @@ TEST(LimbCollisions, TheNarrowphaseOnThreadsFindsTheSerialContactsBitForBit) {
     BlockRunner runner(threading, 2);
     LimbCollisions threaded(scene.model);
     std::vector<LimbContact> contacts;
-    for (int round = 0; round < 3; ++round) {  // the blocks' buffers reused
-      runner.begin();
+    // The blocks' buffers reused; the helpers woken by the caller (rounds 0 and 2) or by the
+    // narrowphase itself (round 1).
+    for (int round = 0; round < 3; ++round) {
+      const bool caller_wakes = round != 1;
+      if (caller_wakes) runner.begin();
       threaded.find(scene.limbs, awake, 0.005, contacts, &runner);
-      runner.end();
       expect_same_contacts(contacts, searched, where + ", search");
-      runner.begin();
       ASSERT_TRUE(threaded.find_kept_pairs(moved, awake, 0.005, contacts, &runner)) << where;
-      runner.end();
       expect_same_contacts(contacts, kept, where + ", kept pairs");
+      if (caller_wakes) runner.end();
     }
     EXPECT_EQ(threaded.candidate_pairs(), 0u);
   }
