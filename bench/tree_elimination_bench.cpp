@@ -11,7 +11,9 @@
 // instance and per joint (counters `instance`, `joint`). The label says scalar or the lane
 // count (xsimd's widest batch for this build: 8 doubles on AVX-512, 4 on AVX2). The `Packed`
 // rows feed the lanes from instances kept one at a time, as the joint trees keep their
-// ragdolls, and unpack the results (with `Inverse`: the inverse diagonal too).
+// ragdolls, and unpack the results (with `Inverse`: the inverse diagonal too). `RopeConstraintSpace`
+// solves the rope's system in constraint space (constraint_elimination.hpp): the factor from
+// the directions, weights and compliances, and a solve, one instance at a time.
 #include <array>
 #include <cstdint>
 #include <random>
@@ -21,6 +23,7 @@
 #include <benchmark/benchmark.h>
 #include <xsimd/xsimd.hpp>
 
+#include "limber/kernel/numerics/constraint_elimination.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 
 namespace limber {
@@ -212,6 +215,43 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
   run.SetLabel(std::to_string(width) + " lanes, packed from instances" + (inverse ? ", with the inverse diagonal" : ""));
 }
 
+void BM_RopeConstraintSpace(benchmark::State& run) {
+  const Shape shape = rope();
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> entry(-1, 1);
+  const std::size_t constraints = shape.inboard.size();
+  struct Instance {
+    ConstraintElimination<double> elimination;
+    std::vector<Eigen::Vector3d> direction;
+    std::vector<double> weight, right;
+  };
+  std::vector<Instance> instances(kInstances);
+  const TreeOrdering ordering = order_tree(static_cast<std::size_t>(shape.bodies), shape.inboard, shape.outboard);
+  for (Instance& instance : instances) {
+    instance.elimination.assign(ordering, static_cast<std::size_t>(shape.bodies), shape.outboard, shape.inboard);
+    for (std::size_t c = 0; c < constraints; ++c) {
+      instance.direction.push_back(Eigen::Vector3d(entry(random), entry(random), entry(random)).normalized());
+      instance.right.push_back(entry(random));
+    }
+    for (int body = 0; body < shape.bodies; ++body) instance.weight.push_back(1 / (1 + 60 * (entry(random) + 1) / 2));  // 1 to 61 kg
+  }
+  for (auto _ : run) {
+    for (Instance& instance : instances) {
+      const bool definite = instance.elimination.factor(
+          0, [&](std::size_t body) { return instance.weight[body]; }, [&](std::size_t c) -> const Eigen::Vector3d& { return instance.direction[c]; },
+          [](std::size_t) { return 0.0; });
+      for (std::size_t c = 0; c < constraints; ++c) instance.elimination.multiplier(c) = instance.right[c];
+      instance.elimination.solve(0);
+      benchmark::DoNotOptimize(definite);
+      benchmark::DoNotOptimize(instance.elimination.multiplier(0));
+    }
+  }
+  run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.counters["joint"] = benchmark::Counter(static_cast<double>(kInstances * constraints),
+                                             benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.SetLabel("scalar, constraint space");
+}
+
 void BM_RagdollScalar(benchmark::State& run) { BM_Eliminate<double, 6>(run, ragdoll()); }
 void BM_RagdollScalarInverse(benchmark::State& run) { BM_Eliminate<double, 6>(run, ragdoll(), true); }
 void BM_RagdollLanesPacked(benchmark::State& run) { BM_EliminatePacked<6>(run, ragdoll(), false); }
@@ -227,6 +267,7 @@ BENCHMARK(BM_RagdollScalarInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeLanes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeConstraintSpace)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace limber

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "limber/kernel/numerics/constraint_elimination.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 #include "limber/kernel/particles/joint_rows.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
@@ -65,6 +66,17 @@ struct DirectProjection {
   /// constraints are state.constraints, same indices. Distance constraints have one row,
   /// zero-length joints three.
   TreeElimination<Scalar, 3> elimination;
+  /// The same components in constraint space (constraint_elimination.hpp), for those whose
+  /// constraints all have one row and whose particles have at most kMaxFront each
+  /// (in_constraint_space, per component); the rest use `elimination`. Each constraint's
+  /// direction and compliance its last factor used (a compliance of NaN: none yet): a factor is
+  /// kept while they stay the same bits — through a rattle substep's Newton steps, and from the
+  /// velocity stage into the next substep, whose start gradients are the same positions'.
+  ConstraintElimination<Scalar> constraint_space;
+  std::vector<std::uint8_t> in_constraint_space;
+  std::vector<Eigen::Matrix<Scalar, 3, 1>> factored_direction;
+  std::vector<Scalar> factored_compliance;
+  std::vector<Eigen::Matrix<Scalar, 3, 1>> correction;  ///< per body: Δ of the last solve (scratch)
   std::vector<std::int32_t> body_of_particle;     ///< −1 for a pinned particle
   std::vector<std::uint32_t> particle_of_body;
   std::vector<Scalar> body_mass;  ///< 1/w (weighted rule) or 1 (unweighted), kg

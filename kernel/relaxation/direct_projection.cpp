@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -117,6 +118,24 @@ void prepare_direct_projection(VerletState<Scalar>& state) {
   std::sort(island_loops.begin(), island_loops.end());
   direct.island_components = group_by_row(state.islands.size(), island_components);
   direct.island_loop_constraints = group_by_row(state.islands.size(), island_loops);
+  std::vector<std::int32_t> body_i(constraints.size()), body_j(constraints.size());
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    body_i[c] = direct.body_of_particle[constraints.particle_i[c]], body_j[c] = direct.body_of_particle[constraints.particle_j[c]];
+  }
+  direct.constraint_space.assign(ordering, direct.particle_of_body.size(), body_i, body_j);
+  direct.in_constraint_space.assign(ordering.components.size(), 0);
+  const auto body_count = static_cast<std::int32_t>(direct.particle_of_body.size());
+  for (std::size_t k = 0; k < ordering.components.size(); ++k) {
+    bool one_row = direct.constraint_space.solvable(k);
+    for (std::uint32_t n = ordering.components[k].begin; n < ordering.components[k].end && one_row; ++n) {
+      const std::int32_t node = ordering.order[n];
+      one_row = node < body_count || rows[static_cast<std::size_t>(node - body_count)] == 1;
+    }
+    direct.in_constraint_space[k] = one_row ? 1 : 0;
+  }
+  direct.factored_direction.assign(constraints.size(), Vector3s<Scalar>::Zero());
+  direct.factored_compliance.assign(constraints.size(), std::numeric_limits<Scalar>::quiet_NaN());
+  direct.correction.assign(direct.particle_of_body.size(), Vector3s<Scalar>::Zero());
   direct.elimination.assign(std::move(ordering), direct.particle_of_body.size(), std::move(rows));
   direct.multiplier.assign(constraints.size(), Vector3s<Scalar>::Zero());
   direct.direction.assign(constraints.size(), Vector3s<Scalar>::UnitX());
@@ -156,6 +175,72 @@ void begin_direct_projection(VerletState<Scalar>& state, double dt) {
 
 namespace {
 
+// The bodies among the nodes order[begin, end).
+template <typename Scalar>
+std::uint32_t count_bodies(const TreeElimination<Scalar, 3>& elimination, std::uint32_t begin, std::uint32_t end) {
+  std::uint32_t bodies = 0;
+  for (std::uint32_t n = begin; n < end; ++n) bodies += elimination.ordering().order[n] < elimination.body_count() ? 1 : 0;
+  return bodies;
+}
+
+// eliminate_awake's work on component k in constraint space: the right-hand sides, a factor
+// unless the last one's directions and compliances are these bits, the solve, and each
+// particle's correction W·Jᵀ·Δλ summed over its constraints. Returns the largest |Δ|.
+template <typename Scalar, typename Prepare, typename Direction, typename Compliance, typename Body, typename Row>
+double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k, Prepare& prepare, Direction& direction,
+                                     Compliance& compliance, Body& body, Row& row) {
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  ConstraintElimination<Scalar>& solver = direct.constraint_space;
+  const TreeOrdering& ordering = direct.elimination.ordering();
+  const std::int32_t body_count = direct.elimination.body_count();
+  const std::uint32_t begin = ordering.components[k].begin, end = ordering.components[k].end;
+  bool stale = false;
+  for (std::uint32_t n = begin; n < end; ++n) {
+    const std::int32_t node = ordering.order[n];
+    if (node < body_count) {
+      direct.correction[static_cast<std::size_t>(node)].setZero();
+      continue;
+    }
+    const auto c = static_cast<std::size_t>(node - body_count);
+    solver.multiplier(c) = prepare(c).x();
+    const Vector3s<Scalar>& n_c = direction(c);
+    const Scalar alpha = compliance(c);
+    if (n_c != direct.factored_direction[c] || !(alpha == direct.factored_compliance[c])) {
+      stale = true;
+      direct.factored_direction[c] = n_c, direct.factored_compliance[c] = alpha;
+    }
+  }
+  if (stale) {
+    solver.factor(
+        k, [&](std::size_t b) { return correction_weight(state, direct.particle_of_body[b]); },
+        [&](std::size_t c) -> const Vector3s<Scalar>& { return direct.factored_direction[c]; },
+        [&](std::size_t c) { return direct.factored_compliance[c]; });
+  }
+  solver.solve(k);
+  const DistanceConstraintBuffer<Scalar>& constraints = state.constraints;
+  for (std::uint32_t n = begin; n < end; ++n) {
+    const std::int32_t node = ordering.order[n];
+    if (node < body_count) continue;
+    const auto c = static_cast<std::size_t>(node - body_count);
+    const Scalar lambda = solver.multiplier(c);
+    const Vector3s<Scalar> along = direct.factored_direction[c] * lambda;
+    for (const auto& [particle, sign] : {std::pair{constraints.particle_i[c], Scalar(1)}, std::pair{constraints.particle_j[c], Scalar(-1)}}) {
+      const std::int32_t b = direct.body_of_particle[particle];
+      if (b >= 0) direct.correction[static_cast<std::size_t>(b)] += (sign * correction_weight(state, particle)) * along;
+    }
+    row(c, Vector3s<Scalar>(-lambda, 0, 0));  // μ = −Δλ, as the particle blocks give it
+  }
+  double largest = 0;
+  for (std::uint32_t n = begin; n < end; ++n) {
+    const std::int32_t node = ordering.order[n];
+    if (node >= body_count) continue;
+    const Vector3s<Scalar>& delta = direct.correction[static_cast<std::size_t>(node)];
+    body(direct.particle_of_body[static_cast<std::size_t>(node)], delta);
+    largest = std::max(largest, static_cast<double>(delta.norm()));
+  }
+  return largest;
+}
+
 // Solves one system [M Jᵀ; J −α̃] over the awake islands' trees and hands each body's solution to
 // `body(p, Δ)` (the particle's correction) and each constraint's to `row(c, −Δλ)`. `prepare(c)`
 // gives a constraint's right-hand side and refreshes the direction `direction(c)` its rows use;
@@ -185,6 +270,11 @@ double eliminate_awake(VerletState<Scalar>& state, Prepare&& prepare, Direction&
   for (const std::uint32_t island : state.awake_islands) {
     for (const std::uint32_t k : direct.island_components.row(island)) {
       const std::uint32_t begin = components[k].begin, end = components[k].end;
+      if (direct.in_constraint_space[k]) {
+        largest = std::max(largest, eliminate_in_constraint_space(state, k, prepare, direction, compliance, body, row));
+        projected += end - begin - count_bodies(elimination, begin, end);
+        continue;
+      }
       // M = 1/w per particle; the right-hand side per constraint, α̃ on its diagonal.
       for (std::uint32_t n = begin; n < end; ++n) {
         const std::int32_t node = order[n];

@@ -12,8 +12,11 @@
 //
 // The system is solved by Baraff's elimination over the particle–constraint tree
 // (kernel/numerics/tree_elimination.hpp, shared with the Lagrange method), O(n) per step: a
-// chain's matrix is block tridiagonal. Constraints that close a loop are left out of the tree
-// and projected one by one (Gauss-Seidel) after each Newton step.
+// chain's matrix is block tridiagonal. A component whose constraints all have one row is solved
+// in constraint space instead (kernel/numerics/constraint_elimination.hpp: tridiagonal on a
+// chain), its factor kept while its rows' directions and compliances stay the same bits.
+// Constraints that close a loop are left out of the tree and projected one by one
+// (Gauss-Seidel) after each Newton step.
 //
 // Warm start (VerletOptions::warm_start): the previous step's multipliers, rescaled to this Δt,
 // are applied before the first Newton step — the tension of a hanging chain persists from step
