@@ -228,7 +228,8 @@ void BM_RopeConstraintSpace(benchmark::State& run) {
   std::vector<Instance> instances(kInstances);
   const TreeOrdering ordering = order_tree(static_cast<std::size_t>(shape.bodies), shape.inboard, shape.outboard);
   for (Instance& instance : instances) {
-    instance.elimination.assign(ordering, static_cast<std::size_t>(shape.bodies), shape.outboard, shape.inboard);
+    instance.elimination.assign(ordering, static_cast<std::size_t>(shape.bodies), shape.outboard, shape.inboard,
+                                std::vector<std::uint8_t>(constraints, 1));
     for (std::size_t c = 0; c < constraints; ++c) {
       instance.direction.push_back(Eigen::Vector3d(entry(random), entry(random), entry(random)).normalized());
       instance.right.push_back(entry(random));

@@ -6,12 +6,19 @@ namespace limber {
 
 template <typename Scalar>
 void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::size_t body_count, std::span<const std::int32_t> body_i,
-                                           std::span<const std::int32_t> body_j) {
-  if (body_i.size() != body_j.size() || ordering.parent.size() != body_count + body_i.size()) {
+                                           std::span<const std::int32_t> body_j, std::span<const std::uint8_t> rows) {
+  if (body_i.size() != body_j.size() || rows.size() != body_i.size() || ordering.parent.size() != body_count + body_i.size()) {
     throw std::invalid_argument("ConstraintElimination::assign: the ordering is not over these bodies and constraints");
   }
   body_count_ = static_cast<std::int32_t>(body_count);
   const std::size_t constraints = body_i.size();
+  row_begin_.assign(constraints + 1, 0), pivot_begin_.assign(constraints, 0);
+  std::uint32_t pivots = 0;
+  for (std::size_t c = 0; c < constraints; ++c) {
+    if (rows[c] != 1 && rows[c] != 3) throw std::invalid_argument("ConstraintElimination::assign: a constraint has 1 or 3 rows");
+    row_begin_[c + 1] = row_begin_[c] + rows[c];
+    pivot_begin_[c] = pivots, pivots += static_cast<std::uint32_t>(rows[c] * rows[c]);
+  }
   // A front's members in eliminated order: the constraints below its body as they come in
   // `order`, then the one above it.
   std::vector<std::vector<std::uint32_t>> fronts(body_count);
@@ -26,19 +33,27 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
     const std::int32_t up = ordering.parent[body];
     if (up >= 0) fronts[body].push_back(static_cast<std::uint32_t>(up - body_count_));
   }
-  // The fronts' storage, each body's once; a body with more than kMaxFront constraints leaves
-  // its component unsolvable (and stores nothing).
+  // The fronts' storage, each body's once; a body of more than kMaxFrontRows rows leaves its
+  // component unsolvable (and stores nothing).
   std::vector<Front> front_of(body_count);
-  members_.clear(), member_sign_.clear();
+  std::vector<std::uint8_t> small(body_count, 1);
+  members_.clear(), member_sign_.clear(), member_rows_.clear(), front_row_.clear();
   std::uint32_t entries = 0;
   for (std::size_t body = 0; body < body_count; ++body) {
-    const std::size_t size = fronts[body].size();
+    std::size_t size = 0;
+    for (const std::uint32_t c : fronts[body]) size += rows[c];
     front_of[body].body = static_cast<std::uint32_t>(body);
-    if (size > static_cast<std::size_t>(kMaxFront)) continue;
-    front_of[body] = {static_cast<std::uint32_t>(body), entries, static_cast<std::uint32_t>(members_.size()), static_cast<std::uint8_t>(size)};
+    if (size > static_cast<std::size_t>(kMaxFrontRows)) {
+      small[body] = 0;
+      continue;
+    }
+    front_of[body] = {static_cast<std::uint32_t>(body), entries, static_cast<std::uint32_t>(members_.size()),
+                      static_cast<std::uint32_t>(front_row_.size()), static_cast<std::uint8_t>(fronts[body].size()), static_cast<std::uint8_t>(size)};
     for (const std::uint32_t c : fronts[body]) {
       members_.push_back(c);
       member_sign_.push_back(body_i[c] == static_cast<std::int32_t>(body) ? Scalar(1) : Scalar(-1));
+      member_rows_.push_back(rows[c]);
+      for (std::uint32_t r = row_begin_[c]; r < row_begin_[c + 1]; ++r) front_row_.push_back(r);
     }
     entries += static_cast<std::uint32_t>(size * (size + 1) / 2);
   }
@@ -51,9 +66,8 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
     for (std::uint32_t k = component.begin; k < component.end; ++k) {
       const std::int32_t node = ordering.order[k];
       if (node < body_count_) {
-        const Front& front = front_of[static_cast<std::size_t>(node)];
-        if (fronts[static_cast<std::size_t>(node)].size() > static_cast<std::size_t>(kMaxFront)) solvable_[index] = 0;
-        bodies_.push_back(front);
+        if (!small[static_cast<std::size_t>(node)]) solvable_[index] = 0;
+        bodies_.push_back(front_of[static_cast<std::size_t>(node)]);
         continue;
       }
       const auto c = static_cast<std::uint32_t>(node - body_count_);
@@ -61,13 +75,15 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
       const std::int32_t below = body_i[c] == up ? body_j[c] : body_i[c];
       const Front& under = front_of[static_cast<std::size_t>(below)];
       Step step;
-      step.constraint = c;
-      step.below_pivot = under.size > 0 ? static_cast<std::uint32_t>(entry(under.first, under.size - 1, under.size - 1)) : 0;
+      step.constraint = c, step.rows = rows[c];
+      step.below_front = under.first, step.below_size = under.size;
       if (up >= 0) {
         const Front& over = front_of[static_cast<std::size_t>(up)];
-        step.above_front = over.first, step.above_members = over.members, step.size = over.size;
-        for (std::uint8_t place = 0; place < over.size; ++place) {
-          if (members_[over.members + place] == c) step.place = place;
+        step.above_front = over.first, step.above_rows = over.rows_begin, step.size = over.size;
+        int row = 0;
+        for (std::uint8_t member = 0; member < over.count; ++member) {
+          if (members_[over.members + member] == c) step.place = static_cast<std::uint8_t>(row);
+          row += rows[members_[over.members + member]];
         }
       }
       steps_.push_back(step);
@@ -77,29 +93,56 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
     body_begin_.push_back(static_cast<std::uint32_t>(bodies_.size()));
   }
   coupling_.assign(entries, Scalar(0));
-  inverse_pivot_.assign(constraints, Scalar(0));
-  work_.assign(constraints, Scalar(0));
+  inverse_pivot_.assign(pivots, Scalar(0));
+  work_.assign(row_begin_.back(), Scalar(0));
+}
+
+// Forward, leaves first: the rest of a constraint's front above takes L·y.
+template <typename Scalar>
+template <int Rows>
+void ConstraintElimination<Scalar>::substitute_forward(const Step& step) {
+  const Scalar* y = &work_[row_begin_[step.constraint]];
+  for (int i = step.place + Rows; i < step.size; ++i) {
+    Scalar change = coupling_[entry(step.above_front, i, step.place)] * y[0];
+    for (int a = 1; a < Rows; ++a) change += coupling_[entry(step.above_front, i, step.place + a)] * y[a];
+    work_[front_row_[step.above_rows + static_cast<std::uint32_t>(i)]] -= change;
+  }
+}
+
+// Back, root first: μ_c = D⁻¹·y_c − Lᵀ·μ over the rest of its front above.
+template <typename Scalar>
+template <int Rows>
+void ConstraintElimination<Scalar>::substitute_back(const Step& step) {
+  Scalar* y = &work_[row_begin_[step.constraint]];
+  const Scalar* inverse = &inverse_pivot_[pivot_begin_[step.constraint]];
+  Scalar mu[Rows];
+  for (int a = 0; a < Rows; ++a) {
+    mu[a] = inverse[a * Rows] * y[0];
+    for (int b = 1; b < Rows; ++b) mu[a] += inverse[a * Rows + b] * y[b];
+  }
+  for (int i = step.place + Rows; i < step.size; ++i) {
+    const Scalar above = work_[front_row_[step.above_rows + static_cast<std::uint32_t>(i)]];
+    for (int a = 0; a < Rows; ++a) mu[a] -= coupling_[entry(step.above_front, i, step.place + a)] * above;
+  }
+  for (int a = 0; a < Rows; ++a) y[a] = mu[a];
 }
 
 template <typename Scalar>
 void ConstraintElimination<Scalar>::solve(std::size_t index) {
   const TreeOrdering::Component& range = components_[index];
-  // Forward, leaves first: the rest of a constraint's front above takes L·y.
   for (std::uint32_t k = range.begin; k < range.end; ++k) {
-    const Step& step = steps_[k];
-    const Scalar y = work_[step.constraint];
-    for (int row = step.place + 1; row < step.size; ++row) {
-      work_[members_[step.above_members + static_cast<std::uint32_t>(row)]] -= coupling_[entry(step.above_front, row, step.place)] * y;
+    if (steps_[k].rows == 1) {
+      substitute_forward<1>(steps_[k]);
+    } else {
+      substitute_forward<3>(steps_[k]);
     }
   }
-  // Back, root first: μ_c = y_c/D_c − Σ L·μ over the rest of its front above.
   for (std::uint32_t k = range.end; k-- > range.begin;) {
-    const Step& step = steps_[k];
-    Scalar mu = work_[step.constraint] * inverse_pivot_[step.constraint];
-    for (int row = step.place + 1; row < step.size; ++row) {
-      mu -= coupling_[entry(step.above_front, row, step.place)] * work_[members_[step.above_members + static_cast<std::uint32_t>(row)]];
+    if (steps_[k].rows == 1) {
+      substitute_back<1>(steps_[k]);
+    } else {
+      substitute_back<3>(steps_[k]);
     }
-    work_[step.constraint] = mu;
   }
 }
 

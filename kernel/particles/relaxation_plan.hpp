@@ -67,9 +67,9 @@ struct DirectProjection {
   /// zero-length joints three.
   TreeElimination<Scalar, 3> elimination;
   /// The same components in constraint space (constraint_elimination.hpp), for those whose
-  /// constraints all have one row and whose particles have at most kMaxFront each
-  /// (in_constraint_space, per component); the rest use `elimination`. Each constraint's
-  /// direction and compliance its last factor used (a compliance of NaN: none yet): a factor is
+  /// particles carry at most kMaxFrontRows rows each (in_constraint_space, per component); the
+  /// rest use `elimination`. Each constraint's direction (one-row constraints) and compliance
+  /// its last factor used (a compliance of NaN: none yet): a factor is
   /// kept while they stay the same bits — through a rattle substep's Newton steps, and from the
   /// velocity stage into the next substep, whose start gradients are the same positions'.
   ConstraintElimination<Scalar> constraint_space;

@@ -122,17 +122,9 @@ void prepare_direct_projection(VerletState<Scalar>& state) {
   for (std::size_t c = 0; c < constraints.size(); ++c) {
     body_i[c] = direct.body_of_particle[constraints.particle_i[c]], body_j[c] = direct.body_of_particle[constraints.particle_j[c]];
   }
-  direct.constraint_space.assign(ordering, direct.particle_of_body.size(), body_i, body_j);
+  direct.constraint_space.assign(ordering, direct.particle_of_body.size(), body_i, body_j, rows);
   direct.in_constraint_space.assign(ordering.components.size(), 0);
-  const auto body_count = static_cast<std::int32_t>(direct.particle_of_body.size());
-  for (std::size_t k = 0; k < ordering.components.size(); ++k) {
-    bool one_row = direct.constraint_space.solvable(k);
-    for (std::uint32_t n = ordering.components[k].begin; n < ordering.components[k].end && one_row; ++n) {
-      const std::int32_t node = ordering.order[n];
-      one_row = node < body_count || rows[static_cast<std::size_t>(node - body_count)] == 1;
-    }
-    direct.in_constraint_space[k] = one_row ? 1 : 0;
-  }
+  for (std::size_t k = 0; k < ordering.components.size(); ++k) direct.in_constraint_space[k] = direct.constraint_space.solvable(k) ? 1 : 0;
   direct.factored_direction.assign(constraints.size(), Vector3s<Scalar>::Zero());
   direct.factored_compliance.assign(constraints.size(), std::numeric_limits<Scalar>::quiet_NaN());
   direct.correction.assign(direct.particle_of_body.size(), Vector3s<Scalar>::Zero());
@@ -184,8 +176,9 @@ std::uint32_t count_bodies(const TreeElimination<Scalar, 3>& elimination, std::u
 }
 
 // eliminate_awake's work on component k in constraint space: the right-hand sides, a factor
-// unless the last one's directions and compliances are these bits, the solve, and each
-// particle's correction W·Jᵀ·Δλ summed over its constraints. Returns the largest |Δ|.
+// unless the last one's directions (of its one-row constraints) and compliances are these bits,
+// the solve, and each particle's correction W·Jᵀ·Δλ summed over its constraints. Returns the
+// largest |Δ|.
 template <typename Scalar, typename Prepare, typename Direction, typename Compliance, typename Body, typename Row>
 double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k, Prepare& prepare, Direction& direction,
                                      Compliance& compliance, Body& body, Row& row) {
@@ -202,13 +195,14 @@ double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k
       continue;
     }
     const auto c = static_cast<std::size_t>(node - body_count);
-    solver.multiplier(c) = prepare(c).x();
-    const Vector3s<Scalar>& n_c = direction(c);
+    const Vector3s<Scalar> right = prepare(c);
+    const int rows = solver.rows(c);
+    for (int r = 0; r < rows; ++r) solver.multiplier(c, r) = right[r];
     const Scalar alpha = compliance(c);
-    if (n_c != direct.factored_direction[c] || !(alpha == direct.factored_compliance[c])) {
-      stale = true;
-      direct.factored_direction[c] = n_c, direct.factored_compliance[c] = alpha;
-    }
+    if (!(alpha == direct.factored_compliance[c])) stale = true, direct.factored_compliance[c] = alpha;
+    if (rows == 3) continue;  // J = ±E: no direction
+    const Vector3s<Scalar>& n_c = direction(c);
+    if (n_c != direct.factored_direction[c]) stale = true, direct.factored_direction[c] = n_c;
   }
   if (stale) {
     solver.factor(
@@ -222,13 +216,15 @@ double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k
     const std::int32_t node = ordering.order[n];
     if (node < body_count) continue;
     const auto c = static_cast<std::size_t>(node - body_count);
-    const Scalar lambda = solver.multiplier(c);
-    const Vector3s<Scalar> along = direct.factored_direction[c] * lambda;
+    const bool point = solver.rows(c) == 3;
+    const Vector3s<Scalar> lambda = point ? Vector3s<Scalar>(solver.multiplier(c, 0), solver.multiplier(c, 1), solver.multiplier(c, 2))
+                                          : Vector3s<Scalar>(solver.multiplier(c), 0, 0);
+    const Vector3s<Scalar> along = point ? lambda : Vector3s<Scalar>(direct.factored_direction[c] * lambda.x());
     for (const auto& [particle, sign] : {std::pair{constraints.particle_i[c], Scalar(1)}, std::pair{constraints.particle_j[c], Scalar(-1)}}) {
       const std::int32_t b = direct.body_of_particle[particle];
       if (b >= 0) direct.correction[static_cast<std::size_t>(b)] += (sign * correction_weight(state, particle)) * along;
     }
-    row(c, Vector3s<Scalar>(-lambda, 0, 0));  // μ = −Δλ, as the particle blocks give it
+    row(c, Vector3s<Scalar>(-lambda));  // μ = −Δλ, as the particle blocks give it
   }
   double largest = 0;
   for (std::uint32_t n = begin; n < end; ++n) {

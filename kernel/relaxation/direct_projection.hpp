@@ -12,9 +12,10 @@
 //
 // The system is solved by Baraff's elimination over the particle–constraint tree
 // (kernel/numerics/tree_elimination.hpp, shared with the Lagrange method), O(n) per step: a
-// chain's matrix is block tridiagonal. A component whose constraints all have one row is solved
-// in constraint space instead (kernel/numerics/constraint_elimination.hpp: tridiagonal on a
-// chain), its factor kept while its rows' directions and compliances stay the same bits.
+// chain's matrix is block tridiagonal. A component whose particles carry at most 19 rows each
+// (every generated chain and tree) is solved in constraint space instead
+// (kernel/numerics/constraint_elimination.hpp: tridiagonal on a chain of distance constraints),
+// its factor kept while its rows' directions and compliances stay the same bits.
 // Constraints that close a loop are left out of the tree and projected one by one
 // (Gauss-Seidel) after each Newton step.
 //

@@ -1,8 +1,9 @@
 // ConstraintElimination (kernel/numerics/constraint_elimination.hpp): the constraint-space solve
 // of (J W Jᵀ + α̃) μ = r over a tree of particles gives, to rounding, the multipliers of a dense
 // solve and of the body–constraint elimination (TreeElimination over 3 × 3 particle blocks), on
-// chains, branching trees and stars, rigid and compliant, with masses 1 to 1000 kg; a factor
-// serves many right-hand sides; a particle with too many constraints is refused.
+// chains, branching trees and stars, rigid and compliant, with masses 1 to 1000 kg, of distance
+// constraints (one row) and zero-length joints (three); a factor serves many right-hand sides;
+// a particle with too many rows is refused.
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -20,25 +21,32 @@ namespace {
 using Vector3d = Eigen::Vector3d;
 
 // A tree of particles: constraint c joins body_i[c] and body_j[c] (−1: the world), with its
-// direction n, compliance α̃ and right-hand side r; each particle's weight w (1/kg).
+// rows (1: J = ±nᵀ with its direction n; 3: J = ±E), compliance α̃ and right-hand side r (its
+// rows' entries in order, rows of all constraints concatenated); each particle's weight w (1/kg).
 struct Tree {
   std::vector<std::int32_t> body_i, body_j;
+  std::vector<std::uint8_t> rows;
   std::vector<Vector3d> direction;
   std::vector<double> compliance, right, weight;
+  std::vector<int> offset;  // per constraint: its first row
 };
 
 // `parent(k)` gives particle k's inboard particle (k ≥ 1); particle 0 hangs from the world when
-// `pinned`. Each constraint's sides are drawn in either order, so both signs occur.
+// `pinned`. Each constraint's sides are drawn in either order, so both signs occur; with
+// `joints`, about a third of the constraints are zero-length joints of three rows.
 template <typename Parent>
-Tree random_tree(int particles, Parent&& parent, bool pinned, bool compliant, std::mt19937& random) {
+Tree random_tree(int particles, Parent&& parent, bool pinned, bool compliant, std::mt19937& random, bool joints = false) {
   std::uniform_real_distribution<double> unit(-1, 1), fraction(0, 1);
   Tree tree;
+  int total = 0;
   const auto add = [&](std::int32_t a, std::int32_t b) {
     if (fraction(random) < 0.5) std::swap(a, b);
     tree.body_i.push_back(a), tree.body_j.push_back(b);
+    const std::uint8_t rows = joints && fraction(random) < 0.33 ? 3 : 1;
+    tree.rows.push_back(rows), tree.offset.push_back(total), total += rows;
     tree.direction.push_back(Vector3d(unit(random), unit(random), unit(random)).normalized());
     tree.compliance.push_back(compliant ? 1e-3 * fraction(random) : 0.0);
-    tree.right.push_back(unit(random));
+    for (int r = 0; r < rows; ++r) tree.right.push_back(unit(random));
   };
   if (pinned) add(-1, 0);
   for (int k = 1; k < particles; ++k) add(parent(k), k);
@@ -46,18 +54,27 @@ Tree random_tree(int particles, Parent&& parent, bool pinned, bool compliant, st
   return tree;
 }
 
+// A constraint's J block on one side (rows × 3): ±nᵀ or ±E.
+Eigen::MatrixXd block(const Tree& tree, std::size_t c, double sign) {
+  if (tree.rows[c] == 3) return sign * Eigen::Matrix3d::Identity();
+  return sign * tree.direction[c].transpose();
+}
+
 // J W Jᵀ + α̃, dense.
 Eigen::MatrixXd dense_matrix(const Tree& tree) {
-  const auto constraints = static_cast<int>(tree.body_i.size());
-  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(constraints, 3 * static_cast<int>(tree.weight.size()));
-  for (int c = 0; c < constraints; ++c) {
-    if (tree.body_i[c] >= 0) jacobian.block<1, 3>(c, 3 * tree.body_i[c]) = tree.direction[c].transpose();
-    if (tree.body_j[c] >= 0) jacobian.block<1, 3>(c, 3 * tree.body_j[c]) = -tree.direction[c].transpose();
+  const auto rows = static_cast<int>(tree.right.size());
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(rows, 3 * static_cast<int>(tree.weight.size()));
+  Eigen::VectorXd compliance(rows);
+  for (std::size_t c = 0; c < tree.body_i.size(); ++c) {
+    const int at = tree.offset[c], m = tree.rows[c];
+    if (tree.body_i[c] >= 0) jacobian.block(at, 3 * tree.body_i[c], m, 3) = block(tree, c, 1);
+    if (tree.body_j[c] >= 0) jacobian.block(at, 3 * tree.body_j[c], m, 3) = block(tree, c, -1);
+    compliance.segment(at, m).setConstant(tree.compliance[c]);
   }
   Eigen::VectorXd weights(3 * tree.weight.size());
   for (std::size_t k = 0; k < tree.weight.size(); ++k) weights.segment<3>(3 * static_cast<int>(k)).setConstant(tree.weight[k]);
   Eigen::MatrixXd matrix = jacobian * weights.asDiagonal() * jacobian.transpose();
-  for (int c = 0; c < constraints; ++c) matrix(c, c) += tree.compliance[c];
+  matrix.diagonal() += compliance;
   return matrix;
 }
 
@@ -81,15 +98,19 @@ Eigen::VectorXd constraint_space(const Tree& tree, ConstraintElimination<double>
   const TreeOrdering ordering = order_tree(tree.weight.size(), inboard_of(tree), outboard_of(tree));
   EXPECT_EQ(ordering.components.size(), 1u);
   EXPECT_TRUE(ordering.loop_constraints.empty());
-  elimination.assign(ordering, tree.weight.size(), tree.body_i, tree.body_j);
+  elimination.assign(ordering, tree.weight.size(), tree.body_i, tree.body_j, tree.rows);
   EXPECT_TRUE(elimination.solvable(0));
   definite = elimination.factor(
       0, [&](std::size_t body) { return tree.weight[body]; }, [&](std::size_t c) -> const Vector3d& { return tree.direction[c]; },
       [&](std::size_t c) { return tree.compliance[c]; });
-  for (std::size_t c = 0; c < tree.right.size(); ++c) elimination.multiplier(c) = tree.right[c];
-  elimination.solve(0);
   Eigen::VectorXd mu(static_cast<int>(tree.right.size()));
-  for (std::size_t c = 0; c < tree.right.size(); ++c) mu[static_cast<int>(c)] = elimination.multiplier(c);
+  for (std::size_t c = 0; c < tree.rows.size(); ++c) {
+    for (int r = 0; r < tree.rows[c]; ++r) elimination.multiplier(c, r) = tree.right[static_cast<std::size_t>(tree.offset[c] + r)];
+  }
+  elimination.solve(0);
+  for (std::size_t c = 0; c < tree.rows.size(); ++c) {
+    for (int r = 0; r < tree.rows[c]; ++r) mu[tree.offset[c] + r] = elimination.multiplier(c, r);
+  }
   return mu;
 }
 
@@ -97,25 +118,29 @@ Eigen::VectorXd constraint_space(const Tree& tree, ConstraintElimination<double>
 Eigen::VectorXd particle_blocks(const Tree& tree) {
   TreeElimination<double, 3> elimination;
   const std::vector<std::int32_t> inboard = inboard_of(tree), outboard = outboard_of(tree);
-  elimination.assign(order_tree(tree.weight.size(), inboard, outboard), tree.weight.size(), std::vector<std::uint8_t>(tree.right.size(), 1));
+  elimination.assign(order_tree(tree.weight.size(), inboard, outboard), tree.weight.size(), tree.rows);
   const auto bodies = static_cast<std::int32_t>(tree.weight.size());
   for (std::int32_t body = 0; body < bodies; ++body) {
     elimination.diagonal(static_cast<std::size_t>(body)) = Eigen::Matrix3d::Identity() / tree.weight[static_cast<std::size_t>(body)];
     elimination.work(static_cast<std::size_t>(body)).setZero();
   }
-  for (std::size_t c = 0; c < tree.right.size(); ++c) {
+  for (std::size_t c = 0; c < tree.rows.size(); ++c) {
     elimination.diagonal(static_cast<std::size_t>(bodies) + c) = -tree.compliance[c] * Eigen::Matrix3d::Identity();
-    elimination.work(static_cast<std::size_t>(bodies) + c) = Vector3d(-tree.right[c], 0, 0);
+    Vector3d right = Vector3d::Zero();
+    for (int r = 0; r < tree.rows[c]; ++r) right[r] = -tree.right[static_cast<std::size_t>(tree.offset[c] + r)];
+    elimination.work(static_cast<std::size_t>(bodies) + c) = right;
   }
   const auto edge = [&](std::size_t c, std::int32_t body) {
-    Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
-    block.row(0) = (tree.body_i[c] == body ? 1.0 : -1.0) * tree.direction[c].transpose();
-    return block;
+    Eigen::Matrix3d padded = Eigen::Matrix3d::Zero();
+    padded.topRows(tree.rows[c]) = block(tree, c, tree.body_i[c] == body ? 1.0 : -1.0);
+    return padded;
   };
   const auto& components = elimination.ordering().components;
   EXPECT_TRUE(elimination.eliminate(components[0].begin, components[0].end, edge));
   Eigen::VectorXd mu(static_cast<int>(tree.right.size()));
-  for (std::size_t c = 0; c < tree.right.size(); ++c) mu[static_cast<int>(c)] = elimination.work(static_cast<std::size_t>(bodies) + c).x();
+  for (std::size_t c = 0; c < tree.rows.size(); ++c) {
+    for (int r = 0; r < tree.rows[c]; ++r) mu[tree.offset[c] + r] = elimination.work(static_cast<std::size_t>(bodies) + c)[r];
+  }
   return mu;
 }
 
@@ -154,21 +179,33 @@ TEST(ConstraintElimination, BranchingTreesGiveTheSameMultipliers) {
   }
 }
 
+TEST(ConstraintElimination, TreesWithZeroLengthJointsGiveTheSameMultipliers) {
+  std::mt19937 random(16);
+  for (int trial = 0; trial < 40; ++trial) {
+    SCOPED_TRACE(trial);
+    std::mt19937 shape(static_cast<unsigned>(trial));
+    // Chains, then trees whose particles hang from one of the last three: fronts of up to
+    // 4 constraints, some of three rows.
+    const auto parent = [&](int k) { return trial < 10 ? k - 1 : std::uniform_int_distribution<int>(std::max(0, k - 3), k - 1)(shape); };
+    expect_agreement(random_tree(3 + trial, parent, trial % 2 == 0, trial % 4 < 2, random, true));
+  }
+}
+
 TEST(ConstraintElimination, AStarAtTheLimitIsSolvedAndOneBeyondItIsRefused) {
   std::mt19937 random(13);
-  const int limit = ConstraintElimination<double>::kMaxFront;
-  // A free hub with `limit` spokes: its front holds them all.
+  const int limit = ConstraintElimination<double>::kMaxFrontRows;
+  // A free hub with `limit` one-row spokes: its front holds them all.
   expect_agreement(random_tree(limit + 1, [](int) { return 0; }, false, false, random));
   const Tree beyond = random_tree(limit + 2, [](int) { return 0; }, false, false, random);
   ConstraintElimination<double> elimination;
   elimination.assign(order_tree(beyond.weight.size(), inboard_of(beyond), outboard_of(beyond)), beyond.weight.size(), beyond.body_i,
-                     beyond.body_j);
+                     beyond.body_j, beyond.rows);
   EXPECT_FALSE(elimination.solvable(0));
 }
 
 TEST(ConstraintElimination, AFactorServesManyRightHandSides) {
   std::mt19937 random(14);
-  Tree tree = random_tree(30, [](int k) { return k / 2; }, true, true, random);
+  Tree tree = random_tree(30, [](int k) { return k / 2; }, true, true, random, true);
   ConstraintElimination<double> elimination;
   bool definite = false;
   constraint_space(tree, elimination, definite);
@@ -176,10 +213,14 @@ TEST(ConstraintElimination, AFactorServesManyRightHandSides) {
   std::uniform_real_distribution<double> unit(-1, 1);
   for (int trial = 0; trial < 5; ++trial) {
     Eigen::VectorXd right(static_cast<int>(tree.right.size()));
-    for (int c = 0; c < right.size(); ++c) elimination.multiplier(static_cast<std::size_t>(c)) = right[c] = unit(random);
+    for (std::size_t c = 0; c < tree.rows.size(); ++c) {
+      for (int r = 0; r < tree.rows[c]; ++r) elimination.multiplier(c, r) = right[tree.offset[c] + r] = unit(random);
+    }
     elimination.solve(0);
     Eigen::VectorXd mu(right.size());
-    for (int c = 0; c < right.size(); ++c) mu[c] = elimination.multiplier(static_cast<std::size_t>(c));
+    for (std::size_t c = 0; c < tree.rows.size(); ++c) {
+      for (int r = 0; r < tree.rows[c]; ++r) mu[tree.offset[c] + r] = elimination.multiplier(c, r);
+    }
     EXPECT_LE((matrix * mu - right).norm(), 1e-9 * right.norm());
   }
 }
