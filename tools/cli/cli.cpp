@@ -87,9 +87,11 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
   if (state.options.solver == RelaxationSolver::direct) {
     const DirectProjection<Scalar>& direct = state.plan.direct;
     const std::size_t trees = direct.elimination.ordering().components.size();
-    return format("solver      direct: Newton steps of Baraff's tree elimination (linear time) over %zu tree%s%s; "
-                  "%zu loop-closing constraints by Gauss-Seidel; 1 thread\n",
-                  trees, trees == 1 ? "" : "s", state.options.warm_start ? ", warm-started" : "",
+    std::size_t constraint_space = 0;
+    for (const std::uint8_t flag : direct.in_constraint_space) constraint_space += flag;
+    return format("solver      direct: Newton steps of a tree elimination (linear time) over %zu tree%s (%zu in constraint space, "
+                  "%zu in particle blocks)%s; %zu loop-closing constraints by Gauss-Seidel; 1 thread\n",
+                  trees, trees == 1 ? "" : "s", constraint_space, trees - constraint_space, state.options.warm_start ? ", warm-started" : "",
                   direct.elimination.ordering().loop_constraints.size());
   }
   std::vector<std::size_t> sizes(state.colour_count, 0);
