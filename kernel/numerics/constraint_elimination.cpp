@@ -37,7 +37,7 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
   // component unsolvable (and stores nothing).
   std::vector<Front> front_of(body_count);
   std::vector<std::uint8_t> small(body_count, 1);
-  members_.clear(), member_sign_.clear(), member_rows_.clear(), front_row_.clear();
+  members_.clear(), member_sign_.clear(), front_row_.clear();
   std::uint32_t entries = 0;
   for (std::size_t body = 0; body < body_count; ++body) {
     std::size_t size = 0;
@@ -52,7 +52,6 @@ void ConstraintElimination<Scalar>::assign(const TreeOrdering& ordering, std::si
     for (const std::uint32_t c : fronts[body]) {
       members_.push_back(c);
       member_sign_.push_back(body_i[c] == static_cast<std::int32_t>(body) ? Scalar(1) : Scalar(-1));
-      member_rows_.push_back(rows[c]);
       for (std::uint32_t r = row_begin_[c]; r < row_begin_[c + 1]; ++r) front_row_.push_back(r);
     }
     entries += static_cast<std::uint32_t>(size * (size + 1) / 2);

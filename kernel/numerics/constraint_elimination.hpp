@@ -104,7 +104,6 @@ class ConstraintElimination {
   std::vector<Front> bodies_;
   std::vector<std::uint32_t> members_;  // fronts' constraints: below in eliminated order, then above
   std::vector<Scalar> member_sign_;     // their rows' sign on the front's body
-  std::vector<std::uint8_t> member_rows_;  // and their row counts
   std::vector<std::uint32_t> front_row_;  // fronts' rows: each one's index in work_
   std::vector<std::uint32_t> row_begin_;  // per constraint: its first row in work_ (and one past the last)
   std::vector<std::uint32_t> pivot_begin_;  // per constraint: its D⁻¹ (rows × rows) in inverse_pivot_
@@ -125,13 +124,13 @@ bool ConstraintElimination<Scalar>::factor(std::size_t index, Weight&& weight, D
     for (int p = 0; p < front.count; ++p) {
       const std::uint32_t c_p = members_[front.members + static_cast<std::uint32_t>(p)];
       const Scalar scale_p = w * member_sign_[front.members + static_cast<std::uint32_t>(p)];
-      const int rows_p = member_rows_[front.members + static_cast<std::uint32_t>(p)];
+      const int rows_p = rows(c_p);
       const Vector3 n_p = rows_p == 1 ? Vector3(scale_p * direction(c_p)) : Vector3::Zero();
       int row_q = 0;
       for (int q = 0; q <= p; ++q) {
         const std::uint32_t c_q = members_[front.members + static_cast<std::uint32_t>(q)];
         const Scalar sign_q = member_sign_[front.members + static_cast<std::uint32_t>(q)];
-        const int rows_q = member_rows_[front.members + static_cast<std::uint32_t>(q)];
+        const int rows_q = rows(c_q);
         if (rows_p == 1 && rows_q == 1) {
           coupling_[entry(front.first, row_p, row_q)] = sign_q * n_p.dot(direction(c_q));
         } else if (rows_p == 1) {  // n_pᵀ·E: row p, columns of q
@@ -182,26 +181,23 @@ void ConstraintElimination<Scalar>::eliminate(const Step& step, Scalar complianc
   for (int a = 0; a < Rows; ++a) {
     for (int b = 0; b < Rows; ++b) stored[a * Rows + b] = inverse(a, b);
   }
-  // The rows after the constraint's in the front above: F_ij −= F_ic·D⁻¹·F_cj (unscaled F_jc),
-  // then F_ic ← F_ic·D⁻¹ (L).
+  // The rows after the constraint's in the front above: L_i = F_ic·D⁻¹ (from the unscaled
+  // F_ic), F_ij −= L_i·F_jc (unscaled F_jc), then F_ic ← L_i.
   const int rest = step.place + Rows;
+  Scalar scaled[kMaxFrontRows][Rows];
   for (int i = rest; i < step.size; ++i) {
-    Eigen::Matrix<Scalar, 1, Rows> scaled = Eigen::Matrix<Scalar, 1, Rows>::Zero();
     for (int b = 0; b < Rows; ++b) {
-      for (int a = 0; a < Rows; ++a) scaled[b] += coupling_[entry(step.above_front, i, step.place + a)] * inverse(a, b);
+      scaled[i][b] = Scalar(0);
+      for (int a = 0; a < Rows; ++a) scaled[i][b] += coupling_[entry(step.above_front, i, step.place + a)] * inverse(a, b);
     }
     for (int j = rest; j <= i; ++j) {
-      Scalar update = scaled[0] * coupling_[entry(step.above_front, j, step.place)];
-      for (int b = 1; b < Rows; ++b) update += scaled[b] * coupling_[entry(step.above_front, j, step.place + b)];
+      Scalar update = scaled[i][0] * coupling_[entry(step.above_front, j, step.place)];
+      for (int b = 1; b < Rows; ++b) update += scaled[i][b] * coupling_[entry(step.above_front, j, step.place + b)];
       coupling_[entry(step.above_front, i, j)] -= update;
     }
   }
-  for (int i = step.size; i-- > rest;) {
-    Eigen::Matrix<Scalar, 1, Rows> scaled = Eigen::Matrix<Scalar, 1, Rows>::Zero();
-    for (int b = 0; b < Rows; ++b) {
-      for (int a = 0; a < Rows; ++a) scaled[b] += coupling_[entry(step.above_front, i, step.place + a)] * inverse(a, b);
-    }
-    for (int b = 0; b < Rows; ++b) coupling_[entry(step.above_front, i, step.place + b)] = scaled[b];
+  for (int i = rest; i < step.size; ++i) {
+    for (int b = 0; b < Rows; ++b) coupling_[entry(step.above_front, i, step.place + b)] = scaled[i][b];
   }
 }
 

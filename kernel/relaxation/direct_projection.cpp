@@ -167,21 +167,13 @@ void begin_direct_projection(VerletState<Scalar>& state, double dt) {
 
 namespace {
 
-// The bodies among the nodes order[begin, end).
-template <typename Scalar>
-std::uint32_t count_bodies(const TreeElimination<Scalar, 3>& elimination, std::uint32_t begin, std::uint32_t end) {
-  std::uint32_t bodies = 0;
-  for (std::uint32_t n = begin; n < end; ++n) bodies += elimination.ordering().order[n] < elimination.body_count() ? 1 : 0;
-  return bodies;
-}
-
 // eliminate_awake's work on component k in constraint space: the right-hand sides, a factor
 // unless the last one's directions (of its one-row constraints) and compliances are these bits,
-// the solve, and each particle's correction W·Jᵀ·Δλ summed over its constraints. Returns the
-// largest |Δ|.
+// the solve, and each particle's correction W·Jᵀ·Δλ summed over its constraints. Counts the
+// constraints into `projected`; returns the largest |Δ|.
 template <typename Scalar, typename Prepare, typename Direction, typename Compliance, typename Body, typename Row>
 double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k, Prepare& prepare, Direction& direction,
-                                     Compliance& compliance, Body& body, Row& row) {
+                                     Compliance& compliance, Body& body, Row& row, std::uint64_t& projected) {
   DirectProjection<Scalar>& direct = state.plan.direct;
   ConstraintElimination<Scalar>& solver = direct.constraint_space;
   const TreeOrdering& ordering = direct.elimination.ordering();
@@ -195,6 +187,7 @@ double eliminate_in_constraint_space(VerletState<Scalar>& state, std::uint32_t k
       continue;
     }
     const auto c = static_cast<std::size_t>(node - body_count);
+    ++projected;
     const Vector3s<Scalar> right = prepare(c);
     const int rows = solver.rows(c);
     for (int r = 0; r < rows; ++r) solver.multiplier(c, r) = right[r];
@@ -267,8 +260,7 @@ double eliminate_awake(VerletState<Scalar>& state, Prepare&& prepare, Direction&
     for (const std::uint32_t k : direct.island_components.row(island)) {
       const std::uint32_t begin = components[k].begin, end = components[k].end;
       if (direct.in_constraint_space[k]) {
-        largest = std::max(largest, eliminate_in_constraint_space(state, k, prepare, direction, compliance, body, row));
-        projected += end - begin - count_bodies(elimination, begin, end);
+        largest = std::max(largest, eliminate_in_constraint_space(state, k, prepare, direction, compliance, body, row, projected));
         continue;
       }
       // M = 1/w per particle; the right-hand side per constraint, α̃ on its diagonal.
