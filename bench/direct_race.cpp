@@ -12,7 +12,8 @@
 // gradients, velocity stage), whole or in substeps; "iters" counts sweeps or Newton steps per
 // frame over all substeps.
 //
-// Usage: direct_race [--links N,N,...] [--csv FILE]   (default 10,100,1000,10000)
+// Usage: direct_race [--links N,N,...] [--csv FILE] [--only TEXT,TEXT,...]   (default 10,100,1000,10000;
+// --only: just the contenders whose name contains one of the texts, Bullet always)
 // Prints a table and writes the CSV the plot reads (tools/plot_race.py).
 #include <algorithm>
 #include <chrono>
@@ -127,12 +128,16 @@ int main(int argc, char** argv) {
   using namespace limber;
   std::vector<std::size_t> link_counts{10, 100, 1000, 10000};
   std::string csv_path;
+  std::vector<std::string> only;
   for (int k = 1; k + 1 < argc; k += 2) {
     const std::string flag = argv[k];
     if (flag == "--links") link_counts = parse_links(argv[k + 1]);
     else if (flag == "--csv") csv_path = argv[k + 1];
-    else {
-      std::fprintf(stderr, "direct_race: unknown flag %s (use --links N,N,... --csv FILE)\n", flag.c_str());
+    else if (flag == "--only") {
+      std::stringstream texts(argv[k + 1]);
+      for (std::string text; std::getline(texts, text, ',');) only.push_back(text);
+    } else {
+      std::fprintf(stderr, "direct_race: unknown flag %s (use --links N,N,... --csv FILE --only TEXT,...)\n", flag.c_str());
       return 2;
     }
   }
@@ -154,6 +159,7 @@ int main(int argc, char** argv) {
       rattle("rattle direct 1 x 4 substeps", RelaxationSolver::direct, 1, 4),
       rattle("rattle direct 1 x 8 substeps", RelaxationSolver::direct, 1, 8),
       rattle("rattle direct 1 x 16 substeps", RelaxationSolver::direct, 1, 16),
+      rattle("rattle direct 1 x 64 substeps", RelaxationSolver::direct, 1, 64),
       rattle("rattle direct to 1e-9 m x 16 substeps", RelaxationSolver::direct, 50, 16, 1e-9),
       rattle("rattle gauss-seidel 2 x 64 substeps", RelaxationSolver::gauss_seidel, 2, 64),
   };
@@ -169,11 +175,14 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     if (csv.is_open()) {
       csv << links << ",\"" << name << "\"," << result.seconds_per_step << ',' << result.max_error << ',' << result.energy_change
-          << ',' << result.mean_iterations << ',' << (result.finite ? 1 : 0) << '\n';
+          << ',' << result.mean_iterations << ',' << (result.finite ? 1 : 0) << std::endl;  // kept if a peer crashes
     }
   };
   for (const std::size_t links : link_counts) {
     for (const Contender& contender : contenders) {
+      if (!only.empty() && std::none_of(only.begin(), only.end(), [&](const std::string& text) { return contender.name.find(text) != std::string::npos; })) {
+        continue;
+      }
       // Thousands of sweeps over 10^4 links: one run (minutes), its time is not the point.
       const bool slow = links >= 10000 && contender.iterations >= 1000;
       const Result result = slow ? run_limber(links, contender) : median_of_three([&] { return run_limber(links, contender); });

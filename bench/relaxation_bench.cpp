@@ -1,7 +1,8 @@
 // The data-oriented core under load: coloured relaxation on chains, trees, a particle grid, a
 // pile of humanoids and a heavy-end chain, for every path (scalar, SIMD, SIMD on two threads,
 // float and double, three layouts), next to a streaming benchmark that measures the machine's
-// memory bandwidth in the same run.
+// memory bandwidth in the same run (float and double, 1 and 2 threads), and the direct solver's
+// elimination in constraint space (Solve/<workload>/<scalar type>/direct) with its bytes.
 //
 //   build/bench/relaxation_bench                                  everything (several minutes)
 //   build/bench/relaxation_bench --benchmark_filter='Sweep/chain' one family
@@ -28,6 +29,10 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#include <oneapi/tbb/blocked_range.h>
+#include <oneapi/tbb/parallel_for.h>
+#include <oneapi/tbb/partitioner.h>
+#include <oneapi/tbb/task_arena.h>
 
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/scene/generators.hpp"
@@ -208,24 +213,86 @@ void colouring_benchmark(benchmark::State& run, const Workload& workload) {
   run.counters["colours"] = colours;
 }
 
-// The machine's streaming bandwidth: a[i] = b[i] + s·c[i] over 3 × 64 MiB (far beyond the
-// caches), counted as 3 arrays moved (the write-allocate read of `a` is not counted, as STREAM).
+// The machine's streaming bandwidth: a[i] = b[i] + s·c[i] over three arrays of 256 MiB (far
+// beyond every cache these VMs have reported, up to a 480 MB L3), counted as 3 arrays moved (the
+// write-allocate read of `a` is not counted, as STREAM), on 1 or 2 threads (each its half).
+template <typename Scalar>
 void BM_StreamTriad(benchmark::State& run) {
-  const std::size_t n = std::size_t{16} << 20;
-  AlignedArray<float> a(n, 0.f), b(n, 1.f), c(n, 2.f);
+  const std::size_t n = (std::size_t{256} << 20) / sizeof(Scalar);
+  const auto threads = static_cast<int>(run.range(0));
+  AlignedArray<Scalar> a(n, Scalar(0)), b(n, Scalar(1)), c(n, Scalar(2));
+  tbb::task_arena arena(threads);
+  const auto triad = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) a[i] = b[i] + Scalar(0.5) * c[i];
+  };
   for (auto _ : run) {
-    for (std::size_t i = 0; i < n; ++i) a[i] = b[i] + 0.5f * c[i];
+    if (threads == 1) {
+      triad(0, n);
+    } else {
+      arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, n / static_cast<std::size_t>(threads)),
+                          [&](const tbb::blocked_range<std::size_t>& range) { triad(range.begin(), range.end()); }, tbb::static_partitioner());
+      });
+    }
     benchmark::DoNotOptimize(a.data());
     benchmark::ClobberMemory();
   }
-  run.counters["bytes/s"] = benchmark::Counter(3.0 * sizeof(float) * n * run.iterations(), benchmark::Counter::kIsRate);
+  run.counters["bytes/s"] = benchmark::Counter(3.0 * sizeof(Scalar) * static_cast<double>(n) * static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_StreamTriad)->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_StreamTriad<float>)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(0.5);
+BENCHMARK(BM_StreamTriad<double>)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->MinTime(0.5);
+
+// The direct solver's elimination in constraint space (constraint_elimination.hpp) over every
+// component of the workload, as one Newton step of the pbd rule needs it: a factor from the
+// directions of a step in flight, then one solve. Its bytes: the elimination's arrays
+// (storage_bytes) and the inputs the factor reads (a direction per constraint, an inverse mass
+// per particle through its index).
+template <typename Scalar>
+void solve_benchmark(benchmark::State& run, const Workload& workload) {
+  VerletOptions options = workload_options(workload);
+  options.solver = RelaxationSolver::direct, options.newton_iterations = 1;
+  VerletState<Scalar> state = compile<Scalar>(workload.build(), options);
+  step(state);  // directions of a chain in motion
+  DirectProjection<Scalar>& direct = state.plan.direct;
+  ConstraintElimination<Scalar>& solver = direct.constraint_space;
+  const std::size_t components = direct.in_constraint_space.size();
+  for (std::size_t k = 0; k < components; ++k) {
+    if (!direct.in_constraint_space[k]) {
+      run.SkipWithError("a component is solved in particle blocks");
+      return;
+    }
+  }
+  const auto weight = [&](std::size_t body) { return state.particles.inverse_mass[direct.particle_of_body[body]]; };
+  const auto direction = [&](std::size_t c) -> const Eigen::Matrix<Scalar, 3, 1>& { return direct.direction[c]; };
+  const auto compliance = [](std::size_t) { return Scalar(0); };
+  for (auto _ : run) {
+    bool definite = true;
+    for (std::size_t k = 0; k < components; ++k) {
+      definite = solver.factor(k, weight, direction, compliance) && definite;
+      solver.solve(k);
+    }
+    benchmark::DoNotOptimize(definite);
+  }
+  const double constraints = static_cast<double>(state.constraints.size());
+  const double bytes = static_cast<double>(solver.storage_bytes()) + constraints * 3.0 * sizeof(Scalar) +
+                       static_cast<double>(direct.particle_of_body.size()) * (sizeof(Scalar) + sizeof(std::uint32_t));
+  run.counters["constraints"] = constraints;
+  run.counters["bytes/constraint"] = bytes / constraints;
+  run.counters["ns/constraint"] = benchmark::Counter(constraints * static_cast<double>(run.iterations()) * 1e-9,
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  run.counters["bytes/s"] = benchmark::Counter(bytes * static_cast<double>(run.iterations()), benchmark::Counter::kIsRate);
+}
 
 void register_all() {
   for (const Workload& workload : workloads()) {
     benchmark::RegisterBenchmark(("Colour/" + workload.name).c_str(), colouring_benchmark, workload)
         ->MinTime(0.05)->Unit(benchmark::kMillisecond);
+    if (workload.name.rfind("chain_", 0) == 0 || workload.name.rfind("tree_", 0) == 0) {
+      benchmark::RegisterBenchmark(("Solve/" + workload.name + "/float/direct").c_str(), solve_benchmark<float>, workload)
+          ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+      benchmark::RegisterBenchmark(("Solve/" + workload.name + "/double/direct").c_str(), solve_benchmark<double>, workload)
+          ->MinTime(0.05)->Unit(benchmark::kMicrosecond);
+    }
     for (const Path& path : paths()) {
       for (const bool use_float : {true, false}) {
         const std::string type = use_float ? "float" : "double";

@@ -13,17 +13,20 @@
 // rows feed the lanes from instances kept one at a time, as the joint trees keep their
 // ragdolls, and unpack the results (with `Inverse`: the inverse diagonal too). `RopeConstraintSpace`
 // solves the rope's system in constraint space (constraint_elimination.hpp): the factor from
-// the directions, weights and compliances, and a solve, one instance at a time.
+// the directions, weights and compliances, and a solve, one instance at a time or one a lane,
+// in double and float.
 #include <array>
 #include <cstdint>
 #include <random>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 #include <xsimd/xsimd.hpp>
 
 #include "limber/kernel/numerics/constraint_elimination.hpp"
+#include "limber/kernel/numerics/lane_blocks.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 
 namespace limber {
@@ -215,32 +218,43 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
   run.SetLabel(std::to_string(width) + " lanes, packed from instances" + (inverse ? ", with the inverse diagonal" : ""));
 }
 
+// Value: double or float, one rope an elimination, or xsimd's widest batch of them, one rope a
+// lane (each lane's bits its own: tests/numerics/constraint_elimination_test.cpp).
+template <typename Value>
 void BM_RopeConstraintSpace(benchmark::State& run) {
+  using Number = decltype(get_lane(Value(0), 0));
+  std::size_t width = 1;
+  if constexpr (!std::is_arithmetic_v<Value>) width = Value::size;
   const Shape shape = rope();
   std::mt19937 random(5);
   std::uniform_real_distribution<double> entry(-1, 1);
   const std::size_t constraints = shape.inboard.size();
   struct Instance {
-    ConstraintElimination<double> elimination;
-    std::vector<Eigen::Vector3d> direction;
-    std::vector<double> weight, right;
+    ConstraintElimination<Value> elimination;
+    std::vector<Block<Value, 3, 1>> direction;
+    std::vector<Value> weight, right;
   };
-  std::vector<Instance> instances(kInstances);
+  std::vector<Instance> instances(kInstances / width);
   const TreeOrdering ordering = order_tree(static_cast<std::size_t>(shape.bodies), shape.inboard, shape.outboard);
   for (Instance& instance : instances) {
     instance.elimination.assign(ordering, static_cast<std::size_t>(shape.bodies), shape.outboard, shape.inboard,
                                 std::vector<std::uint8_t>(constraints, 1));
-    for (std::size_t c = 0; c < constraints; ++c) {
-      instance.direction.push_back(Eigen::Vector3d(entry(random), entry(random), entry(random)).normalized());
-      instance.right.push_back(entry(random));
+    instance.direction.resize(constraints), instance.right.resize(constraints, Value(0));
+    instance.weight.resize(static_cast<std::size_t>(shape.bodies), Value(0));
+    for (std::size_t lane = 0; lane < width; ++lane) {
+      for (std::size_t c = 0; c < constraints; ++c) {
+        const Eigen::Vector3d n = Eigen::Vector3d(entry(random), entry(random), entry(random)).normalized();
+        for (int a = 0; a < 3; ++a) set_lane(instance.direction[c](a, 0), lane, static_cast<Number>(n[a]));
+        set_lane(instance.right[c], lane, static_cast<Number>(entry(random)));
+      }
+      for (Value& w : instance.weight) set_lane(w, lane, static_cast<Number>(1 / (1 + 60 * (entry(random) + 1) / 2)));  // 1 to 61 kg
     }
-    for (int body = 0; body < shape.bodies; ++body) instance.weight.push_back(1 / (1 + 60 * (entry(random) + 1) / 2));  // 1 to 61 kg
   }
   for (auto _ : run) {
     for (Instance& instance : instances) {
       const bool definite = instance.elimination.factor(
-          0, [&](std::size_t body) { return instance.weight[body]; }, [&](std::size_t c) -> const Eigen::Vector3d& { return instance.direction[c]; },
-          [](std::size_t) { return 0.0; });
+          0, [&](std::size_t body) { return instance.weight[body]; },
+          [&](std::size_t c) -> const Block<Value, 3, 1>& { return instance.direction[c]; }, [](std::size_t) { return Value(0); });
       for (std::size_t c = 0; c < constraints; ++c) instance.elimination.multiplier(c) = instance.right[c];
       instance.elimination.solve(0);
       benchmark::DoNotOptimize(definite);
@@ -250,7 +264,8 @@ void BM_RopeConstraintSpace(benchmark::State& run) {
   run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   run.counters["joint"] = benchmark::Counter(static_cast<double>(kInstances * constraints),
                                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  run.SetLabel("scalar, constraint space");
+  run.SetLabel(std::string(sizeof(Number) == 4 ? "float" : "double") + ", " + (width == 1 ? std::string("scalar") : std::to_string(width) + " lanes") +
+               ", constraint space");
 }
 
 void BM_RagdollScalar(benchmark::State& run) { BM_Eliminate<double, 6>(run, ragdoll()); }
@@ -268,7 +283,10 @@ BENCHMARK(BM_RagdollScalarInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeLanes)->Unit(benchmark::kMicrosecond);
-BENCHMARK(BM_RopeConstraintSpace)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeConstraintSpace<double>)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeConstraintSpace<xsimd::batch<double>>)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeConstraintSpace<float>)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RopeConstraintSpace<xsimd::batch<float>>)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace limber

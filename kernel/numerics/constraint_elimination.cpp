@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include <xsimd/xsimd.hpp>
+
 namespace limber {
 
 template <typename Scalar>
@@ -145,7 +147,16 @@ void ConstraintElimination<Scalar>::solve(std::size_t index) {
   }
 }
 
+template <typename Scalar>
+std::size_t ConstraintElimination<Scalar>::storage_bytes() const {
+  const auto bytes = [](const auto& array) { return array.size() * sizeof(array[0]); };
+  return bytes(components_) + bytes(body_begin_) + bytes(steps_) + bytes(bodies_) + bytes(members_) + bytes(member_sign_) +
+         bytes(front_row_) + bytes(row_begin_) + bytes(pivot_begin_) + bytes(coupling_) + bytes(inverse_pivot_) + bytes(work_);
+}
+
 template class ConstraintElimination<float>;
 template class ConstraintElimination<double>;
+template class ConstraintElimination<xsimd::batch<float>>;
+template class ConstraintElimination<xsimd::batch<double>>;
 
 }  // namespace limber

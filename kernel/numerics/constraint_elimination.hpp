@@ -21,6 +21,11 @@
 // to kMaxFrontRows rows (a particle with more, such as a star's hub, leaves its component to the
 // body–constraint form): a front's cost grows as its size cubed.
 //
+// Values are numbers (float, double) or SIMD lanes of numbers (xsimd::batch): with lanes, each
+// lane is an instance of the same shape (a rope of a forest, a ragdoll of a crowd), and lane k
+// gives the bits the same code gives on lane k's numbers alone (lane_blocks.hpp: one operation
+// sequence per entry, no Eigen reductions). The shape (assign) is shared; the values are not.
+//
 // Sources: the multifrontal view of sparse Cholesky (Duff & Reid 1983; Liu, "The multifrontal
 // method for sparse matrix solution", SIAM Review 34, 1992), on the constraint graph of a tree,
 // whose fronts are its particles' stars; the system is XPBD's (Macklin, Müller, Chentanez 2016,
@@ -31,8 +36,7 @@
 #include <span>
 #include <vector>
 
-#include <Eigen/Core>
-
+#include "limber/kernel/numerics/lane_blocks.hpp"
 #include "limber/kernel/numerics/small_cholesky.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 
@@ -44,7 +48,8 @@ class ConstraintElimination {
   /// Most rows of the constraints at one particle for its component to be solved here: eight
   /// distance constraints, or a limb's link and six zero-length joints.
   static constexpr int kMaxFrontRows = 19;
-  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  /// A direction: an Eigen vector of numbers, or a LaneBlock of lanes (one unit vector a lane).
+  using Vector3 = Block<Scalar, 3, 1>;
 
   /// Takes the body–constraint ordering (order_tree over the particles as bodies), each
   /// constraint's bodies on its J's + side (body_i) and − side (body_j), −1 for the world, and
@@ -57,8 +62,9 @@ class ConstraintElimination {
 
   /// Factors the component `index`: weight(body) its particle's w (1/kg, positive),
   /// direction(constraint) the unit n of a one-row constraint (J = ±nᵀ; not called for three
-  /// rows), compliance(constraint) its α̃ (≥ 0, 1/kg, on each of its rows). Returns false when
-  /// a pivot block is not positive definite (a weight not positive, or not finite).
+  /// rows), compliance(constraint) its α̃ (≥ 0, 1/kg, on each of its rows): each a Scalar (a
+  /// Vector3 of Scalars), lanes and all. Returns false when a pivot block is not positive
+  /// definite in some lane (a weight not positive, or not finite).
   template <typename Weight, typename Direction, typename Compliance>
   bool factor(std::size_t index, Weight&& weight, Direction&& direction, Compliance&& compliance);
 
@@ -69,6 +75,10 @@ class ConstraintElimination {
   Scalar& multiplier(std::size_t constraint, int row = 0) { return work_[row_begin_[constraint] + static_cast<std::uint32_t>(row)]; }
   Scalar multiplier(std::size_t constraint, int row = 0) const { return work_[row_begin_[constraint] + static_cast<std::uint32_t>(row)]; }
   int rows(std::size_t constraint) const { return static_cast<int>(row_begin_[constraint + 1] - row_begin_[constraint]); }
+
+  /// Bytes of the arrays factor() and solve() read or write, every component's: what a factor
+  /// and a solve of everything must move at least once (the bandwidth bound of bench/README.md).
+  std::size_t storage_bytes() const;
 
  private:
   // Per constraint, in eliminated order within each component: what its elimination reads.
@@ -125,19 +135,25 @@ bool ConstraintElimination<Scalar>::factor(std::size_t index, Weight&& weight, D
       const std::uint32_t c_p = members_[front.members + static_cast<std::uint32_t>(p)];
       const Scalar scale_p = w * member_sign_[front.members + static_cast<std::uint32_t>(p)];
       const int rows_p = rows(c_p);
-      const Vector3 n_p = rows_p == 1 ? Vector3(scale_p * direction(c_p)) : Vector3::Zero();
+      Scalar n_p[3] = {Scalar(0), Scalar(0), Scalar(0)};
+      if (rows_p == 1) {
+        const Vector3& d_p = direction(c_p);
+        for (int a = 0; a < 3; ++a) n_p[a] = scale_p * d_p(a, 0);
+      }
       int row_q = 0;
       for (int q = 0; q <= p; ++q) {
         const std::uint32_t c_q = members_[front.members + static_cast<std::uint32_t>(q)];
         const Scalar sign_q = member_sign_[front.members + static_cast<std::uint32_t>(q)];
         const int rows_q = rows(c_q);
         if (rows_p == 1 && rows_q == 1) {
-          coupling_[entry(front.first, row_p, row_q)] = sign_q * n_p.dot(direction(c_q));
+          const Vector3& d_q = direction(c_q);
+          coupling_[entry(front.first, row_p, row_q)] = sign_q * ((n_p[0] * d_q(0, 0) + n_p[1] * d_q(1, 0)) + n_p[2] * d_q(2, 0));
         } else if (rows_p == 1) {  // n_pᵀ·E: row p, columns of q
           for (int b = 0; b < 3; ++b) coupling_[entry(front.first, row_p, row_q + b)] = sign_q * n_p[b];
         } else if (rows_q == 1) {  // E·n_q: rows of p, column q
-          const Vector3 n_q = (scale_p * sign_q) * direction(c_q);
-          for (int a = 0; a < 3; ++a) coupling_[entry(front.first, row_p + a, row_q)] = n_q[a];
+          const Vector3& d_q = direction(c_q);
+          const Scalar scale = scale_p * sign_q;
+          for (int a = 0; a < 3; ++a) coupling_[entry(front.first, row_p + a, row_q)] = scale * d_q(a, 0);
         } else {  // E·E, lower triangle when q = p
           for (int a = 0; a < 3; ++a) {
             for (int b = 0; b < 3 && row_q + b <= row_p + a; ++b) coupling_[entry(front.first, row_p + a, row_q + b)] = a == b ? scale_p * sign_q : Scalar(0);
@@ -167,7 +183,7 @@ bool ConstraintElimination<Scalar>::factor(std::size_t index, Weight&& weight, D
 template <typename Scalar>
 template <int Rows>
 void ConstraintElimination<Scalar>::eliminate(const Step& step, Scalar compliance, bool& definite) {
-  Eigen::Matrix<Scalar, Rows, Rows> pivot;
+  Block<Scalar, Rows, Rows> pivot;
   for (int a = 0; a < Rows; ++a) {
     for (int b = 0; b <= a; ++b) {
       Scalar value = a == b ? compliance : Scalar(0);
@@ -176,7 +192,7 @@ void ConstraintElimination<Scalar>::eliminate(const Step& step, Scalar complianc
       pivot(a, b) = pivot(b, a) = value;
     }
   }
-  const Eigen::Matrix<Scalar, Rows, Rows> inverse = positive_definite_inverse<Rows, Scalar>(pivot, definite);
+  const Block<Scalar, Rows, Rows> inverse = positive_definite_inverse<Rows, Scalar>(pivot, definite);
   Scalar* stored = &inverse_pivot_[pivot_begin_[step.constraint]];
   for (int a = 0; a < Rows; ++a) {
     for (int b = 0; b < Rows; ++b) stored[a * Rows + b] = inverse(a, b);

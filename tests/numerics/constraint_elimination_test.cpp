@@ -3,16 +3,20 @@
 // solve and of the body–constraint elimination (TreeElimination over 3 × 3 particle blocks), on
 // chains, branching trees and stars, rigid and compliant, with masses 1 to 1000 kg, of distance
 // constraints (one row) and zero-length joints (three); a factor serves many right-hand sides;
-// a particle with too many rows is refused.
+// a particle with too many rows is refused; instances of one shape solved side by side in SIMD
+// lanes give each instance's own bits.
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <xsimd/xsimd.hpp>
 
 #include "limber/kernel/numerics/constraint_elimination.hpp"
+#include "limber/kernel/numerics/lane_blocks.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 
 namespace limber {
@@ -233,6 +237,98 @@ TEST(ConstraintElimination, AWeightlessChainIsNotDefinite) {
   bool definite = true;
   constraint_space(tree, elimination, definite);
   EXPECT_FALSE(definite);
+}
+
+// New values (directions, compliances, weights, right-hand sides) on the same shape.
+Tree redraw_values(Tree tree, std::mt19937& random) {
+  std::uniform_real_distribution<double> unit(-1, 1), fraction(0, 1);
+  for (Vector3d& n : tree.direction) n = Vector3d(unit(random), unit(random), unit(random)).normalized();
+  for (double& alpha : tree.compliance) alpha = alpha > 0 ? 1e-3 * fraction(random) : 0.0;
+  for (double& r : tree.right) r = unit(random);
+  for (double& w : tree.weight) w = 1 / std::pow(10.0, 3 * fraction(random));
+  return tree;
+}
+
+// Each instance solved alone in Number, then all in lanes of Number (one instance a lane):
+// lane k's multipliers must be instance k's bits.
+template <typename Number>
+void expect_lanes_give_each_instance_its_bits(const std::vector<Tree>& instances) {
+  using Lanes = xsimd::batch<Number>;
+  using Vector3n = Eigen::Matrix<Number, 3, 1>;
+  ASSERT_EQ(instances.size(), Lanes::size);
+  const Tree& shape = instances[0];
+  const TreeOrdering ordering = order_tree(shape.weight.size(), inboard_of(shape), outboard_of(shape));
+  const std::size_t constraints = shape.rows.size();
+  std::vector<std::vector<Number>> alone(instances.size());
+  for (std::size_t k = 0; k < instances.size(); ++k) {
+    const Tree& tree = instances[k];
+    std::vector<Vector3n> direction;
+    for (const Vector3d& n : tree.direction) direction.push_back(n.cast<Number>());
+    ConstraintElimination<Number> elimination;
+    elimination.assign(ordering, tree.weight.size(), tree.body_i, tree.body_j, tree.rows);
+    ASSERT_TRUE(elimination.factor(
+        0, [&](std::size_t body) { return static_cast<Number>(tree.weight[body]); },
+        [&](std::size_t c) -> const Vector3n& { return direction[c]; }, [&](std::size_t c) { return static_cast<Number>(tree.compliance[c]); }));
+    for (std::size_t c = 0; c < constraints; ++c) {
+      for (int r = 0; r < tree.rows[c]; ++r) elimination.multiplier(c, r) = static_cast<Number>(tree.right[static_cast<std::size_t>(tree.offset[c] + r)]);
+    }
+    elimination.solve(0);
+    for (std::size_t c = 0; c < constraints; ++c) {
+      for (int r = 0; r < tree.rows[c]; ++r) alone[k].push_back(elimination.multiplier(c, r));
+    }
+  }
+  // The lanes: lane k of every value is instance k's.
+  const auto gather = [&](auto&& value) {
+    Lanes lanes(Number(0));
+    for (std::size_t k = 0; k < instances.size(); ++k) set_lane(lanes, k, static_cast<Number>(value(instances[k])));
+    return lanes;
+  };
+  std::vector<Block<Lanes, 3, 1>> direction(constraints);
+  for (std::size_t c = 0; c < constraints; ++c) {
+    for (int a = 0; a < 3; ++a) direction[c](a, 0) = gather([&](const Tree& tree) { return tree.direction[c][a]; });
+  }
+  ConstraintElimination<Lanes> lanes;
+  lanes.assign(ordering, shape.weight.size(), shape.body_i, shape.body_j, shape.rows);
+  ASSERT_TRUE(lanes.factor(
+      0, [&](std::size_t body) { return gather([&](const Tree& tree) { return tree.weight[body]; }); },
+      [&](std::size_t c) -> const Block<Lanes, 3, 1>& { return direction[c]; },
+      [&](std::size_t c) { return gather([&](const Tree& tree) { return tree.compliance[c]; }); }));
+  for (std::size_t c = 0; c < constraints; ++c) {
+    for (int r = 0; r < shape.rows[c]; ++r) {
+      lanes.multiplier(c, r) = gather([&](const Tree& tree) { return tree.right[static_cast<std::size_t>(tree.offset[c] + r)]; });
+    }
+  }
+  lanes.solve(0);
+  for (std::size_t k = 0; k < instances.size(); ++k) {
+    std::size_t row = 0;
+    for (std::size_t c = 0; c < constraints; ++c) {
+      for (int r = 0; r < shape.rows[c]; ++r, ++row) {
+        const Number mu = get_lane(lanes.multiplier(c, r), k);
+        ASSERT_EQ(std::memcmp(&mu, &alone[k][row], sizeof(Number)), 0) << "instance " << k << ", constraint " << c << ", row " << r;
+      }
+    }
+  }
+}
+
+TEST(ConstraintElimination, InstancesInLanesGiveEachInstanceItsOwnBits) {
+  std::mt19937 random(17);
+  for (int trial = 0; trial < 12; ++trial) {
+    SCOPED_TRACE(trial);
+    std::mt19937 shape_random(static_cast<unsigned>(trial));
+    // Ropes, then branching trees with zero-length joints; pinned or free, rigid or compliant.
+    const auto parent = [&](int k) { return trial < 4 ? k - 1 : std::uniform_int_distribution<int>(std::max(0, k - 3), k - 1)(shape_random); };
+    const Tree shape = random_tree(5 + 7 * trial, parent, trial % 2 == 0, trial % 3 == 0, random, trial >= 4);
+    for (const bool single : {false, true}) {
+      std::vector<Tree> instances;
+      const std::size_t width = single ? xsimd::batch<float>::size : xsimd::batch<double>::size;
+      for (std::size_t k = 0; k < width; ++k) instances.push_back(redraw_values(shape, random));
+      if (single) {
+        expect_lanes_give_each_instance_its_bits<float>(instances);
+      } else {
+        expect_lanes_give_each_instance_its_bits<double>(instances);
+      }
+    }
+  }
 }
 
 }  // namespace

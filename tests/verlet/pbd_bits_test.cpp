@@ -74,10 +74,12 @@ std::vector<Case> cases() {
   // again when the direct solver moved to constraint space (numerics/constraint_elimination.hpp):
   // over 600 steps, double gives the particle blocks' largest gap, stretch and energy to ten
   // digits; float the same largest gap and stretch to 0.1 % and the energy to 3e-5 (its own
-  // rounding).
+  // rounding). Float's print was retaken once more when the front's coupling n_p·n_q became a sum
+  // in a fixed order, (x + y) + z, for numbers and lanes alike (Eigen's float dot sums
+  // x + (y + z)): double's is unchanged.
   // The particle blocks, still used for busier particles, keep the earlier prints
   // (0x8c61979a6e6ee27f, 0xf6c799529bcfc513) when a test forces them.
-  out.push_back({"humanoid direct", humanoid, with_relaxation(direct, thesis), 400, 0x4df8c4a44a6896adull, 0x9ff4a773249c3080ull});
+  out.push_back({"humanoid direct", humanoid, with_relaxation(direct, thesis), 400, 0xadf05baaa6666153ull, 0x9ff4a773249c3080ull});
   out.push_back({"chain gauss-seidel", chain, with_relaxation(gauss_seidel, over), 300, 0x737203bc81c5e931ull, 0x9d3e370e8ed86d0eull});
   out.push_back({"chain sequential", chain, with_relaxation(sequential, over), 300, 0xf20cc64821cfa54dull, 0x010f797ece2253e1ull});
   out.push_back({"chain unweighted", chain, with_relaxation(unweighted, over), 300, 0x460cecf72a8fe9dfull, 0x3fdeccdc17c528c1ull});
