@@ -16,7 +16,7 @@
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
-#include "limber/kernel/world/world.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 
 namespace limber {
 namespace {
@@ -37,7 +37,7 @@ bool ball_touched(const World& world) {
           return state.ball_touching;
         }
       },
-      world.state());
+      world.internals().state);
 }
 
 FramePose frame_pose(const World& world, std::size_t body) {

@@ -30,25 +30,11 @@
 #include "limber/kernel/featherstone/integration.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 
-struct FeatherstoneOptions {
-  /// The core's integrators (integration.hpp). RK4 by default: the semi-implicit Euler step
-  /// (v ← v + h·v̇(q, v), then q) takes the velocity-product terms of v̇ — the gyroscopic
-  /// torque, and a floating body's body-frame velocity turning as −ω × v — explicitly, so a
-  /// body or joint turning at Ω (rad/s, in its own frame) gains |v| by a factor
-  /// √(1 + (hΩ)²) every step. That is unstable at any Δt: a thin limb spinning about its axis,
-  /// or the humanoid's short neck spinning between two spherical joints after the ball's impact
-  /// (Ω ≈ 100 rad/s), diverges within a few dozen steps at Δt = 1/240 s (measured on every
-  /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
-  /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
-  Integrator integrator = Integrator::rk4;
-  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
-  /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
-  bool profile = false;
-};
 
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
 /// compile so a step allocates nothing.

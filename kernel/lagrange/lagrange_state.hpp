@@ -17,39 +17,13 @@
 #include "limber/kernel/lagrange/constraints.hpp"
 #include "limber/kernel/lagrange/joint_controls.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
 
-/// How the joints' drift (the constraint error integration leaves) is held down.
-enum class Stabilization : std::uint8_t {
-  baumgarte,   ///< C̈ = −2ω_b·Ċ − ω_b²·C in the acceleration solve (Baumgarte 1972)
-  projection,  ///< after each step, positions then velocities projected back onto C = 0, Ċ = 0
-               ///< through the mass matrix (post-stabilization, Cline & Pai 2003)
-};
-
-/// Which solve gives the multipliers.
-enum class MultiplierSolver : std::uint8_t {
-  automatic,  ///< tree when the joint graph has no loop, else sparse
-  tree,       ///< Baraff's linear-time factorization of the tree-ordered system (1996)
-  sparse,     ///< J M⁻¹ Jᵀ assembled and factored by Eigen's sparse LDLᵀ: any graph
-};
-
-struct LagrangeOptions {
-  Integrator integrator = Integrator::semi_implicit_euler;
-  Stabilization stabilization = Stabilization::baumgarte;
-  MultiplierSolver solver = MultiplierSolver::automatic;
-  /// ω_b of Baumgarte stabilization, 1/s; 0: 1/(4Δt), critically damped and four steps to
-  /// correct an error — with Δt no shorter than the Model's Settings::time_step, so that a short
-  /// step does not turn a longer step's error C into a velocity C/(4Δt).
-  double baumgarte_frequency = 0;
-  int projection_iterations = 2;  ///< Newton iterations of the position projection
-  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
-  /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
-  bool profile = false;
-};
 
 struct LagrangeState : RigidScene {
   JointAnchors joints;        ///< the Model's joints' anchors

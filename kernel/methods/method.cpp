@@ -1,7 +1,11 @@
 #include "limber/kernel/methods/method.hpp"
 
+#include <stdexcept>
+#include <string>
+
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/methods/capabilities.hpp"
 #include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
@@ -58,6 +62,10 @@ bool release_drives_after_impact(MethodState& state) {
 }
 
 MethodState compile_method(const Model& model, const WorldOptions& options) {
+  if (options.single_precision && !capabilities(options.method).single_precision) {
+    throw std::invalid_argument("options: single_precision (a float state) is the particle method's alone; " +
+                                std::string(method_name(options.method)) + " runs in double");
+  }
   switch (options.method) {
     case Method::particles:
       if (options.single_precision) return compile<float>(model, options.particles);

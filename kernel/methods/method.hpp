@@ -11,35 +11,11 @@
 #include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/particles/verlet_state.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
 
 namespace limber {
-
-/// The method a Model is stepped with.
-enum class Method : std::uint8_t {
-  particles,     ///< Verlet integration and relaxation (thesis 3.2, 4.2): WorldOptions::particles
-  springs,       ///< rigid limbs joined by stiff springs (thesis 3.3): WorldOptions::springs
-  lagrange,      ///< rigid limbs and joint constraints (thesis 3.4): WorldOptions::lagrange
-  featherstone,  ///< reduced coordinates, the articulated-body algorithm (thesis 3.5)
-};
-
-/// The method's name as the command line spells it ("particles" is "weighted" there).
-std::string_view method_name(Method method);
-
-/// A method and its options (each method reads only its own).
-struct WorldOptions {
-  Method method = Method::particles;
-  bool single_precision = false;  ///< particles only: float state
-  VerletOptions particles{};      ///< threads default to 1: a world starts no threads unless asked
-  SpringOptions springs{};
-  LagrangeOptions lagrange{};
-  FeatherstoneOptions featherstone{};
-};
-
-/// Default options for `method` that carry a scene's method settings (a scene file's
-/// relaxation, particle and spring settings: Scene::methods); change any field after.
-WorldOptions world_options(Method method, const MethodSettings& scene);
 
 /// Any method's compiled state.
 using MethodState = std::variant<VerletState<double>, VerletState<float>, SpringState, LagrangeState, FeatherstoneState>;

@@ -18,7 +18,7 @@
 //   several times their length, gaining energy, with every number finite.
 #pragma once
 
-#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/metrics/observation.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 

@@ -201,7 +201,7 @@ struct Joint {
   /// perpendicular to `axis`.
   Vector3 second_axis = Vector3::UnitY();
   /// The stiff-spring method's spring for this joint (thesis 4.4.1); unset:
-  /// SpringOptions::defaults (kernel/springs/spring_state.hpp).
+  /// SpringOptions::defaults (kernel/model/options.hpp).
   std::optional<double> stiffness;  ///< N/m, > 0
   std::optional<double> damping;    ///< N·s/m, ≥ 0
   /// Limits on the joint's coordinates (spherical: swing and twist; revolute: angle range;

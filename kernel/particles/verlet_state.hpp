@@ -19,6 +19,7 @@
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/particles/contact_rows.hpp"
 #include "limber/kernel/particles/joint_rows.hpp"
@@ -32,83 +33,6 @@
 
 namespace limber {
 
-/// How a distance constraint's correction is shared between its two particles.
-enum class RelaxationRule {
-  weighted,    ///< inverse-mass weights w_i/(w_i+w_j), w_j/(w_i+w_j) — thesis eq. 4.7, the thesis's contribution
-  unweighted,  ///< ½ and ½ (the whole gap to the free end when the other is pinned) — thesis eq. 4.6 [Jak03]
-};
-
-/// How one relaxation sweep visits the constraints.
-enum class RelaxationSolver : std::uint8_t {
-  gauss_seidel,  ///< each projection sees the positions the previous ones left (thesis 3.2.2)
-  jacobi,        ///< every projection reads the same positions; corrections are averaged per particle
-  direct,        ///< Newton steps of an exact global projection, linear time on trees
-                 ///< (kernel/relaxation/direct_projection.hpp)
-};
-
-/// The order of a Gauss-Seidel sweep.
-enum class SweepOrder : std::uint8_t {
-  coloured,    ///< colour after colour, SIMD lanes and threads inside a colour (the default)
-  sequential,  ///< storage order (breadth-first from the pinned root), one constraint at a time:
-               ///< the thesis's loop, scalar and single-threaded
-};
-
-/// Which end of the sweep holds the constraints at pinned particles.
-enum class SweepDirection : std::uint8_t {
-  pinned_first,  ///< coloured: pinned and overflow constraints, then colours 0, 1, …; sequential: root first
-  pinned_last,   ///< the reverse
-};
-
-/// Most threads VerletOptions::threads may ask for (a guard: asking for 1e5 threads failed to
-/// start them and ended the program).
-inline constexpr int kMaxThreads = 256;
-/// Most Newton steps of the direct solver per time step (a guard, as kMaxIterations).
-inline constexpr int kMaxNewtonIterations = 1000;
-
-/// Choices the Verlet method takes besides the Model. None changes the physics model; the
-/// solver, order and direction change how relaxation converges, the rest only how fast it runs
-/// (results are the same bits for every thread count, lane width, layout and ordering).
-struct VerletOptions {
-  RelaxationRule rule = RelaxationRule::weighted;
-  RelaxationSolver solver = RelaxationSolver::gauss_seidel;
-  SweepOrder order = SweepOrder::coloured;
-  SweepDirection direction = SweepDirection::pinned_first;
-  bool simd = true;                          ///< false: the scalar path (one lane)
-  ParticleLayout layout = ParticleLayout::automatic;  ///< of the relaxation's particle copy
-  ParticleOrder ordering = ParticleOrder::depth_parity;  ///< particle numbering inside islands
-  /// Threads for relaxation, the calling one included, in [0, kMaxThreads]: 1 (the default)
-  /// starts none; 0 takes the hardware's, and only when some colour is big enough to pay for them
-  /// (parallel_minimum_slots) or the joint trees have 8 islands or more (a crowd: an island is a
-  /// task); a small scene then starts none either.
-  int threads = 1;
-  Threading threading = Threading::workers;  ///< how a colour is split across threads
-  /// Threading::tasks: the engine's task system (or tbb_task_system(arena)); `threads` then only
-  /// says whether to split (≥ 2, or 0 with a colour big enough) and limber starts no thread.
-  TaskSystem tasks{};
-  /// Colours a stage must have at least this many constraint slots to be split across threads;
-  /// 0 picks the crossover measured on the reference machine (bench/README.md, "The data-oriented core:
-  /// SIMD, threads, layouts").
-  std::uint32_t parallel_minimum_slots = 0;
-  std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow
-  /// RelaxationSolver::direct: Newton steps per time step (in [1, kMaxNewtonIterations]; replaces
-  /// relaxation.iterations), whether they start from the previous step's multipliers,
-  /// and the compliance α of every distance constraint, m/N (0: rigid; XPBD, Macklin et al.
-  /// 2016 — the other solvers treat every constraint as rigid and refuse α > 0).
-  int newton_iterations = 2;
-  bool warm_start = false;
-  double compliance = 0;
-  /// Long-range attachments (Kim, Chentanez, Müller 2012): after every sweep, each particle
-  /// joined to a pinned one is pulled back within the rest length of the path between them.
-  bool long_range_attachments = false;
-  /// Sweeps, tolerance, over-relaxation, projection rule and substeps (a scene file's
-  /// "settings.relaxation"), and how limbs become particles and joints are held
-  /// ("settings.verlet").
-  RelaxationSettings relaxation{};
-  VerletSettings verlet{};
-  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
-  /// a substep, the same bits as without; false leaves the profile all zeros and reads no clock.
-  bool profile = false;
-};
 
 /// A connected set of particles (joined by constraints), stored contiguously in every buffer so
 /// a pass over the awake islands is a pass over a few index ranges. Islands sleep and wake whole.

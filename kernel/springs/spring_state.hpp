@@ -19,6 +19,7 @@
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/numerics/integrator.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
@@ -27,32 +28,6 @@
 
 namespace limber {
 
-/// The sparse solver of the implicit step.
-enum class SpringLinearSolver : std::uint8_t {
-  ldlt,                ///< Eigen::SimplicialLDLT with an AMD ordering: exact, no fill on chains and trees, O(n)
-  conjugate_gradient,  ///< Eigen::ConjugateGradient, Jacobi preconditioner, warm-started
-};
-
-/// Choices the spring method takes besides the Model.
-struct SpringOptions {
-  /// Any of the five: euler is stable only for small h·k (eq. 3.15), semi_implicit_euler for
-  /// h·ω < 2 (ω² = k/m_effective); backward_euler is one linearized solve over the whole system
-  /// (eq. 3.16–3.22; Baraff & Witkin 1998), stable for every h·k.
-  Integrator integrator = Integrator::semi_implicit_euler;
-  SpringLinearSolver linear_solver = SpringLinearSolver::ldlt;
-  std::optional<double> stiffness{};  ///< N/m: overrides every joint's and the scene's
-  std::optional<double> damping{};    ///< N·s/m: likewise
-  double solver_tolerance = 1e-10;  ///< conjugate gradient: relative residual
-  /// Backward Euler: 1 is the linearized step (eq. 3.16–3.22); each further iteration is a
-  /// Newton step on the nonlinear equations with the same matrix (implicit_step.hpp).
-  int newton_iterations = 2;
-  /// The spring of a joint that names none (Joint::stiffness, ::damping; a scene file's
-  /// "settings.springs"). `stiffness` and `damping` above override both.
-  SpringSettings defaults{};
-  /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
-  /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
-  bool profile = false;
-};
 
 /// The joints' springs, one entry per Model joint: its anchors (JointAnchors: what the joint gap
 /// is measured at), and one array per field. A spherical joint is one zero-length spring between

@@ -28,23 +28,9 @@
 #include <oneapi/tbb/task_arena.h>
 
 #include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+#include "limber/kernel/threading/task_system.hpp"
 
 namespace limber {
-
-enum class Threading : std::uint8_t { serial, parallel_for, workers, tasks };
-
-/// An engine's task system (Box2D v3's enqueueTask/finishTask): limber hands it each stage as
-/// `count` independent blocks; the engine runs work(begin, end, work_context) over ranges that
-/// cover [0, count) once, on whatever threads and in whatever order it likes, and finish()
-/// returns once all have run. The results are the same bits however it splits and orders them.
-struct TaskSystem {
-  using Work = void (*)(std::size_t begin, std::size_t end, void* work_context);
-  /// Starts a stage; returns a handle for finish (may be null, e.g. when it ran the stage already).
-  void* (*enqueue)(Work work, std::size_t count, void* work_context, void* user_context) = nullptr;
-  void (*finish)(void* task, void* user_context) = nullptr;
-  void* user_context = nullptr;
-  bool valid() const { return enqueue != nullptr && finish != nullptr; }
-};
 
 /// A TaskSystem that runs each stage with tbb::parallel_for inside `arena` (the engine's: its
 /// threads, its concurrency limit), for Threading::tasks. The arena must outlive its users.

@@ -10,12 +10,14 @@
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/lagrange/compile.hpp"
 #include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 #include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/springs/step.hpp"
 #include "limber/kernel/verlet/compile.hpp"
 #include "limber/kernel/verlet/step.hpp"
 #include "limber/kernel/world/world_bodies.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 
 namespace limber {
 
@@ -44,7 +46,8 @@ std::atomic<std::uint32_t> next_world_serial{1};
 }  // namespace
 
 World::World(Model model, WorldOptions options)
-    : model_(std::move(model)), options_(std::move(options)), serial_(next_world_serial.fetch_add(1)), state_(compile_method(model_, options_)) {
+    : model_(std::move(model)), options_(std::move(options)), serial_(next_world_serial.fetch_add(1)),
+      internals_(std::make_unique<WorldInternals>(WorldInternals{compile_method(model_, options_), {}})) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
@@ -54,8 +57,13 @@ World::World(Model model, WorldOptions options)
   reset_loads();
   for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
   transport_frames();
-  divergence_ = divergence_bounds(model_, observe());
+  internals_->divergence = divergence_bounds(model_, observe());
 }
+
+World::World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
+World::~World() = default;
+World::World(World&&) noexcept = default;
+World& World::operator=(World&&) noexcept = default;
 
 // Sizes the per-body loads after a (re)compile, all zero.
 void World::reset_loads() {
@@ -71,15 +79,15 @@ void World::transport_frames() {
           for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
         }
       },
-      state_);
+      internals_->state);
 }
 
 double World::time() const {
-  return std::visit([](const auto& state) { return state.time; }, state_);
+  return std::visit([](const auto& state) { return state.time; }, internals_->state);
 }
 
 Observation World::observe() const {
-  return std::visit([](const auto& state) { return limber::observe(state); }, state_);
+  return std::visit([](const auto& state) { return limber::observe(state); }, internals_->state);
 }
 
 void World::segments(std::vector<LimbSegment>& out) const {
@@ -91,7 +99,7 @@ void World::segments(std::vector<LimbSegment>& out) const {
           limb_segments(static_cast<const RigidScene&>(state), model_, out);
         }
       },
-      state_);
+      internals_->state);
 }
 
 // --- Handles
@@ -166,9 +174,9 @@ void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const 
 // --- Stepping
 
 StepStatus World::step(double dt) {
-  const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, state_);
+  const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, internals_->state);
   if (!valid_time_step(dt, minimum)) {  // the method's guard refuses it and records the refusal
-    return std::visit([&](auto& state) { return limber::step(state, dt).status; }, state_);
+    return std::visit([&](auto& state) { return limber::step(state, dt).status; }, internals_->state);
   }
   // This step's loads: forces and torques, and impulses as their force over the step.
   for (std::size_t b = 0; b < load_force_.size(); ++b) {
@@ -186,12 +194,12 @@ StepStatus World::step(double dt) {
         }
         return limber::step(state, dt).status;
       },
-      state_);
+      internals_->state);
   if (status == StepStatus::ok) {
-    status = check_divergence(observe(), divergence_);
-    std::visit([&](auto& state) { state.last_report.status = status; }, state_);
+    status = check_divergence(observe(), internals_->divergence);
+    std::visit([&](auto& state) { state.last_report.status = status; }, internals_->state);
   }
-  if (release_drives_after_impact(state_)) {  // keep the Model's drives as the state's, for recompiles
+  if (release_drives_after_impact(internals_->state)) {  // keep the Model's drives as the state's, for recompiles
     for (Joint& joint : model_.joints) {
       if (joint.drive) joint.drive->stiffness = joint.drive->damping = 0;
     }
@@ -217,12 +225,40 @@ Pose World::pose(BodyId body) const {
           return world_bodies::rigid_pose(state, b);
         }
       },
-      state_);
+      internals_->state);
 }
 
 Motion World::motion(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit([&](const auto& state) { return world_bodies::motion(state, b); }, state_);
+  return std::visit([&](const auto& state) { return world_bodies::motion(state, b); }, internals_->state);
+}
+
+void World::poses(std::span<Pose> out) const {
+  if (out.size() != model_.bodies.size()) {
+    throw WorldError("poses: takes one Pose a body, " + std::to_string(model_.bodies.size()) + "; got " + std::to_string(out.size()));
+  }
+  std::visit(
+      [&](const auto& state) {
+        for (std::size_t b = 0; b < out.size(); ++b) {
+          if constexpr (kParticles<std::decay_t<decltype(state)>>) {
+            out[b] = world_bodies::particle_pose(state, b, limb_frame_[b]);
+          } else {
+            out[b] = world_bodies::rigid_pose(state, b);
+          }
+        }
+      },
+      internals_->state);
+}
+
+void World::motions(std::span<Motion> out) const {
+  if (out.size() != model_.bodies.size()) {
+    throw WorldError("motions: takes one Motion a body, " + std::to_string(model_.bodies.size()) + "; got " + std::to_string(out.size()));
+  }
+  std::visit(
+      [&](const auto& state) {
+        for (std::size_t b = 0; b < out.size(); ++b) out[b] = world_bodies::motion(state, b);
+      },
+      internals_->state);
 }
 
 // --- Loads
@@ -232,7 +268,7 @@ Motion World::motion(BodyId body) const {
 void World::add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point,
                          std::vector<Eigen::Vector3d>& linear, std::vector<Eigen::Vector3d>& angular) {
   const std::size_t b = index(body);
-  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, state_);
+  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, internals_->state);
   linear[b] += amount;
   angular[b] += (world_point - centre).cross(amount);
   wake(body);
@@ -289,7 +325,7 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
           state.joint_controls.joints[k].drive = drive;
         }
       },
-      state_);
+      internals_->state);
   wake(body_id(static_cast<std::size_t>(model_.joints[k].outboard)));
 }
 
@@ -301,7 +337,7 @@ PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
     refuse("pin", "holds points only through joints of its tree: a joint to the world added while the tree moves would re-root it; put the joint in the Model");
   }
   const std::size_t b = index(body);
-  const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, state_);
+  const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, internals_->state);
   Joint joint = spherical_joint("pin " + std::to_string(next_pin_), kWorld, static_cast<int>(b), world_point, local_point);
   const JointId id = add_joint(joint);
   pins_[next_pin_] = Pin{id, std::nullopt};
@@ -330,14 +366,14 @@ void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
 
 Eigen::Vector3d World::pin_position(PinId pin) const {
   const JointId joint = pin_entry(pin, "pin_position").joint;
-  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(joint)); }, state_);
+  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(joint)); }, internals_->state);
 }
 
 // --- Sleeping
 
 void World::wake(BodyId body) {
   const std::size_t b = index(body);
-  std::visit([&](auto& state) { world_bodies::wake(state, b); }, state_);
+  std::visit([&](auto& state) { world_bodies::wake(state, b); }, internals_->state);
 }
 
 void World::wake_all() {
@@ -345,17 +381,17 @@ void World::wake_all() {
 }
 
 const StepReport& World::last_report() const {
-  return std::visit([](const auto& state) -> const StepReport& { return state.last_report; }, state_);
+  return std::visit([](const auto& state) -> const StepReport& { return state.last_report; }, internals_->state);
 }
 
 void World::sleep(BodyId body) {
   const std::size_t b = index(body);
-  std::visit([&](auto& state) { world_bodies::sleep(state, b); }, state_);
+  std::visit([&](auto& state) { world_bodies::sleep(state, b); }, internals_->state);
 }
 
 bool World::sleeping(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit([&](const auto& state) { return world_bodies::sleeping(state, b); }, state_);
+  return std::visit([&](const auto& state) { return world_bodies::sleeping(state, b); }, internals_->state);
 }
 
 // --- Teleport
@@ -386,8 +422,8 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
         }
         world_bodies::wake(state, b);
       },
-      state_);
-  divergence_.start_energy = observe().energy();  // a teleport may put energy in: measure from here
+      internals_->state);
+  internals_->divergence.start_energy = observe().energy();  // a teleport may put energy in: measure from here
 }
 
 // --- Structure
@@ -541,7 +577,7 @@ BallMotion World::ball(BallId ball) const {
           return {state.bodies.state.position[b], state.bodies.linear_velocity(state.bodies.state, b)};
         }
       },
-      state_);
+      internals_->state);
 }
 
 // Compiles `edited` and carries across, for every body whose old index is old_body_of_new[b]
@@ -555,11 +591,11 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
   } else {
     survivors.balls = first_bodies_kept(edited.balls.size(), std::min(edited.balls.size(), model_.balls.size()));
   }
-  State next = compile_method(edited, options_);
+  MethodState next = compile_method(edited, options_);
   std::visit(
       [&](auto& fresh) {
         using State = std::decay_t<decltype(fresh)>;
-        const State& old = std::get<State>(state_);
+        const State& old = std::get<State>(internals_->state);
         if constexpr (std::is_same_v<State, FeatherstoneState>) {
           std::string problem;
           if (!world_bodies::carry_state(old, model_, fresh, edited, survivors, problem)) refuse("a structural edit", problem);
@@ -572,12 +608,12 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
   for (std::size_t b = 0; b < edited.bodies.size(); ++b) {
     frames[b] = old_body_of_new[b] >= 0 ? limb_frame_[static_cast<std::size_t>(old_body_of_new[b])] : edited.bodies[b].orientation();
   }
-  state_ = std::move(next);
+  internals_->state = std::move(next);
   model_ = edited;
   reset_loads();
   limb_frame_ = std::move(frames);
   transport_frames();
-  divergence_ = divergence_bounds(model_, observe());
+  internals_->divergence = divergence_bounds(model_, observe());
 }
 
 }  // namespace limber

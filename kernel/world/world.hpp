@@ -23,25 +23,28 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 #include <unordered_map>
-#include <variant>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "limber/kernel/metrics/divergence.hpp"
-#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/metrics/observation.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/options.hpp"
 #include "limber/kernel/model/step_status.hpp"
-#include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 
 namespace limber {
+
+struct LimbSegment;    // kernel/geometry/limb_collisions.hpp
+struct WorldInternals;  // kernel/world/world_internals.hpp: the method's state
 
 /// A call the world's method cannot do, or a bad argument (an unknown handle, a non-finite
 /// vector). what() is one line naming the call and, where it is the method's limit, the method.
@@ -107,8 +110,11 @@ class World {
   /// that do not go together.
   explicit World(Model model, WorldOptions options = {});
   /// A loaded scene under `method`, with the method settings the scene gives
-  /// (world_options(method, scene.methods)).
-  World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
+  /// (world_options(method, scene.methods), kernel/model/options.hpp).
+  World(const Scene& scene, Method method);
+  ~World();
+  World(World&&) noexcept;
+  World& operator=(World&&) noexcept;
 
   /// One step of dt seconds (the Model's time step without an argument), of any length from the
   /// method's minimum (kMinimumTimeStep, 10⁻⁹ s; float particles: substeps of 1 µs) up: a short
@@ -143,6 +149,12 @@ class World {
   // --- Reading ---
   Pose pose(BodyId body) const;
   Motion motion(BodyId body) const;
+  /// Every body's pose (motion) into `out`, in Model order (bodies()), in one call: the same
+  /// values pose() (motion()) gives one at a time, as an engine's render arrays take them
+  /// (MuJoCo's xpos and xquat). Throws WorldError, writing nothing, when out.size() is not the
+  /// number of bodies.
+  void poses(std::span<Pose> out) const;
+  void motions(std::span<Motion> out) const;
 
   // --- Loads over the next step (each wakes the body's island) ---
   /// A force (N) at a world point (m). Particle limbs take what particles can: the force at the
@@ -225,9 +237,10 @@ class World {
   std::size_t index(ColliderId collider) const;
   std::size_t index(BallId ball) const;
 
-  /// The method's state, for what the World does not wrap (observers, counters).
-  using State = MethodState;
-  const State& state() const { return state_; }
+  /// The method's state and the World's divergence bounds, for what the World does not wrap
+  /// (observers, counters): limber's own tools read them through
+  /// kernel/world/world_internals.hpp, which includes the whole kernel.
+  const WorldInternals& internals() const { return *internals_; }
 
  private:
   struct Pin {
@@ -255,7 +268,7 @@ class World {
   Model model_;
   WorldOptions options_;
   std::uint32_t serial_;  // this World's, in every handle it issues
-  State state_;
+  std::unique_ptr<WorldInternals> internals_;  // the method's state, the divergence bounds
   // Handles ↔ Model indices.
   std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
   std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;
@@ -267,7 +280,6 @@ class World {
   std::unordered_map<std::uint32_t, std::size_t> ball_index_;
   std::uint32_t next_ball_handle_ = 0;
   std::unordered_map<std::uint32_t, Pin> pins_;
-  DivergenceBounds divergence_;  // from the start, the last structural edit or teleport
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.
   std::vector<Eigen::Vector3d> load_force_, load_torque_, impulse_force_, impulse_torque_;

@@ -23,16 +23,9 @@
 
 #include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
 #include "limber/layouts/graph/compressed_rows.hpp"
+#include "limber/layouts/layout_choices.hpp"
 
 namespace limber {
-
-/// How particles are numbered inside each island.
-enum class ParticleOrder : std::uint8_t {
-  breadth_first,          ///< from the island's root (compile's own order)
-  depth_parity,           ///< red-black: even breadth-first depth, then odd (the default)
-  reverse_cuthill_mckee,  ///< bandwidth-reducing
-  shuffled,               ///< no locality (the baseline of the cache study)
-};
 
 /// Reverse Cuthill-McKee order of particles [begin, end), whose neighbours (all inside the
 /// range) are `adjacency.row(p)`. Returns the particles in their new order (a permutation of

@@ -7,17 +7,10 @@
 #include <cstdint>
 
 #include "limber/layouts/aligned_array.hpp"
+#include "limber/layouts/layout_choices.hpp"
 #include "limber/layouts/particles/particle_buffer.hpp"
 
 namespace limber {
-
-/// How particle fields are laid out in memory.
-enum class ParticleLayout : std::uint8_t {
-  soa,    ///< one array per field (ParticleBuffer): a SIMD load takes consecutive particles
-  aos,    ///< one record per particle: x y z w (16 bytes in float, 32 in double)
-  aosoa,  ///< blocks of kLanesPerLine particles, one line per field inside a block
-  automatic,  ///< the relaxation picks soa or aos from how its blocks load (relaxation.cpp)
-};
 
 /// Particles interleaved in blocks of `Width` particles: a block holds, for each of the 4 record
 /// fields (position x, y, z and inverse mass w — what relaxation reads; the previous positions

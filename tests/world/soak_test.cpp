@@ -27,6 +27,7 @@
 
 #include <gtest/gtest.h>
 
+#include "limber/kernel/geometry/limb_collisions.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
 

@@ -10,7 +10,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "limber/kernel/world/world.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {
@@ -100,7 +100,7 @@ TEST(WorldHostile, AShortStepAmongLongOnesKeepsTheEnergy) {
     for (const double h : {1e-3, 1e-5, 1e-7, 1e-9}) {
       World world(scene.model, configuration.options);
       for (int k = 0; k < 120; ++k) world.step(1.0 / 240);
-      const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, world.state());
+      const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, world.internals().state);
       if (h < minimum) {
         EXPECT_EQ(world.step(h), StepStatus::invalid_time_step) << configuration.label << " h " << h;
       } else {

@@ -245,6 +245,34 @@ TEST(World, TransformsAreContinuousInTime) {
   }
 }
 
+// The bulk read-outs give, in Model order, the bits of the one-body calls, for every method,
+// and refuse a span of the wrong size without writing into it.
+TEST(World, BulkPosesAndMotionsAreTheOneBodyCallsBits) {
+  const Model model = make_chain({1, 1, 1, 2}, 0.2, true);
+  for (const Method method : kMethods) {
+    World world(model, options_for(method));
+    world.apply_impulse(world.bodies().back(), Vector3(0.3, 0.1, 0), world.pose(world.bodies().back()).position);
+    for (int s = 0; s < 30; ++s) ASSERT_EQ(world.step(1.0 / 480), StepStatus::ok) << name(method) << " step " << s;
+    std::vector<Pose> poses(model.bodies.size());
+    std::vector<Motion> motions(model.bodies.size());
+    world.poses(poses), world.motions(motions);
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const BodyId body = world.bodies()[k];
+      const Pose one = world.pose(body);
+      const Motion moving = world.motion(body);
+      EXPECT_EQ(poses[k].position, one.position) << name(method) << " body " << k;
+      EXPECT_EQ(poses[k].orientation.coeffs(), one.orientation.coeffs()) << name(method) << " body " << k;
+      EXPECT_EQ(motions[k].linear, moving.linear) << name(method) << " body " << k;
+      EXPECT_EQ(motions[k].angular, moving.angular) << name(method) << " body " << k;
+    }
+    std::vector<Pose> short_by_one(model.bodies.size() - 1, Pose{Vector3(7, 7, 7), Eigen::Quaterniond::Identity()});
+    EXPECT_THROW(world.poses(short_by_one), WorldError) << name(method);
+    EXPECT_EQ(short_by_one.front().position, Vector3(7, 7, 7)) << name(method) << ": nothing written";
+    std::vector<Motion> too_many(model.bodies.size() + 1);
+    EXPECT_THROW(world.motions(too_many), WorldError) << name(method);
+  }
+}
+
 TEST(World, StructuralEditsCarryUntouchedBodiesBitForBit) {
   // Two chains in one world; after some steps, remove a body of the second and add one: the
   // first chain's poses and motions are the same bits before and after each edit.

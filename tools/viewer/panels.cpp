@@ -9,6 +9,8 @@
 
 #include <imgui.h>
 
+#include "limber/kernel/world/world_internals.hpp"
+
 namespace limber::viewer {
 namespace {
 
@@ -31,7 +33,7 @@ void sync(const ViewState& view, PanelState& panel) {
           panel.projection = state.options.relaxation.projection == ProjectionRule::rattle ? 1 : 0;
         }
       },
-      world.state());
+      world.internals().state);
   if (world.model().ground) panel.friction = float(world.model().ground->friction);
 }
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 #include "tools/cli/trajectory.hpp"
 
 namespace limber::viewer {
@@ -88,8 +89,8 @@ void ViewState::build_world(std::optional<World> compiled) {
   trajectory_.reset();  // a reset starts the trajectory again
   if (!loaded_.out_path.empty()) {
     trajectory_.emplace(loaded_.out_path, "--out", std::vector<std::filesystem::path>{loaded_.scene_path});
-    cli::write_trajectory_header(trajectory_->stream(), world_->model(), world_->state());
-    cli::write_trajectory_row(trajectory_->stream(), world_->state());
+    cli::write_trajectory_header(trajectory_->stream(), world_->model(), world_->internals().state);
+    cli::write_trajectory_row(trajectory_->stream(), world_->internals().state);
   }
 }
 
@@ -132,7 +133,7 @@ void ViewState::step_once() {
   world_->step();
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - before).count();
   ++steps_taken_;
-  if (trajectory_) cli::write_trajectory_row(trajectory_->stream(), world_->state());
+  if (trajectory_) cli::write_trajectory_row(trajectory_->stream(), world_->internals().state);
   record(ms);
 }
 

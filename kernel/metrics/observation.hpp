@@ -1,0 +1,32 @@
+// What an observer reads off a state after a step (observers.hpp computes it for every method):
+// plain values, in a header that includes no state type.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "limber/kernel/model/joint_coordinates.hpp"
+
+namespace limber {
+
+struct Observation {
+  double time = 0;                 ///< s
+  /// Joint gaps |x_inboard − x_outboard| relative to the mean length of the two limbs joined
+  /// (the outboard limb's for a joint to the world); 0 with shared-particle joints.
+  double max_joint_gap = 0, rms_joint_gap = 0;
+  /// Largest relative link stretch | |x_head − x_tail| − L | / L.
+  double max_link_stretch = 0;
+  Eigen::Vector3d body_centre_of_mass = Eigen::Vector3d::Zero();  ///< of the limbs (not the ball), m
+  Eigen::Vector3d linear_momentum = Eigen::Vector3d::Zero();      ///< everything, kg·m/s
+  double kinetic_energy = 0;    ///< J; particles: v = (x − x*)/Δt of the last step (pbd) or the state's v (rattle)
+  double potential_energy = 0;  ///< J, −Σ m g·x (zero at the origin)
+  int islands = 0, islands_sleeping = 0;
+  bool body_sleeping = false;   ///< every limb island asleep
+  /// The joints' limits and drives (joint_coordinates.hpp, measured alike for every method):
+  /// the largest violation of a limit (rad; m for a prismatic range) and the largest distance
+  /// from a drive's target, over the joints that have them.
+  JointMeasures joints;
+
+  double energy() const { return kinetic_energy + potential_energy; }
+};
+
+}  // namespace limber

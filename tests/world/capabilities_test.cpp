@@ -1,0 +1,99 @@
+// The capability table (kernel/methods/capabilities.hpp) says what each method compiles, and
+// the README's status table says the same: each joint type compiles under a method exactly
+// when the table says so, and the README's row for the method names exactly those joint types
+// and, for precision, float exactly when the table allows it.
+#include <array>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "limber/kernel/methods/capabilities.hpp"
+#include "limber/kernel/methods/method.hpp"
+#include "tests/support/models.hpp"
+
+namespace limber {
+namespace {
+
+constexpr std::array<JointType, 5> kJointTypes{JointType::spherical, JointType::revolute, JointType::prismatic, JointType::universal,
+                                               JointType::fixed};
+
+// Two rods end to end along +x, the first's head held at the origin (a spherical joint to the
+// world), the second's head at the first's tail by a joint of `type` (axis y, second axis z).
+Model two_rods(JointType type) {
+  Model model = testing::rod_held_at_head(JointType::spherical);
+  Body second = model.bodies[0];
+  second.name = "second";
+  second.position = Eigen::Vector3d(1.5, 0, 0);
+  model.bodies.push_back(second);
+  Joint joint = spherical_joint("joint", 0, 1, Eigen::Vector3d(0, 0, -0.5), Eigen::Vector3d(0, 0, 0.5));
+  joint.type = type;
+  joint.axis = Eigen::Vector3d::UnitY();
+  joint.second_axis = Eigen::Vector3d::UnitZ();
+  model.joints.push_back(joint);
+  return model;
+}
+
+bool compiles(Method method, JointType type, bool single_precision = false) {
+  WorldOptions options;
+  options.method = method;
+  options.single_precision = single_precision;
+  try {
+    compile_method(two_rods(type), options);
+    return true;
+  } catch (const ModelError&) {
+    return false;
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+}
+
+// The README's status table row whose first cell starts with the method's name and a colon,
+// split into its cells.
+std::vector<std::string> readme_row(std::string_view method) {
+  std::ifstream readme(std::string(LIMBER_SOURCE_DIR) + "/README.md");
+  std::string line;
+  const std::string lead = "| " + std::string(method) + ":";
+  while (std::getline(readme, line)) {
+    if (line.rfind(lead, 0) != 0) continue;
+    std::vector<std::string> cells;
+    std::stringstream row(line.substr(1));
+    for (std::string cell; std::getline(row, cell, '|');) cells.push_back(cell);
+    return cells;
+  }
+  return {};
+}
+
+TEST(Capabilities, EachJointTypeCompilesExactlyWhereTheTableSaysSo) {
+  for (const MethodCapabilities& entry : kMethodCapabilities) {
+    for (const JointType type : kJointTypes) {
+      EXPECT_EQ(compiles(entry.method, type), supports(entry.method, type))
+          << method_name(entry.method) << ", " << joint_type_name(type);
+    }
+    EXPECT_EQ(compiles(entry.method, JointType::spherical, true), entry.single_precision) << method_name(entry.method) << " in float";
+  }
+}
+
+TEST(Capabilities, TheReadmeStatusTableSaysWhatTheTableSays) {
+  const std::pair<Method, std::string_view> rows[] = {
+      {Method::particles, "particles"}, {Method::springs, "springs"}, {Method::lagrange, "lagrange"}, {Method::featherstone, "featherstone"}};
+  for (const auto& [method, name] : rows) {
+    const std::vector<std::string> cells = readme_row(name);
+    ASSERT_GE(cells.size(), 6u) << "README.md has no status row for " << name;
+    const std::string& joints = cells[1];
+    for (const JointType type : kJointTypes) {
+      const bool named = joints.find(joint_type_name(type)) != std::string::npos;
+      EXPECT_EQ(named, supports(method, type)) << name << "'s joints cell, " << joint_type_name(type) << ": " << joints;
+    }
+    EXPECT_EQ(cells[4].find("float") != std::string::npos, capabilities(method).single_precision) << name << "'s precision: " << cells[4];
+    EXPECT_EQ(cells[5].find("1–n") != std::string::npos, capabilities(method).threads) << name << "'s threads: " << cells[5];
+  }
+}
+
+}  // namespace
+}  // namespace limber
