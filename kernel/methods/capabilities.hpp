@@ -21,6 +21,7 @@ struct MethodCapabilities {
   bool threads;           ///< steps on more than one thread (VerletOptions::threads)
 };
 
+/// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
     //                        spherical revolute prismatic universal fixed
     {Method::particles,    {true, true, false, true, true}, true, true},
@@ -28,13 +29,13 @@ inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
     {Method::lagrange,     {true, true, true, true, true}, false, false},
     {Method::featherstone, {true, true, true, false, true}, false, false},
 }};
+static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
+                  kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&
+                  kMethodCapabilities[static_cast<std::size_t>(Method::lagrange)].method == Method::lagrange &&
+                  kMethodCapabilities[static_cast<std::size_t>(Method::featherstone)].method == Method::featherstone,
+              "kMethodCapabilities is in Method's order");
 
-constexpr const MethodCapabilities& capabilities(Method method) {
-  for (const MethodCapabilities& entry : kMethodCapabilities) {
-    if (entry.method == method) return entry;
-  }
-  return kMethodCapabilities[0];  // unreachable: every Method has a row
-}
+constexpr const MethodCapabilities& capabilities(Method method) { return kMethodCapabilities[static_cast<std::size_t>(method)]; }
 
 constexpr bool supports(Method method, JointType type) { return capabilities(method).joints[static_cast<std::size_t>(type)]; }
 

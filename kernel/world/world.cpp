@@ -215,17 +215,30 @@ StepStatus World::step(double dt) {
 
 // --- Reading
 
+namespace {
+
+// Body b's pose in `state`: a particle limb's carries its transported frame.
+template <typename State>
+Pose body_pose(const State& state, std::size_t b, const std::vector<Eigen::Quaterniond>& limb_frame) {
+  if constexpr (kParticles<State>) {
+    return world_bodies::particle_pose(state, b, limb_frame[b]);
+  } else {
+    return world_bodies::rigid_pose(state, b);
+  }
+}
+
+// A bulk read-out's span has one entry a body, or the call is refused.
+void check_bulk_size(std::string_view call, std::string_view entry, std::size_t bodies, std::size_t size) {
+  if (size != bodies) {
+    throw WorldError(std::string(call) + ": takes one " + std::string(entry) + " a body, " + std::to_string(bodies) + "; got " + std::to_string(size));
+  }
+}
+
+}  // namespace
+
 Pose World::pose(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit(
-      [&](const auto& state) {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          return world_bodies::particle_pose(state, b, limb_frame_[b]);
-        } else {
-          return world_bodies::rigid_pose(state, b);
-        }
-      },
-      internals_->state);
+  return std::visit([&](const auto& state) { return body_pose(state, b, limb_frame_); }, internals_->state);
 }
 
 Motion World::motion(BodyId body) const {
@@ -234,26 +247,16 @@ Motion World::motion(BodyId body) const {
 }
 
 void World::poses(std::span<Pose> out) const {
-  if (out.size() != model_.bodies.size()) {
-    throw WorldError("poses: takes one Pose a body, " + std::to_string(model_.bodies.size()) + "; got " + std::to_string(out.size()));
-  }
+  check_bulk_size("poses", "Pose", model_.bodies.size(), out.size());
   std::visit(
       [&](const auto& state) {
-        for (std::size_t b = 0; b < out.size(); ++b) {
-          if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-            out[b] = world_bodies::particle_pose(state, b, limb_frame_[b]);
-          } else {
-            out[b] = world_bodies::rigid_pose(state, b);
-          }
-        }
+        for (std::size_t b = 0; b < out.size(); ++b) out[b] = body_pose(state, b, limb_frame_);
       },
       internals_->state);
 }
 
 void World::motions(std::span<Motion> out) const {
-  if (out.size() != model_.bodies.size()) {
-    throw WorldError("motions: takes one Motion a body, " + std::to_string(model_.bodies.size()) + "; got " + std::to_string(out.size()));
-  }
+  check_bulk_size("motions", "Motion", model_.bodies.size(), out.size());
   std::visit(
       [&](const auto& state) {
         for (std::size_t b = 0; b < out.size(); ++b) out[b] = world_bodies::motion(state, b);
