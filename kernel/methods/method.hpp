@@ -1,6 +1,6 @@
 // The one method dispatch: which of the four methods, its options, and its compiled state. The
-// World, the studies (kernel/study/) and the command line all compile through compile_method;
-// every state then steps with limber::step(state, dt) and reads with limber::observe(state).
+// World compiles through compile_method and steps each state with limber::step(state, dt); the
+// command line, the viewer and the studies step through the World (kernel/world/world.hpp).
 #pragma once
 
 #include <cstdint>

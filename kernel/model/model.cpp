@@ -237,7 +237,7 @@ void validate_joint_controls(const Joint& joint, const Model& model, const Path&
   }
 }
 
-void validate_joint(const Joint& joint, const Model& model, std::size_t index) {
+void check_joint(const Joint& joint, const Model& model, std::size_t index) {
   const std::size_t body_count = model.bodies.size();
   const auto path = field_path("joints", index);
   require_name(joint.name, path("name"), /*is_body=*/false);
@@ -348,7 +348,7 @@ void validate_settings(const Settings& settings) {
 void validate(const Model& model) {
   for (std::size_t i = 0; i < model.bodies.size(); ++i) validate_body(model.bodies[i], i);
   require_unique_names(model.bodies, [](const Body& body) -> std::string_view { return body.name; }, "bodies");
-  for (std::size_t i = 0; i < model.joints.size(); ++i) validate_joint(model.joints[i], model, i);
+  for (std::size_t i = 0; i < model.joints.size(); ++i) check_joint(model.joints[i], model, i);
   require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
   for (std::size_t i = 0; i < model.gears.size(); ++i) validate_gear(model.gears[i], model.bodies.size(), i);
   require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
@@ -402,7 +402,9 @@ void require_joint_types(const Model& model, std::initializer_list<JointType> su
   }
 }
 
-void validate_joint(const Model& model, std::size_t index) { validate_joint(model.joints.at(index), model, index); }
+void validate_joint(const Model& model, std::size_t index) { check_joint(model.joints.at(index), model, index); }
+
+void validate_joint(const Joint& joint, const Model& model, std::size_t index) { check_joint(joint, model, index); }
 
 void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method) {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {

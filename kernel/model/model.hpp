@@ -387,6 +387,9 @@ void validate(const Model& model);
 /// Checks joint `index` of `model` alone, as validate() does (its bodies must exist). Throws
 /// ModelError naming the field. For a change to one joint between steps (World::set_joint_drive).
 void validate_joint(const Model& model, std::size_t index);
+/// Checks `joint` as if it were joint `index` of `model` (whose bodies it names), leaving
+/// `model` as it is: for a joint the World holds a changed copy of (its current drive).
+void validate_joint(const Joint& joint, const Model& model, std::size_t index);
 
 /// Throws ModelError naming the first joint whose type is not in `supported`, or the first gear
 /// when `gears_supported` is false: "joints[3] 'knee': the <method> method does not support

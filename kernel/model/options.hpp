@@ -194,6 +194,11 @@ struct WorldOptions {
   SpringOptions springs{};
   LagrangeOptions lagrange{};
   FeatherstoneOptions featherstone{};
+  /// After each step, the checks every method shares (metrics/divergence.hpp: a non-finite
+  /// number, energy gained past its bound, a joint come apart) turn an ok status into a
+  /// divergence. The studies turn them off: they run on past such a step and classify the run
+  /// themselves (study/run_metrics.hpp). The method's own guard runs either way.
+  bool divergence_check = true;
 };
 
 /// Default options for `method` that carry a scene's method settings (a scene file's

@@ -3,17 +3,15 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "limber/kernel/featherstone/step.hpp"
-#include "limber/kernel/lagrange/step.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
-#include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 
 namespace limber::study {
 
 WorldOptions configure(const MethodSettings& scene, const Method& method) {
   WorldOptions options{.method = method.family, .single_precision = false, .particles = method.verlet,
-                       .springs = method.springs, .lagrange = method.lagrange, .featherstone = method.featherstone};
+                       .springs = method.springs, .lagrange = method.lagrange, .featherstone = method.featherstone,
+                       .divergence_check = false};
   options.particles.relaxation = {.iterations = method.sweeps, .tolerance = method.relaxation_tolerance, .budget_us = 0,
                                   .over_relaxation = method.over_relaxation, .projection = method.projection,
                                   .substeps = method.substeps};
@@ -34,30 +32,22 @@ Model at_time_step(Model model, double time_step) {
 }  // namespace
 
 Simulation::Simulation(const Scene& scene, const Method& method)
-    : model_(at_time_step(scene.model, method.time_step)),
-      time_step_(method.time_step),
-      state_(compile_method(model_, configure(scene.methods, method))) {}
+    : time_step_(method.time_step), world_(at_time_step(scene.model, method.time_step), configure(scene.methods, method)) {}
 
 StepStatus Simulation::step() {
-  return std::visit(
-      [&](auto& state) {
-        const auto report = limber::step(state, time_step_);
-        if constexpr (requires { report.fallbacks; }) fallbacks_ += report.fallbacks;
-        return report.status;
-      },
-      state_);
+  const StepStatus status = world_.step(time_step_);
+  fallbacks_ += world_.last_report().fallbacks;
+  return status;
 }
 
-Observation Simulation::observe() const {
-  return std::visit([](const auto& state) { return limber::observe(state); }, state_);
-}
+Observation Simulation::observe() const { return world_.observe(); }
 
-double Simulation::time() const {
-  return std::visit([](const auto& state) { return state.time; }, state_);
-}
+double Simulation::time() const { return world_.time(); }
 
 void Simulation::limb_points(std::vector<Eigen::Vector3d>& points) const {
   points.clear();
+  const Model& model_ = world_.model();
+  const MethodState& state_ = world_.internals().state;
   if (const auto* verlet = std::get_if<VerletState<double>>(&state_)) {
     for (std::size_t body = 0; body < model_.bodies.size(); ++body) {
       const std::uint32_t limb = verlet->body_limb[body];

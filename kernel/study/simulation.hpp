@@ -3,9 +3,11 @@
 //
 // A Method names a family (weighted or unweighted Verlet relaxation, stiff springs, Lagrange
 // multipliers, Featherstone) and that family's settings; configure() turns them and the scene's
-// method settings into the one dispatch's options, and Simulation compiles the Model with them
-// and steps it. Nothing here changes the physics of a
-// method: a Simulation steps exactly what `limber run` with the same flags steps.
+// method settings into the one dispatch's options, and Simulation steps the Model with them
+// through a World (the one step path). Nothing here changes the physics of a method: a
+// Simulation steps exactly what `limber run` with the same flags steps. It turns the World's
+// shared divergence check off (WorldOptions::divergence_check): a study runs on past such a step
+// and classifies the run itself (run_metrics.hpp).
 #pragma once
 
 #include <optional>
@@ -15,11 +17,11 @@
 
 #include <Eigen/Core>
 
-#include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/world/world.hpp"
 
 namespace limber::study {
 
@@ -51,7 +53,7 @@ struct Method {
 };
 
 /// `method` as the one dispatch's options (double precision): the scene's method settings, then
-/// the relaxation and particle settings `method` gives.
+/// the relaxation and particle settings `method` gives; the World's divergence check off.
 WorldOptions configure(const MethodSettings& scene, const Method& method);
 
 /// A compiled Model stepping under one method (double precision).
@@ -71,7 +73,8 @@ class Simulation {
   Observation observe() const;
   double time() const;
   double time_step() const { return time_step_; }
-  const Model& model() const { return model_; }
+  const Model& model() const { return world_.model(); }
+  const World& world() const { return world_; }
 
   /// Every limb's head and tail, world, m: 2 points per Model body that is a limb (Model order,
   /// head first; the ball is left out). The particle methods' head and tail particles, the rigid
@@ -80,10 +83,9 @@ class Simulation {
   void limb_points(std::vector<Eigen::Vector3d>& points) const;
 
  private:
-  Model model_;
   double time_step_ = 0;
   std::uint64_t fallbacks_ = 0;
-  MethodState state_;
+  World world_;
 };
 
 }  // namespace limber::study

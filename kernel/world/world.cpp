@@ -47,7 +47,7 @@ std::atomic<std::uint32_t> next_world_serial{1};
 
 World::World(Model model, WorldOptions options)
     : model_(std::move(model)), options_(std::move(options)), serial_(next_world_serial.fetch_add(1)),
-      internals_(std::make_unique<WorldInternals>(WorldInternals{compile_method(model_, options_), {}})) {
+      internals_(std::make_unique<WorldInternals>(WorldInternals{compile_method(model_, options_), {}, {}})) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
   for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
@@ -174,43 +174,75 @@ void World::check_vector(const Eigen::Vector3d& v, std::string_view call) const 
 // --- Stepping
 
 StepStatus World::step(double dt) {
-  const double minimum = std::visit([](const auto& state) { return minimum_time_step(state); }, internals_->state);
+  MethodState& state = internals_->state;
+  const double minimum = std::visit([](const auto& s) { return minimum_time_step(s); }, state);
   if (!valid_time_step(dt, minimum)) {  // the method's guard refuses it and records the refusal
-    return std::visit([&](auto& state) { return limber::step(state, dt).status; }, internals_->state);
+    internals_->report = std::visit([&](auto& s) { return limber::step(s, dt); }, state);
+    return internals_->report.status;
   }
   // This step's loads: forces and torques, and impulses as their force over the step.
   for (std::size_t b = 0; b < load_force_.size(); ++b) {
     load_force_[b] += impulse_force_[b] / dt, load_torque_[b] += impulse_torque_[b] / dt;
     impulse_force_[b].setZero(), impulse_torque_[b].setZero();
   }
-  StepStatus status = std::visit(
-      [&](auto& state) {
+  StepReport report = std::visit(
+      [&](auto& s) {
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
-          world_bodies::apply_load(state, b, load_force_[b], load_torque_[b]);
+          world_bodies::apply_load(s, b, load_force_[b], load_torque_[b]);
         }
         for (const auto& [handle, pin] : pins_) {
-          if (pin.target) world_bodies::move_world_anchor(state, model_, index(pin.joint), *pin.target);
+          if (pin.target) world_bodies::move_world_anchor(s, model_, index(pin.joint), *pin.target);
         }
-        return limber::step(state, dt).status;
+        return limber::step(s, dt);
       },
-      internals_->state);
-  if (status == StepStatus::ok) {
-    status = check_divergence(observe(), internals_->divergence);
-    std::visit([&](auto& state) { state.last_report.status = status; }, internals_->state);
-  }
-  if (release_drives_after_impact(internals_->state)) {  // keep the Model's drives as the state's, for recompiles
-    for (Joint& joint : model_.joints) {
-      if (joint.drive) joint.drive->stiffness = joint.drive->damping = 0;
-    }
-  }
+      state);
+  // After the step, in this order: the shared divergence check, the drives' release, the frames.
+  if (report.status == StepStatus::ok && options_.divergence_check) report.status = check_divergence(observe(), internals_->divergence);
+  internals_->report = report;
+  if (release_drives_after_impact(state)) release_drives();
   transport_frames();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
   for (auto& [handle, pin] : pins_) {
-    if (pin.target) model_.joints[index(pin.joint)].inboard_anchor = *pin.target;
+    if (pin.target) pin.anchor = pin.target;  // where a recompile holds the point
     pin.target.reset();
   }
-  return status;
+  return report.status;
+}
+
+// The state has made every drive limp (release_drives_after_impact): so are the World's, which
+// a recompile reads. Allocates nothing: the drives set before are made limp where they are.
+void World::release_drives() {
+  drives_released_ = true;
+  for (auto& [handle, drive] : drives_) {
+    if (drive) drive->stiffness = drive->damping = 0;
+  }
+}
+
+std::optional<JointDrive> World::current_drive(std::size_t joint) const {
+  if (const auto set = drives_.find(joint_handle_[joint]); set != drives_.end()) return set->second;
+  std::optional<JointDrive> drive = model_.joints[joint].drive;
+  if (drive && drives_released_) drive->stiffness = drive->damping = 0;
+  return drive;
+}
+
+Model World::as_compiled(Model edited, const std::vector<std::uint32_t>& joint_handles) const {
+  if (drives_.empty() && pins_.empty() && !drives_released_) return edited;
+  std::unordered_map<std::uint32_t, std::size_t> joint_of_handle;
+  for (std::size_t j = 0; j < joint_handles.size(); ++j) {
+    if (joint_handles[j] == kNewJoint) continue;  // an added joint keeps its own drive
+    joint_of_handle[joint_handles[j]] = j;
+    std::optional<JointDrive>& drive = edited.joints[j].drive;
+    if (drive && drives_released_) drive->stiffness = drive->damping = 0;
+  }
+  for (const auto& [handle, drive] : drives_) {
+    if (const auto j = joint_of_handle.find(handle); j != joint_of_handle.end()) edited.joints[j->second].drive = drive;
+  }
+  for (const auto& [id, pin] : pins_) {
+    const auto j = joint_of_handle.find(pin.joint.value);
+    if (pin.anchor && j != joint_of_handle.end()) edited.joints[j->second].inboard_anchor = *pin.anchor;
+  }
+  return edited;
 }
 
 // --- Reading
@@ -305,20 +337,27 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
 
 void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& drive) {
   const std::size_t k = index(joint);
-  const std::optional<JointDrive> before = model_.joints[k].drive;
-  model_.joints[k].drive = drive;
+  Joint changed = model_.joints[k];
+  changed.drive = drive;
   try {
-    validate_joint(model_, k);  // this joint alone: a retarget per frame costs O(1)
+    validate_joint(changed, model_, k);  // this joint alone: a retarget per frame costs O(1)
   } catch (const ModelError& error) {
-    model_.joints[k].drive = before;
     throw WorldError(std::string("set_joint_drive: ") + error.what());
   }
-  if (before.has_value() != drive.has_value()) {  // a drive row appears or goes: recompile
-    const Model edited = model_;
-    model_.joints[k].drive = before;  // recompile carries state from the Model as it was
-    recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  if (current_drive(k).has_value() != drive.has_value()) {  // a drive row appears or goes: recompile
+    const auto before = drives_.find(joint.value);
+    const std::optional<std::optional<JointDrive>> kept = before == drives_.end() ? std::nullopt : std::optional(before->second);
+    drives_[joint.value] = drive;
+    try {
+      recompile(model_, first_bodies_kept(model_.bodies.size(), model_.bodies.size()), joint_handle_);
+    } catch (...) {  // nothing changes
+      if (kept) drives_[joint.value] = *kept;
+      else drives_.erase(joint.value);
+      throw;
+    }
     return;
   }
+  drives_[joint.value] = drive;
   if (!drive) return;
   std::visit(
       [&](auto& state) {
@@ -332,6 +371,8 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
   wake(body_id(static_cast<std::size_t>(model_.joints[k].outboard)));
 }
 
+std::optional<JointDrive> World::joint_drive(JointId joint) const { return current_drive(index(joint)); }
+
 // --- Held points
 
 PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
@@ -343,7 +384,7 @@ PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
   const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, internals_->state);
   Joint joint = spherical_joint("pin " + std::to_string(next_pin_), kWorld, static_cast<int>(b), world_point, local_point);
   const JointId id = add_joint(joint);
-  pins_[next_pin_] = Pin{id, std::nullopt};
+  pins_[next_pin_] = Pin{id, std::nullopt, std::nullopt};
   return PinId{next_pin_++, serial_};
 }
 
@@ -383,9 +424,7 @@ void World::wake_all() {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) wake(body_id(b));
 }
 
-const StepReport& World::last_report() const {
-  return std::visit([](const auto& state) -> const StepReport& { return state.last_report; }, internals_->state);
-}
+const StepReport& World::last_report() const { return internals_->report; }
 
 void World::sleep(BodyId body) {
   const std::size_t b = index(body);
@@ -434,7 +473,7 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
 BodyId World::add_body(const Body& body) {
   Model edited = model_;
   edited.bodies.push_back(body);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()), joint_handle_);
   body_handle_.push_back(next_body_handle_);
   body_index_[next_body_handle_] = edited.bodies.size() - 1;
   return BodyId{next_body_handle_++, serial_};
@@ -443,9 +482,12 @@ BodyId World::add_body(const Body& body) {
 JointId World::add_joint(const Joint& joint) {
   Model edited = model_;
   edited.joints.push_back(joint);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  std::vector<std::uint32_t> handles = joint_handle_;
+  handles.push_back(kNewJoint);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), handles);
   joint_handle_.push_back(next_joint_handle_);
   joint_index_[next_joint_handle_] = edited.joints.size() - 1;
+  if (drives_released_ && joint.drive) drives_[next_joint_handle_] = joint.drive;  // released before it came
   return JointId{next_joint_handle_++, serial_};
 }
 
@@ -453,7 +495,10 @@ void World::remove_joint(JointId joint) {
   const std::size_t j = index(joint);
   Model edited = model_;
   edited.joints.erase(edited.joints.begin() + static_cast<std::ptrdiff_t>(j));
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  std::vector<std::uint32_t> handles = joint_handle_;
+  handles.erase(handles.begin() + static_cast<std::ptrdiff_t>(j));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), handles);
+  drives_.erase(joint.value);
   joint_index_.erase(joint.value);
   joint_handle_.erase(joint_handle_.begin() + static_cast<std::ptrdiff_t>(j));
   for (std::size_t k = j; k < joint_handle_.size(); ++k) joint_index_[joint_handle_[k]] = k;
@@ -478,7 +523,7 @@ void World::remove_body(BodyId body) {
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) {
     if (b != removed) old_body_of_new.push_back(static_cast<std::int64_t>(b));
   }
-  recompile(edited, old_body_of_new);
+  recompile(edited, old_body_of_new, kept_joints);
   // Handles: the body's and its joints' are gone; the others move down.
   body_index_.erase(body.value);
   body_handle_.erase(body_handle_.begin() + static_cast<std::ptrdiff_t>(removed));
@@ -486,6 +531,7 @@ void World::remove_body(BodyId body) {
   std::erase_if(pins_, [&](const auto& entry) {
     return std::find(kept_joints.begin(), kept_joints.end(), entry.second.joint.value) == kept_joints.end();
   });
+  std::erase_if(drives_, [&](const auto& entry) { return std::find(kept_joints.begin(), kept_joints.end(), entry.first) == kept_joints.end(); });
   joint_index_.clear();
   joint_handle_ = kept_joints;
   for (std::size_t j = 0; j < joint_handle_.size(); ++j) joint_index_[joint_handle_[j]] = j;
@@ -496,7 +542,9 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
   Model edited = model_;
   const std::size_t base = model_.bodies.size();
   append_model(edited, other, prefix, offset);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()));
+  std::vector<std::uint32_t> handles = joint_handle_;
+  handles.resize(edited.joints.size(), kNewJoint);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()), handles);
   std::vector<BodyId> added;
   for (std::size_t b = base; b < edited.bodies.size(); ++b) {
     body_handle_.push_back(next_body_handle_);
@@ -504,6 +552,7 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
     added.push_back(BodyId{next_body_handle_++, serial_});
   }
   for (std::size_t j = model_.joints.size() - other.joints.size(); j < model_.joints.size(); ++j) {
+    if (drives_released_ && model_.joints[j].drive) drives_[next_joint_handle_] = model_.joints[j].drive;  // released before it came
     joint_handle_.push_back(next_joint_handle_);
     joint_index_[next_joint_handle_++] = j;
   }
@@ -514,7 +563,7 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
 ColliderId World::add_collider(const StaticCollider& collider) {
   Model edited = model_;
   edited.colliders.push_back(collider);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
   collider_handle_.push_back(next_collider_handle_);
   collider_index_[next_collider_handle_] = edited.colliders.size() - 1;
   return ColliderId{next_collider_handle_++, serial_};
@@ -524,7 +573,7 @@ void World::remove_collider(ColliderId collider) {
   const std::size_t c = index(collider);
   Model edited = model_;
   edited.colliders.erase(edited.colliders.begin() + static_cast<std::ptrdiff_t>(c));
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
   collider_index_.erase(collider.value);
   collider_handle_.erase(collider_handle_.begin() + static_cast<std::ptrdiff_t>(c));
   for (std::size_t k = c; k < collider_handle_.size(); ++k) collider_index_[collider_handle_[k]] = k;
@@ -535,7 +584,7 @@ void World::remove_collider(ColliderId collider) {
 BallId World::add_ball(const Ball& ball) {
   Model edited = model_;
   edited.balls.push_back(ball);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
   ball_handle_.push_back(next_ball_handle_);
   ball_index_[next_ball_handle_] = edited.balls.size() - 1;
   return BallId{next_ball_handle_++, serial_};
@@ -549,7 +598,7 @@ void World::remove_ball(BallId ball) {
   for (std::size_t old = 0; old < model_.balls.size(); ++old) {
     if (old != k) old_ball_of_new.push_back(static_cast<std::int64_t>(old));
   }
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), std::move(old_ball_of_new));
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_, std::move(old_ball_of_new));
   ball_index_.erase(ball.value);
   ball_handle_.erase(ball_handle_.begin() + static_cast<std::ptrdiff_t>(k));
   for (std::size_t j = k; j < ball_handle_.size(); ++j) ball_index_[ball_handle_[j]] = j;
@@ -587,14 +636,14 @@ BallMotion World::ball(BallId ball) const {
 // (−1: new), the state the old one had; then makes `edited` the model. Nothing changes when the
 // compile throws.
 void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
-                      std::optional<std::vector<std::int64_t>> old_ball_of_new) {
+                      const std::vector<std::uint32_t>& joint_handles, std::optional<std::vector<std::int64_t>> old_ball_of_new) {
   world_bodies::Survivors survivors{old_body_of_new, {}};
   if (old_ball_of_new) {
     survivors.balls = std::move(*old_ball_of_new);
   } else {
     survivors.balls = first_bodies_kept(edited.balls.size(), std::min(edited.balls.size(), model_.balls.size()));
   }
-  MethodState next = compile_method(edited, options_);
+  MethodState next = compile_method(as_compiled(edited, joint_handles), options_);
   std::visit(
       [&](auto& fresh) {
         using State = std::decay_t<decltype(fresh)>;

@@ -16,6 +16,12 @@
 // Model and carry every surviving body's and ball's state across bit for bit (positions,
 // velocities; islands wake).
 //
+// The World is the one step path: the command line, the viewer and the studies step through it,
+// and what follows a method's step (the shared divergence check, drives released on impact,
+// the particle limbs' frames) happens here alone. The Model stays the description it was given
+// (and edited by the structural calls): the drives set since, and the held points' moved anchors,
+// are the World's own state, which a recompile reads.
+//
 // Frames. A body's pose is that of its Model body frame: origin at the centre of its shape,
 // z along its axis (tail → head). A particle limb has no spin about its axis, so its
 // orientation's roll is carried by parallel transport: each step the frame turns by the
@@ -127,7 +133,8 @@ class World {
   StepStatus step(double dt);
   StepStatus step() { return step(model_.settings.time_step); }
   /// The last step's report, whatever the method: status, contacts, the relaxation's sweeps and
-  /// stop (particles), the linear solver's (springs, Lagrange), constraint errors.
+  /// stop (particles), the linear solver's (springs, Lagrange), constraint errors. Its status is
+  /// the World's verdict (step()'s return); the method's own report is left as it wrote it.
   const StepReport& last_report() const;
 
   double time() const;
@@ -176,6 +183,11 @@ class World {
   /// drive; giving a joint its first drive, or removing one (nullopt), recompiles. Throws
   /// WorldError on a bad value or a joint type without drives.
   void set_joint_drive(JointId joint, const std::optional<JointDrive>& drive);
+  /// The joint's drive now: the Model's, or the last set_joint_drive's, limp once
+  /// Settings::release_drives_on_impact has released it.
+  std::optional<JointDrive> joint_drive(JointId joint) const;
+  /// Whether a ball's impact has made the drives limp (Settings::release_drives_on_impact).
+  bool drives_released() const { return drives_released_; }
 
   // --- Held points ---
   /// Holds the body's point `local_point` (its Model body frame, m) where it is now: a spherical
@@ -245,15 +257,22 @@ class World {
  private:
   struct Pin {
     JointId joint;
-    std::optional<Eigen::Vector3d> target;
+    std::optional<Eigen::Vector3d> target;  // move_pin's, for the next step
+    std::optional<Eigen::Vector3d> anchor;  // where the last target put the held point, world, m
   };
   void reset_loads();
   void transport_frames();
   void add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point, std::vector<Eigen::Vector3d>& linear,
                     std::vector<Eigen::Vector3d>& angular);
-  // old_ball_of_new: which old ball each new one continues (−1: new); nullopt: all, in order.
-  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
+  // joint_handles: each edited joint's handle (kNewJoint: added by this edit); old_ball_of_new:
+  // which old ball each new one continues (−1: new), nullopt: all, in order.
+  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new, const std::vector<std::uint32_t>& joint_handles,
                  std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
+  // `edited` as the method compiles it: the World's drives and held anchors over the Model's.
+  Model as_compiled(Model edited, const std::vector<std::uint32_t>& joint_handles) const;
+  std::optional<JointDrive> current_drive(std::size_t joint) const;
+  void release_drives();
+  static constexpr std::uint32_t kNewJoint = ~0u;
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
   // A handle of this World, or a WorldError naming `call` (if any) and `kind` (a handle from
@@ -280,6 +299,9 @@ class World {
   std::unordered_map<std::uint32_t, std::size_t> ball_index_;
   std::uint32_t next_ball_handle_ = 0;
   std::unordered_map<std::uint32_t, Pin> pins_;
+  // Drives set since the Model (set_joint_drive) or released on impact, by joint handle.
+  std::unordered_map<std::uint32_t, std::optional<JointDrive>> drives_;
+  bool drives_released_ = false;
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.
   std::vector<Eigen::Vector3d> load_force_, load_torque_, impulse_force_, impulse_torque_;

@@ -13,6 +13,7 @@ namespace limber {
 struct WorldInternals {
   MethodState state;
   DivergenceBounds divergence;  ///< from the start, the last structural edit or teleport
+  StepReport report;            ///< the last step's: the method's, with the World's status
 };
 
 }  // namespace limber

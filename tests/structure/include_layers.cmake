@@ -7,7 +7,7 @@ set(layers
   sleeping relaxation collision                 # passes over that state
   verlet springs lagrange featherstone          # the four methods: compile and step
   methods                                       # the one dispatch over the four
-  metrics study world)                          # what reads or drives the methods
+  metrics world study)                          # what reads or drives the methods: the studies step a World
 
 file(GLOB folders LIST_DIRECTORIES true RELATIVE ${SOURCE_DIR}/kernel ${SOURCE_DIR}/kernel/*)
 set(problems "")

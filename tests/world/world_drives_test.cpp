@@ -6,6 +6,7 @@
 
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 
 namespace limber {
 namespace {
@@ -77,8 +78,18 @@ TEST_P(WorldDrives, DrivesGoLimpWhenTheBallHits) {
     ASSERT_EQ(world.step(), StepStatus::ok);
     lowest = std::min(lowest, centre_height(world));
   }
-  ASSERT_TRUE(world.model().joints[0].drive.has_value());
-  EXPECT_EQ(world.model().joints[0].drive->stiffness, 0) << "the ball hit and the drive let go";
+  const std::optional<JointDrive> now = world.joint_drive(world.joint("shoulder"));
+  ASSERT_TRUE(now.has_value());
+  EXPECT_EQ(now->stiffness, 0) << "the ball hit and the drive let go";
+  EXPECT_TRUE(world.drives_released());
+  EXPECT_GT(world.model().joints[0].drive->stiffness, 0) << "the Model stays the description it was given";
+  // A recompile (an added ball) keeps the drive limp: the World's drives, not the Model's.
+  Ball second = ball;
+  second.position = Vector3(3, 0, 3), second.velocity = Vector3::Zero();
+  world.add_ball(second);
+  EXPECT_EQ(world.joint_drive(world.joint("shoulder"))->stiffness, 0);
+  std::visit([](const auto& state) { EXPECT_EQ(state.joint_controls.joints[0].drive->stiffness, 0) << "the recompiled state's drive"; },
+             world.internals().state);
   EXPECT_LT(lowest, 1 - 0.2) << "the arm fell";
 }
 

@@ -223,6 +223,33 @@ TEST(World, AKinematicTargetIsFollowedWithItsVelocity) {
   }
 }
 
+// A held point moved by move_pin stays where it was moved across a recompile (an added
+// collider), and the Model keeps the anchor it was given: the World, not the Model, holds it.
+TEST(World, AMovedPinSurvivesARecompileAndTheModelKeepsItsAnchor) {
+  for (const Method method : {Method::particles, Method::lagrange}) {
+    Model model = make_chain({0.2, 0.2, 0.2, 0.2}, 0.1, false);
+    model.settings.sleep.enabled = false;
+    WorldOptions options = options_for(method);
+    options.particles.verlet.joints = ParticleJoints::shared_particle;
+    World world(model, options);
+    const PinId hand = world.pin(world.body("link_0"), Eigen::Vector3d(0, 0, 0.05));
+    const Eigen::Vector3d start = world.pin_position(hand), given = world.model().joints.back().inboard_anchor;
+    const Eigen::Vector3d moved = start + Eigen::Vector3d(0, 0.1, 0);
+    for (int s = 1; s <= 10; ++s) {
+      world.move_pin(hand, start + Eigen::Vector3d(0, 0.01 * s, 0));
+      ASSERT_EQ(world.step(1.0 / 120), StepStatus::ok) << name(method);
+    }
+    const Joint& pin_joint = world.model().joints.back();
+    EXPECT_EQ(pin_joint.inboard_anchor, given) << name(method) << ": stepping wrote the Model";
+    StaticCollider wall;
+    wall.name = "wall", wall.position = Eigen::Vector3d(5, 0, 0), wall.half_extents = Eigen::Vector3d(0.1, 1, 1);
+    world.add_collider(wall);
+    EXPECT_LT((world.pin_position(hand) - moved).norm(), 1e-12) << name(method) << ": the recompile forgot the moved anchor";
+    ASSERT_EQ(world.step(1.0 / 120), StepStatus::ok) << name(method);
+    EXPECT_LT((world.pin_position(hand) - moved).norm(), 1e-9) << name(method) << ": the held point went back";
+  }
+}
+
 TEST(World, TransformsAreContinuousInTime) {
   // A chain swinging down: no body's orientation jumps between steps (particle limbs carry their
   // roll by parallel transport; the rigid methods integrate it).

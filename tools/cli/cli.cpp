@@ -17,17 +17,15 @@
 #include <variant>
 #include <vector>
 
-#include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/metrics/divergence.hpp"
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/relaxation/joint_trees.hpp"
-#include "limber/kernel/lagrange/step.hpp"
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
-#include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/world/world.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
 #include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
@@ -147,30 +145,29 @@ double penetration_now(const State& state, const Model& model, LimbCollisions& c
   return std::max(between, ground_penetration(model, segments));
 }
 
-// Steps `state` `steps` times (stopping at a divergence), observing after every step. `variant`
-// holds `state`: the drives go limp through it when the scene asks (release_drives_on_impact).
+// Steps `world` `steps` times through World::step, the one step path (stopping at its
+// divergence verdict), observing after every step. `state` is the world's state, read only.
 template <typename State>
-RunRecord run_steps(State& state, MethodState& variant, const Model& model, long steps, std::ostream* csv, KnockMeter& knock) {
+RunRecord run_steps(World& world, const State& state, long steps, std::ostream* csv, KnockMeter& knock) {
+  const Model& model = world.model();
   RunRecord record;
   LimbCollisions collisions(model);
   std::vector<LimbSegment> segments;
   record.deepest_penetration = penetration_now(state, model, collisions, segments);
   record.start = record.end = observe(state);
-  const DivergenceBounds bounds = divergence_bounds(model, record.start);
   record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
   record.largest_limit_violation = record.start.joints.limit_violation;
   bool body_sleeping = record.start.body_sleeping;
   for (; record.steps_done < steps;) {
     const auto before = std::chrono::steady_clock::now();
-    const auto report = step(state);
+    record.status = world.step();
     record.wall_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - before).count();
     ++record.steps_done;
+    const StepReport& report = world.last_report();
     record.profile += report.profile;
-    if (release_drives_after_impact(variant) && record.drives_released_at < 0) record.drives_released_at = state.time;
-    if constexpr (requires { report.stop; }) {
-      ++record.relaxation_stops[static_cast<int>(report.stop)];
-      record.fallbacks += report.fallbacks;
-    }
+    if (world.drives_released() && record.drives_released_at < 0) record.drives_released_at = state.time;
+    ++record.relaxation_stops[static_cast<int>(report.stop)];
+    record.fallbacks += report.fallbacks;
     record.end = observe(state);
     record.contacts = report.contacts;
     record.most_contacts = std::max(record.most_contacts, report.contacts);
@@ -183,9 +180,7 @@ RunRecord run_steps(State& state, MethodState& variant, const Model& model, long
       record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
     }
     body_sleeping = record.end.body_sleeping;
-    if (csv) write_trajectory_row(*csv, variant);
-    // The method's own guard, then the checks every method shares (metrics/divergence.hpp).
-    record.status = report.status == StepStatus::ok ? check_divergence(record.end, bounds) : report.status;
+    if (csv) write_trajectory_row(*csv, world.internals().state);
     if (record.status != StepStatus::ok) break;
   }
   return record;
@@ -376,8 +371,9 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
 
 // Runs the model under the flags' method and prints the summary; returns the exit code.
 template <typename State>
-int simulate(State& state, MethodState& variant, const Model& model, const RunFlags& flags, const std::string& source,
-             std::ostream& out) {
+int simulate(World& world, const State& state, const RunFlags& flags, const std::string& source, std::ostream& out) {
+  const Model& model = world.model();
+  const MethodState& variant = world.internals().state;
   const double dt = model.settings.time_step;
   const long steps = given(flags.steps_option) ? flags.steps : std::max(1L, std::lround(model.settings.duration / dt));
   std::optional<OutputFile> csv;  // renamed into place once the run is summed up
@@ -391,7 +387,7 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   }
   const Observation start = observe(state);
   KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);
-  const RunRecord record = run_steps(state, variant, model, steps, csv ? &csv->stream() : nullptr, knock);
+  const RunRecord record = run_steps(world, state, steps, csv ? &csv->stream() : nullptr, knock);
   const Observation& end = record.end;
 
   out << "limber run: " << model.name << " (" << source << ")\n";
@@ -433,9 +429,9 @@ int simulate(State& state, MethodState& variant, const Model& model, const RunFl
   return record.status == StepStatus::ok ? kSuccess : kDiverged;
 }
 
-int simulate(const LoadedRun& loaded, const RunFlags& flags, std::ostream& out) {
-  MethodState state = compile_method(loaded.scene.model, loaded.options);
-  return std::visit([&](auto& compiled) { return simulate(compiled, state, loaded.scene.model, flags, loaded.source, out); }, state);
+int simulate(LoadedRun loaded, const RunFlags& flags, std::ostream& out) {
+  World world(std::move(loaded.scene.model), loaded.options);
+  return std::visit([&](const auto& state) { return simulate(world, state, flags, loaded.source, out); }, world.internals().state);
 }
 
 // `limber view`'s own flags, which `limber run` does not take.
