@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes a scene of many balls for the scaling measurements (bench/README.md, "Linear costs").
+"""Writes a scene of many balls for the scaling measurements (bench/speed.md, "Linear costs").
 
     bench/ball_scene.py N [--links L] > balls.json
 

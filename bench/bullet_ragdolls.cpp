@@ -1,5 +1,5 @@
 // A pile of ragdolls in limber's particle method and in Bullet 3's rigid bodies, in one run:
-// time per step and the deepest penetration of each (bench/README.md, "Ragdoll pile against
+// time per step and the deepest penetration of each (bench/ragdolls.md, "The pile against
 // Bullet"). Bullet's RagdollDemo is the model of the Bullet side: one btRigidBody per limb,
 // btConeTwistConstraint for spherical joints with swing and twist limits, btHingeConstraint for
 // knees and elbows, collisions between jointed limbs off.

@@ -1,5 +1,5 @@
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"  // operator delete frees what the counting operator new mallocs
-// What collision costs the particle method (bench/README.md, "Collision: contact sweeps, the cost
+// What collision costs the particle method (bench/collision.md, "Collision: contact sweeps, the cost
 // of collision, tunnelling"), ratios inside one run:
 //
 //   build/bench/contact_bench --benchmark_filter=Sweep    the pile's rows: SIMD against scalar lanes

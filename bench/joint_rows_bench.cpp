@@ -1,6 +1,6 @@
 // The particle method's joint rows in the coloured sweep, and its exact joint trees' Newton
 // step: time per row of each kind (per tree joint) against a plain distance constraint, in one
-// run (bench/README.md, "Joint rows in the coloured sweep, and the exact joint tree").
+// run (bench/speed.md, "Joint rows in the coloured sweep, and the exact joint tree").
 //
 //   build/bench/joint_rows_bench                                  all, 10⁵ joints each
 //   build/bench/joint_rows_bench --benchmark_filter=Rows/.*/2     two threads

@@ -1,4 +1,4 @@
-// The Lagrange method's constraint-error figure (bench/README.md, "Lagrange multipliers"): the thesis's
+// The Lagrange method's constraint-error figure (bench/accuracy.md, "Lagrange multipliers"): the thesis's
 // 5-link heavy-end chain (tools/scenes/chain.json) released horizontally and run for 10⁴ steps
 // of 1/240 s (42 s, chaotic), under each integrator and stabilization. Every 12 steps (0.05 s) it
 // records the largest joint gap (m) and the energy change since the start (J).

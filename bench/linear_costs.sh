@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Load + run time and peak memory of the sizes behind "any number" (bench/README.md, "Linear
+# Load + run time and peak memory of the sizes behind "any number" (bench/speed.md, "Linear
 # costs"): a long chain, many humanoid copies and many balls, for two limber programs side by
 # side (e.g. main's before a change and this build after it), each case given at most LIMIT s.
 #

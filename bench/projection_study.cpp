@@ -1,4 +1,4 @@
-// The projection rules measured (bench/README.md, "The rattle rule"): how the pbd and rattle rules
+// The projection rules measured (bench/accuracy.md, "The rattle rule"): how the pbd and rattle rules
 // converge with the step, what frames of 1/60 s cost and keep, and energy over long runs.
 //
 //   projection_study order  [--csv FILE]   error against Δt for both rules on three workloads

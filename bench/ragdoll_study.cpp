@@ -1,4 +1,4 @@
-// The armed ragdoll under every method (bench/README.md, "Joint limits and drives"):
+// The armed ragdoll under every method (bench/accuracy.md, "Limits after a hard fall"):
 //  1. limits after a hard fall: the ragdoll dropped from 1.5 m above its standing pose onto
 //     the ground, without the ball, at 1/60 and 1/240 s: the largest limit violation in 3 s;
 //  2. the thesis's experiment with arms: the ball hits the standing ragdoll; the knock (the

@@ -20,7 +20,7 @@
 //
 //   build/bench/relaxation_bench --benchmark_filter='Sweep/chain_1000000?/.*/(simd|rattle_simd)(_2t_workers)?$'
 // compares the rattle sweep with today's pbd sweep on 10^5 and 10^6 links, float and double,
-// 1 and 2 threads, in one run (bench/README.md).
+// 1 and 2 threads, in one run (bench/speed.md).
 #include <cstdint>
 #include <functional>
 #include <map>

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the rope of Jolt Physics' soft-body comparison (bench/README.md, "The rope against Jolt").
+"""Writes the rope of Jolt Physics' soft-body comparison (bench/chains.md, "The rope against Jolt").
 
     bench/rope_scene.py N > rope.json
 

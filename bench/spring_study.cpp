@@ -1,4 +1,4 @@
-// The stiff-spring method's two figures (bench/README.md, "Stiff springs: rigid bodies joined by springs"):
+// The stiff-spring method's two figures (bench/accuracy.md, "Stiff springs"):
 //  gap        the joint gaps of the thesis's 5-link heavy-end chain (tools/scenes/chain.json,
 //             released horizontally) against stiffness, for explicit (semi-implicit Euler) and
 //             implicit (backward Euler) springs, with weighted Verlet as the reference;

@@ -1,4 +1,4 @@
-// Stability stress of every method (bench/README.md, "Stability stress"). One Model, nine
+// Stability stress of every method (bench/reliability.md, "Stability stress"). One Model, nine
 // Methods (kernel/study/simulation.hpp), every run classified by study::classify() as stable or
 // diverged — non-finite (NaN, or a point faster than Settings::divergence_speed), energy growth
 // (a gain beyond StabilityBounds::energy_gain × energy_scale(), i.e. half the chain's

@@ -1,6 +1,6 @@
 // The tree elimination (kernel/numerics/tree_elimination.hpp) one instance at a time against
 // SIMD lanes across instances (a lane an instance: ragdolls of one skeleton, ropes of one
-// length), in one run (bench/README.md, "The tree elimination in SIMD lanes across instances").
+// length), in one run (bench/speed.md, "The tree elimination in SIMD lanes across instances").
 //
 //   build/bench/tree_elimination_bench
 //

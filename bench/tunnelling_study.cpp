@@ -1,7 +1,7 @@
 // Tunnelling: the highest speed at which the thesis's ball (radius 0.05 m, 2.27 kg, restitution
 // 0.8) still hits a free limb 4 cm thick (a capsule of radius 0.02 m, 0.4 m long, 1 kg), and
 // still bounces off a static plate 2 cm thick (a box, 1 m square), under every method, at
-// Δt = 1/60 s and 1/240 s (bench/README.md, "Collision: contact sweeps, the cost of collision,
+// Δt = 1/60 s and 1/240 s (bench/collision.md, "Collision: contact sweeps, the cost of collision,
 // tunnelling").
 //
 //   build/bench/tunnelling_study            the tables (a few seconds)

@@ -13,7 +13,7 @@
 //   sphere–cylinder closest point only when they overlap (the hierarchical test of 2.4);
 // - continuous collision for each ball, first: a ball tested only where it overlaps after the
 //   move passes through a limb thinner than its step's travel (4.4 m/s against a 4 cm limb at
-//   Δt = 1/60 s, bench/README.md). So its path over the step, from its centre at the step's start
+//   Δt = 1/60 s, bench/collision.md). So its path over the step, from its centre at the step's start
 //   (RigidScene::step_start_position, remember_step_start) to its centre now, is swept against
 //   the limbs and the static colliders (time of impact, kernel/geometry/time_of_impact.hpp). At
 //   its first touch of one that the overlap test will not answer — the ball passed through it,

@@ -9,7 +9,7 @@ namespace limber {
 
 /// How far the body's centre of mass moves along the ball's initial path in the `window`
 /// seconds after the ball first touches it, m. (Later the passive body folds to the ground, and
-/// where it comes to rest depends on how it folds — bench/README.md, "The humanoid and the ball".)
+/// where it comes to rest depends on how it folds — bench/accuracy.md, "The humanoid and the ball".)
 /// Feed it after every step.
 class KnockMeter {
  public:

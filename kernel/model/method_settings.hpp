@@ -47,7 +47,7 @@ struct RelaxationSettings {
   /// thesis's Gauss-Seidel; > 1 converges faster along chains. Contacts are never over-relaxed,
   /// nor is the first sweep of a step (it starts far from the solution and would overshoot).
   /// The projections are nonlinear, so the linear theory's (0, 2) is not all safe: on chain.json
-  /// ω ≤ 1.8 never gained energy, ω = 1.9 did below 10 sweeps (bench/README.md, "Relaxation").
+  /// ω ≤ 1.8 never gained energy, ω = 1.9 did below 10 sweeps (bench/accuracy.md, "Relaxation").
   double over_relaxation = 1;
   ProjectionRule projection = ProjectionRule::pbd;
   int substeps = 1;        ///< in [1, kMaxSubsteps]

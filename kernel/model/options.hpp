@@ -72,7 +72,7 @@ struct VerletOptions {
   /// says whether to split (≥ 2, or 0 with a colour big enough) and limber starts no thread.
   TaskSystem tasks{};
   /// Colours a stage must have at least this many constraint slots to be split across threads;
-  /// 0 picks the crossover measured on the reference machine (bench/README.md, "The data-oriented core:
+  /// 0 picks the crossover measured on the reference machine (bench/speed.md, "The data-oriented core:
   /// SIMD, threads, layouts").
   std::uint32_t parallel_minimum_slots = 0;
   std::uint32_t max_colours = 16;            ///< beyond it, constraints go to the scalar overflow

@@ -77,7 +77,7 @@ class ConstraintElimination {
   int rows(std::size_t constraint) const { return static_cast<int>(row_begin_[constraint + 1] - row_begin_[constraint]); }
 
   /// Bytes of the arrays factor() and solve() read or write, every component's: what a factor
-  /// and a solve of everything must move at least once (the bandwidth bound of bench/README.md).
+  /// and a solve of everything must move at least once (the bandwidth bound of bench/chains.md).
   std::size_t storage_bytes() const;
 
  private:

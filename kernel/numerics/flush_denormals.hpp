@@ -1,6 +1,6 @@
 // Denormal (subnormal) floats are 10–100× slower on x86. A body coming to rest drives values
 // like x − x* towards zero, through the denormal range: a float chain settling at the origin
-// stepped 2.5× slower (bench/README.md, "Float and double"). Like Jolt (FPFlushDenormals), limber
+// stepped 2.5× slower (bench/speed.md, "Float and double"). Like Jolt (FPFlushDenormals), limber
 // flushes them to zero for the duration of a step; the change is limited to numbers below
 // ~1e-38 (float) and ~1e-308 (double), and is the same on every thread that steps.
 #pragma once

@@ -117,7 +117,7 @@ struct SimdLanes {
   }
   // The three coordinates of the lanes where `m` holds, written lane by lane with scalar stores:
   // where few lanes move (contact rows), faster than three masked scatters, which cost the same
-  // whatever the mask (bench/README.md, "Collision").
+  // whatever the mask (bench/collision.md, "Contact rows").
   static void scatter_each_where(typename value::batch_bool_type m, value x, value y, value z, Scalar* base_x, Scalar* base_y,
                                  Scalar* base_z, index offset) {
     alignas(64) Scalar vx[size], vy[size], vz[size];

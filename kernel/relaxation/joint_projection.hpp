@@ -62,7 +62,7 @@ typename Lanes::value min_lanes(typename Lanes::value a, typename Lanes::value b
 /// exact angle in double and float (2.1 the worst measured, just past tan(π/8), where π/4 + atan
 /// cancels; tests/verlet/joint_rows_test.cpp), with the same operations in every lane, so that a
 /// lane gives ScalarLanes' bits (the C library's, called lane by lane, cost a limit row 5–11 %
-/// more: bench/README.md). The octant's ratio t = min/max(|x|, |y|) is carried into
+/// more: bench/speed.md). The octant's ratio t = min/max(|x|, |y|) is carried into
 /// [−tan(π/8), tan(π/8)] by atan(t) = π/4 + atan((t − 1)/(t + 1)) (one division either way), where
 /// atan(t) = t + t·z·P(z), z = t², P of degree 9: a least-squares fit for relative error on
 /// Chebyshev nodes in 50-digit arithmetic, 1.4·10⁻¹⁶ at most in double.

@@ -287,7 +287,7 @@ constexpr double kNewtonMove = 1e-5;
 // The same for a round with contacts (tree_contacts.hpp), whose Jacobi pushes converge linearly,
 // not quadratically: a round moving no particle by 5e-5 m (a tenth of a millimetre, against a
 // goal of a centimetre's penetration) ends the call. On the pile and the rain at 2 × 2 and
-// 4 × 1 this ran 1.4× as many steps a second as 1e-5 m, at the same penetration (bench/README.md,
+// 4 × 1 this ran 1.4× as many steps a second as 1e-5 m, at the same penetration (bench/ragdolls.md,
 // "Exact limits and contacts with the trees"); what it leaves of the joints, ~(5e-5)²/0.1 m, is
 // rounding.
 constexpr double kContactRoundMove = 5e-5;

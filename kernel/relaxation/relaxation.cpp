@@ -24,7 +24,7 @@ namespace limber {
 namespace {
 
 using coloured::kParticlesPerTask;
-// Below this many slots a colour runs on one thread. Measured (bench/README.md, "The data-oriented core:
+// Below this many slots a colour runs on one thread. Measured (bench/speed.md, "The data-oriented core:
 // SIMD, threads, layouts"): handing a
 // stage to two threads costs ~4.6 us (either strategy) and a slot ~0.8 ns, so a colour pays
 // for the second core from ~12k slots; chains of 10^4 links (5k per colour) ran 1.6x slower

@@ -186,7 +186,7 @@ namespace limber {
 /// Most bodies a scene may generate by default (chain, tree, grid and copies together): a guard
 /// against a file asking for terabytes. Not a promise that so many fit: a 10⁷-link chain needs
 /// about 25 GB under the particle method and up to 95 GB under the implicit springs
-/// (bench/README.md, "Linear costs"), more than most machines have — `limber run` refuses a
+/// (bench/speed.md, "Linear costs"), more than most machines have — `limber run` refuses a
 /// scene whose bodies would not fit in the memory available, before generating them
 /// (SceneOptions::before_generating).
 inline constexpr std::size_t kMaxSceneBodies = 10'000'000;

@@ -91,7 +91,7 @@ ObservedRun observe_run(Simulation& simulation, double duration, double sample_i
 /// the method alone. A run that diverges stops there; its time is per simulated second done.
 double wall_time_per_simulated_second(const Scene& scene, const Method& method, double duration, int repeats);
 
-/// How a stress run ended (bench/README.md, "Stability").
+/// How a stress run ended (bench/reliability.md, "Stability stress").
 enum class Stability : std::uint8_t {
   stable,
   non_finite,     ///< NaN or infinite state, or a speed beyond Settings::divergence_speed

@@ -1,5 +1,5 @@
 // The explicit spring integrators' stability bound on a model (thesis 3.3, eq. 3.15), from the
-// spring modes linearized about the model's initial pose (bench/README.md, "Stability stress").
+// spring modes linearized about the model's initial pose (bench/reliability.md, "Stability stress").
 //
 // Linearize the spring method about the initial pose: u = the bodies' velocities (v, ω), 6 per
 // body; each joint's separation d = p_inboard − p_outboard has velocity J u with J = [I, −[r_in]×]

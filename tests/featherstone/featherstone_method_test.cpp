@@ -408,7 +408,7 @@ TEST(FeatherstoneContacts, ImpulsesNeverAddEnergy) {
   // impulses (push-out excluded), every step for 2 s.
   Model chain = make_chain_model({.links = 5, .link_length = 0.2, .link_mass = 1, .anchor = Vector3(0, 0, 0.6),
                                   .direction = Vector3(1, 0.3, -0.4), .pinned = false});
-  for (Body& body : chain.bodies) body.shape.radius = 0.02;  // limbs as stout as the humanoid's (bench/README.md: thin limbs)
+  for (Body& body : chain.bodies) body.shape.radius = 0.02;  // limbs as stout as the humanoid's (bench/reliability.md: thin limbs)
   chain.ground = Ground{0, 0.4, 0.8};
   std::mt19937 random(5);
   std::uniform_real_distribution<double> unit(-1, 1);

@@ -16,7 +16,7 @@ namespace limber {
 namespace {
 
 // Explicit springs are stable on the humanoid at the scene's Δt = 1/240 s up to k ≈ 5·10⁴ N/m
-// (bench/README.md, "Stiff springs"); the implicit step takes them 20× stiffer.
+// (bench/accuracy.md, "Stiff springs"); the implicit step takes them 20× stiffer.
 const SpringOptions kIntegrators[] = {
     {.integrator = Integrator::semi_implicit_euler, .stiffness = 2e4, .damping = 50.0},
     {.integrator = Integrator::backward_euler, .stiffness = 4e5, .damping = 50.0},

@@ -1,5 +1,5 @@
 // The stability stress, shortened for CI (bench/stability_stress.cpp is the full
-// run; bench/README.md, "Stability stress"): what diverges, what does not, and the explicit springs'
+// run; bench/reliability.md, "Stability stress"): what diverges, what does not, and the explicit springs'
 // boundary of eq. 3.15 where the linearized spring modes put it. The StabilityStress tests
 // (study_stability_tests) take seconds; StabilityStressLong, compiled into
 // study_stability_stress_tests with LIMBER_STABILITY_STRESS_LONG (LABELS stress), runs 10⁵
@@ -132,7 +132,7 @@ TEST(StabilityStress, AtEqualMassesOnlyTheExplicitIntegratorsDivergeAt240Hz) {
   // Beyond their bounds (1/304 s, 1/1000 s) the explicit springs gain energy.
   EXPECT_EQ(run(chain, springs(Integrator::semi_implicit_euler, kStiffness, dt), 10), Stability::energy_growth);
   EXPECT_EQ(run(chain, springs(Integrator::euler, kStiffness, dt), 10), Stability::energy_growth);
-  // Featherstone's semi-implicit Euler takes the velocity-product terms explicitly (bench/README.md).
+  // Featherstone's semi-implicit Euler takes the velocity-product terms explicitly (bench/reliability.md).
   EXPECT_EQ(run(chain, {.series = "featherstone semi-implicit", .family = Family::featherstone, .time_step = dt,
                         .featherstone = {.integrator = Integrator::semi_implicit_euler}}, 10),
             Stability::energy_growth);

@@ -4,7 +4,7 @@
 //
 // What is measured: how far the body's centre of mass moves along the ball's path in the 0.3 s
 // after the ball first touches it. Later, the passive body crumples to the ground and where it
-// comes to rest depends on how it folds — sensitive to every detail (bench/README.md, "The humanoid").
+// comes to rest depends on how it folds — sensitive to every detail (bench/accuracy.md, "The humanoid").
 #include <cmath>
 #include <functional>
 

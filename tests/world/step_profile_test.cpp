@@ -1,6 +1,6 @@
 // StepReport::profile (model/step_status.hpp): off, it is all zeros; on, the stages' times
 // partition the step and its counts are the report's; on or off, the trajectory is the same bits.
-// No timing beyond those inequalities: speed is measured in bench/README.md.
+// No timing beyond those inequalities: speed is measured in bench/ragdolls.md.
 #include <cstring>
 #include <string>
 #include <variant>

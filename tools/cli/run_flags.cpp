@@ -356,7 +356,7 @@ std::optional<double> available_memory() {
 double bytes_per_body(const RunFlags& flags) {
   // Peak resident memory over bodies, the larger of a 10⁶-link chain.json and 10⁵ copies of
   // the humanoid (9·10⁵ bodies), rounded up: `/usr/bin/time -v limber run ... --steps 1`
-  // (bench/README.md, "Linear costs").
+  // (bench/speed.md, "Linear costs").
   if (flags.method == "springs-implicit") return 9500;  // the implicit step's sparse system
   if (flags.springs()) return 2800;
   if (flags.lagrange()) return 5700;

@@ -80,7 +80,7 @@ LoadedRun load(const RunFlags& flags);
 /// nullopt where it cannot tell.
 std::optional<double> available_memory();
 /// Bytes one body of a long chain or of many copies needs under the flags' method, from loading
-/// to stepping in `limber run` (peak resident memory per body at 10⁶ links, bench/README.md,
+/// to stepping in `limber run` (peak resident memory per body at 10⁶ links, bench/speed.md,
 /// "Linear costs").
 double bytes_per_body(const RunFlags& flags);
 /// Throws OutOfMemoryError, one line naming `source`, `path` and both figures, when `bodies`
