@@ -9,7 +9,7 @@
 #
 # Valgrind 3.19 cannot run AVX-512 code, so the default build directory is an AVX2 build
 # (-march=x86-64-v3) made here; its AoS path gathers instead of transposing records (that path
-# is AVX-512 only). valgrind itself is not installed by tools/setup.sh: apt-get install valgrind.
+# is AVX-512 only). tools/setup.sh --bench installs valgrind.
 # The simulated last-level cache is one core's 2 MiB L2 (valgrind would otherwise take the
 # VM's 480 MiB L3, which holds the whole working set); CACHEGRIND_LL=size,assoc,line_size
 # overrides it.
@@ -25,7 +25,7 @@ fi
 limber=$build/tools/limber
 links=100000
 
-command -v valgrind >/dev/null || { echo "cachegrind_layouts: valgrind not found (apt-get install valgrind)" >&2; exit 1; }
+command -v valgrind >/dev/null || { echo "cachegrind_layouts: valgrind not found (tools/setup.sh --bench installs it)" >&2; exit 1; }
 [ -x "$limber" ] || { echo "cachegrind_layouts: $limber not found; build the limber_program target" >&2; exit 1; }
 orderings=(depth-parity breadth-first rcm shuffled)
 if ! "$limber" run --help | grep -q -- --ordering; then

@@ -10,7 +10,8 @@
 #             nlohmann-json, CLI11)
 #   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone cross-check)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
-#   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py)
+#   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py),
+#             valgrind (tools/cachegrind_layouts.sh)
 #   clang     clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer: the fuzzer
 #             and the sanitizer runs build with it
 set -euo pipefail
@@ -20,7 +21,7 @@ for purpose in "$@"; do
     library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev) ;;
     tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
-    bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib) ;;
+    bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib valgrind) ;;
     clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
     *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench or clang)" >&2; exit 2 ;;
   esac

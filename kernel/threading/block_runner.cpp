@@ -10,6 +10,8 @@
 #include <oneapi/tbb/parallel_reduce.h>
 #include <oneapi/tbb/task_arena.h>
 
+#include "limber/kernel/numerics/flush_denormals.hpp"
+
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
 #endif
@@ -53,6 +55,7 @@ struct BlockRunner::Shared {
   alignas(64) std::atomic<std::uint32_t> count{0};
   std::atomic<BlockFunction> function{nullptr};
   std::atomic<const void*> context{nullptr};
+  std::atomic<unsigned> mode{0};  // the caller's floating-point mode, which each block runs in
   // Odd while a step runs (helpers spin and claim), even between steps (helpers sleep in
   // atomic wait); `exit` ends them.
   alignas(64) std::atomic<std::uint32_t> session{0};
@@ -98,6 +101,7 @@ struct BlockRunner::Shared {
         if (!cursor.compare_exchange_weak(word, word + take, std::memory_order_acq_rel, std::memory_order_acquire)) continue;
         const BlockFunction run_block = function.load(std::memory_order_relaxed);
         const void* run_context = context.load(std::memory_order_relaxed);
+        const UseFloatingPointMode use(mode.load(std::memory_order_relaxed));
         double largest = result.stage == s ? result.largest : 0.0;
         for (std::uint64_t block = next; block < next + take; ++block) largest = std::max(largest, run_block(run_context, block));
         result.stage = s, result.largest = largest;
@@ -176,8 +180,10 @@ struct TaskStage {
   BlockRunner::BlockFunction function;
   const void* context;
   double* results;
+  unsigned mode;  // the caller's floating-point mode
   static void run(std::size_t begin, std::size_t end, void* stage_pointer) {
     const auto& stage = *static_cast<const TaskStage*>(stage_pointer);
+    const UseFloatingPointMode use(stage.mode);
     for (std::size_t block = begin; block < end; ++block) stage.results[block] = stage.function(stage.context, block);
   }
 };
@@ -201,7 +207,7 @@ TaskSystem tbb_task_system(tbb::task_arena& arena) {
 // The largest of the blocks' results, in block order: the same whoever ran them.
 double BlockRunner::run_tasks(std::size_t count, BlockFunction function, const void* context) {
   if (block_results_.size() < count) block_results_.resize(count);  // grows to the largest stage once
-  TaskStage stage{function, context, block_results_.data()};
+  TaskStage stage{function, context, block_results_.data(), floating_point_mode()};
   void* task = tasks_.enqueue(&TaskStage::run, count, &stage, tasks_.user_context);
   tasks_.finish(task, tasks_.user_context);
   double largest = 0;
@@ -214,10 +220,12 @@ double BlockRunner::run(std::size_t count, BlockFunction function, const void* c
   if (threading_ == Threading::tasks) return run_tasks(count, function, context);
   Shared& shared = *shared_;
   if (threading_ == Threading::parallel_for) {
+    const unsigned mode = floating_point_mode();
     return shared.arena.execute([&] {
       return tbb::parallel_reduce(
           tbb::blocked_range<std::size_t>(0, count, 1), 0.0,
           [&](const tbb::blocked_range<std::size_t>& range, double largest) {
+            const UseFloatingPointMode use(mode);
             for (std::size_t block = range.begin(); block != range.end(); ++block) {
               largest = std::max(largest, function(context, block));
             }
@@ -235,6 +243,7 @@ double BlockRunner::run(std::size_t count, BlockFunction function, const void* c
   shared.count.store(static_cast<std::uint32_t>(count), std::memory_order_release);
   shared.function.store(function, std::memory_order_relaxed);
   shared.context.store(context, std::memory_order_relaxed);
+  shared.mode.store(floating_point_mode(), std::memory_order_relaxed);
   shared.completed.store(0, std::memory_order_relaxed);
   for (std::size_t t = 0; t < threads; ++t) {
     shared.cursors[t].word.store((stage << 32) | shared.range_begin(t, count), std::memory_order_release);

@@ -47,13 +47,12 @@ std::atomic<std::uint32_t> next_world_serial{1};
 
 World::World(Model model, WorldOptions options)
     : model_(std::move(model)), options_(std::move(options)), serial_(next_world_serial.fetch_add(1)),
-      internals_(std::make_unique<WorldInternals>(WorldInternals{compile_method(model_, options_), {}, {}})) {
-  for (std::size_t b = 0; b < model_.bodies.size(); ++b) body_handle_.push_back(next_body_handle_), body_index_[next_body_handle_++] = b;
-  for (std::size_t j = 0; j < model_.joints.size(); ++j) joint_handle_.push_back(next_joint_handle_), joint_index_[next_joint_handle_++] = j;
-  for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
-    collider_handle_.push_back(next_collider_handle_), collider_index_[next_collider_handle_++] = c;
-  }
-  for (std::size_t k = 0; k < model_.balls.size(); ++k) ball_handle_.push_back(next_ball_handle_), ball_index_[next_ball_handle_++] = k;
+      internals_(std::make_unique<WorldInternals>()) {
+  internals_->state = compile_method(model_, options_);
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) internals_->bodies.add(serial_);
+  for (std::size_t j = 0; j < model_.joints.size(); ++j) internals_->joints.add(serial_);
+  for (std::size_t c = 0; c < model_.colliders.size(); ++c) internals_->colliders.add(serial_);
+  for (std::size_t k = 0; k < model_.balls.size(); ++k) internals_->balls.add(serial_);
   reset_loads();
   for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
   transport_frames();
@@ -112,55 +111,62 @@ BodyId World::body(std::string_view name) const {
 
 JointId World::joint(std::string_view name) const {
   for (std::size_t j = 0; j < model_.joints.size(); ++j) {
-    if (model_.joints[j].name == name) return JointId{joint_handle_[j], serial_};
+    if (model_.joints[j].name == name) return internals_->joints.at(j, serial_);
   }
   throw WorldError("joint: no joint called '" + std::string(name) + "'");
 }
 
 std::vector<BodyId> World::bodies() const {
   std::vector<BodyId> out;
-  for (std::uint32_t handle : body_handle_) out.push_back(BodyId{handle, serial_});
+  for (std::size_t b = 0; b < model_.bodies.size(); ++b) out.push_back(body_id(b));
   return out;
 }
+
+BodyId World::body_id(std::size_t b) const { return internals_->bodies.at(b, serial_); }
 
 const Body& World::body_description(BodyId body) const { return model_.bodies[index(body)]; }
 
 template <typename Id>
 void World::check_world(Id id, std::string_view kind, std::string_view call) const {
   if (id.world != serial_) {
-    throw WorldError((call.empty() ? std::string() : std::string(call) + ": ") + std::string(kind) + " handle " + std::to_string(id.value) +
+    throw WorldError((call.empty() ? std::string() : std::string(call) + ": ") + std::string(kind) + " handle " + std::to_string(id.slot) +
                      (id.world == 0 ? ": not a handle a World gave" : ": from another World (each World's handles are its own)"));
   }
 }
 
+namespace {
+
+// The position of `id`'s thing, or a WorldError naming the handle ("body handle 3: no such body
+// (removed?)"); `call` prefixes it when given.
+template <typename Id>
+std::size_t position_of(const HandleTable<Id>& table, Id id, std::string_view kind, std::string_view call = {}) {
+  if (const std::optional<std::size_t> position = table.find(id)) return *position;
+  throw WorldError((call.empty() ? std::string() : std::string(call) + ": ") + std::string(kind) + " handle " + std::to_string(id.slot) +
+                   ": no such " + std::string(kind) + " (removed?)");
+}
+
+}  // namespace
+
 std::size_t World::index(BodyId body) const {
   check_world(body, "body");
-  const auto it = body_index_.find(body.value);
-  if (it == body_index_.end()) throw WorldError("body handle " + std::to_string(body.value) + ": no such body (removed?)");
-  return it->second;
+  return position_of(internals_->bodies, body, "body");
 }
 
 std::size_t World::index(JointId joint) const {
   check_world(joint, "joint");
-  const auto it = joint_index_.find(joint.value);
-  if (it == joint_index_.end()) throw WorldError("joint handle " + std::to_string(joint.value) + ": no such joint (removed?)");
-  return it->second;
+  return position_of(internals_->joints, joint, "joint");
 }
 
 ColliderId World::collider(std::string_view name) const {
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) {
-    if (model_.colliders[c].name == name) return ColliderId{collider_handle_[c], serial_};
+    if (model_.colliders[c].name == name) return internals_->colliders.at(c, serial_);
   }
   throw WorldError("collider: no collider called '" + std::string(name) + "'");
 }
 
 std::size_t World::index(ColliderId collider) const {
   check_world(collider, "collider");
-  const auto it = collider_index_.find(collider.value);
-  if (it == collider_index_.end()) {
-    throw WorldError("collider handle " + std::to_string(collider.value) + ": no such collider (removed?)");
-  }
-  return it->second;
+  return position_of(internals_->colliders, collider, "collider");
 }
 
 [[noreturn]] void World::refuse(std::string_view call, std::string_view why) const {
@@ -191,7 +197,7 @@ StepStatus World::step(double dt) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
           world_bodies::apply_load(s, b, load_force_[b], load_torque_[b]);
         }
-        for (const auto& [handle, pin] : pins_) {
+        for (const WorldInternals::Pin& pin : internals_->pins) {
           if (pin.target) world_bodies::move_world_anchor(s, model_, index(pin.joint), *pin.target);
         }
         return limber::step(s, dt);
@@ -203,7 +209,7 @@ StepStatus World::step(double dt) {
   if (release_drives_after_impact(state)) release_drives();
   transport_frames();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
-  for (auto& [handle, pin] : pins_) {
+  for (WorldInternals::Pin& pin : internals_->pins) {
     if (pin.target) pin.anchor = pin.target;  // where a recompile holds the point
     pin.target.reset();
   }
@@ -214,33 +220,34 @@ StepStatus World::step(double dt) {
 // a recompile reads. Allocates nothing: the drives set before are made limp where they are.
 void World::release_drives() {
   drives_released_ = true;
-  for (auto& [handle, drive] : drives_) {
+  for (auto& [slot, drive] : internals_->drives) {
     if (drive) drive->stiffness = drive->damping = 0;
   }
 }
 
 std::optional<JointDrive> World::current_drive(std::size_t joint) const {
-  if (const auto set = drives_.find(joint_handle_[joint]); set != drives_.end()) return set->second;
+  const auto& drives = internals_->drives;
+  if (const auto set = drives.find(internals_->joints.slot(joint)); set != drives.end()) return set->second;
   std::optional<JointDrive> drive = model_.joints[joint].drive;
   if (drive && drives_released_) drive->stiffness = drive->damping = 0;
   return drive;
 }
 
-Model World::as_compiled(Model edited, const std::vector<std::uint32_t>& joint_handles) const {
-  if (drives_.empty() && pins_.empty() && !drives_released_) return edited;
-  std::unordered_map<std::uint32_t, std::size_t> joint_of_handle;
-  for (std::size_t j = 0; j < joint_handles.size(); ++j) {
-    if (joint_handles[j] == kNewJoint) continue;  // an added joint keeps its own drive
-    joint_of_handle[joint_handles[j]] = j;
+Model World::as_compiled(Model edited, const std::vector<std::uint32_t>& joint_slots) const {
+  if (internals_->drives.empty() && internals_->pins.empty() && !drives_released_) return edited;
+  std::unordered_map<std::uint32_t, std::size_t> joint_of_slot;
+  for (std::size_t j = 0; j < joint_slots.size(); ++j) {
+    if (joint_slots[j] == kNewJoint) continue;  // an added joint keeps its own drive
+    joint_of_slot[joint_slots[j]] = j;
     std::optional<JointDrive>& drive = edited.joints[j].drive;
     if (drive && drives_released_) drive->stiffness = drive->damping = 0;
   }
-  for (const auto& [handle, drive] : drives_) {
-    if (const auto j = joint_of_handle.find(handle); j != joint_of_handle.end()) edited.joints[j->second].drive = drive;
+  for (const auto& [slot, drive] : internals_->drives) {
+    if (const auto j = joint_of_slot.find(slot); j != joint_of_slot.end()) edited.joints[j->second].drive = drive;
   }
-  for (const auto& [id, pin] : pins_) {
-    const auto j = joint_of_handle.find(pin.joint.value);
-    if (pin.anchor && j != joint_of_handle.end()) edited.joints[j->second].inboard_anchor = *pin.anchor;
+  for (const WorldInternals::Pin& pin : internals_->pins) {
+    const auto j = joint_of_slot.find(pin.joint.slot);
+    if (pin.anchor && j != joint_of_slot.end()) edited.joints[j->second].inboard_anchor = *pin.anchor;
   }
   return edited;
 }
@@ -345,19 +352,20 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
     throw WorldError(std::string("set_joint_drive: ") + error.what());
   }
   if (current_drive(k).has_value() != drive.has_value()) {  // a drive row appears or goes: recompile
-    const auto before = drives_.find(joint.value);
-    const std::optional<std::optional<JointDrive>> kept = before == drives_.end() ? std::nullopt : std::optional(before->second);
-    drives_[joint.value] = drive;
+    auto& drives = internals_->drives;
+    const auto before = drives.find(joint.slot);
+    const std::optional<std::optional<JointDrive>> kept = before == drives.end() ? std::nullopt : std::optional(before->second);
+    drives[joint.slot] = drive;
     try {
-      recompile(model_, first_bodies_kept(model_.bodies.size(), model_.bodies.size()), joint_handle_);
+      recompile(model_, first_bodies_kept(model_.bodies.size(), model_.bodies.size()), internals_->joints.slots());
     } catch (...) {  // nothing changes
-      if (kept) drives_[joint.value] = *kept;
-      else drives_.erase(joint.value);
+      if (kept) drives[joint.slot] = *kept;
+      else drives.erase(joint.slot);
       throw;
     }
     return;
   }
-  drives_[joint.value] = drive;
+  internals_->drives[joint.slot] = drive;
   if (!drive) return;
   std::visit(
       [&](auto& state) {
@@ -382,34 +390,33 @@ PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
   }
   const std::size_t b = index(body);
   const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, internals_->state);
-  Joint joint = spherical_joint("pin " + std::to_string(next_pin_), kWorld, static_cast<int>(b), world_point, local_point);
+  Joint joint = spherical_joint("pin " + std::to_string(internals_->pins_made), kWorld, static_cast<int>(b), world_point, local_point);
   const JointId id = add_joint(joint);
-  pins_[next_pin_] = Pin{id, std::nullopt, std::nullopt};
-  return PinId{next_pin_++, serial_};
+  ++internals_->pins_made;
+  internals_->pins.push_back({id, std::nullopt, std::nullopt});
+  return internals_->pin_handles.add(serial_);
 }
 
-const World::Pin& World::pin_entry(PinId pin, std::string_view call) const {
+// The position of `pin` in internals_->pins, or a WorldError naming `call`.
+std::size_t World::index(PinId pin, std::string_view call) const {
   check_world(pin, "pin", call);
-  const auto it = pins_.find(pin.value);
-  if (it == pins_.end()) throw WorldError(std::string(call) + ": pin " + std::to_string(pin.value) + ": no such pin");
-  return it->second;
+  return position_of(internals_->pin_handles, pin, "pin", call);
 }
 
 void World::unpin(PinId pin) {
-  const JointId joint = pin_entry(pin, "unpin").joint;
-  pins_.erase(pin.value);
-  remove_joint(joint);
+  const JointId joint = internals_->pins[index(pin, "unpin")].joint;
+  remove_joint(joint);  // and the pin with it
 }
 
 void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
   check_vector(world_target, "move_pin");
-  const JointId joint = pin_entry(pin, "move_pin").joint;
-  pins_.find(pin.value)->second.target = world_target;
-  wake(body_id(static_cast<std::size_t>(model_.joints[index(joint)].outboard)));
+  WorldInternals::Pin& entry = internals_->pins[index(pin, "move_pin")];
+  entry.target = world_target;
+  wake(body_id(static_cast<std::size_t>(model_.joints[index(entry.joint)].outboard)));
 }
 
 Eigen::Vector3d World::pin_position(PinId pin) const {
-  const JointId joint = pin_entry(pin, "pin_position").joint;
+  const JointId joint = internals_->pins[index(pin, "pin_position")].joint;
   return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(joint)); }, internals_->state);
 }
 
@@ -473,88 +480,91 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
 BodyId World::add_body(const Body& body) {
   Model edited = model_;
   edited.bodies.push_back(body);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()), joint_handle_);
-  body_handle_.push_back(next_body_handle_);
-  body_index_[next_body_handle_] = edited.bodies.size() - 1;
-  return BodyId{next_body_handle_++, serial_};
+  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()), internals_->joints.slots());
+  return internals_->bodies.add(serial_);
 }
 
 JointId World::add_joint(const Joint& joint) {
   Model edited = model_;
   edited.joints.push_back(joint);
-  std::vector<std::uint32_t> handles = joint_handle_;
-  handles.push_back(kNewJoint);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), handles);
-  joint_handle_.push_back(next_joint_handle_);
-  joint_index_[next_joint_handle_] = edited.joints.size() - 1;
-  if (drives_released_ && joint.drive) drives_[next_joint_handle_] = joint.drive;  // released before it came
-  return JointId{next_joint_handle_++, serial_};
+  std::vector<std::uint32_t> slots = internals_->joints.slots();
+  slots.push_back(kNewJoint);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), slots);
+  const JointId id = internals_->joints.add(serial_);
+  if (drives_released_ && joint.drive) internals_->drives[id.slot] = joint.drive;  // released before it came
+  return id;
 }
 
 void World::remove_joint(JointId joint) {
   const std::size_t j = index(joint);
   Model edited = model_;
   edited.joints.erase(edited.joints.begin() + static_cast<std::ptrdiff_t>(j));
-  std::vector<std::uint32_t> handles = joint_handle_;
-  handles.erase(handles.begin() + static_cast<std::ptrdiff_t>(j));
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), handles);
-  drives_.erase(joint.value);
-  joint_index_.erase(joint.value);
-  joint_handle_.erase(joint_handle_.begin() + static_cast<std::ptrdiff_t>(j));
-  for (std::size_t k = j; k < joint_handle_.size(); ++k) joint_index_[joint_handle_[k]] = k;
-  std::erase_if(pins_, [&](const auto& entry) { return entry.second.joint == joint; });
+  std::vector<char> kept(model_.joints.size(), 1);
+  kept[j] = 0;
+  keep_joints(kept, edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()));
+}
+
+// Recompiles `edited`, whose joints are the old ones kept[j] marks, in order; then forgets the
+// others' handles, drives and pins.
+void World::keep_joints(const std::vector<char>& kept, const Model& edited, const std::vector<std::int64_t>& old_body_of_new) {
+  std::vector<std::uint32_t> slots;
+  for (std::size_t j = 0; j < kept.size(); ++j) {
+    if (kept[j]) slots.push_back(internals_->joints.slot(j));
+  }
+  recompile(edited, old_body_of_new, slots);
+  std::vector<char> pin_kept(internals_->pins.size(), 1);
+  for (std::size_t j = 0; j < kept.size(); ++j) {
+    if (kept[j]) continue;
+    const std::uint32_t slot = internals_->joints.slot(j);
+    internals_->drives.erase(slot);
+    for (std::size_t k = 0; k < internals_->pins.size(); ++k) pin_kept[k] &= internals_->pins[k].joint.slot != slot ? 1 : 0;
+  }
+  internals_->joints.keep(kept);
+  internals_->pin_handles.keep(pin_kept);
+  std::size_t next = 0;
+  for (std::size_t k = 0; k < internals_->pins.size(); ++k) {
+    if (pin_kept[k]) internals_->pins[next++] = internals_->pins[k];
+  }
+  internals_->pins.resize(next);
 }
 
 void World::remove_body(BodyId body) {
   const std::size_t removed = index(body);
   Model edited = model_;
   edited.bodies.erase(edited.bodies.begin() + static_cast<std::ptrdiff_t>(removed));
-  std::vector<std::uint32_t> kept_joints;  // handles of the joints that survive, in order
+  std::vector<char> kept(model_.joints.size(), 1);
   edited.joints.clear();
   for (std::size_t j = 0; j < model_.joints.size(); ++j) {
     Joint joint = model_.joints[j];
-    if (joint.inboard == static_cast<int>(removed) || joint.outboard == static_cast<int>(removed)) continue;
+    if (joint.inboard == static_cast<int>(removed) || joint.outboard == static_cast<int>(removed)) {
+      kept[j] = 0;
+      continue;
+    }
     if (joint.inboard > static_cast<int>(removed)) --joint.inboard;
     if (joint.outboard > static_cast<int>(removed)) --joint.outboard;
     edited.joints.push_back(joint);
-    kept_joints.push_back(joint_handle_[j]);
   }
   std::vector<std::int64_t> old_body_of_new;
   for (std::size_t b = 0; b < model_.bodies.size(); ++b) {
     if (b != removed) old_body_of_new.push_back(static_cast<std::int64_t>(b));
   }
-  recompile(edited, old_body_of_new, kept_joints);
-  // Handles: the body's and its joints' are gone; the others move down.
-  body_index_.erase(body.value);
-  body_handle_.erase(body_handle_.begin() + static_cast<std::ptrdiff_t>(removed));
-  for (std::size_t b = 0; b < body_handle_.size(); ++b) body_index_[body_handle_[b]] = b;
-  std::erase_if(pins_, [&](const auto& entry) {
-    return std::find(kept_joints.begin(), kept_joints.end(), entry.second.joint.value) == kept_joints.end();
-  });
-  std::erase_if(drives_, [&](const auto& entry) { return std::find(kept_joints.begin(), kept_joints.end(), entry.first) == kept_joints.end(); });
-  joint_index_.clear();
-  joint_handle_ = kept_joints;
-  for (std::size_t j = 0; j < joint_handle_.size(); ++j) joint_index_[joint_handle_[j]] = j;
+  keep_joints(kept, edited, old_body_of_new);
+  internals_->bodies.erase(removed);
 }
 
 std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix, const Eigen::Vector3d& offset) {
   check_vector(offset, "add_model");
   Model edited = model_;
-  const std::size_t base = model_.bodies.size();
+  const std::size_t base = model_.bodies.size(), joint_base = model_.joints.size();
   append_model(edited, other, prefix, offset);
-  std::vector<std::uint32_t> handles = joint_handle_;
-  handles.resize(edited.joints.size(), kNewJoint);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), model_.bodies.size()), handles);
+  std::vector<std::uint32_t> slots = internals_->joints.slots();
+  slots.resize(edited.joints.size(), kNewJoint);
+  recompile(edited, first_bodies_kept(edited.bodies.size(), base), slots);
   std::vector<BodyId> added;
-  for (std::size_t b = base; b < edited.bodies.size(); ++b) {
-    body_handle_.push_back(next_body_handle_);
-    body_index_[next_body_handle_] = b;
-    added.push_back(BodyId{next_body_handle_++, serial_});
-  }
-  for (std::size_t j = model_.joints.size() - other.joints.size(); j < model_.joints.size(); ++j) {
-    if (drives_released_ && model_.joints[j].drive) drives_[next_joint_handle_] = model_.joints[j].drive;  // released before it came
-    joint_handle_.push_back(next_joint_handle_);
-    joint_index_[next_joint_handle_++] = j;
+  for (std::size_t b = base; b < model_.bodies.size(); ++b) added.push_back(internals_->bodies.add(serial_));
+  for (std::size_t j = joint_base; j < model_.joints.size(); ++j) {
+    const JointId id = internals_->joints.add(serial_);
+    if (drives_released_ && model_.joints[j].drive) internals_->drives[id.slot] = model_.joints[j].drive;  // released before it came
   }
   return added;
 }
@@ -563,20 +573,16 @@ std::vector<BodyId> World::add_model(const Model& other, std::string_view prefix
 ColliderId World::add_collider(const StaticCollider& collider) {
   Model edited = model_;
   edited.colliders.push_back(collider);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
-  collider_handle_.push_back(next_collider_handle_);
-  collider_index_[next_collider_handle_] = edited.colliders.size() - 1;
-  return ColliderId{next_collider_handle_++, serial_};
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), internals_->joints.slots());
+  return internals_->colliders.add(serial_);
 }
 
 void World::remove_collider(ColliderId collider) {
   const std::size_t c = index(collider);
   Model edited = model_;
   edited.colliders.erase(edited.colliders.begin() + static_cast<std::ptrdiff_t>(c));
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
-  collider_index_.erase(collider.value);
-  collider_handle_.erase(collider_handle_.begin() + static_cast<std::ptrdiff_t>(c));
-  for (std::size_t k = c; k < collider_handle_.size(); ++k) collider_index_[collider_handle_[k]] = k;
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), internals_->joints.slots());
+  internals_->colliders.erase(c);
 }
 
 // --- Balls
@@ -584,10 +590,8 @@ void World::remove_collider(ColliderId collider) {
 BallId World::add_ball(const Ball& ball) {
   Model edited = model_;
   edited.balls.push_back(ball);
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_);
-  ball_handle_.push_back(next_ball_handle_);
-  ball_index_[next_ball_handle_] = edited.balls.size() - 1;
-  return BallId{next_ball_handle_++, serial_};
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), internals_->joints.slots());
+  return internals_->balls.add(serial_);
 }
 
 void World::remove_ball(BallId ball) {
@@ -598,23 +602,19 @@ void World::remove_ball(BallId ball) {
   for (std::size_t old = 0; old < model_.balls.size(); ++old) {
     if (old != k) old_ball_of_new.push_back(static_cast<std::int64_t>(old));
   }
-  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), joint_handle_, std::move(old_ball_of_new));
-  ball_index_.erase(ball.value);
-  ball_handle_.erase(ball_handle_.begin() + static_cast<std::ptrdiff_t>(k));
-  for (std::size_t j = k; j < ball_handle_.size(); ++j) ball_index_[ball_handle_[j]] = j;
+  recompile(edited, first_bodies_kept(edited.bodies.size(), edited.bodies.size()), internals_->joints.slots(), std::move(old_ball_of_new));
+  internals_->balls.erase(k);
 }
 
 std::vector<BallId> World::balls() const {
   std::vector<BallId> out;
-  for (const std::uint32_t handle : ball_handle_) out.push_back(BallId{handle, serial_});
+  for (std::size_t k = 0; k < model_.balls.size(); ++k) out.push_back(internals_->balls.at(k, serial_));
   return out;
 }
 
 std::size_t World::index(BallId ball) const {
   check_world(ball, "ball");
-  const auto it = ball_index_.find(ball.value);
-  if (it == ball_index_.end()) throw WorldError("ball handle " + std::to_string(ball.value) + ": no such ball (removed?)");
-  return it->second;
+  return position_of(internals_->balls, ball, "ball");
 }
 
 BallMotion World::ball(BallId ball) const {

@@ -35,7 +35,6 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
-#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
@@ -59,37 +58,25 @@ class WorldError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// Handles: stable across structural edits (a removed body's handle is refused thereafter), and
-/// bound to the World that made them: another World refuses them with a WorldError instead of
-/// addressing a body of its own.
-struct BodyId {
-  std::uint32_t value = ~0u;
+/// Handles (Box2D v3's ids): a slot of the World's handle table, the slot's generation, and the
+/// issuing World's serial. Stable across structural edits; a removed thing's handle is refused
+/// thereafter (its slot has moved on a generation), and another World refuses every one of them
+/// with a WorldError instead of addressing a thing of its own.
+template <typename Tag>
+struct Handle {
+  std::uint32_t slot = ~0u;
+  std::uint32_t generation = 0;
   std::uint32_t world = 0;  ///< the issuing World's serial (0: none)
-  friend bool operator==(BodyId, BodyId) = default;
+  friend bool operator==(Handle, Handle) = default;
 };
-struct JointId {
-  std::uint32_t value = ~0u;
-  std::uint32_t world = 0;
-  friend bool operator==(JointId, JointId) = default;
-};
+using BodyId = Handle<struct BodyTag>;
+using JointId = Handle<struct JointTag>;
 /// Static level geometry (Model::colliders; World::add_collider).
-struct ColliderId {
-  std::uint32_t value = ~0u;
-  std::uint32_t world = 0;
-  friend bool operator==(ColliderId, ColliderId) = default;
-};
+using ColliderId = Handle<struct ColliderTag>;
 /// A ball (Model::balls; World::add_ball).
-struct BallId {
-  std::uint32_t value = ~0u;
-  std::uint32_t world = 0;
-  friend bool operator==(BallId, BallId) = default;
-};
+using BallId = Handle<struct BallTag>;
 /// A point of a body held to the world (World::pin): a spherical joint to the world.
-struct PinId {
-  std::uint32_t value = ~0u;
-  std::uint32_t world = 0;
-  friend bool operator==(PinId, PinId) = default;
-};
+using PinId = Handle<struct PinTag>;
 
 /// A body frame's pose, world: origin (m) and orientation (body → world).
 struct Pose {
@@ -255,21 +242,18 @@ class World {
   const WorldInternals& internals() const { return *internals_; }
 
  private:
-  struct Pin {
-    JointId joint;
-    std::optional<Eigen::Vector3d> target;  // move_pin's, for the next step
-    std::optional<Eigen::Vector3d> anchor;  // where the last target put the held point, world, m
-  };
   void reset_loads();
   void transport_frames();
   void add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point, std::vector<Eigen::Vector3d>& linear,
                     std::vector<Eigen::Vector3d>& angular);
-  // joint_handles: each edited joint's handle (kNewJoint: added by this edit); old_ball_of_new:
+  // joint_slots: each edited joint's handle slot (kNewJoint: added by this edit); old_ball_of_new:
   // which old ball each new one continues (−1: new), nullopt: all, in order.
-  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new, const std::vector<std::uint32_t>& joint_handles,
+  void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new, const std::vector<std::uint32_t>& joint_slots,
                  std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
+  void keep_joints(const std::vector<char>& kept, const Model& edited, const std::vector<std::int64_t>& old_body_of_new);
+  std::size_t index(PinId pin, std::string_view call) const;
   // `edited` as the method compiles it: the World's drives and held anchors over the Model's.
-  Model as_compiled(Model edited, const std::vector<std::uint32_t>& joint_handles) const;
+  Model as_compiled(Model edited, const std::vector<std::uint32_t>& joint_slots) const;
   std::optional<JointDrive> current_drive(std::size_t joint) const;
   void release_drives();
   static constexpr std::uint32_t kNewJoint = ~0u;
@@ -280,27 +264,13 @@ class World {
   template <typename Id>
   void check_world(Id id, std::string_view kind, std::string_view call = {}) const;
   // The handle of body index `b`.
-  BodyId body_id(std::size_t b) const { return BodyId{body_handle_[b], serial_}; }
-  // The pin `pin` of this World, or a WorldError naming `call` (another World's, or removed).
-  const Pin& pin_entry(PinId pin, std::string_view call) const;
+  BodyId body_id(std::size_t b) const;
 
   Model model_;
   WorldOptions options_;
   std::uint32_t serial_;  // this World's, in every handle it issues
-  std::unique_ptr<WorldInternals> internals_;  // the method's state, the divergence bounds
-  // Handles ↔ Model indices.
-  std::vector<std::uint32_t> body_handle_, joint_handle_;  // per Model index: its handle
-  std::unordered_map<std::uint32_t, std::size_t> body_index_, joint_index_;
-  std::uint32_t next_body_handle_ = 0, next_joint_handle_ = 0, next_pin_ = 0;
-  std::vector<std::uint32_t> collider_handle_;  // per Model collider: its handle
-  std::unordered_map<std::uint32_t, std::size_t> collider_index_;
-  std::uint32_t next_collider_handle_ = 0;
-  std::vector<std::uint32_t> ball_handle_;  // per Model ball: its handle
-  std::unordered_map<std::uint32_t, std::size_t> ball_index_;
-  std::uint32_t next_ball_handle_ = 0;
-  std::unordered_map<std::uint32_t, Pin> pins_;
-  // Drives set since the Model (set_joint_drive) or released on impact, by joint handle.
-  std::unordered_map<std::uint32_t, std::optional<JointDrive>> drives_;
+  // The method's state, the divergence bounds, the handle tables, the pins and the drives.
+  std::unique_ptr<WorldInternals> internals_;
   bool drives_released_ = false;
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.

@@ -1,11 +1,20 @@
-// What a World keeps behind its public face (world.hpp): the method's compiled state and the
-// bounds its divergence check measures against. For limber's own tools (the command line, the
-// viewer, the studies, tests) that read a state's observers and counters; it includes the whole
-// kernel, which world.hpp does not.
+// What a World keeps behind its public face (world.hpp): the method's compiled state, the bounds
+// its divergence check measures against, the last step's report, the handle tables, the pins and
+// the drives set since the Model. For limber's own tools (the command line, the viewer, the
+// studies, tests) that read a state's observers and counters; it includes the whole kernel,
+// which world.hpp does not.
 #pragma once
+
+#include <cstdint>
+#include <optional>
+#include <unordered_map>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/metrics/divergence.hpp"
+#include "limber/kernel/world/handle_table.hpp"
 #include "limber/kernel/world/world.hpp"
 
 namespace limber {
@@ -14,6 +23,26 @@ struct WorldInternals {
   MethodState state;
   DivergenceBounds divergence;  ///< from the start, the last structural edit or teleport
   StepReport report;            ///< the last step's: the method's, with the World's status
+
+  /// Handles ↔ positions in the Model's arrays (and in `pins`).
+  HandleTable<BodyId> bodies;
+  HandleTable<JointId> joints;
+  HandleTable<ColliderId> colliders;
+  HandleTable<BallId> balls;
+  HandleTable<PinId> pin_handles;
+
+  /// A held point (World::pin): its joint to the world, move_pin's target for the next step, and
+  /// where the last target put the held point (world, m), which a recompile gives the joint.
+  struct Pin {
+    JointId joint;
+    std::optional<Eigen::Vector3d> target;
+    std::optional<Eigen::Vector3d> anchor;
+  };
+  std::vector<Pin> pins;  ///< by pin_handles' position
+  std::uint32_t pins_made = 0;  ///< names each pin's joint ("pin 7") uniquely
+
+  /// Drives set since the Model (set_joint_drive) or released on impact, by joint handle slot.
+  std::unordered_map<std::uint32_t, std::optional<JointDrive>> drives;
 };
 
 }  // namespace limber

@@ -1,10 +1,13 @@
 // The block runner: every block of every stage runs exactly once, whichever strategy and thread
 // count, and the stage's largest value comes back.
 #include <atomic>
+#include <chrono>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "limber/kernel/numerics/flush_denormals.hpp"
 #include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
@@ -67,6 +70,33 @@ TEST(BlockRunner, RunsWithoutBeginAndStopsCleanly) {
   EXPECT_GE(runner.run(10, run_block, &stage), 0.0);
   for (auto& r : runs) EXPECT_EQ(r.load(), 1);
   EXPECT_THROW(BlockRunner(Threading::workers, 0), std::invalid_argument);
+}
+
+// 1 when the thread running the block computes a denormal where the caller's mode flushes it
+// to zero. Each block dawdles, so the helpers claim some of them.
+double block_without_the_callers_mode(const void*, std::size_t) {
+  volatile float tiny = 1e-37f;
+  const float half = tiny * 0.01f;  // 1e-39: a denormal, or 0 flushed
+  std::this_thread::sleep_for(std::chrono::microseconds(200));
+  return half != 0 ? 1.0 : 0.0;
+}
+
+// Denormals are flushed on the thread that steps (FlushDenormals); a block a helper runs must
+// compute in that mode too, or 1 and 2 threads could give different bits.
+TEST(BlockRunner, EveryBlockRunsInTheCallersFloatingPointMode) {
+  if (floating_point_mode() == 0) GTEST_SKIP() << "no floating-point mode register on this machine";
+  tbb::task_arena arena(2);
+  for (const Threading threading : {Threading::parallel_for, Threading::workers, Threading::tasks}) {
+    BlockRunner runner(threading, 2, threading == Threading::tasks ? tbb_task_system(arena) : TaskSystem{});
+    runner.begin();
+    {
+      const FlushDenormals flush;
+      EXPECT_EQ(runner.run(64, block_without_the_callers_mode, nullptr), 0.0) << "threading " << static_cast<int>(threading);
+    }
+    EXPECT_EQ(runner.run(64, block_without_the_callers_mode, nullptr), 1.0) << "the caller's mode restored, threading "
+                                                                             << static_cast<int>(threading);
+    runner.end();
+  }
 }
 
 }  // namespace

@@ -167,6 +167,30 @@ TEST(WorldHostile, HandlesOfAnotherWorldAreRefused) {
   EXPECT_NE(pose_bits(second), before);
 }
 
+// A removed body's handle stays refused when its slot is given to a body added after it (the
+// handle's generation, not just its slot, must match), and every other handle keeps its body.
+TEST(WorldHostile, AHandleOfARemovedThingIsRefusedAfterItsSlotIsReused) {
+  const Model model = make_chain({1, 1, 1}, 0.1, true);
+  World world(model, options_for(Method::lagrange));
+  const BodyId removed = world.body("link_1"), kept = world.body("link_2");
+  const Body description = world.body_description(removed);
+  world.remove_body(removed);
+  Body again = description;
+  again.name = "again";
+  const BodyId added = world.add_body(again);
+  EXPECT_EQ(added.slot, removed.slot) << "the freed slot is reused";
+  EXPECT_NE(added, removed);
+  try {
+    (void)world.pose(removed);
+    FAIL() << "a removed body's handle addressed the body that took its slot";
+  } catch (const WorldError& error) {
+    EXPECT_THAT(error.what(), HasSubstr("no such body"));
+  }
+  EXPECT_EQ(world.body_description(added).name, "again");
+  EXPECT_EQ(world.body_description(kept).name, "link_2");
+  EXPECT_EQ(world.index(kept), 1u) << "the body after the removed one moved down";
+}
+
 // Two chains that do not touch, and a ball far from both. One chain blown up to infinity (a
 // finite but absurd teleport or impulse) diverges; the other chain and the ball stay finite.
 // Once the chain is teleported back, the World steps on exactly as a World in which it never
