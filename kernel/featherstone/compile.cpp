@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 
 namespace limber {
@@ -84,8 +85,7 @@ std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& mo
 FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOptions& options) {
   FeatherstoneState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
-  require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::fixed},
-                      /*gears_supported=*/false, "featherstone");
+  require_supported(model, Method::featherstone);
   require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "featherstone");
   refuse_kinematic_loops(model);
   require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");

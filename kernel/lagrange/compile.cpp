@@ -1,12 +1,14 @@
 #include "limber/kernel/lagrange/compile.hpp"
 
 #include "limber/kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 
 namespace limber {
 
 LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& options) {
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
+  require_supported(model, Method::lagrange);
   require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "lagrange");
   require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");
   state.options = options;

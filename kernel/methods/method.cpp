@@ -5,10 +5,9 @@
 
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/lagrange/compile.hpp"
-#include "limber/kernel/methods/capabilities.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/springs/compile.hpp"
 #include "limber/kernel/verlet/compile.hpp"
-#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 
@@ -34,26 +33,14 @@ WorldOptions world_options(Method method, const MethodSettings& scene) {
 bool release_drives_after_impact(MethodState& state) {
   return std::visit(
       [](auto& s) {
-        using State = std::decay_t<decltype(s)>;
-        constexpr bool particles = std::is_same_v<State, VerletState<double>> || std::is_same_v<State, VerletState<float>>;
-        bool touched = false;
-        if constexpr (particles) {
-          touched = s.ball_touched;
-        } else {
-          touched = s.ball_touching;
-        }
-        if (!s.settings.release_drives_on_impact || !touched) return false;
+        if (!s.settings.release_drives_on_impact || !ball_touching(s)) return false;
         bool released = false;
         for (std::size_t k = 0; k < s.joint_controls.joints.size(); ++k) {
           const std::optional<JointDrive>& drive = s.joint_controls.joints[k].drive;
           if (!drive || !(drive->stiffness + drive->damping > 0)) continue;
           JointDrive limp = *drive;
           limp.stiffness = limp.damping = 0;
-          if constexpr (particles) {
-            set_joint_drive(s, k, limp);
-          } else {
-            s.joint_controls.joints[k].drive = limp;
-          }
+          set_joint_drive(s, k, limp);
           released = true;
         }
         return released;

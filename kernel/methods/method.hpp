@@ -1,4 +1,5 @@
-// The one method dispatch: which of the four methods, its options, and its compiled state. The
+// The one method dispatch: which of the four methods, its options, and its compiled state, with
+// each method's answers to the calls of method_contract.hpp (its step.hpp and bodies.hpp). The
 // World compiles through compile_method and steps each state with limber::step(state, dt); the
 // command line, the viewer and the studies step through the World (kernel/world/world.hpp).
 #pragma once
@@ -7,13 +8,21 @@
 #include <string_view>
 #include <variant>
 
+#include "limber/kernel/featherstone/bodies.hpp"
 #include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/lagrange/bodies.hpp"
 #include "limber/kernel/lagrange/lagrange_state.hpp"
+#include "limber/kernel/lagrange/step.hpp"
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/options.hpp"
 #include "limber/kernel/particles/verlet_state.hpp"
+#include "limber/kernel/springs/bodies.hpp"
 #include "limber/kernel/springs/spring_state.hpp"
+#include "limber/kernel/springs/step.hpp"
+#include "limber/kernel/verlet/bodies.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
 namespace limber {
 

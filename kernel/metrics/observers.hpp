@@ -38,6 +38,12 @@ Observation observe(const FeatherstoneState& state);
 template <typename Scalar>
 void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments);
 void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments);
+/// The particle limbs' as the rigid methods' are called (method_contract.hpp): the Model is not
+/// needed, the particles are the limbs.
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, const Model&, std::vector<LimbSegment>& segments) {
+  limb_segments(state, segments);
+}
 
 /// How far the limbs reach below the ground now (m, ≥ 0; 0 without a ground): the deepest end
 /// sphere of a capsule, or end rim of a cylinder, under the ground plane.

@@ -9,6 +9,7 @@
 #include <string>
 #include <unordered_set>
 
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
@@ -385,20 +386,21 @@ std::string ball_name(const Model& model, std::size_t index) {
   return model.balls.size() == 1 ? std::string("ball") : "ball" + std::to_string(index);
 }
 
-void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,
-                         std::string_view method) {
+void require_supported(const Model& model, Method method) {
+  const MethodCapabilities& row = capabilities(method);
+  const std::string name(method_name(method));
   std::string names;
-  for (const JointType type : supported) names += (names.empty() ? "" : ", ") + std::string(joint_type_name(type));
+  for (std::size_t t = 0; t < row.joints.size(); ++t) {
+    if (row.joints[t]) names += (names.empty() ? "" : ", ") + std::string(joint_type_name(static_cast<JointType>(t)));
+  }
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
-    if (std::find(supported.begin(), supported.end(), joint.type) != supported.end()) continue;
-    throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + std::string(method) +
-                     " method does not support " + std::string(joint_type_name(joint.type)) + " joints (it supports " +
-                     names + "; lagrange supports every type)");
+    if (row.joints[static_cast<std::size_t>(joint.type)]) continue;
+    throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + name + " method does not support " +
+                     std::string(joint_type_name(joint.type)) + " joints (it supports " + names + "; lagrange supports every type)");
   }
-  if (!gears_supported && !model.gears.empty()) {
-    throw ModelError("gears[0] '" + model.gears[0].name + "': the " + std::string(method) +
-                     " method does not support gears (velocity constraints); lagrange does");
+  if (!row.gears && !model.gears.empty()) {
+    throw ModelError("gears[0] '" + model.gears[0].name + "': the " + name + " method does not support gears (velocity constraints); lagrange does");
   }
 }
 

@@ -110,6 +110,27 @@ struct Body {
   Vector3 tail() const { return position - 0.5 * shape.length * axis; }
 };
 
+// What a body is doing now, whatever the method: the World's read-outs and teleports, and each
+// method's side of them (kernel/methods/method_contract.hpp).
+
+/// A body frame's pose, world: origin (m) and orientation (body → world).
+struct Pose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+};
+
+/// A ball's centre (m) and velocity (m/s), world.
+struct BallMotion {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+};
+
+/// A body frame's motion, world: the velocity of its origin (m/s) and its angular velocity (rad/s).
+struct Motion {
+  Eigen::Vector3d linear = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular = Eigen::Vector3d::Zero();
+};
+
 /// What a joint lets its outboard body do relative to its inboard body (rows: the constraint
 /// equations it adds in maximal coordinates; DOF: the coordinates it adds in reduced ones).
 enum class JointType {
@@ -391,11 +412,6 @@ void validate_joint(const Model& model, std::size_t index);
 /// `model` as it is: for a joint the World holds a changed copy of (its current drive).
 void validate_joint(const Joint& joint, const Model& model, std::size_t index);
 
-/// Throws ModelError naming the first joint whose type is not in `supported`, or the first gear
-/// when `gears_supported` is false: "joints[3] 'knee': the <method> method does not support
-/// revolute joints (it supports spherical; lagrange supports every type)".
-void require_joint_types(const Model& model, std::initializer_list<JointType> supported, bool gears_supported,
-                         std::string_view method);
 
 /// Which joint controls (limits, friction, drives) a method applies.
 struct JointControlSupport {

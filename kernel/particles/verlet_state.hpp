@@ -214,6 +214,11 @@ struct VerletState {
   bool ball_touched = false;  ///< a ball touched a limb in some substep of the last step
   std::vector<std::pair<std::uint32_t, Eigen::Vector3d>> pending_forces;  ///< particle, N; next step
   std::vector<KinematicTarget> kinematic_targets;  ///< pinned particles only; next step, then cleared
+  /// Per Model body, its body frame's orientation (body → world). A limb with frame particles
+  /// reads its own (framed_orientation); a stick has no roll, so each step turns its frame by
+  /// the smallest rotation that takes the old axis to the new one (parallel transport,
+  /// verlet/bodies.hpp): continuous in time.
+  std::vector<Eigen::Quaterniond> body_frame;
   StepReport last_report;
   StepCounters counters;
 };

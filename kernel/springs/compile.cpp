@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/springs/implicit_step.hpp"
 
 namespace limber {
@@ -29,7 +30,7 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   validate(options.defaults);
   SpringState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
-  require_joint_types(model, {JointType::spherical, JointType::revolute}, /*gears_supported=*/false, "stiff-spring");
+  require_supported(model, Method::springs);
   require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "stiff-spring");
   state.options = options;
   state.joint_controls = joint_controls(model);

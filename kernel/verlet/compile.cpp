@@ -8,9 +8,11 @@
 #include <sstream>
 
 #include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/verlet/bodies.hpp"
 #include "limber/kernel/verlet/frames.hpp"
 #include "limber/layouts/graph/compressed_rows.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
@@ -209,8 +211,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   validate(model);
   validate(options.relaxation);
   validate(options.verlet);
-  require_joint_types(model, {JointType::spherical, JointType::revolute, JointType::universal, JointType::fixed},
-                      /*gears_supported=*/false, "verlet");
+  require_supported(model, Method::particles);
   require_joint_controls(model, {true, true, true}, "verlet");
   const std::size_t body_count = model.bodies.size();
   const std::size_t joint_count = model.joints.size();
@@ -594,6 +595,9 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   renumber_particles(state);
   prepare_relaxation_plan(state);
   prepare_limb_collisions(state, model);
+  // The body frames: each body's Model orientation, turned onto its limb's axis as compiled.
+  for (const Body& body : model.bodies) state.body_frame.push_back(body.orientation());
+  transport_body_frames(state);
   return state;
 }
 

@@ -12,6 +12,7 @@
 #include "limber/kernel/relaxation/relaxation.hpp"
 #include "limber/kernel/relaxation/tree_contacts.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/verlet/bodies.hpp"
 
 namespace limber {
 namespace {
@@ -499,6 +500,7 @@ StepReport step(VerletState<Scalar>& state, double dt) {
     state.pending_forces.clear();
     state.kinematic_targets.clear();
     report.fallbacks = state.plan.fallbacks.value;
+    transport_body_frames(state);  // the sticks' roll, carried onto their new axes
     report.profile.sleep += clock.lap();  // the step's bookkeeping after its substeps
   });
 }

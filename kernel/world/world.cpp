@@ -6,25 +6,24 @@
 #include <sstream>
 #include <type_traits>
 
-#include "limber/kernel/featherstone/compile.hpp"
-#include "limber/kernel/featherstone/step.hpp"
-#include "limber/kernel/lagrange/compile.hpp"
-#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/model/capabilities.hpp"
+#include "limber/kernel/methods/method.hpp"
+#include "limber/kernel/methods/method_contract.hpp"
 #include "limber/kernel/metrics/observers.hpp"
-#include "limber/kernel/sleeping/sleeping.hpp"
-#include "limber/kernel/springs/compile.hpp"
-#include "limber/kernel/springs/step.hpp"
-#include "limber/kernel/verlet/compile.hpp"
-#include "limber/kernel/verlet/step.hpp"
-#include "limber/kernel/world/world_bodies.hpp"
 #include "limber/kernel/world/world_internals.hpp"
 
 namespace limber {
 
 namespace {
 
-template <typename State>
-constexpr bool kParticles = std::is_same_v<State, VerletState<double>> || std::is_same_v<State, VerletState<float>>;
+// Every method's state answers every call the World makes (methods/method_contract.hpp).
+template <typename Variant>
+struct EveryMethodKeepsTheContract;
+template <typename... States>
+struct EveryMethodKeepsTheContract<std::variant<States...>> {
+  static constexpr bool value = (MethodContract<States> && ...);
+};
+static_assert(EveryMethodKeepsTheContract<MethodState>::value, "a method's state misses a call of method_contract.hpp");
 
 std::string vector_text(const Eigen::Vector3d& v) {
   std::ostringstream text;
@@ -54,8 +53,6 @@ World::World(Model model, WorldOptions options)
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) internals_->colliders.add(serial_);
   for (std::size_t k = 0; k < model_.balls.size(); ++k) internals_->balls.add(serial_);
   reset_loads();
-  for (const Body& body : model_.bodies) limb_frame_.push_back(body.orientation());
-  transport_frames();
   internals_->divergence = divergence_bounds(model_, observe());
 }
 
@@ -70,17 +67,6 @@ void World::reset_loads() {
   for (auto* loads : {&load_force_, &load_torque_, &impulse_force_, &impulse_torque_}) loads->assign(bodies, Eigen::Vector3d::Zero());
 }
 
-// Turns each particle limb's frame onto its axis now (the rigid methods' bodies carry their own).
-void World::transport_frames() {
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          for (std::size_t b = 0; b < limb_frame_.size(); ++b) limb_frame_[b] = world_bodies::transported_frame(state, b, limb_frame_[b]);
-        }
-      },
-      internals_->state);
-}
-
 double World::time() const {
   return std::visit([](const auto& state) { return state.time; }, internals_->state);
 }
@@ -90,15 +76,7 @@ Observation World::observe() const {
 }
 
 void World::segments(std::vector<LimbSegment>& out) const {
-  std::visit(
-      [&](const auto& state) {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          limb_segments(state, out);
-        } else {
-          limb_segments(static_cast<const RigidScene&>(state), model_, out);
-        }
-      },
-      internals_->state);
+  std::visit([&](const auto& state) { limb_segments(state, model_, out); }, internals_->state);
 }
 
 // --- Handles
@@ -195,19 +173,18 @@ StepStatus World::step(double dt) {
       [&](auto& s) {
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
-          world_bodies::apply_load(s, b, load_force_[b], load_torque_[b]);
+          apply_body_load(s, b, load_force_[b], load_torque_[b]);
         }
         for (const WorldInternals::Pin& pin : internals_->pins) {
-          if (pin.target) world_bodies::move_world_anchor(s, model_, index(pin.joint), *pin.target);
+          if (pin.target) move_world_anchor(s, model_, index(pin.joint), *pin.target);
         }
         return limber::step(s, dt);
       },
       state);
-  // After the step, in this order: the shared divergence check, the drives' release, the frames.
+  // After the step, in this order: the shared divergence check, the drives' release.
   if (report.status == StepStatus::ok && options_.divergence_check) report.status = check_divergence(observe(), internals_->divergence);
   internals_->report = report;
   if (release_drives_after_impact(state)) release_drives();
-  transport_frames();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
   for (WorldInternals::Pin& pin : internals_->pins) {
     if (pin.target) pin.anchor = pin.target;  // where a recompile holds the point
@@ -256,16 +233,6 @@ Model World::as_compiled(Model edited, const std::vector<std::uint32_t>& joint_s
 
 namespace {
 
-// Body b's pose in `state`: a particle limb's carries its transported frame.
-template <typename State>
-Pose body_pose(const State& state, std::size_t b, const std::vector<Eigen::Quaterniond>& limb_frame) {
-  if constexpr (kParticles<State>) {
-    return world_bodies::particle_pose(state, b, limb_frame[b]);
-  } else {
-    return world_bodies::rigid_pose(state, b);
-  }
-}
-
 // A bulk read-out's span has one entry a body, or the call is refused.
 void check_bulk_size(std::string_view call, std::string_view entry, std::size_t bodies, std::size_t size) {
   if (size != bodies) {
@@ -277,19 +244,19 @@ void check_bulk_size(std::string_view call, std::string_view entry, std::size_t 
 
 Pose World::pose(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit([&](const auto& state) { return body_pose(state, b, limb_frame_); }, internals_->state);
+  return std::visit([&](const auto& state) { return body_pose(state, b); }, internals_->state);
 }
 
 Motion World::motion(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit([&](const auto& state) { return world_bodies::motion(state, b); }, internals_->state);
+  return std::visit([&](const auto& state) { return body_motion(state, b); }, internals_->state);
 }
 
 void World::poses(std::span<Pose> out) const {
   check_bulk_size("poses", "Pose", model_.bodies.size(), out.size());
   std::visit(
       [&](const auto& state) {
-        for (std::size_t b = 0; b < out.size(); ++b) out[b] = body_pose(state, b, limb_frame_);
+        for (std::size_t b = 0; b < out.size(); ++b) out[b] = body_pose(state, b);
       },
       internals_->state);
 }
@@ -298,7 +265,7 @@ void World::motions(std::span<Motion> out) const {
   check_bulk_size("motions", "Motion", model_.bodies.size(), out.size());
   std::visit(
       [&](const auto& state) {
-        for (std::size_t b = 0; b < out.size(); ++b) out[b] = world_bodies::motion(state, b);
+        for (std::size_t b = 0; b < out.size(); ++b) out[b] = body_motion(state, b);
       },
       internals_->state);
 }
@@ -310,7 +277,7 @@ void World::motions(std::span<Motion> out) const {
 void World::add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point,
                          std::vector<Eigen::Vector3d>& linear, std::vector<Eigen::Vector3d>& angular) {
   const std::size_t b = index(body);
-  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return world_bodies::centre_of_mass(state, b); }, internals_->state);
+  const Eigen::Vector3d centre = std::visit([&](const auto& state) { return body_centre_of_mass(state, b); }, internals_->state);
   linear[b] += amount;
   angular[b] += (world_point - centre).cross(amount);
   wake(body);
@@ -367,15 +334,7 @@ void World::set_joint_drive(JointId joint, const std::optional<JointDrive>& driv
   }
   internals_->drives[joint.slot] = drive;
   if (!drive) return;
-  std::visit(
-      [&](auto& state) {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          limber::set_joint_drive(state, k, *drive);
-        } else {
-          state.joint_controls.joints[k].drive = drive;
-        }
-      },
-      internals_->state);
+  std::visit([&](auto& state) { limber::set_joint_drive(state, k, *drive); }, internals_->state);
   wake(body_id(static_cast<std::size_t>(model_.joints[k].outboard)));
 }
 
@@ -385,11 +344,11 @@ std::optional<JointDrive> World::joint_drive(JointId joint) const { return curre
 
 PinId World::pin(BodyId body, const Eigen::Vector3d& local_point) {
   check_vector(local_point, "pin");
-  if (options_.method == Method::featherstone) {
+  if (!capabilities(options_.method).holds) {
     refuse("pin", "holds points only through joints of its tree: a joint to the world added while the tree moves would re-root it; put the joint in the Model");
   }
   const std::size_t b = index(body);
-  const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return world_bodies::world_point(state, model_, b, limb_frame_[b], local_point); }, internals_->state);
+  const Eigen::Vector3d world_point = std::visit([&](const auto& state) { return body_point(state, b, local_point); }, internals_->state);
   Joint joint = spherical_joint("pin " + std::to_string(internals_->pins_made), kWorld, static_cast<int>(b), world_point, local_point);
   const JointId id = add_joint(joint);
   ++internals_->pins_made;
@@ -417,14 +376,14 @@ void World::move_pin(PinId pin, const Eigen::Vector3d& world_target) {
 
 Eigen::Vector3d World::pin_position(PinId pin) const {
   const JointId joint = internals_->pins[index(pin, "pin_position")].joint;
-  return std::visit([&](const auto& state) { return world_bodies::world_anchor(state, model_, index(joint)); }, internals_->state);
+  return std::visit([&](const auto& state) { return world_anchor(state, model_, index(joint)); }, internals_->state);
 }
 
 // --- Sleeping
 
 void World::wake(BodyId body) {
   const std::size_t b = index(body);
-  std::visit([&](auto& state) { world_bodies::wake(state, b); }, internals_->state);
+  std::visit([&](auto& state) { wake_body(state, b); }, internals_->state);
 }
 
 void World::wake_all() {
@@ -435,12 +394,12 @@ const StepReport& World::last_report() const { return internals_->report; }
 
 void World::sleep(BodyId body) {
   const std::size_t b = index(body);
-  std::visit([&](auto& state) { world_bodies::sleep(state, b); }, internals_->state);
+  std::visit([&](auto& state) { sleep_body(state, b); }, internals_->state);
 }
 
 bool World::sleeping(BodyId body) const {
   const std::size_t b = index(body);
-  return std::visit([&](const auto& state) { return world_bodies::sleeping(state, b); }, internals_->state);
+  return std::visit([&](const auto& state) { return body_sleeping(state, b); }, internals_->state);
 }
 
 // --- Teleport
@@ -455,23 +414,17 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
     throw WorldError("teleport: orientation must be a finite unit quaternion (w, x, y, z), got " + got.str());
   }
   const std::size_t b = index(body);
-  const Eigen::Quaterniond orientation = pose.orientation.normalized();
-  std::visit(
+  const Pose normalized{pose.position, pose.orientation.normalized()};
+  const bool moved = std::visit(
       [&](auto& state) {
-        using State = std::decay_t<decltype(state)>;
-        if constexpr (std::is_same_v<State, FeatherstoneState>) {
-          if (!world_bodies::teleport_floating_root(state, b, pose.position, orientation, motion)) {
-            refuse("teleport", "moves only a floating root (a body whose coordinates are its own); '" + model_.bodies[b].name + "' hangs from a joint");
-          }
-        } else if constexpr (kParticles<State>) {
-          world_bodies::teleport(state, b, pose.position, orientation, motion);
-          limb_frame_[b] = orientation;
-        } else {
-          world_bodies::teleport(state, b, pose.position, orientation, motion);
-        }
-        world_bodies::wake(state, b);
+        if (!teleport_body(state, b, normalized, motion)) return false;
+        wake_body(state, b);
+        return true;
       },
       internals_->state);
+  if (!moved) {
+    refuse("teleport", "moves only a body whose coordinates are its own (a floating root); '" + model_.bodies[b].name + "' hangs from a joint");
+  }
   internals_->divergence.start_energy = observe().energy();  // a teleport may put energy in: measure from here
 }
 
@@ -619,17 +572,7 @@ std::size_t World::index(BallId ball) const {
 
 BallMotion World::ball(BallId ball) const {
   const std::size_t k = index(ball);
-  return std::visit(
-      [&](const auto& state) -> BallMotion {
-        if constexpr (kParticles<std::decay_t<decltype(state)>>) {
-          const std::uint32_t p = state.balls[k].particle;
-          return {state.particles.position(p).template cast<double>(), particle_velocity(state, p)};
-        } else {
-          const std::size_t b = state.ball_begin + k;
-          return {state.bodies.state.position[b], state.bodies.linear_velocity(state.bodies.state, b)};
-        }
-      },
-      internals_->state);
+  return std::visit([&](const auto& state) { return ball_motion(state, k); }, internals_->state);
 }
 
 // Compiles `edited` and carries across, for every body whose old index is old_body_of_new[b]
@@ -637,34 +580,24 @@ BallMotion World::ball(BallId ball) const {
 // compile throws.
 void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
                       const std::vector<std::uint32_t>& joint_handles, std::optional<std::vector<std::int64_t>> old_ball_of_new) {
-  world_bodies::Survivors survivors{old_body_of_new, {}};
+  Survivors survivors{old_body_of_new, {}};
   if (old_ball_of_new) {
     survivors.balls = std::move(*old_ball_of_new);
   } else {
     survivors.balls = first_bodies_kept(edited.balls.size(), std::min(edited.balls.size(), model_.balls.size()));
   }
   MethodState next = compile_method(as_compiled(edited, joint_handles), options_);
-  std::visit(
+  std::string problem;
+  const bool carried = std::visit(
       [&](auto& fresh) {
         using State = std::decay_t<decltype(fresh)>;
-        const State& old = std::get<State>(internals_->state);
-        if constexpr (std::is_same_v<State, FeatherstoneState>) {
-          std::string problem;
-          if (!world_bodies::carry_state(old, model_, fresh, edited, survivors, problem)) refuse("a structural edit", problem);
-        } else {
-          world_bodies::carry_state(old, model_, fresh, edited, survivors);
-        }
+        return carry_state(std::get<State>(internals_->state), model_, fresh, edited, survivors, problem);
       },
       next);
-  std::vector<Eigen::Quaterniond> frames(edited.bodies.size());
-  for (std::size_t b = 0; b < edited.bodies.size(); ++b) {
-    frames[b] = old_body_of_new[b] >= 0 ? limb_frame_[static_cast<std::size_t>(old_body_of_new[b])] : edited.bodies[b].orientation();
-  }
+  if (!carried) refuse("a structural edit", problem);
   internals_->state = std::move(next);
   model_ = edited;
   reset_loads();
-  limb_frame_ = std::move(frames);
-  transport_frames();
   internals_->divergence = divergence_bounds(model_, observe());
 }
 

@@ -78,24 +78,6 @@ using BallId = Handle<struct BallTag>;
 /// A point of a body held to the world (World::pin): a spherical joint to the world.
 using PinId = Handle<struct PinTag>;
 
-/// A body frame's pose, world: origin (m) and orientation (body → world).
-struct Pose {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
-};
-
-/// A ball's centre (m) and velocity (m/s), world.
-struct BallMotion {
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
-};
-
-/// A body frame's motion, world: the velocity of its origin (m/s) and its angular velocity (rad/s).
-struct Motion {
-  Eigen::Vector3d linear = Eigen::Vector3d::Zero();
-  Eigen::Vector3d angular = Eigen::Vector3d::Zero();
-};
-
 class World {
  public:
   /// Compiles `model` under `options.method`. Throws ModelError when the model is invalid or the
@@ -243,7 +225,6 @@ class World {
 
  private:
   void reset_loads();
-  void transport_frames();
   void add_at_point(BodyId body, const Eigen::Vector3d& amount, const Eigen::Vector3d& world_point, std::vector<Eigen::Vector3d>& linear,
                     std::vector<Eigen::Vector3d>& angular);
   // joint_slots: each edited joint's handle slot (kNewJoint: added by this edit); old_ball_of_new:
@@ -275,8 +256,6 @@ class World {
   // Loads for the next step, per body, world, about its centre of mass: forces (N) and torques
   // (N·m), and impulses (N·s) and angular impulses (N·m·s), turned into forces when dt is known.
   std::vector<Eigen::Vector3d> load_force_, load_torque_, impulse_force_, impulse_torque_;
-  // Particle limbs' frames, carried by parallel transport (per Model body).
-  std::vector<Eigen::Quaterniond> limb_frame_;
 };
 
 }  // namespace limber

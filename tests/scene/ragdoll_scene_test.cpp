@@ -217,20 +217,17 @@ TEST(RagdollScene, ASmallSwingInsideAShouldersConeTurnsItsTwistLittle) {
 // --- Runs ---
 
 template <typename Scalar>
-FramePose body_pose(const VerletState<Scalar>& state, std::size_t b) {
+FramePose frame_pose(const VerletState<Scalar>& state, std::size_t b) {
   const std::uint32_t limb = state.body_limb[b];
   const Eigen::Vector3d head = state.particles.position(state.limbs.head[limb]).template cast<double>();
   const Eigen::Vector3d tail = state.particles.position(state.limbs.tail[limb]).template cast<double>();
   const auto framed = framed_orientation(state, b);
   return {framed ? *framed : Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), head - tail), 0.5 * (head + tail)};
 }
-FramePose body_pose(const RigidScene& state, std::size_t b) {
+FramePose frame_pose(const RigidScene& state, std::size_t b) {
   const Eigen::Quaterniond orientation = (state.bodies.state.orientation[b] * state.shapes.principal_frame[b].conjugate()).normalized();
   return {orientation, state.bodies.state.position[b] - orientation * state.shapes.centre_offset[b]};
 }
-template <typename Scalar>
-bool ball_touching(const VerletState<Scalar>& state) { return state.ball_touched; }
-bool ball_touching(const RigidScene& state) { return state.ball_touching; }
 
 struct RunResult {
   explicit RunResult(const KnockMeter& meter) : knock(meter) {}
@@ -260,8 +257,8 @@ RunResult run(const Model& model, MethodState& variant, double seconds) {
           for (std::size_t k = 0; k < model.joints.size(); ++k) {
             const Joint& joint = model.joints[k];
             if (!is_knee(joint) && !is_elbow(joint)) continue;
-            const JointCoordinates q = joint_coordinates(joint, frames[k], body_pose(state, static_cast<std::size_t>(joint.inboard)),
-                                                         body_pose(state, static_cast<std::size_t>(joint.outboard)));
+            const JointCoordinates q = joint_coordinates(joint, frames[k], frame_pose(state, static_cast<std::size_t>(joint.inboard)),
+                                                         frame_pose(state, static_cast<std::size_t>(joint.outboard)));
             const Range range = *joint.limits.range;
             const double excess = std::max(range.min - q.angle, q.angle - range.max);
             if (excess > result.worst_excess) result.worst_excess = excess, result.worst_joint = joint.name, result.worst_angle = q.angle;

@@ -1,4 +1,4 @@
-// The capability table (kernel/methods/capabilities.hpp) says what each method compiles, and
+// The capability table (kernel/model/capabilities.hpp) says what each method compiles, and
 // the README's status table says the same: each joint type compiles under a method exactly
 // when the table says so, and the README's row for the method names exactly those joint types
 // and, for precision, float exactly when the table allows it.
@@ -13,7 +13,7 @@
 
 #include <gtest/gtest.h>
 
-#include "limber/kernel/methods/capabilities.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/methods/method.hpp"
 #include "tests/support/models.hpp"
 

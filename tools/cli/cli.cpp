@@ -64,10 +64,6 @@ bool has_joint_gaps(const SpringState& state) { return state.springs.size() > 0;
 bool has_joint_gaps(const LagrangeState& state) { return state.joints.size() > 0; }
 bool has_joint_gaps(const FeatherstoneState& state) { return state.joints.size() > 0; }
 
-template <typename Scalar>
-bool ball_touching(const VerletState<Scalar>& state) { return state.ball_touched; }
-bool ball_touching(const RigidScene& state) { return state.ball_touching; }
-
 const char* layout_name(ParticleLayout layout) {
   switch (layout) {
     case ParticleLayout::aos: return "aos";
@@ -136,11 +132,7 @@ struct RunRecord {
 // The deepest overlap of `state`'s limbs now, measured alike for every method (observers.hpp).
 template <typename State>
 double penetration_now(const State& state, const Model& model, LimbCollisions& collisions, std::vector<LimbSegment>& segments) {
-  if constexpr (requires { state.particles; }) {
-    limb_segments(state, segments);
-  } else {
-    limb_segments(static_cast<const RigidScene&>(state), model, segments);
-  }
+  limb_segments(state, model, segments);
   const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
   return std::max(between, ground_penetration(model, segments));
 }

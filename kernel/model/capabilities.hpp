@@ -1,7 +1,6 @@
-// What each method supports, as one table in code: the README's status table says the same,
-// and tests/world/capabilities_test.cpp checks both against what compile_method accepts. A
-// method's own compile still refuses what it cannot do with a ModelError naming the part; the
-// table states those refusals in one place.
+// What each method supports, as one table in code: each method's compile refuses what its row
+// does not have (require_supported, model.hpp), the World refuses the calls it lacks, the
+// README's status table says the same, and tests/world/capabilities_test.cpp checks all three.
 #pragma once
 
 #include <array>
@@ -19,15 +18,17 @@ struct MethodCapabilities {
   std::array<bool, 5> joints;
   bool single_precision;  ///< a float state (WorldOptions::single_precision)
   bool threads;           ///< steps on more than one thread (VerletOptions::threads)
+  bool gears;             ///< Model::gears (velocity constraints between joints)
+  bool holds;             ///< points held to the world and moved while stepping (World::pin, move_pin)
 };
 
 /// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
-    //                        spherical revolute prismatic universal fixed
-    {Method::particles,    {true, true, false, true, true}, true, true},
-    {Method::springs,      {true, true, false, false, false}, false, false},
-    {Method::lagrange,     {true, true, true, true, true}, false, false},
-    {Method::featherstone, {true, true, true, false, true}, false, false},
+    //                     spherical revolute prismatic universal fixed   float  threads gears  holds
+    {Method::particles,    {true, true, false, true, true},              true,  true,   false, true},
+    {Method::springs,      {true, true, false, false, false},            false, false,  false, true},
+    {Method::lagrange,     {true, true, true, true, true},               false, false,  true,  true},
+    {Method::featherstone, {true, true, true, false, true},              false, false,  false, false},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
                   kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&
@@ -38,5 +39,11 @@ static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].m
 constexpr const MethodCapabilities& capabilities(Method method) { return kMethodCapabilities[static_cast<std::size_t>(method)]; }
 
 constexpr bool supports(Method method, JointType type) { return capabilities(method).joints[static_cast<std::size_t>(type)]; }
+
+/// Throws ModelError naming the first joint whose type `method`'s row lacks, or the first gear
+/// when it has no gears: "joints[3] 'knee': the springs method does not support prismatic
+/// joints (it supports spherical, revolute; lagrange supports every type)". Each method's
+/// compile calls it first.
+void require_supported(const Model& model, Method method);
 
 }  // namespace limber

@@ -1,36 +1,26 @@
-// The World's per-method work (internal to kernel/world): how each method's state answers a
-// body's pose, motion and centre of mass, takes a load, a held point, a teleport, a wake, and
-// carries its bodies across a recompile. Particle limbs are templates on the scalar type; the
-// rigid methods share RigidScene's arrays (Featherstone's after refreshing them from (q, v)).
+// The particle method's side of the World's calls (kernel/methods/method_contract.hpp): a body's
+// pose, motion and centre of mass read from its limb's particles, loads, held points, sleep,
+// teleports, balls, and the state carried across a recompile. Templates on the scalar type.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "limber/kernel/featherstone/featherstone_state.hpp"
-#include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/model/model.hpp"
-#include "limber/kernel/rigid/rigid_scene.hpp"
-#include "limber/kernel/sleeping/sleeping.hpp"
-#include "limber/kernel/springs/spring_state.hpp"
-#include "limber/kernel/verlet/step.hpp"
+#include "limber/kernel/model/survivors.hpp"
 #include "limber/kernel/particles/verlet_state.hpp"
-#include "limber/kernel/world/world.hpp"
+#include "limber/kernel/sleeping/sleeping.hpp"
+#include "limber/kernel/verlet/step.hpp"
 
-namespace limber::world_bodies {
+namespace limber {
 
-/// Which old body and ball each new one continues after a structural edit (−1: new): one entry
-/// per new Model body, and one per new ball.
-struct Survivors {
-  std::vector<std::int64_t> bodies, balls;
-};
-
-// ---- Particle limbs
+namespace particle_bodies {
 
 template <typename Scalar>
 Eigen::Vector3d particle_position(const VerletState<Scalar>& state, std::uint32_t p) {
@@ -55,15 +45,29 @@ Eigen::Quaterniond transported_frame(const VerletState<Scalar>& state, std::size
   return (Eigen::Quaterniond::FromTwoVectors(previous * Eigen::Vector3d::UnitZ(), axis) * previous).normalized();
 }
 
+}  // namespace particle_bodies
+
+/// Turns every body's frame (VerletState::body_frame) onto its limb's axis now: compile and
+/// step call it once each.
 template <typename Scalar>
-Pose particle_pose(const VerletState<Scalar>& state, std::size_t body, const Eigen::Quaterniond& frame) {
-  const auto [head, tail] = limb_ends(state, body);
-  return {0.5 * (head + tail), frame};
+void transport_body_frames(VerletState<Scalar>& state) {
+  for (std::size_t b = 0; b < state.body_frame.size(); ++b) {
+    state.body_frame[b] = particle_bodies::transported_frame(state, b, state.body_frame[b]);
+  }
+}
+
+/// The body frame: origin at the limb's centre (the mean of its ends), its orientation carried
+/// by body_frame.
+template <typename Scalar>
+Pose body_pose(const VerletState<Scalar>& state, std::size_t body) {
+  const auto [head, tail] = particle_bodies::limb_ends(state, body);
+  return {0.5 * (head + tail), state.body_frame[body]};
 }
 
 /// The limb's own mass at its particles, kg, and their positions.
 template <typename Scalar>
-Eigen::Vector3d centre_of_mass(const VerletState<Scalar>& state, std::size_t body) {
+Eigen::Vector3d body_centre_of_mass(const VerletState<Scalar>& state, std::size_t body) {
+  using particle_bodies::particle_position;
   const std::uint32_t limb = state.body_limb[body];
   const LimbBuffer& limbs = state.limbs;
   Eigen::Vector3d sum = limbs.head_mass[limb] * particle_position(state, limbs.head[limb]) +
@@ -82,9 +86,9 @@ Eigen::Vector3d centre_of_mass(const VerletState<Scalar>& state, std::size_t bod
 /// The velocity of the limb's centre (the mean of its ends') and its angular velocity across
 /// its axis (a particle limb does not spin about it).
 template <typename Scalar>
-Motion motion(const VerletState<Scalar>& state, std::size_t body) {
+Motion body_motion(const VerletState<Scalar>& state, std::size_t body) {
   const std::uint32_t limb = state.body_limb[body];
-  const auto [head, tail] = limb_ends(state, body);
+  const auto [head, tail] = particle_bodies::limb_ends(state, body);
   const Eigen::Vector3d v_head = particle_velocity(state, state.limbs.head[limb]), v_tail = particle_velocity(state, state.limbs.tail[limb]);
   const Eigen::Vector3d axis = head - tail;
   const double length2 = axis.squaredNorm();
@@ -94,9 +98,9 @@ Motion motion(const VerletState<Scalar>& state, std::size_t body) {
 /// A force at the limb's centre of mass (shared by its particles in proportion to its mass at
 /// each: apply_force) and the part of a torque across its axis, as a couple on its ends.
 template <typename Scalar>
-void apply_load(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
+void apply_body_load(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
   if (!force.isZero(0)) apply_force(state, static_cast<int>(body), force);
-  const auto [head, tail] = limb_ends(state, body);
+  const auto [head, tail] = particle_bodies::limb_ends(state, body);
   const Eigen::Vector3d axis = head - tail;
   const double length = axis.norm();
   if (torque.isZero(0) || !(length > 0)) return;
@@ -107,11 +111,14 @@ void apply_load(VerletState<Scalar>& state, std::size_t body, const Eigen::Vecto
   state.pending_forces.emplace_back(state.limbs.tail[limb], -at_head);
 }
 
+/// The world position of `local_point` (the Model body frame, m).
 template <typename Scalar>
-Eigen::Vector3d world_point(const VerletState<Scalar>& state, const Model&, std::size_t body, const Eigen::Quaterniond& frame,
-                            const Eigen::Vector3d& local_point) {
-  return particle_pose(state, body, frame).position + frame * local_point;
+Eigen::Vector3d body_point(const VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& local_point) {
+  const Pose pose = body_pose(state, body);
+  return pose.position + pose.orientation * local_point;
 }
+
+namespace particle_bodies {
 
 /// The held particle of world joint `joint`: its own pin particle (zero-length joints), or the
 /// limb end it pins (shared-particle joints).
@@ -127,16 +134,6 @@ std::uint32_t held_particle(const VerletState<Scalar>& state, const Model& model
 }
 
 template <typename Scalar>
-Eigen::Vector3d world_anchor(const VerletState<Scalar>& state, const Model& model, std::size_t joint) {
-  return particle_position(state, held_particle(state, model, joint));
-}
-
-template <typename Scalar>
-void move_world_anchor(VerletState<Scalar>& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target) {
-  state.kinematic_targets.push_back({held_particle(state, model, joint), target, Eigen::Vector3d::Zero()});
-}
-
-template <typename Scalar>
 std::uint32_t island_of_limb(const VerletState<Scalar>& state, std::size_t body) {
   const std::uint32_t limb = state.body_limb[body];
   for (std::uint32_t k = 0; k < state.islands.size(); ++k) {
@@ -145,29 +142,46 @@ std::uint32_t island_of_limb(const VerletState<Scalar>& state, std::size_t body)
   return 0;
 }
 
+}  // namespace particle_bodies
+
+/// Where world joint `joint` holds its body: its held particle, m.
 template <typename Scalar>
-void wake(VerletState<Scalar>& state, std::size_t body) {
-  wake_island(state, island_of_limb(state, body));
+Eigen::Vector3d world_anchor(const VerletState<Scalar>& state, const Model& model, std::size_t joint) {
+  return particle_bodies::particle_position(state, particle_bodies::held_particle(state, model, joint));
+}
+
+/// A kinematic target for the next step: the held particle moves to `target` on a straight
+/// path at constant velocity (exact).
+template <typename Scalar>
+void move_world_anchor(VerletState<Scalar>& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target) {
+  state.kinematic_targets.push_back({particle_bodies::held_particle(state, model, joint), target, Eigen::Vector3d::Zero()});
 }
 
 template <typename Scalar>
-void sleep(VerletState<Scalar>& state, std::size_t body) {
-  const std::uint32_t k = island_of_limb(state, body);
+void wake_body(VerletState<Scalar>& state, std::size_t body) {
+  wake_island(state, particle_bodies::island_of_limb(state, body));
+}
+
+template <typename Scalar>
+void sleep_body(VerletState<Scalar>& state, std::size_t body) {
+  const std::uint32_t k = particle_bodies::island_of_limb(state, body);
   if (state.islands[k].sleeping) return;
   rest_island(state, k);
   rebuild_awake_islands(state);
 }
 
 template <typename Scalar>
-bool sleeping(const VerletState<Scalar>& state, std::size_t body) {
-  return state.islands[island_of_limb(state, body)].sleeping;
+bool body_sleeping(const VerletState<Scalar>& state, std::size_t body) {
+  return state.islands[particle_bodies::island_of_limb(state, body)].sleeping;
 }
 
 /// Puts the limb's movable particles where the pose puts its head, centre and tail, moving as
-/// the motion says (a pinned particle stays; a particle a joint shares moves for both limbs).
+/// the motion says (a pinned particle stays; a particle a joint shares moves for both limbs),
+/// and its frame at the pose's orientation. Any body: always true.
 template <typename Scalar>
-void teleport(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
-              const Motion& motion) {
+bool teleport_body(VerletState<Scalar>& state, std::size_t body, const Pose& pose, const Motion& motion) {
+  const Eigen::Vector3d& position = pose.position;
+  const Eigen::Quaterniond& orientation = pose.orientation;
   const std::uint32_t limb = state.body_limb[body];
   const double half = 0.5 * double(state.constraints.rest_length[state.limbs.link_constraint[limb]]);
   const Eigen::Vector3d axis = orientation * Eigen::Vector3d::UnitZ();
@@ -181,7 +195,24 @@ void teleport(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3
   place(state.limbs.head[limb], position + half * axis);
   place(state.limbs.tail[limb], position - half * axis);
   if (state.limbs.centre[limb] != kNoCentre) place(state.limbs.centre[limb], position);
+  state.body_frame[body] = orientation;
+  return true;
 }
+
+/// Ball `ball`'s centre and velocity: its particle's.
+template <typename Scalar>
+BallMotion ball_motion(const VerletState<Scalar>& state, std::size_t ball) {
+  const std::uint32_t p = state.balls[ball].particle;
+  return {particle_bodies::particle_position(state, p), particle_velocity(state, p)};
+}
+
+/// Whether a ball touched a limb in the last step (Settings::release_drives_on_impact).
+template <typename Scalar>
+bool ball_touching(const VerletState<Scalar>& state) {
+  return state.ball_touched;
+}
+
+namespace particle_bodies {
 
 /// Island index of every limb (islands are contiguous limb ranges).
 template <typename Scalar>
@@ -193,13 +224,17 @@ std::vector<std::uint32_t> island_of_each_limb(const VerletState<Scalar>& state)
   return island;
 }
 
+}  // namespace particle_bodies
+
 /// Copies every particle that stands for the same thing in both states (a limb's head, centre
-/// or tail by body, a pin by joint name): positions, previous positions, velocities, and the
-/// clock. An island of surviving bodies sleeps if they all slept, else wakes; one of new bodies
-/// is as compiled. Linear in the particles and bodies (plus pins × joints).
+/// or tail by body, a pin by joint name): positions, previous positions, velocities, the body
+/// frames and the clock. An island of surviving bodies sleeps if they all slept, else wakes;
+/// one of new bodies is as compiled. Linear in the particles and bodies (plus pins × joints).
+/// Never refuses: true.
 template <typename Scalar>
-void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletState<Scalar>& fresh, const Model& new_model,
-                 const Survivors& survivors) {
+bool carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletState<Scalar>& fresh, const Model& new_model,
+                 const Survivors& survivors, std::string& /*problem*/) {
+  using particle_bodies::island_of_each_limb;
   // The old particle standing for each (kind, index), the first one as compiled.
   const auto key = [](ParticleOrigin::Kind kind, std::int64_t index) {
     return (static_cast<std::uint64_t>(kind) << 40) | static_cast<std::uint64_t>(index);
@@ -281,39 +316,13 @@ void carry_state(const VerletState<Scalar>& old, const Model& old_model, VerletS
     if (any_old[k]) fresh.islands[k].sleeping = all_asleep[k] != 0, fresh.islands[k].still_time = 0;
   }
   rebuild_awake_islands(fresh);
+  // A surviving body keeps its frame, turned onto its axis now; a new one starts from the Model's.
+  for (std::size_t b = 0; b < fresh.body_frame.size(); ++b) {
+    const std::int64_t o = survivors.bodies[b];
+    fresh.body_frame[b] = o >= 0 ? old.body_frame[static_cast<std::size_t>(o)] : new_model.bodies[b].orientation();
+  }
+  transport_body_frames(fresh);
+  return true;
 }
 
-// ---- Rigid bodies (springs, Lagrange, Featherstone's refreshed bodies)
-
-Pose rigid_pose(const RigidScene& scene, std::size_t body);
-Motion motion(const RigidScene& scene, std::size_t body);
-Eigen::Vector3d centre_of_mass(const RigidScene& scene, std::size_t body);
-void apply_load(RigidScene& scene, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque);
-Eigen::Vector3d world_point(const RigidScene& scene, const Model& model, std::size_t body, const Eigen::Quaterniond& frame,
-                            const Eigen::Vector3d& local_point);
-Eigen::Vector3d world_anchor(const SpringState& state, const Model& model, std::size_t joint);
-Eigen::Vector3d world_anchor(const LagrangeState& state, const Model& model, std::size_t joint);
-Eigen::Vector3d world_anchor(const FeatherstoneState& state, const Model& model, std::size_t joint);
-void move_world_anchor(SpringState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
-void move_world_anchor(LagrangeState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
-void move_world_anchor(FeatherstoneState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
-void wake(RigidScene& scene, std::size_t body);
-void sleep(RigidScene& scene, std::size_t body);
-void sleep(FeatherstoneState& state, std::size_t body);  ///< and its island's joint velocities
-bool sleeping(const RigidScene& scene, std::size_t body);
-void teleport(RigidScene& scene, std::size_t body, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation,
-              const Motion& motion);
-/// Featherstone: moves a floating root (and what hangs from it); false for any other body.
-bool teleport_floating_root(FeatherstoneState& state, std::size_t body, const Eigen::Vector3d& position,
-                            const Eigen::Quaterniond& orientation, const Motion& motion);
-/// Copies every surviving body's x, q, P, L (and the balls') and the clock; islands sleep as
-/// for the particle method.
-void carry_state(const RigidScene& old, const Model& old_model, RigidScene& fresh, const Model& new_model,
-                 const Survivors& survivors);
-/// Featherstone: copies each surviving body's joint coordinates and velocities when it hangs
-/// from the same joint on the same parent (or floats) in both; false, with `problem` naming
-/// the body, when an edit changes how a surviving body hangs.
-bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
-                 const Survivors& survivors, std::string& problem);
-
-}  // namespace limber::world_bodies
+}  // namespace limber

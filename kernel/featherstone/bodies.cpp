@@ -1,0 +1,73 @@
+#include "limber/kernel/featherstone/bodies.hpp"
+
+#include <stdexcept>
+
+#include "limber/kernel/featherstone/step.hpp"
+
+namespace limber {
+
+Eigen::Vector3d world_anchor(const FeatherstoneState& state, const Model&, std::size_t joint) { return state.joints.inboard_anchor[joint]; }
+
+void move_world_anchor(FeatherstoneState&, const Model&, std::size_t, const Eigen::Vector3d&) {
+  throw std::logic_error("move_world_anchor: Featherstone worlds hold no pins (World::pin refuses them)");
+}
+
+void sleep_body(FeatherstoneState& state, std::size_t body) {
+  rest_island(state, state.island_of_body[body]);
+  zero_sleeping_velocities(state);
+}
+
+bool teleport_body(FeatherstoneState& state, std::size_t body, const Pose& pose, const Motion& motion) {
+  const Eigen::Vector3d& position = pose.position;
+  const Eigen::Quaterniond& orientation = pose.orientation;
+  const std::int32_t i = state.tree_body[body];
+  if (state.tree.body(i).joint != ArticulatedJoint::floating) return false;
+  // A floating root's frame: the Model body frame's axes at the centre of mass; q = (p, w, x, y, z).
+  const Eigen::Vector3d centre = position + orientation * state.shapes.centre_offset[body];
+  const int p = state.tree.position_offset(i), v = state.tree.velocity_offset(i);
+  state.q.segment<3>(p) = centre;
+  state.q.segment<4>(p + 3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
+  const Eigen::Matrix3d to_child = orientation.toRotationMatrix().transpose();
+  state.v.segment<3>(v) = to_child * motion.angular;
+  state.v.segment<3>(v + 3) = to_child * (motion.linear + motion.angular.cross(centre - position));
+  refresh_rigid_bodies(state);
+  return true;
+}
+
+bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
+                 const Survivors& survivors, std::string& problem) {
+  // The joint a tree body hangs from, by name (empty: floating), and its parent's old index.
+  const auto hangs = [](const FeatherstoneState& state, const Model& model, std::int32_t i) {
+    const std::int32_t joint = state.model_joint[static_cast<std::size_t>(i)];
+    return joint < 0 ? std::string() : model.joints[static_cast<std::size_t>(joint)].name;
+  };
+  for (std::int32_t i = 0; i < fresh.tree.body_count(); ++i) {
+    const std::int32_t b = fresh.scene_body[static_cast<std::size_t>(i)];
+    const std::int64_t o = rigid_bodies::old_body(old, fresh, survivors, static_cast<std::size_t>(b));
+    if (o < 0) continue;
+    const std::int32_t oi = old.tree_body[static_cast<std::size_t>(o)];
+    const std::int32_t parent = fresh.tree.body(i).parent, old_parent = old.tree.body(oi).parent;
+    const std::int64_t parent_then =
+        parent < 0 ? -1 : rigid_bodies::old_body(old, fresh, survivors, static_cast<std::size_t>(fresh.scene_body[static_cast<std::size_t>(parent)]));
+    const std::int64_t old_parent_body = old_parent < 0 ? -1 : old.scene_body[static_cast<std::size_t>(old_parent)];
+    if (hangs(fresh, new_model, i) != hangs(old, old_model, oi) || parent_then != old_parent_body ||
+        fresh.tree.body(i).joint != old.tree.body(oi).joint) {
+      const std::string name = static_cast<std::size_t>(b) < new_model.bodies.size() ? new_model.bodies[static_cast<std::size_t>(b)].name
+                                                                                    : ball_name(new_model, static_cast<std::size_t>(b) - new_model.bodies.size());
+      problem = "keeps a moving body's state only while it hangs from the same joint on the same parent; the edit changes how '" + name +
+                "' hangs (reduced coordinates would re-root it)";
+      return false;
+    }
+    const ArticulatedJoint type = fresh.tree.body(i).joint;
+    fresh.q.segment(fresh.tree.position_offset(i), joint_position_count(type)) =
+        old.q.segment(old.tree.position_offset(oi), joint_position_count(type));
+    fresh.v.segment(fresh.tree.velocity_offset(i), joint_velocity_count(type)) =
+        old.v.segment(old.tree.velocity_offset(oi), joint_velocity_count(type));
+  }
+  fresh.time = old.time;
+  rigid_bodies::carry_sleep(old, fresh, survivors);
+  refresh_rigid_bodies(fresh);
+  return true;
+}
+
+}  // namespace limber

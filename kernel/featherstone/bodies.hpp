@@ -1,0 +1,34 @@
+// Featherstone's side of the World's calls (kernel/methods/method_contract.hpp) where its
+// reduced coordinates differ from the rigid bodies it refreshes (rigid/bodies.hpp answers the
+// rest): held points, sleep, teleports and the state carried across a recompile act on (q, v).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/survivors.hpp"
+#include "limber/kernel/rigid/bodies.hpp"
+
+namespace limber {
+
+/// Where joint `joint` (to the world) holds its body: its world anchor, m.
+Eigen::Vector3d world_anchor(const FeatherstoneState& state, const Model& model, std::size_t joint);
+/// Refused before it is called (World::pin refuses a Featherstone world: a joint to the world
+/// added while the tree moves would re-root it); throws std::logic_error.
+void move_world_anchor(FeatherstoneState& state, const Model& model, std::size_t joint, const Eigen::Vector3d& target);
+/// Puts the body's island to sleep and zeroes its joint velocities.
+void sleep_body(FeatherstoneState& state, std::size_t body);
+/// Moves a floating root (a body whose coordinates are its own) and what hangs from it; false,
+/// changing nothing, for any other body.
+bool teleport_body(FeatherstoneState& state, std::size_t body, const Pose& pose, const Motion& motion);
+/// Copies each surviving body's joint coordinates and velocities when it hangs from the same
+/// joint on the same parent (or floats) in both; false, with `problem` naming the body, when an
+/// edit changes how a surviving body hangs (reduced coordinates would re-root it).
+bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
+                 const Survivors& survivors, std::string& problem);
+
+}  // namespace limber

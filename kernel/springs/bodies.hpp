@@ -1,0 +1,21 @@
+// The springs method's side of the World's calls (kernel/methods/method_contract.hpp): its held
+// points; every other call is the rigid bodies' (rigid/bodies.hpp).
+#pragma once
+
+#include <cstddef>
+
+#include <Eigen/Core>
+
+#include "limber/kernel/model/model.hpp"
+#include "limber/kernel/rigid/bodies.hpp"
+#include "limber/kernel/springs/spring_state.hpp"
+
+namespace limber {
+
+/// Where joint `joint` (to the world) holds its body: the spring's world anchor, m.
+inline Eigen::Vector3d world_anchor(const SpringState& state, const Model&, std::size_t joint) { return state.springs.inboard_anchor[joint]; }
+
+/// Moves the spring's world anchor to `target` for the next step; the body follows through the joint.
+inline void move_world_anchor(SpringState& state, const Model&, std::size_t joint, const Eigen::Vector3d& target) { state.springs.inboard_anchor[joint] = target; }
+
+}  // namespace limber
