@@ -64,7 +64,7 @@
 // exactly at the step's end (Catto's speculative contacts). Then the push-out takes the rows
 // with the contacts: a violation is pushed out in full (it is always the solver's: the Model's
 // poses are inside every limit), and a row inside its limit is not pushed past it. In each pass
-// an island's rows are solved together, after its contacts (joint_space_contacts.cpp, "Holding
+// an island's rows are solved together, after its contacts (joint_space_limits.cpp, "Holding
 // rows"): the rows held get a penalty 10⁶ times their effective mass on their joint's D_i in the
 // articulated-body factorization, which is exactly the response to joint impulses along them
 // and leaves them within round-off of their targets after one refinement; rows that would pull

@@ -1,0 +1,468 @@
+#include "limber/kernel/featherstone/joint_space_limits.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <type_traits>
+
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
+#include "limber/kernel/featherstone/joint_space_response.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/model/joint_coordinates.hpp"
+
+namespace limber {
+namespace joint_space {
+
+// --- Joint limits (joint_space_contacts.hpp, "Joint limits") -------------------------------------
+
+// Rows closer than this to their limit (rad or m), or closer than two steps of their approach, are
+// solved; the others cannot reach it within the step (nor be pushed there by the contacts'
+// push-out of an ordinary step).
+constexpr double kLimitMargin = 0.02;
+
+// The rotation by rotation vector `rotation` (axis × angle, rad).
+Eigen::Quaterniond rotation_of(const Eigen::Vector3d& rotation) {
+  const double angle = rotation.norm();
+  return angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation / angle)) : Eigen::Quaterniond::Identity();
+}
+
+// Joint k measured at the tree's current poses (state.kinematics): its bodies' Model frames, its
+// coordinates, and the map from an inboard-frame angular vector to joint k's velocity coordinates,
+// sign·E_child·R_inboard (orthogonal: it maps rates' rows and torques alike).
+struct MeasuredJoint {
+  FramePose inboard, outboard;
+  JointCoordinates coordinates;
+  Eigen::Matrix3d inboard_to_velocity = Eigen::Matrix3d::Identity();
+};
+MeasuredJoint measure_joint(const FeatherstoneState& state, std::size_t k) {
+  const Joint& joint = state.joint_controls.joints[k];
+  const TreeJoint& held = state.tree_joint[k];
+  MeasuredJoint out;
+  if (joint.inboard != kWorld) out.inboard = model_frame_pose(state, static_cast<std::size_t>(joint.inboard));
+  out.outboard = model_frame_pose(state, static_cast<std::size_t>(joint.outboard));
+  out.coordinates = joint_coordinates(joint, state.joint_controls.frames[k], out.inboard, out.outboard);
+  out.inboard_to_velocity =
+      held.sign * (state.kinematics.world_to_body[static_cast<std::size_t>(held.body)].rotation * out.inboard.orientation.toRotationMatrix());
+  return out;
+}
+
+// Whether joint k's island is awake.
+bool awake(const FeatherstoneState& state, const TreeJoint& held) {
+  return !state.islands[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]].sleeping;
+}
+
+// The rows of every limit that is violated or may be within the step, at the current (q, v):
+// gaps, directions, approach speeds (inverse masses: measure_limit_rows).
+void find_limit_rows(FeatherstoneState& state, double dt) {
+  std::vector<JointLimitRow>& rows = state.controls.rows;
+  rows.clear();
+  state.controls.islands.clear();
+  const JointControls& controls = state.joint_controls;
+  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+    const Joint& joint = controls.joints[k];
+    const TreeJoint& held = state.tree_joint[k];
+    if (!joint.limits.any() || held.dofs == 0 || !awake(state, held)) continue;
+    const JointFrame& frame = controls.frames[k];
+    const MeasuredJoint measured = measure_joint(state, k);
+    const JointCoordinates& q = measured.coordinates;
+    JointLimitRow row;
+    row.island = static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
+    row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
+    // Adds the row C = gap ≥ 0 with ∂C/∂v = direction when it may act within the step.
+    const auto add = [&](double gap, const Eigen::Vector3d& direction) {
+      const double rate = joint_dot(direction, state.v, held.offset, held.dofs);
+      if (!(gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0))) return;  // also skips a NaN
+      row.gap = gap, row.direction = direction;
+      rows.push_back(row);
+      std::vector<std::int32_t>& islands = state.controls.islands;
+      if (std::find(islands.begin(), islands.end(), row.island) == islands.end()) islands.push_back(row.island);
+    };
+    if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
+      if (!joint.limits.range) continue;
+      const double x = joint.type == JointType::revolute ? q.angle : q.slide;
+      add(x - joint.limits.range->min, Eigen::Vector3d(held.sign, 0, 0));
+      add(joint.limits.range->max - x, Eigen::Vector3d(-held.sign, 0, 0));
+      continue;
+    }
+    // Spherical: rates of the swing and twist as rows on the relative angular velocity ω
+    // (inboard frame), carried onto v.
+    const Eigen::Vector3d axis = (rotation_of(q.rotation) * frame.rest_axis).normalized();  // a = D·a₀
+    const Eigen::Vector3d& cone = frame.cone_axis;                                           // c
+    if (joint.limits.swing) {
+      // θ = acos(c·a), θ̇ = ω·(c × a)/|c × a|: the axis that turns the cone's axis to the outboard's.
+      const Eigen::Vector3d normal = cone.cross(axis);
+      const double length = normal.norm();
+      if (length > 1e-9) add(*joint.limits.swing - q.swing, -(measured.inboard_to_velocity * (normal / length)));
+    }
+    if (joint.limits.twist && 1 + cone.dot(axis) > 1e-6) {
+      // ψ = 2·atan2((D·Q).vec·c, (D·Q).w) has ψ̇ = ω·(c + a)/(1 + c·a): the outboard's axis a plus
+      // the swing's own turn about it (= a where a = c).
+      const Eigen::Vector3d gradient = measured.inboard_to_velocity * twist_gradient(axis, cone);
+      add(q.twist - joint.limits.twist->min, gradient);
+      add(joint.limits.twist->max - q.twist, -gradient);
+    }
+  }
+}
+
+// Each row's direction·H⁻¹·direction (one joint-block response per limited joint). Needs the
+// articulated inertias at the current q in state.contact.articulated.
+void measure_limit_rows(FeatherstoneState& state) {
+  Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+  int measured_offset = -1;
+  for (JointLimitRow& row : state.controls.rows) {
+    if (row.offset != measured_offset) {
+      block = joint_block_response(state, static_cast<std::size_t>(row.island), row.offset, row.dofs);
+      measured_offset = row.offset;
+    }
+    row.inverse_mass = row.direction.dot(block * row.direction);
+  }
+}
+
+// --- Holding rows: an island's rows solved together ------------------------------------------------
+//
+// Sequential impulses converge slowly on limit rows of neighbouring joints (a light spine between
+// a torso and a pelvis both at their limits: each row's impulse undoes the other's), so an
+// island's rows are solved together, exactly: the rows held (the active set) get the penalty
+// M = kPenalty/(their inverse mass) on their joint's D_i in the articulated-body factorization —
+// H + Σ M·d·dᵀ, each held joint passing its parent nearly its whole inertia, as a locked joint
+// does — and the impulse Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
+// impulses Σ λ·d with λ = M·(target − value − d·Δv), and each held row's value ends within
+// 1/kPenalty of its target. Rows whose λ would pull are released, rows the solve pushes past
+// their target are held, and the solve repeats (at most kActiveSetIterations times).
+constexpr double kPenalty = 1e6;
+constexpr int kActiveSetIterations = 8;
+
+// The articulated-body factorization of island `island` at the current q (parent_to_body from
+// state.contact.articulated) with `armature` (nv, or none) and state.controls.penalty added to each
+// D_i, into state.controls.held: the inward pass of the articulated-body algorithm (Table 7.1).
+void factor_held(FeatherstoneState& state, std::size_t island, const Eigen::VectorXd* armature) {
+  const ArticulatedTree& tree = state.tree;
+  const DynamicsWorkspace& base = state.contact.articulated;
+  JointControlScratch& c = state.controls;
+  DynamicsWorkspace& w = c.held;
+  const int begin = state.island_begin[island], end = state.island_begin[island + 1];
+  for (int i = begin; i < end; ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    w.articulated_inertia[index] = tree.body(i).inertia.matrix();
+    w.parent_to_body[index] = base.parent_to_body[index];
+  }
+  for (int i = end - 1; i >= begin; --i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    const int offset = tree.velocity_offset(i);
+    const SpatialMatrix& ia = w.articulated_inertia[index];
+    SpatialMatrix through;
+    with_degrees_of_freedom(body.joint, [&](auto dofs) {
+      constexpr int k = decltype(dofs)::value;
+      if constexpr (k == 0) {
+        through = ia;
+      } else {
+        const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
+        const Eigen::Matrix<double, 6, k> u = ia * s;
+        Eigen::Matrix<double, k, k> d = s.transpose() * u;
+        if (armature) d.diagonal() += armature->template segment<k>(offset);
+        if constexpr (k <= 3) d += c.penalty[index].template topLeftCorner<k, k>();
+        const Eigen::Matrix<double, k, k> d_inverse = d.inverse();
+        w.projected_inertia.template middleCols<k>(offset) = u;
+        w.joint_inertia_inverse.template block<k, k>(0, offset) = d_inverse;
+        through.noalias() = ia - u * d_inverse * u.transpose();
+      }
+    });
+    if (body.parent >= 0) {
+      w.articulated_inertia[static_cast<std::size_t>(body.parent)] += w.parent_to_body[index].transpose_apply_inertia(through);
+    }
+  }
+}
+
+// Clears the penalties of island `island`'s bodies.
+void clear_penalties(FeatherstoneState& state, std::size_t island) {
+  for (int i = state.island_begin[island]; i < state.island_begin[island + 1]; ++i) state.controls.penalty[static_cast<std::size_t>(i)].setZero();
+}
+
+// The limit rows, together per island: velocity level (values direction·v, targets
+// −max(C, 0)/Δt, accumulated impulses) or position level (values direction·δ of the push-out's
+// displacement, targets the violation to push out, or −C for a row inside its limit;
+// accumulated pushes). The responses are added to (v, body velocities) or to (δ, body
+// displacements). Returns whether it changed anything.
+bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
+  JointControlScratch& c = state.controls;
+  JointSpaceContactScratch& s = state.contact;
+  const Eigen::VectorXd& values = position ? s.displacement : state.v;
+  const ResponseTarget response = position ? ResponseTarget{&s.displacement, &s.body_displacement} : ResponseTarget{&state.v, &state.kinematics.velocity};
+  const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
+  const auto accumulated = [&](JointLimitRow& row) -> double& { return position ? row.push : row.impulse; };
+  bool changed_any = false;
+  for (const std::int32_t island : c.islands) {
+    bool needed = false;
+    for (JointLimitRow& row : c.rows) {
+      if (row.island != island) continue;
+      row.value = joint_dot(row.direction, values, row.offset, row.dofs);
+      if (position) {
+        row.target = -row.gap;  // a violation in full: it is never the Model's, always the solver's
+      } else {
+        row.target = row.gap > 0 ? -row.gap / dt : 0.0;
+      }
+      row.active = row.inverse_mass > 0 && (row.value < row.target - tolerance || accumulated(row) > 0);
+      needed = needed || (row.active && std::abs(row.target - row.value) > tolerance + (position ? 1e-5 * std::abs(row.target) : 0.0));
+    }
+    if (!needed) continue;
+    const auto k = static_cast<std::size_t>(island);
+    for (int iteration = 0;; ++iteration) {
+      // Held rows: the penalty and its impulse; released rows give back what they had.
+      clear_penalties(state, k);
+      for (JointLimitRow& row : c.rows) {
+        if (row.island != island) continue;
+        row.held = row.active;
+        if (row.held) {
+          const double penalty = kPenalty / row.inverse_mass;
+          const Eigen::Vector3d d = row.direction;
+          Eigen::Matrix3d& block = c.penalty[static_cast<std::size_t>(row.body)];
+          for (int a = 0; a < row.dofs; ++a) {
+            for (int b = 0; b < row.dofs; ++b) block(a, b) += penalty * d[a] * d[b];
+          }
+          add_joint_vector(penalty * (row.target - row.value) * d, s.joint_impulse, row.offset, row.dofs);
+        } else if (accumulated(row) > 0) {
+          add_joint_vector(-accumulated(row) * row.direction, s.joint_impulse, row.offset, row.dofs);
+        }
+      }
+      factor_held(state, k, nullptr);
+      impulse_response(state, k, c.held);
+      bool changed = false;
+      for (JointLimitRow& row : c.rows) {
+        if (row.island != island) continue;
+        const double moved = joint_dot(row.direction, s.joint_change, row.offset, row.dofs);
+        if (row.held) {
+          row.change = kPenalty / row.inverse_mass * (row.target - row.value - moved);
+          if (accumulated(row) + row.change < 0) row.active = false, changed = true;  // it would pull: release it
+        } else {
+          row.change = -accumulated(row);
+          if (row.inverse_mass > 0 && row.value + moved < row.target - tolerance) row.active = true, changed = true;
+        }
+      }
+      if (changed && iteration + 1 < kActiveSetIterations) continue;
+      add_response(state, k, response);
+      // One refinement with the same factorization takes the held rows' residual, 1/kPenalty of
+      // what they moved, to round-off.
+      for (JointLimitRow& row : c.rows) {
+        if (row.island != island) continue;
+        accumulated(row) = std::max(accumulated(row) + row.change, 0.0);
+        row.value = joint_dot(row.direction, values, row.offset, row.dofs);
+        if (row.held && row.active) {
+          add_joint_vector(kPenalty / row.inverse_mass * (row.target - row.value) * row.direction, s.joint_impulse, row.offset, row.dofs);
+        }
+      }
+      impulse_response(state, k, c.held);
+      for (JointLimitRow& row : c.rows) {
+        if (row.island != island || !(row.held && row.active)) continue;
+        const double moved = joint_dot(row.direction, s.joint_change, row.offset, row.dofs);
+        accumulated(row) = std::max(accumulated(row) + kPenalty / row.inverse_mass * (row.target - row.value - moved), 0.0);
+      }
+      add_response(state, k, response);
+      changed_any = true;
+      break;
+    }
+  }
+  return changed_any;
+}
+
+// Joint friction, together per island, as the rows (see "Holding rows"): a stuck joint is held at
+// rest (penalty kPenalty times its block of (H + h·G)⁻¹ inverted), a sliding one takes the impulse
+// friction·h against the velocity it ends with; a stuck joint whose impulse would pass its bound
+// slides, a sliding one that friction would turn back sticks. Adds the responses to the
+// predicted velocities; the impulses stay in the blocks. Needs state.contact.articulated (with
+// the drives' armature, state.controls.armature).
+void solve_friction(FeatherstoneState& state) {
+  JointControlScratch& c = state.controls;
+  JointSpaceContactScratch& s = state.contact;
+  for (const std::int32_t island : c.islands) {
+    const auto k = static_cast<std::size_t>(island);
+    bool moving = false;
+    for (JointFrictionBlock& block : c.friction) {
+      if (block.island != island) continue;
+      block.stuck = true, block.impulse.setZero();
+      moving = moving || block.rate.norm() > 0;
+    }
+    if (!moving) continue;  // nothing to hold
+    for (int iteration = 0;; ++iteration) {
+      clear_penalties(state, k);
+      for (JointFrictionBlock& block : c.friction) {
+        if (block.island != island) continue;
+        block.held = block.stuck;
+        if (block.held) {
+          c.penalty[static_cast<std::size_t>(block.body)] += kPenalty * block.mass;
+          add_joint_vector(-kPenalty * (block.mass * block.rate), s.joint_impulse, block.offset, block.dofs);
+        } else {
+          add_joint_vector(block.impulse, s.joint_impulse, block.offset, block.dofs);
+        }
+      }
+      factor_held(state, k, &c.armature);
+      impulse_response(state, k, c.held);
+      bool changed = false;
+      for (JointFrictionBlock& block : c.friction) {
+        if (block.island != island) continue;
+        Eigen::Vector3d after = block.rate;
+        for (int m = 0; m < block.dofs; ++m) after[m] += s.joint_change[block.offset + m];
+        if (block.held) {
+          block.impulse = -kPenalty * (block.mass * after);  // what the penalty applied
+          if (block.impulse.norm() > block.bound) block.stuck = false, changed = true;
+        } else if (after.dot(block.impulse) > 0) {
+          block.stuck = true, changed = true;  // friction would turn it back: it sticks
+        } else if (block.dofs == 3 && after.norm() > 0) {
+          // Against the sliding velocity it ends with (maximal dissipation).
+          const Eigen::Vector3d against = -block.bound / after.norm() * after;
+          if ((against - block.impulse).norm() > 1e-6 * block.bound) block.impulse = against, changed = true;
+        }
+      }
+      if (changed && iteration + 1 < kActiveSetIterations) {
+        // The next round: a joint that slips slides at the bound along the impulse it needed.
+        for (JointFrictionBlock& block : c.friction) {
+          if (block.island == island && block.held && !block.stuck) block.impulse *= block.bound / block.impulse.norm();
+        }
+        continue;
+      }
+      const auto [first, last] = island_velocities(state, k);
+      c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
+      // One refinement of the held joints with the same factorization (as for the rows).
+      for (JointFrictionBlock& block : c.friction) {
+        if (block.island != island || !(block.held && block.stuck)) continue;
+        Eigen::Vector3d after = Eigen::Vector3d::Zero();
+        for (int m = 0; m < block.dofs; ++m) after[m] = c.predicted[block.offset + m];
+        block.rate = after;  // now the residual
+        add_joint_vector(-kPenalty * (block.mass * after), s.joint_impulse, block.offset, block.dofs);
+      }
+      impulse_response(state, k, c.held);
+      for (JointFrictionBlock& block : c.friction) {
+        if (block.island != island) continue;
+        if (block.held && block.stuck) {
+          Eigen::Vector3d residual = block.rate;
+          for (int m = 0; m < block.dofs; ++m) residual[m] += s.joint_change[block.offset + m];
+          block.impulse -= kPenalty * (block.mass * residual);
+        }
+        const double size = block.impulse.norm();  // past the bound only when the rounds ran out
+        if (size > block.bound) block.impulse *= block.bound / size;
+      }
+      c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
+      break;
+    }
+  }
+}
+
+
+}  // namespace joint_space
+
+using namespace joint_space;
+
+FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body) {
+  const auto i = static_cast<std::size_t>(state.tree_body[body]);
+  const PluckerTransform& world_to_body = state.kinematics.world_to_body[i];
+  const Eigen::Matrix3d rotation = world_to_body.rotation.transpose();  // body → world
+  // The tree body's origin is the Model frame's point centre_offset − centre_of_mass[i] (its anchor).
+  FramePose pose;
+  pose.orientation = Eigen::Quaterniond(rotation);
+  pose.position = world_to_body.translation - rotation * (state.shapes.centre_offset[body] - state.centre_of_mass[i]);
+  return pose;
+}
+
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h) {
+  const JointControls& controls = state.joint_controls;
+  JointControlScratch& c = state.controls;
+  bool drives = false, friction = false;
+  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+    const Joint& joint = controls.joints[k];
+    const TreeJoint& held = state.tree_joint[k];
+    if (held.dofs == 0 || !awake(state, held)) continue;
+    drives = drives || (joint.drive && (joint.drive->stiffness > 0 || joint.drive->damping > 0));
+    friction = friction || joint.friction > 0;
+  }
+  if (!drives && !friction) return false;
+  forward_kinematics(state.tree, state.q, state.v, state.kinematics);
+
+  // Drives: the force k·(target − x) + c·target_velocity and the gain k·h + c on each driven
+  // velocity (x, target and rates in the Model's coordinates, carried onto v).
+  c.drive_force.setZero(), c.drive_gain.setZero();
+  if (drives) {
+    for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+      const Joint& joint = controls.joints[k];
+      const TreeJoint& held = state.tree_joint[k];
+      if (!joint.drive || held.dofs == 0 || !awake(state, held)) continue;
+      const JointDrive& drive = *joint.drive;
+      if (!(drive.stiffness > 0 || drive.damping > 0)) continue;
+      const MeasuredJoint measured = measure_joint(state, k);
+      const JointCoordinates& q = measured.coordinates;
+      c.drive_gain.segment(held.offset, held.dofs).setConstant(drive.stiffness * h + drive.damping);
+      if (joint.type == JointType::spherical) {
+        // The turn E = D_target·D⁻¹ that takes the deviation D to the target (inboard frame), as a
+        // rotation vector, the shorter way round.
+        const JointFrame& frame = controls.frames[k];
+        Eigen::Quaterniond error = drive_target_rotation(drive, frame) * rotation_of(q.rotation).conjugate();
+        if (error.w() < 0) error.coeffs() = -error.coeffs();
+        const Eigen::AngleAxisd turn(error.normalized());
+        const Eigen::Vector3d torque =
+            drive.stiffness * turn.angle() * turn.axis() + drive.damping * (frame.inboard_rest.conjugate() * drive.target_angular_velocity);
+        c.drive_force.segment<3>(held.offset) = measured.inboard_to_velocity * torque;
+      } else {
+        const bool revolute = joint.type == JointType::revolute;
+        double error = drive.target - (revolute ? q.angle : q.slide);
+        if (revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
+        c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
+      }
+    }
+  }
+  // Stable PD (Tan, Liu & Turk 2011): (H + h·G) v̇ = τ − C + F − G·v, G = diag(k·h + c), whose
+  // v + h·v̇ is the velocity the drives' force F − G·(v + h·v̇) leaves at the step's end.
+  c.armature = h * c.drive_gain;
+  c.explicit_force = loads + c.drive_force - c.drive_gain.cwiseProduct(state.v);
+  JointSpaceContactScratch& s = state.contact;
+  forward_dynamics(state.tree, state.q, state.v, c.explicit_force, c.armature, state.settings.gravity, s.articulated, c.acceleration);
+  c.predicted = state.v + h * c.acceleration;
+
+  // Friction: per joint, the impulse j that stops its predicted velocity through (H + h·G)⁻¹,
+  // or (sliding) friction·h against the velocity it then has.
+  c.friction.clear();
+  c.islands.clear();
+  if (friction) {
+    for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+      const TreeJoint& held = state.tree_joint[k];
+      if (!(controls.joints[k].friction > 0) || held.dofs == 0 || !awake(state, held)) continue;
+      JointFrictionBlock block;
+      block.island = static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
+      block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
+      block.bound = controls.joints[k].friction * h;
+      const Eigen::Matrix3d response = joint_block_response(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
+      if (held.dofs == 1) {
+        block.mass(0, 0) = 1 / response(0, 0);
+      } else {
+        block.mass = response.inverse();
+      }
+      for (int m = 0; m < held.dofs; ++m) block.rate[m] = c.predicted[held.offset + m];
+      c.friction.push_back(block);
+      if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
+    }
+    solve_friction(state);
+  }
+
+  // The forces held over the step: the loads, the drives' at the predicted velocity, friction's j/h.
+  c.forces = loads + c.drive_force - c.drive_gain.cwiseProduct(c.predicted);
+  for (const JointFrictionBlock& block : c.friction) add_joint_vector(block.impulse / h, c.forces, block.offset, block.dofs);
+  return true;
+}
+
+void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces) {
+  const ArticulatedTree& tree = state.tree;
+  for (int i = tree.body_count() - 1; i >= 0; --i) {
+    const ArticulatedBody& body = tree.body(i);
+    const auto index = static_cast<std::size_t>(i);
+    const int offset = tree.velocity_offset(i);
+    with_degrees_of_freedom(body.joint, [&](auto dofs) {
+      constexpr int k = decltype(dofs)::value;
+      if constexpr (k > 0) joint_forces.template segment<k>(offset) = project_on_joint<k>(body, body_forces[index]);
+    });
+    if (body.parent >= 0) {
+      body_forces[static_cast<std::size_t>(body.parent)] += state.kinematics.parent_to_body[index].transpose_apply_force(body_forces[index]);
+    }
+    body_forces[index].setZero();
+  }
+}
+
+
+}  // namespace limber

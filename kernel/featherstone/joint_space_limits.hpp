@@ -1,0 +1,22 @@
+// The Featherstone method's joint limits as rows, its joint friction and its drives, in joint
+// space (joint_space_contacts.hpp, "Joint limits", "Drives and friction"; joint_control_forces
+// and the other public calls are declared there). What the contacts' passes
+// (joint_space_contacts.cpp) take from here. Internal to kernel/featherstone.
+#pragma once
+
+#include "limber/kernel/featherstone/featherstone_state.hpp"
+
+namespace limber::joint_space {
+
+// The rows of every limit that is violated or may be within the step, at the current (q, v):
+// gaps, directions, approach speeds (inverse masses: measure_limit_rows).
+void find_limit_rows(FeatherstoneState& state, double dt);
+// Each row's direction·H⁻¹·direction (one joint-block response per limited joint). Needs the
+// articulated inertias at the current q in state.contact.articulated.
+void measure_limit_rows(FeatherstoneState& state);
+// One pass over the islands' rows, each island's together (joint_space_limits.cpp, "Holding
+// rows"): on the velocities, or (`position`) on the push-out's displacement. True when it
+// changed any.
+bool solve_limit_rows(FeatherstoneState& state, double dt, bool position);
+
+}  // namespace limber::joint_space
