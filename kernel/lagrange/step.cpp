@@ -5,6 +5,7 @@
 
 #include "limber/kernel/collision/rigid_contacts.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/model/guarded_step.hpp"
 
 namespace limber {
 namespace {

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "limber/kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/model/guarded_step.hpp"
 #include "limber/kernel/springs/implicit_step.hpp"
 #include "limber/kernel/springs/spring_forces.hpp"
 

@@ -6,6 +6,7 @@
 
 #include "limber/kernel/collision/contacts.hpp"
 #include "limber/kernel/collision/limb_contacts.hpp"
+#include "limber/kernel/model/guarded_step.hpp"
 #include "limber/kernel/relaxation/contact_relaxation.hpp"
 #include "limber/kernel/relaxation/direct_projection.hpp"
 #include "limber/kernel/relaxation/joint_trees.hpp"

@@ -358,8 +358,8 @@ double bytes_per_body(const RunFlags& flags) {
   // the humanoid (9·10⁵ bodies), rounded up: `/usr/bin/time -v limber run ... --steps 1`
   // (bench/speed.md, "Linear costs").
   if (flags.method == "springs-implicit") return 9500;  // the implicit step's sparse system
-  if (flags.springs()) return 2800;
-  if (flags.lagrange()) return 5700;
+  if (flags.springs()) return 2900;
+  if (flags.lagrange()) return 6300;
   if (flags.featherstone()) return 7700;
   return flags.precision == "float" ? 2300 : 2500;
 }
