@@ -28,6 +28,9 @@ string(FIND "${rest}" "```" end)
 string(SUBSTRING "${rest}" 0 ${end} example)
 file(COPY ${SOURCE_DIR}/tests/package/client/CMakeLists.txt DESTINATION ${WORK_DIR}/client)
 file(WRITE ${WORK_DIR}/client/main.cpp "${example}")
+# A second translation unit through the umbrella header alone: it must compile and link with the first.
+file(WRITE ${WORK_DIR}/client/umbrella.cpp
+     "#include <limber/limber.hpp>\nlimber::WorldOptions umbrella_options() { return limber::WorldOptions{}; }\n")
 
 # The generator CMake picks by itself (Unix Makefiles), as the README's command does.
 run(${CMAKE_COMMAND} -S ${WORK_DIR}/client -B ${WORK_DIR}/client-build -DCMAKE_BUILD_TYPE=Release

@@ -12,9 +12,9 @@ install(TARGETS limber EXPORT limberTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 foreach(folder kernel layouts)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${folder}/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/limber/${folder}
-          FILES_MATCHING PATTERN "*.hpp" PATTERN "*.md")
+          FILES_MATCHING PATTERN "*.hpp" PATTERN "*.md" PATTERN "kernel/limber.hpp" EXCLUDE)
 endforeach()
-install(FILES ${LIMBER_INCLUDE_DIR}/limber/config.hpp DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/limber)
+install(FILES ${LIMBER_INCLUDE_DIR}/limber/config.hpp ${PROJECT_SOURCE_DIR}/kernel/limber.hpp DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/limber)
 install(EXPORT limberTargets NAMESPACE limber:: DESTINATION ${LIMBER_PACKAGE_DIR})
 configure_package_config_file(${PROJECT_SOURCE_DIR}/tools/cmake/limberConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/limberConfig.cmake INSTALL_DESTINATION ${LIMBER_PACKAGE_DIR})
