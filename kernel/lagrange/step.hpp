@@ -12,7 +12,7 @@ namespace limber {
 ///                limits, friction and drives (joint_controls.hpp) are rows of the velocity-level
 ///                solve; the other integrators take them as an impulse pass before the step and
 ///                hold reached limits and held friction in its stages;
-///  2. collide    contacts with the planes and the ball answered by impulses on single bodies
+///  2. collide    contacts with the planes, balls, limbs and colliders answered by impulses on single bodies
 ///                (kernel/collision/rigid_contacts.hpp);
 ///  3. project    (projection stabilization) positions back onto C = 0 (and violated limits
 ///                onto their bounds); then — whenever there

@@ -183,7 +183,9 @@ enum class Method : std::uint8_t {
   featherstone,  ///< reduced coordinates, the articulated-body algorithm (thesis 3.5)
 };
 
-/// The method's name as the command line spells it ("particles" is "weighted" there).
+/// The method's name in messages and tables ("particles", "springs", "lagrange",
+/// "featherstone"); the command line spells the particle method "weighted" or "unweighted"
+/// (its limb masses) and the springs "springs-explicit" or "springs-implicit".
 std::string_view method_name(Method method);
 
 /// A method and its options (each method reads only its own).

@@ -9,7 +9,7 @@ namespace limber {
 ///  1. integrate  the awake bodies under gravity, drag and the joints' springs — explicitly
 ///                (forward or symplectic Euler, RK2, RK4: kernel/rigid/rigid_integration.hpp)
 ///                or implicitly (linearized backward Euler: implicit_step.hpp);
-///  2. collide    contacts with the planes and the ball, impulses (contacts.hpp);
+///  2. collide    contacts with the planes, balls, limbs and colliders, impulses (collision/rigid_contacts.hpp);
 ///  3. sleep      still islands fall asleep; divergence is detected.
 /// Never throws; a bad Δt or a divergence is reported in the result (also state.last_report).
 /// The explicit integrators allocate nothing; the implicit step allocates inside Eigen's sparse

@@ -32,9 +32,10 @@ namespace limber {
 ///   options.verlet.joints == shared_particle; a joint to the world pins a particle (w = 0);
 /// - initial velocities become previous positions, x(−Δt) = x(0) − v·Δt, and, under the rattle
 ///   projection rule, the particles' velocities (the rule is fixed at compile: the state is (x, v));
-/// - particles are grouped by island (connected limbs) and ordered breadth-first from the
-///   island's root (a limb held by the world, else its first limb), so constraints are swept
-///   from the pinned end outwards; each ball is its own island;
+/// - particles are grouped by island (connected limbs); constraints run breadth-first from the
+///   island's root (a limb held by the world, else its first limb), so they are swept from the
+///   pinned end outwards, and the particles are then numbered in VerletOptions::ordering
+///   (depth parity by default); each ball is its own island;
 /// - passes the scene does not need are left out: no contact features without a ground or
 ///   bounds, no ball contacts without a ball.
 /// Throws ModelError when the model is invalid or names something the particle method cannot

@@ -164,9 +164,10 @@ class World {
   /// tail (its particles; ModelError otherwise).
   PinId pin(BodyId body, const Eigen::Vector3d& local_point);
   void unpin(PinId pin);
-  /// A kinematic target: over the next step the held point moves to `world_target` along a
-  /// straight path at constant velocity (a rope in a moving hand). Particles: exact. Springs and
-  /// Lagrange: the joint's world anchor moves, and the body follows through the joint.
+  /// A kinematic target for the next step (a rope in a moving hand). Particles: the held point
+  /// moves to `world_target` along a straight path at constant velocity, exactly. Springs and
+  /// Lagrange: the joint's world anchor jumps to `world_target` before the step, and the body
+  /// follows through the joint.
   /// Featherstone: refused (a moving world anchor is not a joint of its tree).
   void move_pin(PinId pin, const Eigen::Vector3d& world_target);
   Eigen::Vector3d pin_position(PinId pin) const;  ///< where the held point's world anchor is, m
