@@ -80,41 +80,43 @@ std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& mo
   return nodes;
 }
 
-}  // namespace
+// The Model body frame's world pose at the start (rotation, origin), per rigid-scene body (the
+// limbs, then the balls), and per tree body its frame's (featherstone_state.hpp, "Frames").
+struct StartFrames {
+  std::vector<Eigen::Matrix3d> model_rotation;
+  std::vector<Eigen::Vector3d> model_origin;
+  std::vector<Eigen::Matrix3d> rotation;  // tree body frame → world, at the start
+  std::vector<Eigen::Vector3d> origin;    // tree body frame's origin in world, at the start, m
+};
 
-FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOptions& options) {
-  FeatherstoneState state;
-  static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
-  require_supported(model, Method::featherstone);
-  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "featherstone");
-  refuse_kinematic_loops(model);
-  require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");
-  state.options = options;
-  const std::size_t limb_count = model.bodies.size();
-  const std::size_t body_count = state.bodies.size();
-  const std::vector<TreeNode> nodes = tree_order(state, model, state.island_begin);
-  const RigidBodyState& y = state.bodies.state;
-
-  // The Model body frame's world pose at the start (rotation, origin) for each rigid-scene body.
-  std::vector<Eigen::Matrix3d> model_rotation(body_count);
-  std::vector<Eigen::Vector3d> model_origin(body_count);
+StartFrames model_frames(const FeatherstoneState& state, const Model& model) {
+  const std::size_t limb_count = model.bodies.size(), body_count = state.bodies.size();
+  StartFrames frames;
+  frames.model_rotation.resize(body_count), frames.model_origin.resize(body_count);
   for (std::size_t b = 0; b < body_count; ++b) {
     if (b < limb_count) {
-      model_rotation[b] = model.bodies[b].orientation().toRotationMatrix();
-      model_origin[b] = model.bodies[b].position;
+      frames.model_rotation[b] = model.bodies[b].orientation().toRotationMatrix();
+      frames.model_origin[b] = model.bodies[b].position;
     } else {
-      model_rotation[b].setIdentity();
-      model_origin[b] = model.balls[b - limb_count].position;
+      frames.model_rotation[b].setIdentity();
+      frames.model_origin[b] = model.balls[b - limb_count].position;
     }
   }
+  return frames;
+}
 
-  // Tree bodies: frames, inertias, joints, X_tree (featherstone_state.hpp, "Frames").
+// Tree bodies: frames, inertias, joints, X_tree (featherstone_state.hpp, "Frames").
+void build_tree(FeatherstoneState& state, const Model& model, const std::vector<TreeNode>& nodes, StartFrames& frames) {
+  const std::size_t limb_count = model.bodies.size();
   const std::size_t tree_size = nodes.size();
-  std::vector<Eigen::Matrix3d> rotation(tree_size);  // tree body frame → world, at the start
-  std::vector<Eigen::Vector3d> origin(tree_size);    // tree body frame's origin in world, at the start, m
+  const std::vector<Eigen::Matrix3d>& model_rotation = frames.model_rotation;
+  const std::vector<Eigen::Vector3d>& model_origin = frames.model_origin;
+  std::vector<Eigen::Matrix3d>& rotation = frames.rotation;
+  std::vector<Eigen::Vector3d>& origin = frames.origin;
+  rotation.resize(tree_size), origin.resize(tree_size);
   state.scene_body.resize(tree_size), state.model_joint.resize(tree_size);
   state.centre_of_mass.resize(tree_size), state.principal_frame.resize(tree_size);
-  state.tree_body.assign(body_count, -1);
+  state.tree_body.assign(state.bodies.size(), -1);
   for (std::size_t i = 0; i < tree_size; ++i) {
     const TreeNode& node = nodes[i];
     const std::int32_t b = node.body;
@@ -162,19 +164,29 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
     state.tree.add_body(std::move(body));
   }
 
-  // q: the joints' zero, the floating roots at their world poses.
+}
+
+// q: the joints' zero, the floating roots at their world poses.
+void set_positions(FeatherstoneState& state, const StartFrames& frames) {
   const ArticulatedTree& tree = state.tree;
   state.q = tree.neutral_positions();
-  state.v.setZero(tree.velocity_count());
   for (std::int32_t i : state.floating_roots) {
     const int p = tree.position_offset(i);
-    const Eigen::Quaterniond orientation(rotation[i]);
-    state.q.segment<3>(p) = origin[i];
+    const Eigen::Quaterniond orientation(frames.rotation[i]);
+    state.q.segment<3>(p) = frames.origin[i];
     state.q.segment<4>(p + 3) << orientation.w(), orientation.x(), orientation.y(), orientation.z();
   }
+}
 
-  // v: each body's spatial velocity relative to its parent, at its frame's origin, in its frame,
-  // projected on the joint's motion subspace S: q̇ = Sᵀ v_rel (S's columns are orthonormal).
+// v: each body's spatial velocity relative to its parent, at its frame's origin, in its frame,
+// projected on the joint's motion subspace S: q̇ = Sᵀ v_rel (S's columns are orthonormal).
+void set_velocities(FeatherstoneState& state, const std::vector<TreeNode>& nodes, const StartFrames& frames) {
+  const ArticulatedTree& tree = state.tree;
+  const RigidBodyState& y = state.bodies.state;
+  const std::vector<Eigen::Matrix3d>& rotation = frames.rotation;
+  const std::vector<Eigen::Vector3d>& origin = frames.origin;
+  const std::size_t tree_size = nodes.size();
+  state.v.setZero(tree.velocity_count());
   auto velocity_at = [&](std::int32_t b, const Eigen::Vector3d& point) -> Eigen::Vector3d {
     return state.bodies.linear_velocity(y, b) + state.bodies.angular_velocity(y, b).cross(point - y.position[b]);
   };
@@ -198,20 +210,26 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
     }
   }
   zero_sleeping_velocities(state);
+}
 
-  // The joint-gap observer's anchors and slide axes.
+// The joint-gap observer's anchors and slide axes.
+void set_joint_anchors(FeatherstoneState& state, const Model& model, const StartFrames& frames) {
   state.joints = joint_anchors(state, model);
   state.slide_axis.assign(model.joints.size(), Eigen::Vector3d::Zero());
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
     if (joint.type != JointType::prismatic) continue;
-    state.slide_axis[j] = state.shapes.principal_frame[joint.outboard].conjugate() * (model_rotation[joint.outboard].transpose() * joint.axis);
+    state.slide_axis[j] =
+        state.shapes.principal_frame[joint.outboard].conjugate() * (frames.model_rotation[joint.outboard].transpose() * joint.axis);
   }
+}
 
-  // The joints' limits, friction and drives, and where the tree holds each joint.
+// The joints' limits, friction and drives, and where the tree holds each joint.
+void place_tree_joints(FeatherstoneState& state, const Model& model) {
+  const ArticulatedTree& tree = state.tree;
   state.joint_controls = joint_controls(model);
   state.tree_joint.assign(model.joints.size(), TreeJoint{});
-  for (std::size_t i = 0; i < tree_size; ++i) {
+  for (std::size_t i = 0; i < state.model_joint.size(); ++i) {
     const std::int32_t j = state.model_joint[i];
     if (j < 0) continue;
     TreeJoint& held = state.tree_joint[static_cast<std::size_t>(j)];
@@ -220,8 +238,12 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
     held.dofs = joint_velocity_count(tree.body(static_cast<int>(i)).joint);
     held.sign = model.joints[static_cast<std::size_t>(j)].outboard == state.scene_body[i] ? 1 : -1;
   }
+}
 
-  // Scratch, sized once.
+// Scratch, sized once: step() never allocates.
+void size_scratch(FeatherstoneState& state, const Model& model) {
+  const ArticulatedTree& tree = state.tree;
+  const std::size_t tree_size = state.scene_body.size();
   const int nv = tree.velocity_count();
   state.kinematics.resize(tree);
   state.integration.resize(tree);
@@ -250,6 +272,27 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
   controls.held.resize(tree);
 
+}
+
+}  // namespace
+
+// The passes in order (kernel/PIPELINE.md lists them).
+FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOptions& options) {
+  FeatherstoneState state;
+  static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
+  require_supported(model, Method::featherstone);
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "featherstone");
+  refuse_kinematic_loops(model);
+  require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");
+  state.options = options;
+  const std::vector<TreeNode> nodes = tree_order(state, model, state.island_begin);
+  StartFrames frames = model_frames(state, model);
+  build_tree(state, model, nodes, frames);
+  set_positions(state, frames);
+  set_velocities(state, nodes, frames);
+  set_joint_anchors(state, model, frames);
+  place_tree_joints(state, model);
+  size_scratch(state, model);
   refresh_rigid_bodies(state);
   return state;
 }
