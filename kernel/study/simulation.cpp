@@ -46,10 +46,10 @@ double Simulation::time() const { return world_.time(); }
 
 void Simulation::limb_points(std::vector<Eigen::Vector3d>& points) const {
   points.clear();
-  const Model& model_ = world_.model();
-  const MethodState& state_ = world_.internals().state;
-  if (const auto* verlet = std::get_if<VerletState<double>>(&state_)) {
-    for (std::size_t body = 0; body < model_.bodies.size(); ++body) {
+  const Model& model = world_.model();
+  const MethodState& state = world_.internals().state;
+  if (const auto* verlet = std::get_if<VerletState<double>>(&state)) {
+    for (std::size_t body = 0; body < model.bodies.size(); ++body) {
       const std::uint32_t limb = verlet->body_limb[body];
       points.push_back(verlet->particles.position(verlet->limbs.head[limb]));
       points.push_back(verlet->particles.position(verlet->limbs.tail[limb]));
@@ -57,13 +57,13 @@ void Simulation::limb_points(std::vector<Eigen::Vector3d>& points) const {
     return;
   }
   const RigidScene& rigid = std::visit(
-      [](const auto& state) -> const RigidScene& {
-        if constexpr (std::is_base_of_v<RigidScene, std::decay_t<decltype(state)>>) return state;
+      [](const auto& s) -> const RigidScene& {
+        if constexpr (std::is_base_of_v<RigidScene, std::decay_t<decltype(s)>>) return s;
         else throw std::logic_error("unreachable: the Verlet state was handled above");
       },
-      state_);
-  for (std::size_t body = 0; body < model_.bodies.size(); ++body) {
-    const double half = 0.5 * model_.bodies[body].shape.length;
+      state);
+  for (std::size_t body = 0; body < model.bodies.size(); ++body) {
+    const double half = 0.5 * model.bodies[body].shape.length;
     points.push_back(world_point(rigid, body, Eigen::Vector3d(0, 0, half)));
     points.push_back(world_point(rigid, body, Eigen::Vector3d(0, 0, -half)));
   }
