@@ -113,7 +113,7 @@ struct Body {
   bool explicit_inertial = false;  ///< an <inertial> element was given
   /// kg: from <inertial>, or (inertiafromgeom true, or auto without <inertial>) the geoms' sum.
   double mass = 0;
-  /// Body frame, m. A body with no mass keeps 0 (MuJoCo reports its body frame's origin).
+  /// Body frame, m. A body with no mass keeps 0 (MuJoCo's body_ipos is then no centre of mass).
   Eigen::Vector3d centre_of_mass = Eigen::Vector3d::Zero();
   /// kg m², about the centre of mass in the body frame: the full symmetric tensor, not
   /// diagonalized (MuJoCo's R diag(body_inertia) Rᵀ, R from body_iquat).

@@ -271,6 +271,7 @@ TEST(MjcfAgainstMujoco, DefaultsChildclassAndClassMatch) {
         <geom fromto="0 0 0 0 0 -.3" class="stiff"/>
         <body name="lower" pos="0 0 -.3">
           <joint name="elbow" class="stiff" damping="2" range="0 120"/>
+          <joint name="loose" class="main" limited="false" range="-30 60" ref="20"/>
           <geom class="main" size=".04"/>
           <body name="slider" childclass="slider">
             <joint name="slide" pos="0 0 .1"/>
@@ -294,7 +295,7 @@ TEST(MjcfAgainstMujoco, DefaultsChildclassAndClassMatch) {
 
 TEST(MjcfAgainstMujoco, ExplicitInertialAndInertiaFromGeomMatch) {
   const std::string bodies = R"(    <body pos="0 0 1">
-      <joint type="ball"/>
+      <joint type="ball" limited="true" range="0 60" ref="30" springref="20" damping=".2"/>
       <inertial pos=".1 .2 .3" mass="2" diaginertia=".1 .2 .25" euler="10 20 30"/>
       <geom type="box" size=".1 .2 .3"/>
       <body pos="0 0 -1">
