@@ -7,8 +7,9 @@
 #
 #   library   the library and the `limber` program (compiler, CMake, Ninja and make — an installed
 #             package's client may configure with either —, Eigen, oneTBB, xsimd,
-#             nlohmann-json, CLI11)
-#   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone cross-check)
+#             nlohmann-json, pugixml (the MJCF reader), CLI11)
+#   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone and MJCF cross-checks) and its
+#             sample models (/usr/share/mujoco/model: the MJCF reader's humanoid tests)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
 #   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py),
 #             valgrind (tools/cachegrind_layouts.sh)
@@ -18,8 +19,8 @@ set -euo pipefail
 packages=()
 for purpose in "$@"; do
   case "$purpose" in
-    library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libcli11-dev) ;;
-    tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev) ;;
+    library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libpugixml-dev libcli11-dev) ;;
+    tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev libmujoco-samples) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib valgrind) ;;
     clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
