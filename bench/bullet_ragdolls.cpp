@@ -505,6 +505,7 @@ BulletScene::BulletScene(const Model& model, const PairRules& rules, const Bulle
         ++others;
         break;
       }
+      case JointType::serial: throw ModelError("bullet_ragdolls: " + joint.name + ": a serial joint is not mapped");
     }
     if (joint.friction > 0 && joint.type != JointType::revolute) notes.push_back("joint friction dropped: " + joint.name);
     if (joint.drive) notes.push_back("joint drive dropped: " + joint.name);

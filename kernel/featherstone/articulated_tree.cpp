@@ -76,7 +76,17 @@ void validate_articulated_body(const ArticulatedBody& body, int index) {
                                               format_number(orthogonality) + ", det = " + format_number(rotation.determinant()));
   }
 
+  checks::require_non_negative(body.armature, path("armature"));
+  if (body.armature > 0 && body.joint != ArticulatedJoint::revolute && body.joint != ArticulatedJoint::prismatic) {
+    fail(path("armature"), "is for revolute and prismatic joints");
+  }
   const SpatialInertia& inertia = body.inertia;
+  if (body.joint_frame) {
+    if (inertia.mass != 0 || !inertia.first_moment.isZero() || !inertia.rotational_inertia.isZero()) {
+      fail(path("inertia"), "must be zero: a joint frame is massless");
+    }
+    return;
+  }
   checks::require_positive(inertia.mass, path("inertia.mass"));
   checks::require_finite(inertia.first_moment, path("inertia.first_moment"));
   if (!inertia.rotational_inertia.allFinite()) fail(path("inertia.rotational_inertia"), "must be finite");

@@ -56,6 +56,13 @@ struct ArticulatedBody {
   Eigen::Vector3d joint_axis = Eigen::Vector3d::UnitZ();  ///< unit, joint-frame coordinates (revolute, prismatic)
   PluckerTransform tree_transform;                      ///< X_tree: parent body frame → joint frame
   SpatialInertia inertia;                               ///< in the body's own frame (eq. 2.63)
+  /// Revolute and prismatic: added to the joint's diagonal of H (kg·m² or kg, ≥ 0): a rotor's
+  /// reflected inertia, MuJoCo's armature. Every algorithm below includes it.
+  double armature = 0;
+  /// A massless frame between two axes of a serial joint (MuJoCo's several joints in one body):
+  /// its inertia must be zero. ABA stays defined as long as the bodies beyond it have mass, or the
+  /// joint armature.
+  bool joint_frame = false;
 };
 
 /// A validated tree with the offsets of each joint's coordinates. Adding bodies keeps it valid;
@@ -90,7 +97,8 @@ class ArticulatedTree {
 /// Checks body `index` as the next body of a tree that already has `index` bodies: the parent
 /// comes before it (−1 ≤ parent < index); the joint axis is finite and unit (revolute,
 /// prismatic; within 1e-9); X_tree is finite with a proper rotation (‖EᵀE − 1‖ ≤ 1e-9,
-/// det E > 0); the mass is finite and > 0; the centre of mass is finite; the inertia about the
+/// det E > 0); the armature is finite and ≥ 0 (0 unless revolute or prismatic); the mass is finite
+/// and > 0 (exactly 0, with no inertia, for a joint frame); the centre of mass is finite; the inertia about the
 /// centre of mass is symmetric and positive definite, with principal moments that satisfy the
 /// triangle inequality (a real mass distribution). Throws ModelError (kernel/model/model.hpp), one line:
 /// "bodies[3] (\"forearm\").mass: must be > 0, got -1".

@@ -41,28 +41,37 @@ bool carry_state(const FeatherstoneState& old, const Model& old_model, Featherst
     const std::int32_t joint = state.model_joint[static_cast<std::size_t>(i)];
     return joint < 0 ? std::string() : model.joints[static_cast<std::size_t>(joint)].name;
   };
+  // A serial joint's chain counts as one joint: its first tree body (the body's own otherwise).
+  const auto chain_first = [](const FeatherstoneState& state, std::int32_t i) {
+    while (state.tree.body(i).parent >= 0 && state.scene_body[static_cast<std::size_t>(state.tree.body(i).parent)] < 0) i = state.tree.body(i).parent;
+    return i;
+  };
   for (std::int32_t i = 0; i < fresh.tree.body_count(); ++i) {
     const std::int32_t b = fresh.scene_body[static_cast<std::size_t>(i)];
+    if (b < 0) continue;  // a serial joint's frame: carried with its chain's child
     const std::int64_t o = rigid_bodies::old_body(old, fresh, survivors, static_cast<std::size_t>(b));
     if (o < 0) continue;
     const std::int32_t oi = old.tree_body[static_cast<std::size_t>(o)];
-    const std::int32_t parent = fresh.tree.body(i).parent, old_parent = old.tree.body(oi).parent;
+    const std::int32_t first = chain_first(fresh, i), old_first = chain_first(old, oi);
+    const std::int32_t parent = fresh.tree.body(first).parent, old_parent = old.tree.body(old_first).parent;
     const std::int64_t parent_then =
         parent < 0 ? -1 : rigid_bodies::old_body(old, fresh, survivors, static_cast<std::size_t>(fresh.scene_body[static_cast<std::size_t>(parent)]));
     const std::int64_t old_parent_body = old_parent < 0 ? -1 : old.scene_body[static_cast<std::size_t>(old_parent)];
     if (hangs(fresh, new_model, i) != hangs(old, old_model, oi) || parent_then != old_parent_body ||
-        fresh.tree.body(i).joint != old.tree.body(oi).joint) {
+        fresh.tree.body(i).joint != old.tree.body(oi).joint || i - first != oi - old_first) {
       const std::string name = static_cast<std::size_t>(b) < new_model.bodies.size() ? new_model.bodies[static_cast<std::size_t>(b)].name
                                                                                     : ball_name(new_model, static_cast<std::size_t>(b) - new_model.bodies.size());
       problem = "keeps a moving body's state only while it hangs from the same joint on the same parent; the edit changes how '" + name +
                 "' hangs (reduced coordinates would re-root it)";
       return false;
     }
+    // The joint's coordinates, a serial chain's all together (1 position and velocity a body).
+    const int extra = i - first;
     const ArticulatedJoint type = fresh.tree.body(i).joint;
-    fresh.q.segment(fresh.tree.position_offset(i), joint_position_count(type)) =
-        old.q.segment(old.tree.position_offset(oi), joint_position_count(type));
-    fresh.v.segment(fresh.tree.velocity_offset(i), joint_velocity_count(type)) =
-        old.v.segment(old.tree.velocity_offset(oi), joint_velocity_count(type));
+    fresh.q.segment(fresh.tree.position_offset(first), joint_position_count(type) + extra) =
+        old.q.segment(old.tree.position_offset(old_first), joint_position_count(type) + extra);
+    fresh.v.segment(fresh.tree.velocity_offset(first), joint_velocity_count(type) + extra) =
+        old.v.segment(old.tree.velocity_offset(old_first), joint_velocity_count(type) + extra);
   }
   fresh.time = old.time;
   rigid_bodies::carry_sleep(old, fresh, survivors);

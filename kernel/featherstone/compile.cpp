@@ -17,7 +17,8 @@ ArticulatedJoint articulated_joint(JointType type) {
     case JointType::prismatic: return ArticulatedJoint::prismatic;
     case JointType::fixed: return ArticulatedJoint::fixed;
     case JointType::spherical:
-    case JointType::universal: break;  // universal is refused before
+    case JointType::universal:  // refused before
+    case JointType::serial: break;  // a chain of tree bodies (expand_serial_joint)
   }
   return ArticulatedJoint::spherical;
 }
@@ -35,11 +36,32 @@ void refuse_kinematic_loops(const Model& model) {
                    "': closes a kinematic loop, which reduced coordinates cannot express; use --method lagrange");
 }
 
-// A tree body before it is built: its rigid-scene body, its parent (tree index, −1: the world)
-// and the Model joint to it (−1: a floating root).
+// A tree body before it is built: its rigid-scene body (−1: a serial joint's massless frame), its
+// parent (tree index, −1: the world), the Model joint to it (−1: a floating root) and, for a
+// serial joint, which of its axes (featherstone_state.hpp, "Serial joints").
 struct TreeNode {
-  std::int32_t body = 0, parent = -1, joint = -1;
+  std::int32_t body = 0, parent = -1, joint = -1, axis = -1;
 };
+
+// Joint j's tree bodies below tree body `parent` (−1: the world) down to Model body `child`: one,
+// or a serial joint's chain, a massless frame per axis but the last, which is the child's.
+void push_joint(std::vector<TreeNode>& nodes, const Model& model, std::int32_t child, std::int32_t parent, std::int32_t j) {
+  const Joint& joint = model.joints[static_cast<std::size_t>(j)];
+  if (joint.type != JointType::serial) {
+    nodes.push_back({child, parent, j});
+    return;
+  }
+  if (joint.outboard != child) {
+    throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name +
+                     "': a serial joint's axes run from its inboard body, but the tree reaches it from its outboard body; "
+                     "list the island's root side as inboard");
+  }
+  const auto count = static_cast<std::int32_t>(joint.serial_axes.size());
+  for (std::int32_t a = 0; a < count; ++a) {
+    nodes.push_back({a + 1 == count ? child : -1, parent, j, a});
+    parent = static_cast<std::int32_t>(nodes.size()) - 1;
+  }
+}
 
 // The tree order: island by island, breadth first from each island's root.
 std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& model, std::vector<std::int32_t>& island_begin) {
@@ -64,15 +86,19 @@ std::vector<TreeNode> tree_order(const FeatherstoneState& state, const Model& mo
       if (b < limb_count && world_joint[b] >= 0) root = {static_cast<std::int32_t>(b), -1, world_joint[b]};
     }
     const std::size_t first = nodes.size();
-    nodes.push_back(root);
+    if (root.joint < 0) {
+      nodes.push_back(root);
+    } else {
+      push_joint(nodes, model, root.body, -1, root.joint);
+    }
     for (std::size_t next = first; next < nodes.size(); ++next) {
       const TreeNode node = nodes[next];
-      if (static_cast<std::size_t>(node.body) >= limb_count) continue;  // a ball
+      if (node.body < 0 || static_cast<std::size_t>(node.body) >= limb_count) continue;  // a joint frame, a ball
       for (std::int32_t j : incident[node.body]) {
         if (j == node.joint) continue;
         const Joint& joint = model.joints[j];
         const std::int32_t child = joint.inboard == node.body ? joint.outboard : joint.inboard;
-        nodes.push_back({child, static_cast<std::int32_t>(next), j});
+        push_joint(nodes, model, child, static_cast<std::int32_t>(next), j);
       }
     }
   }
@@ -119,39 +145,55 @@ void build_tree(FeatherstoneState& state, const Model& model, const std::vector<
   state.tree_body.assign(state.bodies.size(), -1);
   for (std::size_t i = 0; i < tree_size; ++i) {
     const TreeNode& node = nodes[i];
-    const std::int32_t b = node.body;
-    state.scene_body[i] = b, state.tree_body[b] = static_cast<std::int32_t>(i), state.model_joint[i] = node.joint;
-    // The frame's origin in the Model body frame: the child's anchor of its joint (the Model's
-    // outboard anchor unless the tree turned the joint round), or the centre of mass. The joint
-    // sits there: where a non-prismatic joint's two anchors do not coincide at the initial poses,
-    // the child's anchor is taken as the joint's location and the gap is kept as it started (the
-    // other methods close it; the joint-gap observer reports it).
-    Eigen::Vector3d anchor = state.shapes.centre_offset[b];
-    if (node.joint >= 0) {
-      const Joint& joint = model.joints[node.joint];
-      anchor = joint.outboard == b ? joint.outboard_anchor : joint.inboard_anchor;
-    }
-    rotation[i] = model_rotation[b];
-    origin[i] = model_origin[b] + model_rotation[b] * anchor;
-    state.centre_of_mass[i] = state.shapes.centre_offset[b] - anchor;
-    state.principal_frame[i] = state.shapes.principal_frame[b];
-
     ArticulatedBody body;
-    body.name = static_cast<std::size_t>(b) < limb_count ? model.bodies[b].name : ball_name(model, static_cast<std::size_t>(b) - limb_count);
     body.parent = node.parent;
-    // The rigid body's inertia (principal moments, floored as the rigid scene floors them) in the
-    // tree body's axes, about the centre of mass.
-    const Eigen::Matrix3d principal = state.principal_frame[i].toRotationMatrix();
-    Eigen::Matrix3d inertia = principal * state.bodies.body_inertia[b] * principal.transpose();
-    inertia = 0.5 * (inertia + inertia.transpose()).eval();
-    body.inertia = SpatialInertia::from_mass_properties(state.bodies.mass[b], state.centre_of_mass[i], inertia);
+    state.scene_body[i] = node.body, state.model_joint[i] = node.joint;
+    const SerialAxis* serial = node.axis >= 0 ? &model.joints[node.joint].serial_axes[static_cast<std::size_t>(node.axis)] : nullptr;
+    if (node.body < 0) {
+      // A serial joint's frame: at its axis's point, with the axes of the chain's child (the last node).
+      const auto child = static_cast<std::size_t>(nodes[i + model.joints[node.joint].serial_axes.size() - 1 - node.axis].body);
+      rotation[i] = model_rotation[child], origin[i] = serial->point;
+      state.centre_of_mass[i].setZero(), state.principal_frame[i].setIdentity();
+      body.name = serial->name;
+      body.joint_frame = true;
+      body.inertia = SpatialInertia::from_mass_properties(0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero());
+    } else {
+      const std::int32_t b = node.body;
+      state.tree_body[b] = static_cast<std::int32_t>(i);
+      // The frame's origin in the Model body frame: the child's anchor of its joint (the Model's
+      // outboard anchor unless the tree turned the joint round; a serial joint's last axis's
+      // point), or the centre of mass. The joint sits there: where a non-prismatic joint's two
+      // anchors do not coincide at the initial poses, the child's anchor is taken as the joint's
+      // location and the gap is kept as it started (the other methods close it; the joint-gap
+      // observer reports it).
+      Eigen::Vector3d anchor = state.shapes.centre_offset[b];
+      if (serial) {
+        anchor = model_rotation[b].transpose() * (serial->point - model_origin[b]);
+      } else if (node.joint >= 0) {
+        const Joint& joint = model.joints[node.joint];
+        anchor = joint.outboard == b ? joint.outboard_anchor : joint.inboard_anchor;
+      }
+      rotation[i] = model_rotation[b];
+      origin[i] = model_origin[b] + model_rotation[b] * anchor;
+      state.centre_of_mass[i] = state.shapes.centre_offset[b] - anchor;
+      state.principal_frame[i] = state.shapes.principal_frame[b];
+      body.name = static_cast<std::size_t>(b) < limb_count ? model.bodies[b].name : ball_name(model, static_cast<std::size_t>(b) - limb_count);
+      // The rigid body's inertia (principal moments, floored as the rigid scene floors them) in the
+      // tree body's axes, about the centre of mass.
+      const Eigen::Matrix3d principal = state.principal_frame[i].toRotationMatrix();
+      Eigen::Matrix3d inertia = principal * state.bodies.body_inertia[b] * principal.transpose();
+      inertia = 0.5 * (inertia + inertia.transpose()).eval();
+      body.inertia = SpatialInertia::from_mass_properties(state.bodies.mass[b], state.centre_of_mass[i], inertia);
+    }
     if (node.joint < 0) {
       body.joint = ArticulatedJoint::floating;  // X_tree = 1: q holds the world pose
       state.floating_roots.push_back(static_cast<std::int32_t>(i));
     } else {
       const Joint& joint = model.joints[node.joint];
-      body.joint = articulated_joint(joint.type);
-      body.joint_axis = (rotation[i].transpose() * joint.axis).normalized();  // child frame = joint frame at q = 0
+      body.joint = serial ? (serial->slide ? ArticulatedJoint::prismatic : ArticulatedJoint::revolute) : articulated_joint(joint.type);
+      body.armature = serial ? serial->armature : joint.armature;
+      // Child frame = joint frame at q = 0.
+      body.joint_axis = (rotation[i].transpose() * (serial ? serial->axis : joint.axis)).normalized();
       // X_tree: the child's frame at its initial pose, seen from the parent's frame (or the world).
       if (node.parent < 0) {
         body.tree_transform = PluckerTransform::from_pose(rotation[i], origin[i]);
@@ -178,9 +220,30 @@ void set_positions(FeatherstoneState& state, const StartFrames& frames) {
   }
 }
 
+// A serial joint's rates at its initial poses, where its axes lie as the Model gives them: the
+// least-squares q̇ of Σ ξ_a q̇_a = (ω, v at `point`), ξ_a the axis's twist (a, a × (point − p_a)) for
+// a hinge, (0, a) for a slide. Exact when the Model's velocities are ones the joint allows.
+void set_serial_rates(FeatherstoneState& state, const Joint& joint, std::size_t first, const Eigen::Vector3d& angular,
+                      const Eigen::Vector3d& linear, const Eigen::Vector3d& point) {
+  const auto count = static_cast<Eigen::Index>(joint.serial_axes.size());
+  Eigen::Matrix<double, 6, Eigen::Dynamic> twists(6, count);
+  for (Eigen::Index a = 0; a < count; ++a) {
+    const SerialAxis& axis = joint.serial_axes[static_cast<std::size_t>(a)];
+    if (axis.slide) {
+      twists.col(a) << Eigen::Vector3d::Zero(), axis.axis;
+    } else {
+      twists.col(a) << axis.axis, axis.axis.cross(point - axis.point);
+    }
+  }
+  Eigen::Matrix<double, 6, 1> relative;
+  relative << angular, linear;
+  const Eigen::VectorXd rates = twists.colPivHouseholderQr().solve(relative);
+  state.v.segment(state.tree.velocity_offset(static_cast<int>(first)), count) = rates;
+}
+
 // v: each body's spatial velocity relative to its parent, at its frame's origin, in its frame,
 // projected on the joint's motion subspace S: q̇ = Sᵀ v_rel (S's columns are orthonormal).
-void set_velocities(FeatherstoneState& state, const std::vector<TreeNode>& nodes, const StartFrames& frames) {
+void set_velocities(FeatherstoneState& state, const Model& model, const std::vector<TreeNode>& nodes, const StartFrames& frames) {
   const ArticulatedTree& tree = state.tree;
   const RigidBodyState& y = state.bodies.state;
   const std::vector<Eigen::Matrix3d>& rotation = frames.rotation;
@@ -192,11 +255,17 @@ void set_velocities(FeatherstoneState& state, const std::vector<TreeNode>& nodes
   };
   for (std::size_t i = 0; i < tree_size; ++i) {
     const std::int32_t b = state.scene_body[i];
+    if (b < 0) continue;  // a serial joint's frame: its rate is set with the chain's child
+    const std::size_t first = nodes[i].axis >= 0 ? i - static_cast<std::size_t>(nodes[i].axis) : i;  // the chain's first node
     Eigen::Vector3d angular = state.bodies.angular_velocity(y, b), linear = velocity_at(b, origin[i]);
-    if (nodes[i].parent >= 0) {
-      const std::int32_t parent = state.scene_body[nodes[i].parent];
+    if (nodes[first].parent >= 0) {
+      const std::int32_t parent = state.scene_body[nodes[first].parent];
       angular -= state.bodies.angular_velocity(y, parent);
       linear -= velocity_at(parent, origin[i]);
+    }
+    if (nodes[i].axis >= 0) {
+      set_serial_rates(state, model.joints[nodes[i].joint], first, angular, linear, origin[i]);
+      continue;
     }
     const Eigen::Vector3d angular_in_child = rotation[i].transpose() * angular, linear_in_child = rotation[i].transpose() * linear;
     const ArticulatedBody& body = tree.body(static_cast<int>(i));
@@ -229,14 +298,21 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
   const ArticulatedTree& tree = state.tree;
   state.joint_controls = joint_controls(model);
   state.tree_joint.assign(model.joints.size(), TreeJoint{});
+  state.serial_axes.clear();
   for (std::size_t i = 0; i < state.model_joint.size(); ++i) {
     const std::int32_t j = state.model_joint[i];
-    if (j < 0) continue;
+    if (j < 0 || state.scene_body[i] < 0) continue;  // a floating root; a serial joint's frame (its child holds the joint)
+    const Joint& joint = model.joints[static_cast<std::size_t>(j)];
+    const auto count = static_cast<int>(joint.serial_axes.size());
     TreeJoint& held = state.tree_joint[static_cast<std::size_t>(j)];
     held.body = static_cast<std::int32_t>(i);
-    held.offset = tree.velocity_offset(static_cast<int>(i));
-    held.dofs = joint_velocity_count(tree.body(static_cast<int>(i)).joint);
-    held.sign = model.joints[static_cast<std::size_t>(j)].outboard == state.scene_body[i] ? 1 : -1;
+    held.offset = tree.velocity_offset(static_cast<int>(i) - (count > 0 ? count - 1 : 0));
+    held.dofs = count > 0 ? count : joint_velocity_count(tree.body(static_cast<int>(i)).joint);
+    held.sign = joint.outboard == state.scene_body[i] ? 1 : -1;
+    for (int a = 0; a < count; ++a) {
+      const std::int32_t node = static_cast<std::int32_t>(i) - (count - 1 - a);
+      state.serial_axes.push_back({j, a, node, tree.velocity_offset(node)});
+    }
   }
 }
 
@@ -266,8 +342,8 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   JointControlScratch& controls = state.controls;
   controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);
   controls.explicit_force.setZero(nv), controls.acceleration.setZero(nv), controls.predicted.setZero(nv), controls.forces.setZero(nv);
-  controls.friction.reserve(model.joints.size());
-  controls.rows.reserve(3 * model.joints.size());
+  controls.friction.reserve(model.joints.size() + state.serial_axes.size());
+  controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());
   controls.islands.reserve(state.islands.size());
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
   controls.held.resize(tree);
@@ -281,7 +357,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   FeatherstoneState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);  // validates
   require_supported(model, Method::featherstone);
-  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "featherstone");
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true, .armature = true}, "featherstone");
   refuse_kinematic_loops(model);
   require_integrator(options.integrator, {Integrator::semi_implicit_euler, Integrator::rk4}, "featherstone");
   state.options = options;
@@ -289,7 +365,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   StartFrames frames = model_frames(state, model);
   build_tree(state, model, nodes, frames);
   set_positions(state, frames);
-  set_velocities(state, nodes, frames);
+  set_velocities(state, model, nodes, frames);
   set_joint_anchors(state, model, frames);
   place_tree_joints(state, model);
   size_scratch(state, model);

@@ -187,6 +187,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
         const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
         const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
         Eigen::Matrix<double, k, k> d = s.transpose() * u_matrix;
+        if constexpr (k == 1) d(0, 0) += body.armature;
         if (armature) d.diagonal() += Eigen::Matrix<double, k, 1>::Map(armature + offset);
         // D is symmetric positive definite: cofactors up to 3×3, a written-out Cholesky beyond,
         // the floating base's 6×6 (Eigen's LLT solves a matrix by its blocked path, which was a
@@ -270,11 +271,14 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                             joint_velocity(body, joint_accelerations.data() + tree.velocity_offset(i)) + w.bias_acceleration[index];
     w.bias_force[index] = body.inertia * w.acceleration[index] + cross_force(w.velocity[index], body.inertia * w.velocity[index]);
   }
-  // Inward: τ_i = S_iᵀ f_i; the joint transmits f_i to the parent, f_λ += λX_i* f_i.
+  // Inward: τ_i = S_iᵀ f_i (plus the armature's a·v̇_i); the joint transmits f_i to the parent,
+  // f_λ += λX_i* f_i.
   for (int i = n - 1; i >= 0; --i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
-    project_force(body, w.bias_force[index], joint_forces.data() + tree.velocity_offset(i));
+    const int offset = tree.velocity_offset(i);
+    project_force(body, w.bias_force[index], joint_forces.data() + offset);
+    if (body.armature > 0) joint_forces[offset] += body.armature * joint_accelerations[offset];
     if (body.parent >= 0) {
       w.bias_force[static_cast<std::size_t>(body.parent)] += w.parent_to_body[index].transpose_apply_force(w.bias_force[index]);
     }
@@ -322,7 +326,10 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
     }
   }
   // Ancestors come first, so the loop filled the diagonal blocks and the upper triangle; the
-  // lower triangle is its mirror.
+  // lower triangle is its mirror. The armatures add to the diagonal.
+  for (int i = 0; i < n; ++i) {
+    if (tree.body(i).armature > 0) joint_space_inertia(tree.velocity_offset(i), tree.velocity_offset(i)) += tree.body(i).armature;
+  }
   for (int column = 0; column < nv; ++column) {
     for (int row = column + 1; row < nv; ++row) joint_space_inertia(row, column) = joint_space_inertia(column, row);
   }

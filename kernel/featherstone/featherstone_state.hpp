@@ -16,6 +16,12 @@
 // - the centre of mass, for a floating root (a 6-DOF joint to the world).
 // The rigid body's frame is on the principal axes at the centre of mass; `centre_of_mass[i]` and
 // `principal_frame[i]` give that frame in tree body i's frame.
+//
+// Serial joints. A Model joint of k axes (JointType::serial) is k consecutive tree bodies, each a
+// 1-DOF revolute or prismatic joint at its axis's point: k − 1 massless joint frames (scene_body
+// −1, axes those of the chain's child) and then the child, whose frame's origin is the last axis's
+// point. Their k velocities are contiguous in v, each the axis's coordinate rate (MuJoCo's qvel of
+// those joints), so a limit, spring or friction on an axis is a row on one velocity.
 #pragma once
 
 #include <cstdint>
@@ -64,6 +70,14 @@ struct TreeJoint {
   /// round: the Model's coordinate rates are sign·(rates of v) (rotated into the child's frame
   /// for a spherical joint).
   double sign = 1;
+};
+
+/// One axis of a serial joint as the tree holds it.
+struct TreeSerialAxis {
+  std::int32_t joint = 0;  ///< the Model joint
+  int axis = 0;            ///< which of its serial_axes
+  std::int32_t body = 0;   ///< its tree body (a joint frame, or the child for the last axis)
+  int offset = 0;          ///< its velocity in v
 };
 
 /// One row of a joint limit (joint_space_contacts.hpp, "Joint limits"): the coordinate's rate
@@ -117,7 +131,7 @@ struct FeatherstoneState : RigidScene {
   FeatherstoneOptions options;
 
   // Tree body i ↔ rigid-scene body b.
-  std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last)
+  std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last); −1: a joint frame
   std::vector<std::int32_t> tree_body;   ///< per rigid-scene body: its tree body
   /// Per tree body: the Model joint that connects it to its parent, −1 for a floating root.
   std::vector<std::int32_t> model_joint;
@@ -141,8 +155,11 @@ struct FeatherstoneState : RigidScene {
   /// friction and drives are read from here every step, so a drive written here between steps
   /// (World::set_joint_drive) acts from the next step on.
   JointControls joint_controls;
-  /// Per Model joint: where the tree holds it.
+  /// Per Model joint: where the tree holds it (a serial joint: its child's tree body, its first
+  /// velocity and its axis count).
   std::vector<TreeJoint> tree_joint;
+  /// Every serial joint's axes, joint by joint, in order.
+  std::vector<TreeSerialAxis> serial_axes;
   JointControlScratch controls;
 
   /// forward_kinematics of the current (q, v): world_to_body and the bodies' spatial velocities.

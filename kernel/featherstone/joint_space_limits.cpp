@@ -51,6 +51,35 @@ bool awake(const FeatherstoneState& state, const TreeJoint& held) {
   return !state.islands[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]].sleeping;
 }
 
+// Joint k's island (held: where the tree holds it).
+std::int32_t island_of(const FeatherstoneState& state, const TreeJoint& held) {
+  return static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
+}
+
+// Adds `row` with C = gap ≥ 0 and ∂C/∂v = direction when it may act within the step.
+void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, const Eigen::Vector3d& direction, double dt) {
+  const double rate = joint_dot(direction, state.v, row.offset, row.dofs);
+  if (!(gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0))) return;  // also skips a NaN
+  row.gap = gap, row.direction = direction;
+  state.controls.rows.push_back(row);
+  std::vector<std::int32_t>& islands = state.controls.islands;
+  if (std::find(islands.begin(), islands.end(), row.island) == islands.end()) islands.push_back(row.island);
+}
+
+// A serial joint's axis ranges: each axis's coordinate is its tree body's q (0 at rest).
+void find_serial_limit_rows(FeatherstoneState& state, double dt) {
+  for (const TreeSerialAxis& node : state.serial_axes) {
+    const SerialAxis& axis = state.joint_controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+    const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
+    if (!axis.range || !awake(state, held)) continue;
+    JointLimitRow row;
+    row.island = island_of(state, held), row.body = node.body, row.offset = node.offset, row.dofs = 1;
+    const double x = state.q[state.tree.position_offset(node.body)];
+    add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt);
+    add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt);
+  }
+}
+
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
 // gaps, directions, approach speeds (inverse masses: measure_limit_rows).
 void find_limit_rows(FeatherstoneState& state, double dt) {
@@ -66,17 +95,9 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     const MeasuredJoint measured = measure_joint(state, k);
     const JointCoordinates& q = measured.coordinates;
     JointLimitRow row;
-    row.island = static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
+    row.island = island_of(state, held);
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
-    // Adds the row C = gap ≥ 0 with ∂C/∂v = direction when it may act within the step.
-    const auto add = [&](double gap, const Eigen::Vector3d& direction) {
-      const double rate = joint_dot(direction, state.v, held.offset, held.dofs);
-      if (!(gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0))) return;  // also skips a NaN
-      row.gap = gap, row.direction = direction;
-      rows.push_back(row);
-      std::vector<std::int32_t>& islands = state.controls.islands;
-      if (std::find(islands.begin(), islands.end(), row.island) == islands.end()) islands.push_back(row.island);
-    };
+    const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt); };
     if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
       if (!joint.limits.range) continue;
       const double x = joint.type == JointType::revolute ? q.angle : q.slide;
@@ -102,6 +123,7 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
       add(joint.limits.twist->max - q.twist, -gradient);
     }
   }
+  find_serial_limit_rows(state, dt);
 }
 
 // Each row's direction·H⁻¹·direction (one joint-block response per limited joint). Needs the
@@ -160,6 +182,7 @@ void factor_held(FeatherstoneState& state, std::size_t island, const Eigen::Vect
         const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
         const Eigen::Matrix<double, 6, k> u = ia * s;
         Eigen::Matrix<double, k, k> d = s.transpose() * u;
+        if constexpr (k == 1) d(0, 0) += body.armature;
         if (armature) d.diagonal() += armature->template segment<k>(offset);
         if constexpr (k <= 3) d += c.penalty[index].template topLeftCorner<k, k>();
         const Eigen::Matrix<double, k, k> d_inverse = d.inverse();
@@ -367,12 +390,14 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
   bool drives = false, friction = false;
+  const auto acting = [](const std::optional<JointDrive>& drive) { return drive && (drive->stiffness > 0 || drive->damping > 0); };
   for (std::size_t k = 0; k < controls.joints.size(); ++k) {
     const Joint& joint = controls.joints[k];
     const TreeJoint& held = state.tree_joint[k];
     if (held.dofs == 0 || !awake(state, held)) continue;
-    drives = drives || (joint.drive && (joint.drive->stiffness > 0 || joint.drive->damping > 0));
+    drives = drives || acting(joint.drive);
     friction = friction || joint.friction > 0;
+    for (const SerialAxis& axis : joint.serial_axes) drives = drives || acting(axis.drive), friction = friction || axis.friction > 0;
   }
   if (!drives && !friction) return false;
   forward_kinematics(state.tree, state.q, state.v, state.kinematics);
@@ -407,6 +432,16 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
         c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
       }
     }
+    // A serial joint's axes: each its own spring and damper on its own velocity.
+    for (const TreeSerialAxis& node : state.serial_axes) {
+      const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+      if (!acting(axis.drive) || !awake(state, state.tree_joint[static_cast<std::size_t>(node.joint)])) continue;
+      const JointDrive& drive = *axis.drive;
+      double error = drive.target - state.q[state.tree.position_offset(node.body)];
+      if (!axis.slide) error = std::remainder(error, 2 * std::numbers::pi);
+      c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
+      c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
+    }
   }
   // Stable PD (Tan, Liu & Turk 2011): (H + h·G) v̇ = τ − C + F − G·v, G = diag(k·h + c), whose
   // v + h·v̇ is the velocity the drives' force F − G·(v + h·v̇) leaves at the step's end.
@@ -425,7 +460,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
       const TreeJoint& held = state.tree_joint[k];
       if (!(controls.joints[k].friction > 0) || held.dofs == 0 || !awake(state, held)) continue;
       JointFrictionBlock block;
-      block.island = static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
+      block.island = island_of(state, held);
       block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
       block.bound = controls.joints[k].friction * h;
       const Eigen::Matrix3d response = joint_block_response(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
@@ -435,6 +470,18 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
         block.mass = response.inverse();
       }
       for (int m = 0; m < held.dofs; ++m) block.rate[m] = c.predicted[held.offset + m];
+      c.friction.push_back(block);
+      if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
+    }
+    for (const TreeSerialAxis& node : state.serial_axes) {
+      const double bound = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)].friction;
+      const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
+      if (!(bound > 0) || !awake(state, held)) continue;
+      JointFrictionBlock block;
+      block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
+      block.bound = bound * h;
+      block.mass(0, 0) = 1 / joint_block_response(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
+      block.rate[0] = c.predicted[node.offset];
       c.friction.push_back(block);
       if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
     }

@@ -19,6 +19,10 @@ void body_load_joint_forces(FeatherstoneState& state, bool drag_on) {
   for (int i = 0; i < state.tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);
     const std::int32_t b = state.scene_body[index];
+    if (b < 0) {  // a serial joint's massless frame: no load
+      state.drag_force[index].setZero();
+      continue;
+    }
     if (state.islands[state.island_of_body[b]].sleeping) continue;
     Eigen::Vector3d force = state.applied_force[b], torque = state.applied_torque[b];
     if (drag_on) {
@@ -92,6 +96,7 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
   for (int i = 0; i < state.tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);
     const std::int32_t b = state.scene_body[index];
+    if (b < 0) continue;  // a serial joint's frame
     const PluckerTransform& world_to_body = state.kinematics.world_to_body[index];
     const Eigen::Matrix3d rotation = world_to_body.rotation.transpose();  // body → world
     const Eigen::Vector3d& centre = state.centre_of_mass[index];

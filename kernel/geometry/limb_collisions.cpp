@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "limber/kernel/geometry/golden_section.hpp"
+#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {
@@ -201,6 +202,34 @@ bool contact_before(const LimbContact& a, const LimbContact& b) {
 
 }  // namespace
 
+// Bodies welded by fixed joints are one rigid body (a compound shape: MuJoCo's weld bodies, a
+// torso of two capsules), so a joint joins their whole groups: no two of a group collide, nor any
+// two across a joint between groups. Without fixed joints, the joined pairs alone.
+void LimbCollisions::exclude_joined_pairs(const Model& model) {
+  DisjointSets welded(limb_count_);
+  bool any_welded = false;
+  for (const Joint& joint : model.joints) {
+    if (joint.type != JointType::fixed || joint.inboard == kWorld) continue;
+    welded.unite(static_cast<std::uint32_t>(joint.inboard), static_cast<std::uint32_t>(joint.outboard)), any_welded = true;
+  }
+  std::vector<std::vector<std::uint32_t>> members(any_welded ? limb_count_ : 0);  // per group's representative
+  for (std::uint32_t b = 0; b < members.size(); ++b) members[welded.find(b)].push_back(b);
+  const auto exclude = [&](std::uint32_t a, std::uint32_t b) {
+    if (a != b) excluded_.emplace_back(std::min(a, b), std::max(a, b));
+  };
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
+    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
+    if (!any_welded) {
+      exclude(a, b);
+      continue;
+    }
+    for (std::uint32_t x : members[welded.find(a)]) {
+      for (std::uint32_t y : members[welded.find(b)]) exclude(x, y);
+    }
+  }
+}
+
 LimbCollisions::LimbCollisions(const Model& model)
     : limb_count_(static_cast<std::uint32_t>(model.bodies.size())),
       limb_friction_(model.settings.limb_friction),
@@ -221,11 +250,7 @@ LimbCollisions::LimbCollisions(const Model& model)
 
   // Exclusions: joined pairs, and limb pairs overlapping at the Model's poses (found by the sweep,
   // when any two limbs' filters let them meet: the exclusions answer only for those).
-  for (const Joint& joint : model.joints) {
-    if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
-    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
-    excluded_.emplace_back(std::min(a, b), std::max(a, b));
-  }
+  exclude_joined_pairs(model);
   boxes_.resize(segments);
   std::sort(excluded_.begin(), excluded_.end());
   excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());

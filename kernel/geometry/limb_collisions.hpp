@@ -148,6 +148,8 @@ class LimbCollisions {
   std::uint64_t comparisons() const { return broadphase_.comparisons(); }
 
  private:
+  /// Adds the pairs joints join to excluded_ (welded groups as one body).
+  void exclude_joined_pairs(const Model& model);
   // A value type (states are copied): no shared buffers.
   // One narrowphase block's output: its contacts and the pairs it kept (limb pairs, or (segment,
   // primitive) pairs), each block's own, so blocks run on any thread.

@@ -81,6 +81,7 @@ ConstraintSet compile_constraints(const RigidScene& scene, const Model& model) {
         rows.point_rows = 3;
         keep_rotation();
         break;
+      case JointType::serial: break;  // refused by require_supported
       case JointType::prismatic: {
         rows.slide_rows = 2;
         const auto normals = perpendicular_pair(joint.axis);
@@ -247,7 +248,8 @@ int control_row_count(const Joint& joint) {
       if (joint.drive || joint.friction > 0) return 3;
       return (joint.limits.swing ? 1 : 0) + (joint.limits.twist ? 1 : 0);
     case JointType::universal: return joint.friction > 0 ? 2 : 0;
-    case JointType::fixed: return 0;
+    case JointType::fixed:
+    case JointType::serial: return 0;  // serial: refused by require_supported
   }
   return 0;
 }
@@ -298,7 +300,8 @@ JointControlSet compile_joint_controls(const RigidScene& scene, const Model& mod
           if (joint.limits.twist) directions[next] = 2, controlled.twist_row = next++;
         }
         break;
-      case JointType::fixed: break;
+      case JointType::fixed:
+      case JointType::serial: break;
     }
     for (int r = 0; r < rows.control_rows; ++r) {
       ControlRow row;
@@ -442,7 +445,8 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
         }
         break;
       }
-      case JointType::fixed: break;
+      case JointType::fixed:
+      case JointType::serial: break;
     }
   }
 }

@@ -62,12 +62,13 @@ MassProperties solid_cylinder(double mass, double radius, double length) {
 MassProperties solid_capsule(double mass, double radius, double length) {
   require_positive(mass, "mass");
   require_positive(radius, "radius");
-  require_positive(length, "length");
+  if (!(length >= 0) || !std::isfinite(length)) throw std::invalid_argument("length: must be finite and >= 0");
   const double pi = std::numbers::pi;
   const double cylinder_volume = pi * radius * radius * length, cap_volume = 2.0 / 3.0 * pi * radius * radius * radius;
   const double density = mass / (cylinder_volume + 2 * cap_volume);
   const double cylinder_mass = density * cylinder_volume, cap_mass = density * cap_volume;
-  MassProperties result = solid_cylinder(cylinder_mass, radius, length);
+  // Length 0: a sphere, the two caps alone.
+  MassProperties result = length > 0 ? solid_cylinder(cylinder_mass, radius, length) : diagonal(mass, 0, 0, 0);
   result.mass = mass;
   // A hemisphere about its own centre of mass: I_zz = 2/5 m r², I_xx = I_yy = 83/320 m r².
   const double r2 = radius * radius, offset = length / 2 + 3.0 * radius / 8;

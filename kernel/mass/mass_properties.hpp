@@ -29,7 +29,8 @@ struct MassProperties {
 MassProperties solid_cylinder(double mass, double radius, double length);
 /// Solid capsule: a cylinder of `length` along z with hemispherical caps of `radius` (total
 /// extent length + 2·radius), uniform density. Each cap's inertia about its own centre of mass
-/// (3r/8 from its flat face) is moved to the capsule's centre by the parallel-axis theorem.
+/// (3r/8 from its flat face) is moved to the capsule's centre by the parallel-axis theorem. Length
+/// 0 (≥ 0) is a solid sphere, (2/5) m r².
 MassProperties solid_capsule(double mass, double radius, double length);
 /// Solid box of edge lengths `size` (x, y, z): I_xx = m (s_y² + s_z²)/12, and so on.
 MassProperties solid_box(double mass, const Eigen::Vector3d& size);

@@ -147,6 +147,8 @@ Observation observe(const FeatherstoneState& state) {
   Observation out = observe_rigid_scene(state, state.joint_controls);
   const RigidBodyState& y = state.bodies.state;
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
+    // A serial joint is its chain of tree bodies: the child's frame is where the chain puts it.
+    if (state.joint_controls.joints[j].type == JointType::serial) return 0.0;
     Eigen::Vector3d separation = joint_separation(state.joints, y, j);
     if (!state.slide_axis[j].isZero(0)) {
       const Eigen::Vector3d axis = y.orientation[state.joints.outboard[j]] * state.slide_axis[j];

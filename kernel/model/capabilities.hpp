@@ -14,21 +14,22 @@ namespace limber {
 struct MethodCapabilities {
   Method method;
   /// Joint types it compiles, indexed by JointType (spherical, revolute, prismatic, universal,
-  /// fixed).
-  std::array<bool, 5> joints;
+  /// fixed, serial).
+  std::array<bool, 6> joints;
   bool single_precision;  ///< a float state (WorldOptions::single_precision)
   bool threads;           ///< steps on more than one thread (VerletOptions::threads)
   bool gears;             ///< Model::gears (velocity constraints between joints)
   bool holds;             ///< points held to the world and moved while stepping (World::pin, move_pin)
+  bool spheres;           ///< bodies shaped as spheres (capsules of length 0: MuJoCo's sphere geoms)
 };
 
 /// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
-    //                     spherical revolute prismatic universal fixed   float  threads gears  holds
-    {Method::particles,    {true, true, false, true, true},              true,  true,   false, true},
-    {Method::springs,      {true, true, false, false, false},            false, false,  false, true},
-    {Method::lagrange,     {true, true, true, true, true},               false, false,  true,  true},
-    {Method::featherstone, {true, true, true, false, true},              false, false,  false, false},
+    //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres
+    {Method::particles,    {true, true, false, true, true, false},              true,  true,   false, true,  false},
+    {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false},
+    {Method::lagrange,     {true, true, true, true, true, false},               false, false,  true,  true,  true},
+    {Method::featherstone, {true, true, true, false, true, true},               false, false,  false, false, true},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
                   kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&
@@ -40,9 +41,9 @@ constexpr const MethodCapabilities& capabilities(Method method) { return kMethod
 
 constexpr bool supports(Method method, JointType type) { return capabilities(method).joints[static_cast<std::size_t>(type)]; }
 
-/// Throws ModelError naming the first joint whose type `method`'s row lacks, or the first gear
-/// when it has no gears: "joints[3] 'knee': the springs method does not support prismatic
-/// joints (it supports spherical, revolute; lagrange supports every type)". Each method's
+/// Throws ModelError naming the first joint whose type `method`'s row lacks, the first gear
+/// when it has no gears, or the first sphere when it has none: "joints[3] 'knee': the springs method does not support prismatic
+/// joints (it supports spherical, revolute; lagrange does)". Each method's
 /// compile calls it first.
 void require_supported(const Model& model, Method method);
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <unordered_set>
@@ -37,6 +38,7 @@ std::string_view joint_type_name(JointType type) {
     case JointType::prismatic: return "prismatic";
     case JointType::universal: return "universal";
     case JointType::fixed: return "fixed";
+    case JointType::serial: return "serial";
   }
   return "unknown";
 }
@@ -79,6 +81,7 @@ void append_model(Model& model, const Model& other, std::string_view prefix, con
       joint.inboard += first;
     }
     joint.outboard += first;
+    for (SerialAxis& axis : joint.serial_axes) axis.point += offset;
     model.joints.push_back(std::move(joint));
   }
   for (Gear gear : other.gears) {
@@ -137,7 +140,12 @@ void validate_inertial(const Body& body, const Path& path) {
 void validate_body(const Body& body, std::size_t index) {
   const auto path = field_path("bodies", index);
   require_name(body.name, path("name"), /*is_body=*/true);
-  require_positive(body.shape.length, path("shape.length"));
+  if (body.shape.type == ShapeType::capsule) {
+    require_non_negative(body.shape.length, path("shape.length"));
+    if (body.shape.length == 0) require_positive(body.shape.radius, path("shape.radius"));  // a sphere
+  } else {
+    require_positive(body.shape.length, path("shape.length"));
+  }
   require_non_negative(body.shape.radius, path("shape.radius"));
   require_positive(body.mass, path("mass"));
   double point_mass_sum = 0;
@@ -238,6 +246,45 @@ void validate_joint_controls(const Joint& joint, const Model& model, const Path&
   }
 }
 
+// A serial joint's axes: 1 to 6, each with its own range, drive, friction and armature; the
+// joint-wide controls are per axis instead.
+template <typename Path>
+void validate_serial_axes(const Joint& joint, const Path& path) {
+  if (joint.serial_axes.empty() || joint.serial_axes.size() > 6) {
+    fail(path("serial_axes"), "must hold 1 to 6 axes, got " + std::to_string(joint.serial_axes.size()));
+  }
+  for (std::size_t a = 0; a < joint.serial_axes.size(); ++a) {
+    const SerialAxis& axis = joint.serial_axes[a];
+    const auto at = [&](const char* field) {
+      return [&, field] { return indexed(path("serial_axes")(), a) + "." + field; };
+    };
+    require_name(axis.name, at("name"), /*is_body=*/false);
+    require_unit(axis.axis, at("axis"));
+    require_finite(axis.point, at("point"));
+    if (axis.range) {
+      const std::string range = at("range")();
+      const double bound = axis.slide ? std::numeric_limits<double>::infinity() : kPi;
+      require_in_range(axis.range->min, -bound, 0, range + ".min", /*low_open=*/true);
+      require_in_range(axis.range->max, 0, bound, range + ".max", false, /*high_open=*/true);
+    }
+    require_non_negative(axis.friction, at("friction"));
+    require_non_negative(axis.armature, at("armature"));
+    if (const auto& drive = axis.drive) {
+      require_non_negative(drive->stiffness, at("drive.stiffness"));
+      require_non_negative(drive->damping, at("drive.damping"));
+      require_finite(drive->target, at("drive.target"));
+      require_finite(drive->target_velocity, at("drive.target_velocity"));
+      if (drive->target_rotation != Vector3::Zero() || drive->target_angular_velocity != Vector3::Zero()) {
+        fail(at("drive.target_rotation"), "is for spherical joints; an axis's drive takes target and target_velocity");
+      }
+    }
+  }
+  if (joint.limits.any() || joint.friction > 0 || joint.drive) {
+    fail(path(joint.drive ? "drive" : joint.friction > 0 ? "friction" : "limits"),
+         "is per axis on a serial joint (serial_axes[i].range, .friction, .drive)");
+  }
+}
+
 void check_joint(const Joint& joint, const Model& model, std::size_t index) {
   const std::size_t body_count = model.bodies.size();
   const auto path = field_path("joints", index);
@@ -252,6 +299,16 @@ void check_joint(const Joint& joint, const Model& model, std::size_t index) {
   if (joint.stiffness) require_positive(*joint.stiffness, path("stiffness"));
   if (joint.damping) require_non_negative(*joint.damping, path("damping"));
   validate_joint_controls(joint, model, path);
+  require_non_negative(joint.armature, path("armature"));
+  if (joint.armature > 0 && joint.type != JointType::revolute && joint.type != JointType::prismatic) {
+    fail(path("armature"), "is for revolute and prismatic joints (a serial joint's is per axis), not " +
+                               std::string(joint_type_name(joint.type)));
+  }
+  if (joint.type == JointType::serial) {
+    validate_serial_axes(joint, path);
+    return;
+  }
+  if (!joint.serial_axes.empty()) fail(path("serial_axes"), "is for serial joints, not " + std::string(joint_type_name(joint.type)));
   if (joint.type == JointType::spherical || joint.type == JointType::fixed) return;
   require_unit(joint.axis, path("axis"));
   if (joint.type != JointType::universal) return;
@@ -396,8 +453,19 @@ void require_supported(const Model& model, Method method) {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
     if (row.joints[static_cast<std::size_t>(joint.type)]) continue;
+    std::string others;  // the methods that do
+    for (const MethodCapabilities& other : kMethodCapabilities) {
+      if (other.joints[static_cast<std::size_t>(joint.type)]) others += (others.empty() ? "" : ", ") + std::string(method_name(other.method));
+    }
     throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + name + " method does not support " +
-                     std::string(joint_type_name(joint.type)) + " joints (it supports " + names + "; lagrange supports every type)");
+                     std::string(joint_type_name(joint.type)) + " joints (it supports " + names + "; " + others + " " +
+                     (others.find(',') == std::string::npos ? "does" : "do") + ")");
+  }
+  for (std::size_t b = 0; b < model.bodies.size() && !row.spheres; ++b) {
+    const Shape& shape = model.bodies[b].shape;
+    if (shape.type != ShapeType::capsule || shape.length > 0) continue;
+    throw ModelError("bodies[" + std::to_string(b) + "] '" + model.bodies[b].name + "': the " + name +
+                     " method does not support spheres (a capsule of length 0: its limbs need an axis); lagrange and featherstone do");
   }
   if (!row.gears && !model.gears.empty()) {
     throw ModelError("gears[0] '" + model.gears[0].name + "': the " + name + " method does not support gears (velocity constraints); lagrange does");
@@ -411,10 +479,15 @@ void validate_joint(const Joint& joint, const Model& model, std::size_t index) {
 void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method) {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
-    const char* missing = joint.limits.any() && !supported.limits ? "joint limits"
-                          : joint.friction > 0 && !supported.friction ? "joint friction"
-                          : joint.drive && !supported.drives          ? "joint drives"
-                                                                      : nullptr;
+    bool limits = joint.limits.any(), friction = joint.friction > 0, drives = joint.drive.has_value(), armature = joint.armature > 0;
+    for (const SerialAxis& axis : joint.serial_axes) {
+      limits |= axis.range.has_value(), friction |= axis.friction > 0, drives |= axis.drive.has_value(), armature |= axis.armature > 0;
+    }
+    const char* missing = limits && !supported.limits       ? "joint limits"
+                          : friction && !supported.friction ? "joint friction"
+                          : drives && !supported.drives     ? "joint drives"
+                          : armature && !supported.armature ? "joint armature"
+                                                            : nullptr;
     if (missing) {
       throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + std::string(method) +
                        " method does not apply " + missing);

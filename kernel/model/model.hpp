@@ -38,12 +38,13 @@ enum class ShapeType { cylinder, capsule };
 
 /// A limb's shape in its body frame: the axis is local +z, the centre is the origin.
 /// - cylinder: flat end faces at z = ±length/2, radius `radius`.
-/// - capsule: hemispherical caps centred at z = ±length/2 (total extent length + 2·radius).
+/// - capsule: hemispherical caps centred at z = ±length/2 (total extent length + 2·radius); of
+///   length 0, a sphere (MuJoCo's sphere geoms: a head, a hand).
 /// The axis end points (0, 0, ±length/2) are the limb's *head* (+) and *tail* (−).
 struct Shape {
   ShapeType type = ShapeType::cylinder;
-  double length = 0;  ///< m, > 0
-  double radius = 0;  ///< m, ≥ 0
+  double length = 0;  ///< m, > 0 (a capsule: ≥ 0)
+  double radius = 0;  ///< m, ≥ 0 (a capsule of length 0: > 0)
 };
 
 /// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule.
@@ -70,6 +71,8 @@ struct Inertial {
 /// one's `group` shares a bit with the other's `mask`. Besides the filter, bodies joined by a joint
 /// never collide (their shapes meet at the joint by design), nor do two bodies that overlap in
 /// the Model's poses (a torso and the arm that hangs into it; Jolt's ragdoll does the same).
+/// Bodies welded by fixed joints count as one body (a compound shape, MuJoCo's weld body): none
+/// of them collides with another, nor with a body jointed to any of them.
 struct CollisionFilter {
   std::uint32_t group = 1;           ///< the categories it belongs to, bits
   std::uint32_t mask = 0xFFFFFFFFu;  ///< the categories it collides with, bits
@@ -140,6 +143,9 @@ enum class JointType {
   universal,  ///< turn about `axis` (fixed in the inboard body) and `second_axis` (fixed in the
               ///< outboard body), which stay perpendicular (4 rows, 2 DOF): a Cardan joint
   fixed,      ///< no relative motion (6 rows, 0 DOF): welds two limbs
+  serial,     ///< 1–6 hinges and slides in a row with nothing between them (Joint::serial_axes):
+              ///< MuJoCo's several joints in one body, such as a hip's three hinges or an ankle's
+              ///< two skew ones (6 − k rows, k DOF)
 };
 
 /// The scene-file name of a joint type ("spherical", "revolute", ...).
@@ -199,6 +205,25 @@ struct JointDrive {
   Vector3 target_angular_velocity = Vector3::Zero();  ///< rad/s, the same axes
 };
 
+/// One degree of freedom of a serial joint: a hinge about, or a slide along, an axis through a
+/// point. The axes compose in order from the inboard body (MuJoCo's `mj_kinematics`): the
+/// outboard body's pose is G₁(q₁)·G₂(q₂)⋯G_k(q_k) applied to its initial pose, G_i the screw about
+/// axis i as it lies at the initial poses, so each axis is carried by the turns before it. Its
+/// coordinate q is 0 at the initial poses (MuJoCo's q − ref).
+struct SerialAxis {
+  std::string name;                ///< the coordinate's name (MuJoCo's joint name), unique in the Model
+  bool slide = false;              ///< false: a hinge (q in rad); true: a slide (q in m)
+  Vector3 axis = Vector3::UnitX(); ///< unit, world frame at the initial poses
+  Vector3 point = Vector3::Zero(); ///< a point on the axis, m, world frame at the initial poses
+  /// The coordinate's limits, holding 0: a hinge's within (−π, π) rad, a slide's in m.
+  std::optional<Range> range;
+  /// A spring and damper on the coordinate (MuJoCo's joint stiffness, springref − ref and damping;
+  /// the same pull as a revolute joint's drive): target and target_velocity, stiffness, damping.
+  std::optional<JointDrive> drive;
+  double friction = 0;  ///< dry friction, N·m or N, ≥ 0 (MuJoCo's frictionloss)
+  double armature = 0;  ///< added to the coordinate's diagonal of the mass matrix, kg·m² or kg, ≥ 0
+};
+
 /// A joint between an inboard and an outboard body, at an anchor fixed in each body's frame.
 /// With inboard == kWorld, inboard_anchor is a world point, m.
 ///
@@ -234,10 +259,24 @@ struct Joint {
   double friction = 0;
   /// A drive toward a target (spherical, revolute, prismatic).
   std::optional<JointDrive> drive;
+  /// Revolute and prismatic: inertia added to the coordinate's diagonal of the joint-space mass
+  /// matrix (a rotor's reflected inertia; MuJoCo's armature), kg·m² or kg, ≥ 0.
+  double armature = 0;
+  /// Serial only: its degrees of freedom in order from the inboard body, 1 to 6. The anchors are
+  /// then the first axis's point (inboard frame) and the last axis's point (outboard frame), each
+  /// fixed in its body; the other fields of a joint (axis, limits, friction, drive, armature) are
+  /// per axis here.
+  std::vector<SerialAxis> serial_axes;
 };
 
 /// Whether the joint has a limit, friction or a drive: something beyond its type's equality rows.
-inline bool has_joint_controls(const Joint& joint) { return joint.limits.any() || joint.friction > 0 || joint.drive.has_value(); }
+inline bool has_joint_controls(const Joint& joint) {
+  if (joint.limits.any() || joint.friction > 0 || joint.drive.has_value()) return true;
+  for (const SerialAxis& axis : joint.serial_axes) {
+    if (axis.range || axis.friction > 0 || axis.drive) return true;
+  }
+  return false;
+}
 
 /// A spherical joint with the default spring (the common case, without naming every field).
 inline Joint spherical_joint(std::string name, int inboard, int outboard, const Vector3& inboard_anchor,
@@ -415,11 +454,11 @@ void validate_joint(const Joint& joint, const Model& model, std::size_t index);
 
 /// Which joint controls (limits, friction, drives) a method applies.
 struct JointControlSupport {
-  bool limits = false, friction = false, drives = false;
+  bool limits = false, friction = false, drives = false, armature = false;
 };
 
-/// Throws ModelError naming the first joint with a limit, friction or drive that `method` does
-/// not apply: "joints[3] 'knee': the <method> method does not apply joint limits".
+/// Throws ModelError naming the first joint with a limit, friction, drive or armature (its own
+/// or an axis's) that `method` does not apply: "joints[3] 'knee': the <method> method does not apply joint limits".
 void require_joint_controls(const Model& model, JointControlSupport supported, std::string_view method);
 
 }  // namespace limber

@@ -112,12 +112,17 @@ JointAnchors joint_anchors(const RigidScene& scene, const Model& model) {
     joints.inboard.push_back(joint.inboard);
     joints.outboard.push_back(joint.outboard);
     joints.outboard_anchor.push_back(body_anchor(scene, joint.outboard, joint.outboard_anchor));
-    double reference = model.bodies[joint.outboard].shape.length;
+    // A sphere (length 0) counts by its diameter.
+    const auto size = [&](int body) {
+      const Shape& shape = model.bodies[static_cast<std::size_t>(body)].shape;
+      return shape.length > 0 ? shape.length : 2 * shape.radius;
+    };
+    double reference = size(joint.outboard);
     if (joint.inboard == kWorld) {
       joints.inboard_anchor.push_back(joint.inboard_anchor);
     } else {
       joints.inboard_anchor.push_back(body_anchor(scene, joint.inboard, joint.inboard_anchor));
-      reference = 0.5 * (reference + model.bodies[joint.inboard].shape.length);
+      reference = 0.5 * (reference + size(joint.inboard));
     }
     joints.reference_length.push_back(reference);
   }

@@ -301,7 +301,8 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
         }
         break;
       }
-      case JointType::prismatic: break;  // refused by plan()
+      case JointType::prismatic:  // refused by plan(), as serial is
+      case JointType::serial: break;
     }
     set.joint_rows[k] = {first, static_cast<std::uint32_t>(set.rows.size())};
   }

@@ -221,7 +221,7 @@ TEST(FeatherstoneCompile, RefusesGearsAndUniversalJoints) {
   cardan.joints[2].type = JointType::universal;
   cardan.joints[2].axis = Vector3::UnitY(), cardan.joints[2].second_axis = Vector3::UnitZ();
   EXPECT_EQ(refusal(cardan), "joints[2] 'joint_2': the featherstone method does not support universal joints (it supports "
-                             "spherical, revolute, prismatic, fixed; lagrange supports every type)");
+                             "spherical, revolute, prismatic, fixed, serial; particles, lagrange do)");
 }
 
 // --- Stepping ------------------------------------------------------------------------------------

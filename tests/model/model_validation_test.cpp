@@ -92,8 +92,11 @@ TEST(ModelValidation, ValidateAcceptsZeroRadius) {
 }
 
 TEST(ModelValidation, ValidateRejectsZeroLength) {
-  EXPECT_EQ(error_after([](Model& m) { m.bodies[1].shape.length = 0; }),
+  EXPECT_EQ(error_after([](Model& m) { m.bodies[1].shape = {ShapeType::cylinder, 0, 0.05}; }),
             "bodies[1].shape.length: must be > 0, got 0");
+  // A capsule of length 0 is a sphere, which needs a radius.
+  EXPECT_EQ(error_after([](Model& m) { m.bodies[1].shape = {ShapeType::capsule, 0, 0}; }),
+            "bodies[1].shape.radius: must be > 0, got 0");
 }
 
 TEST(ModelValidation, ValidateRejectsNanInAVectorNamingTheComponent) {

@@ -20,11 +20,12 @@
 namespace limber {
 namespace {
 
-constexpr std::array<JointType, 5> kJointTypes{JointType::spherical, JointType::revolute, JointType::prismatic, JointType::universal,
-                                               JointType::fixed};
+constexpr std::array<JointType, 6> kJointTypes{JointType::spherical, JointType::revolute, JointType::prismatic, JointType::universal,
+                                               JointType::fixed,     JointType::serial};
 
 // Two rods end to end along +x, the first's head held at the origin (a spherical joint to the
-// world), the second's head at the first's tail by a joint of `type` (axis y, second axis z).
+// world), the second's head at the first's tail by a joint of `type` (axis y, second axis z; a
+// serial joint: a hinge about y then one about z, there).
 Model two_rods(JointType type) {
   Model model = testing::rod_held_at_head(JointType::spherical);
   Body second = model.bodies[0];
@@ -35,6 +36,13 @@ Model two_rods(JointType type) {
   joint.type = type;
   joint.axis = Eigen::Vector3d::UnitY();
   joint.second_axis = Eigen::Vector3d::UnitZ();
+  if (type == JointType::serial) {
+    const Eigen::Vector3d point(1, 0, 0);
+    SerialAxis about_y, about_z;
+    about_y.name = "about_y", about_y.axis = Eigen::Vector3d::UnitY(), about_y.point = point;
+    about_z.name = "about_z", about_z.axis = Eigen::Vector3d::UnitZ(), about_z.point = point;
+    joint.serial_axes = {about_y, about_z};
+  }
   model.joints.push_back(joint);
   return model;
 }
