@@ -49,7 +49,7 @@ Scene scene_model(const std::string& scene) {
   if (scene == "double-pendulum") return double_pendulum();
   if (scene == "chain-5") return load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/chain.json");
   if (scene == "chain-100") {
-    Scene chain{make_chain_model({.links = 100, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = 2}), {}};
+    Scene chain{make_chain_model({.links = 100, .link_length = 0.1, .link_mass = 1, .end_mass_ratio = 2}), {}, {}};
     chain.methods.verlet.joints = ParticleJoints::shared_particle;  // one particle a joint, as measured
     return chain;
   }

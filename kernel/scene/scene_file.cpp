@@ -7,6 +7,9 @@
 // in the Model, so its paths match the file) and generated chain links that clash.
 #include "limber/kernel/scene/scene_file.hpp"
 
+#include "limber/kernel/scene/mjcf_document.hpp"
+#include "limber/kernel/scene/mjcf_model.hpp"
+
 #include <algorithm>
 #include <cerrno>
 #include <climits>
@@ -886,7 +889,27 @@ Scene load_scene_text(std::string_view json_text, std::string_view source,
   }
 }
 
+namespace {
+
+// An MJCF model file as a Scene: its Model, the methods' defaults, and the loader's notes.
+Scene load_mjcf_scene(const std::filesystem::path& path, const SceneOptions& options) {
+  const std::string source = path.string();
+  const char* option = options.variant ? "a variant" : options.links ? "a link count" : options.copies ? "copies" : nullptr;
+  if (option) throw ModelError(source + ": " + option + " was asked for, but an MJCF model file has no variants, chain or copies");
+  Scene scene;
+  scene.model = model_from_mjcf(mjcf::load_mjcf(path), scene.notes);
+  if (scene.model.bodies.size() > options.max_bodies) {
+    throw ModelError(source + ": " + std::to_string(scene.model.bodies.size()) + " bodies, more than the " +
+                     std::to_string(options.max_bodies) + " a scene may have");
+  }
+  validate(scene.methods);
+  return scene;
+}
+
+}  // namespace
+
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
+  if (path.extension() == ".xml") return load_mjcf_scene(path, options);
   const std::string source = path.string();
   const auto cannot_read = [&] {
     throw ModelError(source + ": cannot read file: " + std::strerror(errno));

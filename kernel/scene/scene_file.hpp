@@ -177,6 +177,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
@@ -218,6 +219,10 @@ struct SceneOptions {
 struct Scene {
   Model model;
   MethodSettings methods;
+  /// What the loader dropped or approximated, one line each ("file:line: <element>: reason"):
+  /// a model file's elements limber does not simulate (kernel/scene/mjcf_model.hpp). Empty for
+  /// a JSON scene, which has no such fields.
+  std::vector<std::string> notes;
 };
 
 /// Parses and validates a scene. `source` names it in error messages (usually the file path).
@@ -229,8 +234,10 @@ Scene load_scene_text(std::string_view json_text, std::string_view source, const
 /// 10⁵ triangles is ~10 MB): a guard against reading a wrong file whole.
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
 
-/// Reads and loads a scene file. Throws ModelError (one line naming the file) when it cannot be
-/// read, is a directory, is empty, is larger than kMaxSceneFileBytes, or is invalid.
+/// Reads and loads a scene file: JSON, or MuJoCo's MJCF when its name ends in ".xml"
+/// (kernel/scene/mjcf_model.hpp; it takes no SceneOptions but the limits). Throws ModelError
+/// (one line naming the file) when it cannot be read, is a directory, is empty, is larger than
+/// kMaxSceneFileBytes, or is invalid.
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
 
 /// The text of tools/scenes/humanoid.json, compiled into the library: the default scene.

@@ -63,7 +63,7 @@ class Simulation {
   /// ModelError when the model is invalid for the method (as the method's own compile does).
   Simulation(const Scene& scene, const Method& method);
   /// A Model without method settings of its own (the methods' defaults).
-  Simulation(const Model& model, const Method& method) : Simulation(Scene{model, {}}, method) {}
+  Simulation(const Model& model, const Method& method) : Simulation(Scene{model, {}, {}}, method) {}
 
   /// One step of the method's time step.
   StepStatus step();

@@ -92,7 +92,7 @@ Model limp_ragdoll() {
 // A World for `model` with the ragdoll scene's method settings (for particles, its joint trees at 2
 // substeps × 2 sweeps).
 World ragdoll_world(const Model& model, Method method) {
-  return World(Scene{model, testing::shipped_scene("ragdoll.json").methods}, method);
+  return World(Scene{model, testing::shipped_scene("ragdoll.json").methods, {}}, method);
 }
 
 // Limb–limb contacts now, found by a collision world of the Model (its filters and exclusions:

@@ -1,0 +1,248 @@
+// MuJoCo's own humanoid (Debian's libmujoco-samples) loaded by limber and by MuJoCo 2.2.2: the
+// Featherstone method's joint-space mass matrix and accelerations are MuJoCo's, with the
+// armature, joint springs and damping the file gives. Skipped, with a message, where the model
+// file is missing.
+//
+// Coordinates. The hinges are the same in both (angle from the file's pose, ref = 0 in
+// humanoid.xml), matched by name; the serial joints' axes are tree bodies of their own
+// (featherstone_state.hpp). The floating base differs: MuJoCo's free joint moves the torso's body
+// frame (qpos: its origin p and orientation R; qvel: ṗ in world, ω in the torso frame); limber's
+// floating root is its torso body's frame (the torso's first capsule: origin o_l at its centre,
+// orientation R_l = R·R_off), v = (ω, ȯ_l) in that frame. So v_mj = T v_l with
+//   ṗ = R_l ȯ_l + (R_l ω) × (p − o_l),   ω_mj = R_off ω,   hinge rates one to one,
+// and the kinetic energies agree when M_l = Tᵀ M_mj T.
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/scene/mjcf_document.hpp"
+#include "limber/kernel/scene/mjcf_model.hpp"
+
+namespace limber {
+namespace {
+
+const std::filesystem::path kHumanoid = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& r) {
+  Eigen::Matrix3d m;
+  m << 0, -r.z(), r.y(), r.z(), 0, -r.x(), -r.y(), r.x(), 0;
+  return m;
+}
+
+// Both engines on one file, and the map between their coordinates.
+class BothEngines {
+ public:
+  explicit BothEngines(const std::filesystem::path& file) {
+    std::vector<std::string> notes;
+    model_ = model_from_mjcf(mjcf::load_mjcf(file), notes);
+    state_ = compile_featherstone(model_, FeatherstoneOptions{});
+    char error[1000] = "";
+    mj_ = mj_loadXML(file.c_str(), nullptr, error, sizeof error);
+    if (!mj_) throw std::runtime_error(std::string("mj_loadXML: ") + error);
+    mj_->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_LIMIT;  // the free dynamics: no contact or limit forces
+    data_ = mj_makeData(mj_);
+    index_hinges();
+    // The torso's frame at the file's pose in MuJoCo (its body pos and quat; its parent is the
+    // world), and limber's root frame then.
+    const Eigen::Quaterniond torso(mj_->body_quat[4], mj_->body_quat[5], mj_->body_quat[6], mj_->body_quat[7]);
+    const Body& root = model_.bodies[0];
+    rotation_offset_ = torso.toRotationMatrix().transpose() * root.orientation().toRotationMatrix();
+    origin_offset_ = torso.conjugate() * (root.position - Eigen::Vector3d(mj_->body_pos[3], mj_->body_pos[4], mj_->body_pos[5]));
+  }
+  ~BothEngines() {
+    mj_deleteData(data_);
+    mj_deleteModel(mj_);
+  }
+  BothEngines(const BothEngines&) = delete;
+  BothEngines& operator=(const BothEngines&) = delete;
+
+  // A random state: torso pose and velocity, hinges inside their ranges, random rates.
+  void set_random_state(std::mt19937& random) {
+    std::uniform_real_distribution<double> unit(-1, 1);
+    Eigen::Quaterniond turn(unit(random), unit(random), unit(random), unit(random));
+    turn.normalize();
+    const Eigen::Vector3d p(unit(random), unit(random), 10 + unit(random)), pdot(unit(random), unit(random), unit(random));
+    const Eigen::Vector3d omega(2 * unit(random), 2 * unit(random), 2 * unit(random));  // torso frame
+    for (int k = 0; k < 3; ++k) data_->qpos[k] = p[k], data_->qvel[k] = pdot[k], data_->qvel[3 + k] = omega[k];
+    data_->qpos[3] = turn.w(), data_->qpos[4] = turn.x(), data_->qpos[5] = turn.y(), data_->qpos[6] = turn.z();
+    state_.q = state_.tree.neutral_positions();
+    state_.v.setZero();
+    for (const Hinge& hinge : hinges_) {
+      const double low = mj_->jnt_range[2 * hinge.joint], high = mj_->jnt_range[2 * hinge.joint + 1];
+      const double angle = 0.5 * (low + high) + 0.45 * (high - low) * unit(random), rate = 3 * unit(random);
+      data_->qpos[mj_->jnt_qposadr[hinge.joint]] = angle, data_->qvel[mj_->jnt_dofadr[hinge.joint]] = rate;
+      state_.q[hinge.position] = angle, state_.v[hinge.velocity] = rate;
+    }
+    // limber's root: R_l = R·R_off, o_l = p + R·d; v = (R_lᵀ ω_world, R_lᵀ ȯ_l).
+    rotation_ = turn.toRotationMatrix() * rotation_offset_;
+    origin_ = p + turn * origin_offset_;
+    torso_origin_ = p;
+    const Eigen::Vector3d omega_world = turn * omega;
+    const Eigen::Quaterniond root(rotation_);
+    state_.q.segment<3>(0) = origin_;
+    state_.q.segment<4>(3) << root.w(), root.x(), root.y(), root.z();
+    state_.v.segment<3>(0) = rotation_.transpose() * omega_world;
+    state_.v.segment<3>(3) = rotation_.transpose() * (pdot + omega_world.cross(origin_ - p));
+  }
+
+  // T: MuJoCo's velocities of limber's (nv × nv; see the file's comment).
+  Eigen::MatrixXd velocity_map() const {
+    const int nv = mj_->nv;
+    Eigen::MatrixXd t = Eigen::MatrixXd::Zero(nv, nv);
+    t.block<3, 3>(0, 0) = -skew(torso_origin_ - origin_) * rotation_;
+    t.block<3, 3>(0, 3) = rotation_;
+    t.block<3, 3>(3, 0) = rotation_offset_;
+    for (const Hinge& hinge : hinges_) t(mj_->jnt_dofadr[hinge.joint], hinge.velocity) = 1;
+    return t;
+  }
+
+  // The joint forces of the springs and dampers the Model holds (its drives), at limber's state.
+  Eigen::VectorXd passive_forces() const {
+    Eigen::VectorXd tau = Eigen::VectorXd::Zero(state_.tree.velocity_count());
+    for (const Hinge& hinge : hinges_) {
+      if (!hinge.drive) continue;
+      tau[hinge.velocity] = hinge.drive->stiffness * (hinge.drive->target - state_.q[hinge.position]) - hinge.drive->damping * state_.v[hinge.velocity];
+    }
+    return tau;
+  }
+
+  struct Hinge {
+    int joint = 0;              // MuJoCo's joint id
+    int position = 0, velocity = 0;  // limber's q and v index
+    const JointDrive* drive = nullptr;
+  };
+  const std::vector<Hinge>& hinges() const { return hinges_; }
+  const Model& model() const { return model_; }
+  FeatherstoneState& state() { return state_; }
+  mjModel* mj() const { return mj_; }
+  mjData* data() const { return data_; }
+  const Eigen::Matrix3d& rotation() const { return rotation_; }
+  const Eigen::Vector3d& origin() const { return origin_; }
+  const Eigen::Vector3d& torso_origin() const { return torso_origin_; }
+
+ private:
+  // Every MuJoCo hinge, by name, to the tree's coordinate that holds it.
+  void index_hinges() {
+    std::map<std::string, Hinge> by_name;
+    for (std::size_t j = 0; j < model_.joints.size(); ++j) {
+      const Joint& joint = model_.joints[j];
+      if (joint.type != JointType::revolute) continue;
+      const int body = state_.tree_joint[j].body;
+      by_name[joint.name] = {0, state_.tree.position_offset(body), state_.tree.velocity_offset(body), joint.drive ? &*joint.drive : nullptr};
+    }
+    for (const TreeSerialAxis& axis : state_.serial_axes) {
+      const SerialAxis& serial = model_.joints[static_cast<std::size_t>(axis.joint)].serial_axes[static_cast<std::size_t>(axis.axis)];
+      by_name[serial.name] = {0, state_.tree.position_offset(axis.body), axis.offset, serial.drive ? &*serial.drive : nullptr};
+    }
+    for (int j = 0; j < mj_->njnt; ++j) {
+      if (mj_->jnt_type[j] != mjJNT_HINGE) continue;
+      const auto found = by_name.find(mj_id2name(mj_, mjOBJ_JOINT, j));
+      if (found == by_name.end()) throw std::runtime_error(std::string("no limber coordinate for hinge ") + mj_id2name(mj_, mjOBJ_JOINT, j));
+      found->second.joint = j;
+      hinges_.push_back(found->second);
+    }
+  }
+
+  Model model_;
+  FeatherstoneState state_;
+  mjModel* mj_ = nullptr;
+  mjData* data_ = nullptr;
+  std::vector<Hinge> hinges_;
+  Eigen::Matrix3d rotation_offset_, rotation_;
+  Eigen::Vector3d origin_offset_, origin_, torso_origin_;
+};
+
+#define SKIP_WITHOUT_HUMANOID()                                                                                         \
+  if (!std::filesystem::exists(kHumanoid)) GTEST_SKIP() << kHumanoid << " is missing: install libmujoco-samples " \
+                                                                         "(tools/install_packages.sh tests)"
+
+TEST(MjcfHumanoid, EachBodysMassAndCentreAreMujocos) {
+  SKIP_WITHOUT_HUMANOID();
+  const BothEngines both(kHumanoid);
+  mj_forward(both.mj(), both.data());  // xipos: each body's centre of mass in world at qpos0
+  const Model& model = both.model();
+  for (int b = 1; b < both.mj()->nbody; ++b) {
+    const std::string name = mj_id2name(both.mj(), mjOBJ_BODY, b);
+    double mass = 0;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+    for (const Body& body : model.bodies) {
+      if (body.name != name && body.name.rfind(name + "/", 0) != 0) continue;
+      mass += body.mass;
+      moment += body.mass * body.to_world(body_mass_properties(body).centre_of_mass);
+    }
+    EXPECT_NEAR(mass, both.mj()->body_mass[b], 1e-12 * mass) << name;
+    const Eigen::Vector3d centre(both.data()->xipos[3 * b], both.data()->xipos[3 * b + 1], both.data()->xipos[3 * b + 2]);
+    EXPECT_LT((moment / mass - centre).norm(), 1e-12) << name;
+  }
+}
+
+TEST(MjcfHumanoid, MassMatrixIsMujocosWithArmature) {
+  SKIP_WITHOUT_HUMANOID();
+  BothEngines both(kHumanoid);
+  std::mt19937 random(7);
+  DynamicsWorkspace workspace;
+  Eigen::MatrixXd limber_matrix;
+  const int nv = both.mj()->nv;
+  ASSERT_EQ(both.state().tree.velocity_count(), nv);
+  std::vector<mjtNum> dense(static_cast<std::size_t>(nv * nv));
+  for (int trial = 0; trial < 20; ++trial) {
+    both.set_random_state(random);
+    mj_forward(both.mj(), both.data());
+    mj_fullM(both.mj(), dense.data(), both.data()->qM);
+    const Eigen::MatrixXd mujoco = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(dense.data(), nv, nv);
+    mass_matrix(both.state().tree, both.state().q, workspace, limber_matrix);
+    const Eigen::MatrixXd t = both.velocity_map();
+    const Eigen::MatrixXd expected = t.transpose() * mujoco * t;
+    EXPECT_LT((limber_matrix - expected).norm(), 1e-10 * expected.norm()) << "state " << trial;
+  }
+}
+
+TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingAndArmature) {
+  SKIP_WITHOUT_HUMANOID();
+  BothEngines both(kHumanoid);
+  std::mt19937 random(11);
+  DynamicsWorkspace workspace;
+  Eigen::VectorXd acceleration, forces;
+  const Eigen::Vector3d gravity(both.mj()->opt.gravity[0], both.mj()->opt.gravity[1], both.mj()->opt.gravity[2]);
+  for (int trial = 0; trial < 20; ++trial) {
+    both.set_random_state(random);
+    mj_forward(both.mj(), both.data());
+    FeatherstoneState& state = both.state();
+    const Eigen::VectorXd tau = both.passive_forces();
+    forward_dynamics(state.tree, state.q, state.v, tau, gravity, workspace, acceleration);
+    const mjtNum* qacc = both.data()->qacc;
+    double scale = 0;
+    for (int k = 0; k < both.mj()->nv; ++k) scale = std::max(scale, std::abs(qacc[k]));
+    for (const auto& hinge : both.hinges()) {
+      EXPECT_NEAR(acceleration[hinge.velocity], qacc[both.mj()->jnt_dofadr[hinge.joint]], 1e-8 * scale)
+          << mj_id2name(both.mj(), mjOBJ_JOINT, hinge.joint) << ", state " << trial;
+    }
+    // The torso: ω̇ in world, and the acceleration of MuJoCo's torso origin (limber's root origin's
+    // R_l(v̇ + ω × v), carried to it as a rigid body's).
+    const Eigen::Matrix3d& r = both.rotation();
+    const Eigen::Vector3d omega = r * state.v.segment<3>(0), omega_dot = r * acceleration.segment<3>(0);
+    const Eigen::Vector3d arm = both.torso_origin() - both.origin();
+    const Eigen::Vector3d origin_acceleration =
+        r * (acceleration.segment<3>(3) + state.v.segment<3>(0).cross(state.v.segment<3>(3)));
+    const Eigen::Vector3d torso_acceleration = origin_acceleration + omega_dot.cross(arm) + omega.cross(omega.cross(arm));
+    const Eigen::Quaterniond turn(both.data()->qpos[3], both.data()->qpos[4], both.data()->qpos[5], both.data()->qpos[6]);
+    const Eigen::Vector3d mujoco_omega_dot = turn * Eigen::Vector3d(qacc[3], qacc[4], qacc[5]);
+    EXPECT_LT((omega_dot - mujoco_omega_dot).norm(), 1e-8 * scale) << "state " << trial;
+    EXPECT_LT((torso_acceleration - Eigen::Vector3d(qacc[0], qacc[1], qacc[2])).norm(), 1e-8 * scale) << "state " << trial;
+    // Inverse dynamics of these accelerations gives the forces back (armature included).
+    inverse_dynamics(state.tree, state.q, state.v, acceleration, gravity, workspace, forces);
+    EXPECT_LT((forces - tau).norm(), 1e-9 * std::max(1.0, tau.norm())) << "state " << trial;
+  }
+}
+
+}  // namespace
+}  // namespace limber
