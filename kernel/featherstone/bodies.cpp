@@ -34,6 +34,11 @@ bool teleport_body(FeatherstoneState& state, std::size_t body, const Pose& pose,
   return true;
 }
 
+void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, double force) {
+  const TreeJoint& held = state.tree_joint[joint];
+  state.actuation[held.offset + axis] += held.sign * force;
+}
+
 bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
                  const Survivors& survivors, std::string& problem) {
   // The joint a tree body hangs from, by name (empty: floating), and its parent's old index.

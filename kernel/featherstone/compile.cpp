@@ -324,6 +324,7 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.kinematics.resize(tree);
   state.integration.resize(tree);
   state.joint_forces.setZero(nv);
+  state.actuation.setZero(nv);
   state.saved_positions = state.q;
   state.drag_force.assign(tree_size, SpatialVector::Zero());
   JointSpaceContactScratch& contact = state.contact;

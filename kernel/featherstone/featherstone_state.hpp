@@ -166,7 +166,8 @@ struct FeatherstoneState : RigidScene {
   DynamicsWorkspace kinematics;
   FeatherstoneIntegratorWorkspace integration;
   JointSpaceContactScratch contact;
-  Eigen::VectorXd joint_forces;  ///< nv: Settings::drag as joint forces, held over a step
+  Eigen::VectorXd joint_forces;  ///< nv: Settings::drag, the loads and the actuation as joint forces, held over a step
+  Eigen::VectorXd actuation;     ///< nv: generalized forces for the next step (apply_joint_force), zeroed after it
   Eigen::VectorXd saved_positions;  ///< nq: q of sleeping islands, restored after integrating
   std::vector<SpatialVector> drag_force;  ///< per tree body (scratch)
   StepReport last_report;

@@ -68,6 +68,7 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   bool loads = false;
   for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
   if (drag || loads) body_load_joint_forces(state, drag);
+  if (!state.actuation.isZero(0)) state.joint_forces += state.actuation;  // zeroed at the last step's end
   const int substeps = turn_substeps(state, dt);
   const double h = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
@@ -136,6 +137,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     report.status = update_sleep(state, dt);
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
+    state.actuation.setZero();
     zero_sleeping_velocities(state);  // islands put to sleep had their rigid momenta zeroed
     if (state.options.profile) count_rigid_step(state, report);
   });

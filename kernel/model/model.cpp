@@ -67,7 +67,7 @@ double Model::body_mass() const {
 }
 
 void append_model(Model& model, const Model& other, std::string_view prefix, const Vector3& offset) {
-  const int first = static_cast<int>(model.bodies.size());
+  const int first = static_cast<int>(model.bodies.size()), first_joint = static_cast<int>(model.joints.size());
   const std::string lead(prefix);
   for (Body body : other.bodies) {
     body.name = lead + body.name, body.position += offset;
@@ -87,6 +87,10 @@ void append_model(Model& model, const Model& other, std::string_view prefix, con
   for (Gear gear : other.gears) {
     gear.name = lead + gear.name, gear.first += first, gear.second += first;
     model.gears.push_back(std::move(gear));
+  }
+  for (Actuator actuator : other.actuators) {
+    actuator.name = lead + actuator.name, actuator.joint += first_joint;
+    model.actuators.push_back(std::move(actuator));
   }
 }
 
@@ -319,6 +323,29 @@ void check_joint(const Joint& joint, const Model& model, std::size_t index) {
   }
 }
 
+// An actuator: a joint coordinate that exists and moves, a finite gear, a range min ≤ max.
+void validate_actuator(const Actuator& actuator, const Model& model, std::size_t index) {
+  const auto path = field_path("actuators", index);
+  require_name(actuator.name, path("name"), /*is_body=*/false);
+  if (actuator.joint < 0 || static_cast<std::size_t>(actuator.joint) >= model.joints.size()) {
+    fail(path("joint"), "names joint index " + std::to_string(actuator.joint) + " but there are " + std::to_string(model.joints.size()) + " joints");
+  }
+  const Joint& joint = model.joints[static_cast<std::size_t>(actuator.joint)];
+  if (joint.type != JointType::revolute && joint.type != JointType::prismatic && joint.type != JointType::serial) {
+    fail(path("joint"), "names '" + joint.name + "', a " + std::string(joint_type_name(joint.type)) +
+                            " joint: an actuator drives a revolute, prismatic or serial joint's coordinate");
+  }
+  const std::size_t axes = joint.type == JointType::serial ? joint.serial_axes.size() : 1;
+  if (actuator.axis < 0 || static_cast<std::size_t>(actuator.axis) >= axes) {
+    fail(path("axis"), "must be in [0, " + std::to_string(axes) + ") for '" + joint.name + "', got " + std::to_string(actuator.axis));
+  }
+  require_finite(actuator.gear, path("gear"));
+  if (const auto& range = actuator.control_range) {
+    require_finite(range->min, path("control_range.min")), require_finite(range->max, path("control_range.max"));
+    if (!(range->min <= range->max)) fail(path("control_range"), "min must be <= max, got [" + format_number(range->min) + ", " + format_number(range->max) + "]");
+  }
+}
+
 void validate_gear(const Gear& gear, std::size_t body_count, std::size_t index) {
   const auto path = field_path("gears", index);
   require_name(gear.name, path("name"), /*is_body=*/false);
@@ -410,6 +437,8 @@ void validate(const Model& model) {
   require_unique_names(model.joints, [](const Joint& joint) -> std::string_view { return joint.name; }, "joints");
   for (std::size_t i = 0; i < model.gears.size(); ++i) validate_gear(model.gears[i], model.bodies.size(), i);
   require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
+  for (std::size_t i = 0; i < model.actuators.size(); ++i) validate_actuator(model.actuators[i], model, i);
+  require_unique_names(model.actuators, [](const Actuator& actuator) -> std::string_view { return actuator.name; }, "actuators");
 
   if (const auto& ground = model.ground) {
     require_finite(ground->height, "ground.height");

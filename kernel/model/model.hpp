@@ -302,6 +302,20 @@ struct Gear {
   double ratio = -1;                        ///< finite, ≠ 0
 };
 
+/// A motor on one joint coordinate (MuJoCo's <motor>): the joint force gear × control, N·m on a
+/// hinge, N on a slide, with the control set while stepping (World::set_controls) and 0 until
+/// then. The force acts between the joint's two bodies and nowhere else: a generalized force on
+/// the coordinate.
+struct Actuator {
+  std::string name;
+  int joint = 0;  ///< Model joint index: revolute, prismatic or serial
+  int axis = 0;   ///< a serial joint's axis (serial_axes index); 0 for revolute and prismatic
+  double gear = 1;  ///< N·m (or N) per unit of control, finite
+  /// The controls it takes: a control outside is clamped to it (MuJoCo's ctrlrange with
+  /// ctrllimited). Unset: any finite control.
+  std::optional<Range> control_range;
+};
+
 /// The plane z = height, solid below. Coulomb friction and restitution against everything.
 struct Ground {
   double height = 0;       ///< m
@@ -408,6 +422,7 @@ struct Model {
   std::vector<Body> bodies;
   std::vector<Joint> joints;
   std::vector<Gear> gears;
+  std::vector<Actuator> actuators;  ///< motors on joint coordinates, in the order of their controls
   std::optional<Ground> ground;
   std::optional<Bounds> bounds;
   std::vector<Ball> balls;                ///< projectiles, in order (the first: the thesis's ball)
@@ -424,8 +439,8 @@ struct Model {
 /// "ball0", "ball1", …
 std::string ball_name(const Model& model, std::size_t index);
 
-/// Appends `other`'s bodies, joints and gears to `model`: names led by `prefix`, moved by
-/// `offset` (m; joints to the world too), body indices renumbered. Settings, ground, bounds and
+/// Appends `other`'s bodies, joints, gears and actuators to `model`: names led by `prefix`, moved
+/// by `offset` (m; joints to the world too), body and joint indices renumbered. Settings, ground, bounds and
 /// balls stay `model`'s. (Several ragdolls in one world; copies of a scene on a lattice.)
 void append_model(Model& model, const Model& other, std::string_view prefix, const Vector3& offset);
 

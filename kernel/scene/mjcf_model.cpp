@@ -239,6 +239,25 @@ void set_friction(const mjcf::Document& document, Model& model, std::vector<std:
   }
 }
 
+// A <motor> on a hinge or slide: the joint (and serial axis) that holds its coordinate.
+Actuator motor(const mjcf::Document& document, const mjcf::Actuator& source, const Model& model, const std::vector<int>& joint_of) {
+  const char* kinds[] = {"motor", "position", "velocity"};
+  const std::string element = std::string(kinds[static_cast<int>(source.type)]) + (source.name.empty() ? "" : " name='" + source.name + "'");
+  if (source.type != mjcf::ActuatorType::motor) refuse(source.at, element, "position and velocity actuators are not supported yet (motors are)");
+  if (source.forcelimited) refuse(source.at, element, "forcerange is not supported yet (ctrlrange is)");
+  const mjcf::Joint& joint = document.bodies[static_cast<std::size_t>(source.joint_body)].joints[static_cast<std::size_t>(source.joint)];
+  if (joint.type != mjcf::JointType::hinge && joint.type != mjcf::JointType::slide) {
+    refuse(source.at, element, "a motor on a ball or free joint is not supported yet (hinges and slides are)");
+  }
+  Actuator actuator;
+  actuator.name = source.name.empty() ? "actuator" + std::to_string(model.actuators.size()) : source.name;
+  actuator.joint = joint_of[static_cast<std::size_t>(source.joint_body)];
+  actuator.axis = model.joints[static_cast<std::size_t>(actuator.joint)].type == JointType::serial ? source.joint : 0;
+  actuator.gear = source.gear;
+  if (source.ctrllimited) actuator.control_range = Range{source.ctrl_min, source.ctrl_max};
+  return actuator;
+}
+
 }  // namespace
 
 Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& notes) {
@@ -251,23 +270,16 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
   double body_friction = 0;
   set_friction(document, model, notes, body_friction);
   const std::vector<Isometry> frames = world_frames(document);
-  std::vector<int> own(document.bodies.size(), kWorld);
+  std::vector<int> own(document.bodies.size(), kWorld), joint_of(document.bodies.size(), -1);
   for (std::size_t b = 0; b < document.bodies.size(); ++b) {
     const mjcf::Body& source = document.bodies[b];
     const int parent = source.parent < 0 ? kWorld : own[static_cast<std::size_t>(source.parent)];
     own[b] = add_body(source, frames[b], parent, model);
+    const bool jointed = !source.joints.empty() && source.joints.front().type != mjcf::JointType::free;
+    if (jointed) joint_of[b] = static_cast<int>(model.joints.size()) - 1;  // add_body adds the body's joint last
   }
   add_world_geoms(document, model, body_friction);
-  for (const mjcf::Actuator& actuator : document.actuators) {
-    if (actuator.type != mjcf::ActuatorType::motor) {
-      refuse(actuator.at, actuator.type == mjcf::ActuatorType::position ? "position" : "velocity",
-             "position and velocity actuators are not supported yet (motors are)");
-    }
-  }
-  if (!document.actuators.empty()) {
-    notes.push_back(document.actuators.front().at.file + ": <actuator>: " + std::to_string(document.actuators.size()) +
-                    " motors held at control 0 (a joint torque of gear x control; setting controls is not supported yet)");
-  }
+  for (const mjcf::Actuator& actuator : document.actuators) model.actuators.push_back(motor(document, actuator, model, joint_of));
   validate(model);
   return model;
 }

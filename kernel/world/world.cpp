@@ -39,6 +39,33 @@ std::vector<std::int64_t> first_bodies_kept(std::size_t count, std::size_t kept)
   return old_body_of_new;
 }
 
+// The actuators' joint forces for this step: a generalized force where the method takes one
+// (apply_joint_force), else, on a revolute or prismatic joint, the pair of loads it is: ±force·a
+// as torques about the hinge's axis now, or as forces along the slide.
+template <typename State>
+void apply_actuators(State& state, const Model& model, const std::vector<double>& controls, std::vector<Eigen::Vector3d>& force,
+                     std::vector<Eigen::Vector3d>& torque) {
+  for (std::size_t a = 0; a < controls.size(); ++a) {
+    const Actuator& actuator = model.actuators[a];
+    double control = controls[a];
+    if (actuator.control_range) control = std::clamp(control, actuator.control_range->min, actuator.control_range->max);
+    const double amount = actuator.gear * control;
+    if (amount == 0) continue;
+    const auto j = static_cast<std::size_t>(actuator.joint);
+    if constexpr (requires { apply_joint_force(state, j, actuator.axis, amount); }) {
+      apply_joint_force(state, j, actuator.axis, amount);
+    } else {
+      const Joint& joint = model.joints[j];
+      const auto outboard = static_cast<std::size_t>(joint.outboard);
+      const Eigen::Vector3d along =
+          amount * (body_pose(state, outboard).orientation * (model.bodies[outboard].orientation().conjugate() * joint.axis));
+      std::vector<Eigen::Vector3d>& loads = joint.type == JointType::revolute ? torque : force;
+      loads[outboard] += along;
+      if (joint.inboard != kWorld) loads[static_cast<std::size_t>(joint.inboard)] -= along;
+    }
+  }
+}
+
 // Serials for the handles of each World made (0 is no World's).
 std::atomic<std::uint32_t> next_world_serial{1};
 
@@ -52,6 +79,7 @@ World::World(Model model, WorldOptions options)
   for (std::size_t j = 0; j < model_.joints.size(); ++j) internals_->joints.add(serial_);
   for (std::size_t c = 0; c < model_.colliders.size(); ++c) internals_->colliders.add(serial_);
   for (std::size_t k = 0; k < model_.balls.size(); ++k) internals_->balls.add(serial_);
+  internals_->controls.assign(model_.actuators.size(), 0.0);
   reset_loads();
   internals_->divergence = divergence_bounds(model_, observe());
 }
@@ -171,6 +199,7 @@ StepStatus World::step(double dt) {
   }
   StepReport report = std::visit(
       [&](auto& s) {
+        apply_actuators(s, model_, internals_->controls, load_force_, load_torque_);
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
           apply_body_load(s, b, load_force_[b], load_torque_[b]);
@@ -306,6 +335,26 @@ void World::apply_joint_torque(JointId joint, const Eigen::Vector3d& torque) {
   wake(body_id(static_cast<std::size_t>(j.outboard)));
   if (j.inboard != kWorld) load_torque_[static_cast<std::size_t>(j.inboard)] -= torque;
 }
+
+// --- Actuators
+
+void World::set_controls(std::span<const double> controls) {
+  std::vector<double>& kept = internals_->controls;
+  if (controls.size() != kept.size()) {
+    throw WorldError("set_controls: the model has " + std::to_string(kept.size()) + " actuators, got " + std::to_string(controls.size()) +
+                     " controls");
+  }
+  for (std::size_t a = 0; a < controls.size(); ++a) {
+    if (!std::isfinite(controls[a])) throw WorldError("set_controls: control " + std::to_string(a) + " ('" + model_.actuators[a].name + "') must be finite");
+  }
+  std::copy(controls.begin(), controls.end(), kept.begin());
+  for (std::size_t a = 0; a < controls.size(); ++a) {
+    if (controls[a] != 0) wake(body_id(static_cast<std::size_t>(model_.joints[static_cast<std::size_t>(model_.actuators[a].joint)].outboard)));
+  }
+}
+
+std::span<const double> World::controls() const { return internals_->controls; }
+
 
 // --- Drives
 
@@ -459,12 +508,23 @@ void World::remove_joint(JointId joint) {
 
 // Recompiles `edited`, whose joints are the old ones kept[j] marks, in order; then forgets the
 // others' handles, drives and pins.
-void World::keep_joints(const std::vector<char>& kept, const Model& edited, const std::vector<std::int64_t>& old_body_of_new) {
+void World::keep_joints(const std::vector<char>& kept, Model edited, const std::vector<std::int64_t>& old_body_of_new) {
   std::vector<std::uint32_t> slots;
+  std::vector<int> new_joint(kept.size(), -1);
   for (std::size_t j = 0; j < kept.size(); ++j) {
-    if (kept[j]) slots.push_back(internals_->joints.slot(j));
+    if (kept[j]) new_joint[j] = static_cast<int>(slots.size()), slots.push_back(internals_->joints.slot(j));
+  }
+  // The kept joints' actuators, renumbered, and their controls.
+  std::vector<double> controls;
+  edited.actuators.clear();
+  for (std::size_t a = 0; a < model_.actuators.size(); ++a) {
+    Actuator actuator = model_.actuators[a];
+    actuator.joint = new_joint[static_cast<std::size_t>(actuator.joint)];
+    if (actuator.joint < 0) continue;
+    edited.actuators.push_back(actuator), controls.push_back(internals_->controls[a]);
   }
   recompile(edited, old_body_of_new, slots);
+  internals_->controls = std::move(controls);
   std::vector<char> pin_kept(internals_->pins.size(), 1);
   for (std::size_t j = 0; j < kept.size(); ++j) {
     if (kept[j]) continue;

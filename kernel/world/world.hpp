@@ -152,6 +152,13 @@ class World {
   /// drive; giving a joint its first drive, or removing one (nullopt), recompiles. Throws
   /// WorldError on a bad value or a joint type without drives.
   void set_joint_drive(JointId joint, const std::optional<JointDrive>& drive);
+  /// The motors' controls, one per Model::actuators entry in its order: from the next step on,
+  /// each actuator's joint gets the generalized force gear × control (its control clamped to its
+  /// range), until set again; 0 until the first call. Throws WorldError when the count is not
+  /// the actuators' or a control is not finite (nothing changes).
+  void set_controls(std::span<const double> controls);
+  /// The controls as set (before clamping), Model::actuators order.
+  std::span<const double> controls() const;
   /// The joint's drive now: the Model's, or the last set_joint_drive's, limp once
   /// Settings::release_drives_on_impact has released it.
   std::optional<JointDrive> joint_drive(JointId joint) const;
@@ -232,7 +239,7 @@ class World {
   // which old ball each new one continues (−1: new), nullopt: all, in order.
   void recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new, const std::vector<std::uint32_t>& joint_slots,
                  std::optional<std::vector<std::int64_t>> old_ball_of_new = std::nullopt);
-  void keep_joints(const std::vector<char>& kept, const Model& edited, const std::vector<std::int64_t>& old_body_of_new);
+  void keep_joints(const std::vector<char>& kept, Model edited, const std::vector<std::int64_t>& old_body_of_new);
   std::size_t index(PinId pin, std::string_view call) const;
   // `edited` as the method compiles it: the World's drives and held anchors over the Model's.
   Model as_compiled(Model edited, const std::vector<std::uint32_t>& joint_slots) const;

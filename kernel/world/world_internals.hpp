@@ -43,6 +43,9 @@ struct WorldInternals {
 
   /// Drives set since the Model (set_joint_drive) or released on impact, by joint handle slot.
   std::unordered_map<std::uint32_t, std::optional<JointDrive>> drives;
+
+  /// The actuators' controls (Model::actuators order), as set_controls left them: 0 at first.
+  std::vector<double> controls;
 };
 
 }  // namespace limber

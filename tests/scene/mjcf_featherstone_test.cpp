@@ -1,6 +1,6 @@
 // MuJoCo's own humanoid (Debian's libmujoco-samples) loaded by limber and by MuJoCo 2.2.2: the
 // Featherstone method's joint-space mass matrix and accelerations are MuJoCo's, with the
-// armature, joint springs and damping the file gives. Skipped, with a message, where the model
+// armature, joint springs and damping the file gives and its 21 motors at random controls. Skipped, with a message, where the model
 // file is missing.
 //
 // Coordinates. The hinges are the same in both (angle from the file's pose, ref = 0 in
@@ -11,6 +11,7 @@
 // orientation R_l = R·R_off), v = (ω, ȯ_l) in that frame. So v_mj = T v_l with
 //   ṗ = R_l ȯ_l + (R_l ω) × (p − o_l),   ω_mj = R_off ω,   hinge rates one to one,
 // and the kinetic energies agree when M_l = Tᵀ M_mj T.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -73,6 +74,7 @@ class BothEngines {
     const Eigen::Vector3d p(unit(random), unit(random), 10 + unit(random)), pdot(unit(random), unit(random), unit(random));
     const Eigen::Vector3d omega(2 * unit(random), 2 * unit(random), 2 * unit(random));  // torso frame
     for (int k = 0; k < 3; ++k) data_->qpos[k] = p[k], data_->qvel[k] = pdot[k], data_->qvel[3 + k] = omega[k];
+    for (int a = 0; a < mj_->nu; ++a) data_->ctrl[a] = 1.2 * unit(random);  // past ctrlrange at times: clamped
     data_->qpos[3] = turn.w(), data_->qpos[4] = turn.x(), data_->qpos[5] = turn.y(), data_->qpos[6] = turn.z();
     state_.q = state_.tree.neutral_positions();
     state_.v.setZero();
@@ -105,12 +107,18 @@ class BothEngines {
     return t;
   }
 
-  // The joint forces of the springs and dampers the Model holds (its drives), at limber's state.
-  Eigen::VectorXd passive_forces() const {
+  // The joint forces of the springs and dampers the Model holds (its drives) at limber's state,
+  // and of its motors at MuJoCo's controls (gear × control clamped to its range).
+  Eigen::VectorXd joint_forces() const {
     Eigen::VectorXd tau = Eigen::VectorXd::Zero(state_.tree.velocity_count());
     for (const Hinge& hinge : hinges_) {
       if (!hinge.drive) continue;
       tau[hinge.velocity] = hinge.drive->stiffness * (hinge.drive->target - state_.q[hinge.position]) - hinge.drive->damping * state_.v[hinge.velocity];
+    }
+    for (std::size_t a = 0; a < model_.actuators.size(); ++a) {
+      const Actuator& actuator = model_.actuators[a];
+      const double control = std::clamp(data_->ctrl[a], actuator.control_range->min, actuator.control_range->max);
+      tau[state_.tree_joint[static_cast<std::size_t>(actuator.joint)].offset + actuator.axis] += actuator.gear * control;
     }
     return tau;
   }
@@ -206,7 +214,7 @@ TEST(MjcfHumanoid, MassMatrixIsMujocosWithArmature) {
   }
 }
 
-TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingAndArmature) {
+TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingArmatureAndMotors) {
   SKIP_WITHOUT_HUMANOID();
   BothEngines both(kHumanoid);
   std::mt19937 random(11);
@@ -217,7 +225,7 @@ TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingAndArmature) {
     both.set_random_state(random);
     mj_forward(both.mj(), both.data());
     FeatherstoneState& state = both.state();
-    const Eigen::VectorXd tau = both.passive_forces();
+    const Eigen::VectorXd tau = both.joint_forces();
     forward_dynamics(state.tree, state.q, state.v, tau, gravity, workspace, acceleration);
     const mjtNum* qacc = both.data()->qacc;
     double scale = 0;
