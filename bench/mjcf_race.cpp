@@ -1,0 +1,194 @@
+// MuJoCo's own models under MuJoCo 2.2.2 (mj_step) and under limber (load_scene_file of the same
+// .xml, stepped through the World) in one run: load time, steps per second, time per humanoid
+// per 1/60 s, the largest joint gap, the deepest penetration and the energy over the fall
+// (bench/speed.md, "MuJoCo's models").
+//
+//   build/bench/mjcf_race [MODEL.xml ...] [--seconds S] [--rounds R] [--method M ...]
+//
+// MODEL defaults to MuJoCo's humanoid.xml and 22_humanoids.xml (libmujoco-samples). Each round
+// runs every engine from the file's initial state for S simulated seconds (default 5), one engine
+// after the other, so a busy machine slows them alike; a row gives the median over R rounds
+// (default 3) of the stepping thread's CPU time. The measures come from the first round:
+// - joint gap: limber's observer (relative to the limbs' length); MuJoCo's joints are its
+//   coordinates, closed by construction;
+// - penetration: MuJoCo's deepest contact (−dist), limber's deepest overlap of its limbs with
+//   each other and the ground (the CLI's measure);
+// - energy: each engine's own, at the start and the end: MuJoCo's potential (gravity and joint
+//   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs).
+// Method M is featherstone (default) or any method that can run the model.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "bench/thread_time.hpp"
+#include "limber/kernel/geometry/limb_collisions.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/world/world.hpp"
+
+namespace limber {
+namespace {
+
+struct Measures {
+  double cpu_seconds = 0;
+  double largest_gap = 0, deepest_penetration = 0;
+  double energy_start = 0, energy_end = 0;
+};
+
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+// The best of five loads, s.
+template <typename Load>
+double load_seconds(Load load) {
+  double best = 1e30;
+  for (int k = 0; k < 5; ++k) {
+    const auto start = std::chrono::steady_clock::now();
+    load();
+    best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  return best;
+}
+
+Measures run_mujoco(const mjModel* model, mjData* data, long steps, bool measure) {
+  mj_resetData(model, data);
+  Measures out;
+  const auto energy = [&] {
+    mj_energyPos(model, data), mj_energyVel(model, data);
+    return data->energy[0] + data->energy[1];
+  };
+  if (measure) mj_forward(model, data), out.energy_start = energy();
+  const double start = thread_seconds();
+  for (long n = 0; n < steps; ++n) {
+    mj_step(model, data);
+    if (!measure) continue;
+    out.cpu_seconds -= thread_seconds();
+    for (int c = 0; c < data->ncon; ++c) out.deepest_penetration = std::max(out.deepest_penetration, -data->contact[c].dist);
+    out.cpu_seconds += thread_seconds();
+  }
+  out.cpu_seconds += thread_seconds() - start;
+  if (measure) out.energy_end = energy();
+  return out;
+}
+
+Measures run_limber(const Scene& scene, Method method, long steps, bool measure) {
+  WorldOptions options;
+  options.method = method;
+  World world(scene.model, options);
+  LimbCollisions collisions(scene.model);
+  std::vector<LimbSegment> segments;
+  Measures out;
+  if (measure) out.energy_start = world.observe().energy();
+  double stepping = 0;
+  for (long n = 0; n < steps; ++n) {
+    const double start = thread_seconds();
+    if (world.step(scene.model.settings.time_step) != StepStatus::ok) throw std::runtime_error("limber: the step failed");
+    stepping += thread_seconds() - start;
+    if (!measure) continue;
+    out.largest_gap = std::max(out.largest_gap, world.observe().max_joint_gap);
+    world.segments(segments);
+    const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
+    out.deepest_penetration = std::max({out.deepest_penetration, between, ground_penetration(scene.model, segments)});
+  }
+  out.cpu_seconds = stepping;
+  if (measure) out.energy_end = world.observe().energy();
+  return out;
+}
+
+void print_row(const char* engine, double load, const std::vector<double>& times, const Measures& first, long steps, double dt, int humanoids) {
+  const double per_step = median(times) / static_cast<double>(steps);
+  const double per_humanoid_frame = per_step * (1.0 / 60.0 / dt) / humanoids;
+  std::printf("| %-26s | %8.1f | %9.0f | %10.0f | %9.2g | %9.3g | %8.1f → %-8.1f |\n", engine, 1e3 * load, 1.0 / per_step,
+              1e6 * per_humanoid_frame, first.largest_gap, first.deepest_penetration, first.energy_start, first.energy_end);
+}
+
+void race(const std::filesystem::path& file, double seconds, int rounds, const std::vector<Method>& methods) {
+  char error[1000] = "";
+  mjModel* model = mj_loadXML(file.c_str(), nullptr, error, sizeof error);
+  if (!model) throw std::runtime_error(file.string() + ": mj_loadXML: " + error);
+  model->opt.enableflags |= mjENBL_ENERGY;
+  mjData* data = mj_makeData(model);
+  const Scene scene = load_scene_file(file);
+  const double dt = model->opt.timestep;
+  const long steps = std::lround(seconds / dt);
+  int humanoids = 0;
+  for (int j = 0; j < model->njnt; ++j) humanoids += model->jnt_type[j] == mjJNT_FREE ? 1 : 0;
+  humanoids = std::max(humanoids, 1);
+  const double mujoco_load = load_seconds([&] {
+    char e[1000] = "";
+    mj_deleteModel(mj_loadXML(file.c_str(), nullptr, e, sizeof e));
+  });
+  const double limber_load = load_seconds([&] { (void)load_scene_file(file); });
+
+  std::vector<double> mujoco_times;
+  std::vector<std::vector<double>> limber_times(methods.size());
+  Measures mujoco_first;
+  std::vector<Measures> limber_first(methods.size());
+  for (int round = 0; round < rounds; ++round) {
+    const Measures m = run_mujoco(model, data, steps, round == 0);
+    mujoco_times.push_back(m.cpu_seconds);
+    if (round == 0) mujoco_first = m;
+    for (std::size_t k = 0; k < methods.size(); ++k) {
+      const Measures l = run_limber(scene, methods[k], steps, round == 0);
+      limber_times[k].push_back(l.cpu_seconds);
+      if (round == 0) limber_first[k] = l;
+    }
+  }
+  std::printf("\n%s: %d humanoid(s), %ld steps of %g s, median of %d rounds (thread CPU time)\n\n", file.filename().c_str(), humanoids, steps,
+              dt, rounds);
+  std::printf("| engine                     | load ms  | steps/s   | µs/humanoid/frame | joint gap | penetr. m | energy J start → end |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---|\n");
+  print_row("MuJoCo 2.2.2 mj_step", mujoco_load, mujoco_times, mujoco_first, steps, dt, humanoids);
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    const std::string name = "limber " + std::string(method_name(methods[k])) + ", 1 thread";
+    print_row(name.c_str(), limber_load, limber_times[k], limber_first[k], steps, dt, humanoids);
+  }
+  mj_deleteData(data);
+  mj_deleteModel(model);
+}
+
+}  // namespace
+}  // namespace limber
+
+int main(int argc, char** argv) {
+  using namespace limber;
+  std::vector<std::filesystem::path> files;
+  std::vector<Method> methods;
+  double seconds = 5;
+  int rounds = 3;
+  try {
+    for (int i = 1; i < argc; ++i) {
+      const std::string argument = argv[i];
+      if (argument == "--seconds" && i + 1 < argc) {
+        seconds = std::stod(argv[++i]);
+      } else if (argument == "--rounds" && i + 1 < argc) {
+        rounds = std::max(1, std::stoi(argv[++i]));
+      } else if (argument == "--method" && i + 1 < argc) {
+        const std::string name = argv[++i];
+        bool known = false;
+        for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
+          if (method_name(method) == name) methods.push_back(method), known = true;
+        }
+        if (!known) throw std::invalid_argument("unknown method " + name + " (particles, springs, lagrange or featherstone)");
+      } else {
+        files.emplace_back(argument);
+      }
+    }
+    if (methods.empty()) methods.push_back(Method::featherstone);
+    if (files.empty()) files = {"/usr/share/mujoco/model/humanoid/humanoid.xml", "/usr/share/mujoco/model/humanoid/22_humanoids.xml"};
+    for (const auto& file : files) race(file, seconds, rounds, methods);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "mjcf_race: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}
