@@ -159,6 +159,30 @@ class World {
   void set_controls(std::span<const double> controls);
   /// The controls as set (before clamping), Model::actuators order.
   std::span<const double> controls() const;
+  // Joint space (MuJoCo's qpos, qvel, mj_fullM, qfrc_bias, qfrc_passive + qfrc_actuator,
+  // mj_inverse), in the layout of kernel/featherstone/joint_space.hpp: walking the bodies in
+  // order, a floating body's 7 positions (centre of mass, quaternion w x y z) and 6 velocities
+  // (ω, v of the centre, body frame), then each joint whose outboard it is (an angle or slide, a
+  // relative quaternion, a serial joint's axes). For a Model read from MJCF, MuJoCo's order. Only
+  // reduced coordinates have them: the other methods refuse each call by name (WorldError).
+  /// Per velocity coordinate: its name ("torso.wx", "knee", "hip_y").
+  std::vector<std::string> joint_space_names() const;
+  Eigen::VectorXd joint_positions() const;   ///< nq
+  Eigen::VectorXd joint_velocities() const;  ///< nv
+  /// Sets every coordinate and rate (sizes nq, nv; quaternions normalized); the bodies follow and
+  /// every island wakes. Throws WorldError on a wrong size or a non-finite value (nothing changes).
+  void set_joint_state(const Eigen::VectorXd& positions, const Eigen::VectorXd& velocities);
+  /// M(q), nv × nv, kg·m² / kg, with the joints' armature.
+  Eigen::MatrixXd joint_mass_matrix() const;
+  /// C(q, v): gravity, Coriolis and centrifugal forces, nv (τ = M v̇ + C).
+  Eigen::VectorXd joint_bias_forces() const;
+  /// The joints' springs and dampers (explicit) and the motors at the current controls, nv.
+  Eigen::VectorXd joint_passive_forces() const;
+  /// v̇ = M⁻¹(τ − C) for joint forces τ (nv): no contacts, limits, springs or motors.
+  Eigen::VectorXd joint_accelerations(const Eigen::VectorXd& forces) const;
+  /// τ = M v̇ + C for accelerations v̇ (nv).
+  Eigen::VectorXd inverse_dynamics(const Eigen::VectorXd& accelerations) const;
+
   /// The joint's drive now: the Model's, or the last set_joint_drive's, limp once
   /// Settings::release_drives_on_impact has released it.
   std::optional<JointDrive> joint_drive(JointId joint) const;
@@ -247,6 +271,7 @@ class World {
   void release_drives();
   static constexpr std::uint32_t kNewJoint = ~0u;
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
+  [[noreturn]] void refuse_joint_space(std::string_view call) const;  ///< a method without joint coordinates
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;
   // A handle of this World, or a WorldError naming `call` (if any) and `kind` (a handle from
   // another World). Builds no string unless it throws: step() paths call it.

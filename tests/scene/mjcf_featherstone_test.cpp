@@ -28,6 +28,8 @@
 #include "limber/kernel/mass/mass_properties.hpp"
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/world/world.hpp"
 
 namespace limber {
 namespace {
@@ -261,6 +263,28 @@ TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingArmatureAndMotors) {
   }
   std::printf("accelerations: largest difference from MuJoCo's qacc over 20 states %.2g of the largest |qacc|; "
               "inverse dynamics returns the forces to %.2g\n", largest, largest_inverse);
+}
+
+TEST(MjcfHumanoid, TheWorldsJointSpaceIsInMujocosOrder) {
+  SKIP_WITHOUT_HUMANOID();
+  WorldOptions options;
+  options.method = Method::featherstone;
+  World world(load_scene_file(kHumanoid).model, options);
+  BothEngines both(kHumanoid);
+  const std::vector<std::string> names = world.joint_space_names();
+  ASSERT_EQ(static_cast<int>(names.size()), both.mj()->nv);
+  for (int j = 1; j < both.mj()->njnt; ++j) {  // joint 0 is the free joint: the torso's six rates
+    EXPECT_EQ(names[static_cast<std::size_t>(both.mj()->jnt_dofadr[j])], mj_id2name(both.mj(), mjOBJ_JOINT, j));
+  }
+  // At the file's pose the hinges' block of M is MuJoCo's, entry for entry.
+  mj_forward(both.mj(), both.data());
+  std::vector<mjtNum> dense(static_cast<std::size_t>(both.mj()->nv * both.mj()->nv));
+  mj_fullM(both.mj(), dense.data(), both.data()->qM);
+  const int nv = both.mj()->nv;
+  const Eigen::MatrixXd mujoco = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(dense.data(), nv, nv);
+  const Eigen::MatrixXd limber = world.joint_mass_matrix();
+  EXPECT_LT((limber.bottomRightCorner(nv - 6, nv - 6) - mujoco.bottomRightCorner(nv - 6, nv - 6)).norm(),
+            1e-12 * mujoco.bottomRightCorner(nv - 6, nv - 6).norm());
 }
 
 }  // namespace
