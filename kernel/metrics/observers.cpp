@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "limber/kernel/springs/spring_forces.hpp"
 
@@ -143,8 +144,32 @@ Observation observe(const LagrangeState& state) {
   return out;
 }
 
+namespace {
+
+// A serial joint's axes: each coordinate is its tree body's q, measured against its range and its
+// spring's rest (measure_joints sees the joint's own limits and drive, which a serial joint leaves empty).
+void measure_serial_axes(const FeatherstoneState& state, JointMeasures& measures) {
+  std::int32_t last_limited = -1, last_driven = -1;
+  for (const TreeSerialAxis& node : state.serial_axes) {
+    const SerialAxis& axis = state.joint_controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+    const double x = state.q[state.tree.position_offset(node.body)];
+    if (axis.range) {
+      measures.limit_violation = std::max({measures.limit_violation, axis.range->min - x, x - axis.range->max});
+      if (node.joint != last_limited) ++measures.limited_joints, last_limited = node.joint;
+    }
+    if (axis.drive) {
+      const double error = axis.drive->target - x;
+      measures.drive_error = std::max(measures.drive_error, std::abs(axis.slide ? error : std::remainder(error, 2 * std::numbers::pi)));
+      if (node.joint != last_driven) ++measures.driven_joints, last_driven = node.joint;
+    }
+  }
+}
+
+}  // namespace
+
 Observation observe(const FeatherstoneState& state) {
   Observation out = observe_rigid_scene(state, state.joint_controls);
+  measure_serial_axes(state, out.joints);
   const RigidBodyState& y = state.bodies.state;
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
     // A serial joint is its chain of tree bodies: the child's frame is where the chain puts it.

@@ -99,6 +99,10 @@ TEST(FeatherstoneSerial, EachAxisHoldsItsRange) {
   EXPECT_GT(low[1], -0.2 - 2e-3);
   EXPECT_LT(high[1], 0.25 + 2e-3);
   EXPECT_TRUE(high[0] > 0.3 - 2e-3 || low[0] < -0.3 + 2e-3) << "the first axis never reached its range's end";
+  // The observers measure the axes' ranges as they measure a joint's own.
+  const Observation seen = observe(state);
+  EXPECT_EQ(seen.joints.limited_joints, 1);
+  EXPECT_LT(seen.joints.limit_violation, 2e-3);
 }
 
 TEST(FeatherstoneSerial, AnAxisSpringSettlesAtItsRest) {
