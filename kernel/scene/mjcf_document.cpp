@@ -136,6 +136,19 @@ struct PendingBody {
 };
 
 // One body's frame and children; its child bodies go on `stack` (last pushed is read next).
+// A child of <body> or <worldbody> (`parent`) that is not a geom, joint or body: sites, cameras
+// and lights are noted, a composite and anything outside MuJoCo's schema refused.
+void other_body_child(Reader& reader, const Node& child, std::string_view parent) {
+  const std::string_view kind = child.name();
+  if (kind == "site" || kind == "camera" || kind == "light") {
+    reader.note(child, tag(child), kind == "site" ? "sites (markers for sensors and tendons)" : "rendering only");
+  } else if (kind == "composite") {
+    reader.fail(child, tag(child), "not supported: composite objects (particles, grids, ropes, cloth)");
+  } else {
+    reader.fail(child, tag(child), "not supported: unknown element (not a child of <" + std::string(parent) + "> in MuJoCo's schema)");
+  }
+}
+
 void read_body_children(Context& context, const PendingBody& pending, Body& body, int index,
                         std::vector<Node>& geoms, std::vector<Node>& bodies) {
   Reader& reader = context.reader;
@@ -154,12 +167,8 @@ void read_body_children(Context& context, const PendingBody& pending, Body& body
       geoms.push_back(child);
     } else if (kind == "body") {
       bodies.push_back(child);
-    } else if (kind == "site" || kind == "camera" || kind == "light") {
-      reader.note(child, tag(child), kind == "site" ? "sites (markers for sensors and tendons)" : "rendering only");
-    } else if (kind == "composite") {
-      reader.fail(child, tag(child), "not supported: composite objects (particles, grids, ropes, cloth)");
     } else {
-      reader.fail(child, tag(child), "not supported: unknown element (not a child of <body> in MuJoCo's schema)");
+      other_body_child(reader, child, "body");
     }
   }
   for (std::size_t j = 0; j < body.joints.size(); ++j) {
@@ -245,12 +254,8 @@ void read_world(Context& context, const Node& world, Document& document) {
       document.world_geoms.push_back(make_geom(context, child, 0, false));
     } else if (kind == "body") {
       bodies.push_back(child);
-    } else if (kind == "site" || kind == "camera" || kind == "light") {
-      reader.note(child, tag(child), kind == "site" ? "sites (markers for sensors and tendons)" : "rendering only");
-    } else if (kind == "composite") {
-      reader.fail(child, tag(child), "not supported: composite objects (particles, grids, ropes, cloth)");
     } else {
-      reader.fail(child, tag(child), "not supported: unknown element (not a child of <worldbody> in MuJoCo's schema)");
+      other_body_child(reader, child, "worldbody");
     }
   }
   std::vector<PendingBody> stack;
