@@ -87,13 +87,15 @@ Tree build_tree(const urdf::Robot& robot) {
     tree.link_of_child.push_back(child->second);
   }
   std::string roots;
+  int root_count = 0;
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     if (tree.parent_joint[l] >= 0) continue;
-    roots += (roots.empty() ? "'" : ", '") + robot.links[l].name + "'";
-    if (tree.root < 0) tree.root = static_cast<int>(l);
+    if (root_count < 3) roots += (roots.empty() ? "'" : ", '") + robot.links[l].name + "'";
+    if (root_count++ == 0) tree.root = static_cast<int>(l);
   }
-  if (tree.root < 0) refuse(robot.at, "<robot>", "no root link: every link has a parent joint, so the joints close a loop");
-  if (roots.find(',') != std::string::npos) refuse(robot.at, "<robot>", "several root links (" + roots + "): a URDF robot is one tree");
+  if (root_count == 0) refuse(robot.at, "<robot>", "no root link: every link has a parent joint, so the joints close a loop");
+  if (root_count > 3) roots += ", ... (" + std::to_string(root_count) + " in all)";
+  if (root_count > 1) refuse(robot.at, "<robot>", "several root links (" + roots + "): a URDF robot is one tree");
   // Depth first from the root with an explicit stack: any depth.
   std::vector<int> stack{tree.root};
   while (!stack.empty()) {

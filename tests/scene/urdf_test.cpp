@@ -5,14 +5,19 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <string>
 #include <vector>
+
+#include <unistd.h>  // getpid
 
 #include <gtest/gtest.h>
 
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/scene/urdf.hpp"
 #include "limber/kernel/world/world.hpp"
 
@@ -401,6 +406,22 @@ TEST(UrdfJoints, FloatingJointFromTheRootFrameMakesAFreeBody) {
   ASSERT_EQ(model.bodies.size(), 1u);
   EXPECT_TRUE(model.joints.empty());
   expect_near(model.bodies[0].position, {0, 0, 2});
+}
+
+TEST(UrdfSceneFile, LoadSceneFileReadsUrdfWithItsNotesAndFloatingBase) {
+  const std::filesystem::path file = std::filesystem::temp_directory_path() / ("limber_urdf_test_" + std::to_string(::getpid()) + ".urdf");
+  std::ofstream(file) << kArm;
+  const Scene welded = load_scene_file(file);
+  EXPECT_EQ(welded.model.bodies.size(), 3u);
+  EXPECT_EQ(welded.model.joints.size(), 3u);
+  EXPECT_FALSE(welded.notes.empty());
+  EXPECT_EQ(welded.notes.front().rfind(file.string() + ":3: <material>", 0), 0u) << welded.notes.front();
+  SceneOptions floating;
+  floating.floating_base = true;
+  EXPECT_EQ(load_scene_file(file, floating).model.joints.size(), 2u);
+  std::filesystem::remove(file);
+  const std::filesystem::path json = std::filesystem::path(LIMBER_SOURCE_DIR) / "tools/scenes/chain.json";
+  EXPECT_THROW(load_scene_file(json, floating), ModelError) << "a floating base is for URDF robots only";
 }
 
 // ---- refusals: one line naming file, line and element ----
