@@ -1,5 +1,5 @@
-// The MJCF reader's files: parsing with pugixml, lines from element offsets, <include> splicing,
-// attribute checks and typed attribute reading, the notes.
+// The MJCF reader's files: parsing with pugixml, lines from element offsets (xml_text.hpp),
+// <include> splicing, attribute checks and typed attribute reading, the notes.
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -7,25 +7,16 @@
 #include <sstream>
 
 #include "limber/kernel/scene/mjcf_reader.hpp"
+#include "limber/kernel/scene/xml_text.hpp"
 
 namespace limber::mjcf::detail {
 
 namespace {
 
-std::vector<std::size_t> line_starts(std::string_view text) {
-  std::vector<std::size_t> starts{0};
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] == '\n') starts.push_back(i + 1);
-  }
-  return starts;
-}
+using xml::parse_double;
+using xml::words;
 
-int line_of(const Buffer& buffer, std::ptrdiff_t offset) {
-  if (offset < 0) return 0;
-  auto after = std::upper_bound(buffer.line_starts.begin(), buffer.line_starts.end(),
-                                static_cast<std::size_t>(offset));
-  return static_cast<int>(after - buffer.line_starts.begin());
-}
+int line_of(const Buffer& buffer, std::ptrdiff_t offset) { return xml::line_of(buffer.line_starts, offset); }
 
 std::string read_file(const std::filesystem::path& path, bool& ok) {
   std::ifstream in(path, std::ios::binary);
@@ -33,29 +24,6 @@ std::string read_file(const std::filesystem::path& path, bool& ok) {
   std::ostringstream text;
   text << in.rdbuf();
   return text.str();
-}
-
-// Splits on XML whitespace.
-std::vector<std::string_view> words(std::string_view text) {
-  std::vector<std::string_view> out;
-  std::size_t i = 0;
-  auto space = [](char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; };
-  while (i < text.size()) {
-    while (i < text.size() && space(text[i])) ++i;
-    std::size_t start = i;
-    while (i < text.size() && !space(text[i])) ++i;
-    if (i > start) out.push_back(text.substr(start, i - start));
-  }
-  return out;
-}
-
-// A whole word as a finite double ("+1", ".5", "1e-3"), as MuJoCo's strtod-based reading.
-std::optional<double> parse_double(std::string_view word) {
-  if (!word.empty() && word.front() == '+') word.remove_prefix(1);
-  double value = 0;
-  auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
-  if (error != std::errc{} || end != word.data() + word.size() || !std::isfinite(value)) return std::nullopt;
-  return value;
 }
 
 }  // namespace
@@ -76,7 +44,7 @@ const Buffer& Reader::parse(std::string file, std::string text) {
   Buffer& buffer = buffers_.emplace_back();
   buffer.file = std::move(file);
   buffer.text = std::move(text);
-  buffer.line_starts = line_starts(buffer.text);
+  buffer.line_starts = xml::line_starts(buffer.text);
   pugi::xml_parse_result result =
       buffer.tree.load_buffer(buffer.text.data(), buffer.text.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!result) {

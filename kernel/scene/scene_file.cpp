@@ -9,6 +9,7 @@
 
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
+#include "limber/kernel/scene/urdf.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -891,13 +892,15 @@ Scene load_scene_text(std::string_view json_text, std::string_view source,
 
 namespace {
 
-// An MJCF model file as a Scene: its Model, the methods' defaults, and the loader's notes.
-Scene load_mjcf_scene(const std::filesystem::path& path, const SceneOptions& options) {
+// An MJCF or URDF model file as a Scene: its Model, the methods' defaults, and the loader's notes.
+Scene load_model_file_scene(const std::filesystem::path& path, const SceneOptions& options, bool urdf) {
   const std::string source = path.string();
   const char* option = options.variant ? "a variant" : options.links ? "a link count" : options.copies ? "copies" : nullptr;
-  if (option) throw ModelError(source + ": " + option + " was asked for, but an MJCF model file has no variants, chain or copies");
+  const char* format = urdf ? "a URDF" : "an MJCF";
+  if (option) throw ModelError(source + ": " + option + " was asked for, but " + format + " model file has no variants, chain or copies");
+  if (options.floating_base && !urdf) throw ModelError(source + ": a floating base was asked for, which only a URDF robot takes");
   Scene scene;
-  scene.model = model_from_mjcf(mjcf::load_mjcf(path), scene.notes);
+  scene.model = urdf ? load_urdf(path, scene.notes, options.floating_base) : model_from_mjcf(mjcf::load_mjcf(path), scene.notes);
   if (scene.model.bodies.size() > options.max_bodies) {
     throw ModelError(source + ": " + std::to_string(scene.model.bodies.size()) + " bodies, more than the " +
                      std::to_string(options.max_bodies) + " a scene may have");
@@ -909,8 +912,9 @@ Scene load_mjcf_scene(const std::filesystem::path& path, const SceneOptions& opt
 }  // namespace
 
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
-  if (path.extension() == ".xml") return load_mjcf_scene(path, options);
+  if (path.extension() == ".xml" || path.extension() == ".urdf") return load_model_file_scene(path, options, path.extension() == ".urdf");
   const std::string source = path.string();
+  if (options.floating_base) throw ModelError(source + ": a floating base was asked for, which only a URDF robot takes");
   const auto cannot_read = [&] {
     throw ModelError(source + ": cannot read file: " + std::strerror(errno));
   };

@@ -211,6 +211,9 @@ struct SceneOptions {
   /// the file (e.g. "chain.links"), after the max_bodies check and before anything is allocated:
   /// a caller refuses sizes it cannot hold (the command line: the memory available) by throwing.
   std::function<void(double bodies, const std::string& path)> before_generating = nullptr;
+  /// A URDF robot only (kernel/scene/urdf.hpp): its root link floats (a free body) instead of
+  /// being welded to the world. Refused for any other file.
+  bool floating_base = false;
 };
 
 /// A loaded scene: the solver-independent Model, and what the file says about the methods
@@ -220,8 +223,8 @@ struct Scene {
   Model model;
   MethodSettings methods;
   /// What the loader dropped or approximated, one line each ("file:line: <element>: reason"):
-  /// a model file's elements limber does not simulate (kernel/scene/mjcf_model.hpp). Empty for
-  /// a JSON scene, which has no such fields.
+  /// a model file's elements limber does not simulate (kernel/scene/mjcf_model.hpp,
+  /// kernel/scene/urdf.hpp). Empty for a JSON scene, which has no such fields.
   std::vector<std::string> notes;
 };
 
@@ -234,8 +237,10 @@ Scene load_scene_text(std::string_view json_text, std::string_view source, const
 /// 10⁵ triangles is ~10 MB): a guard against reading a wrong file whole.
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
 
-/// Reads and loads a scene file: JSON, or MuJoCo's MJCF when its name ends in ".xml"
-/// (kernel/scene/mjcf_model.hpp; it takes no SceneOptions but the limits). Throws ModelError
+/// Reads and loads a scene file: JSON; MuJoCo's MJCF when its name ends in ".xml"
+/// (kernel/scene/mjcf_model.hpp); a URDF robot when it ends in ".urdf" (kernel/scene/urdf.hpp:
+/// welded to the world at its root link unless options.floating_base). Model files take no
+/// SceneOptions but the limits (and floating_base, URDF only). Throws ModelError
 /// (one line naming the file) when it cannot be read, is a directory, is empty, is larger than
 /// kMaxSceneFileBytes, or is invalid.
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});

@@ -70,6 +70,7 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   flags.ball_mass_option = run.add_option("--ball-mass", flags.ball_mass, "Ball mass (every ball's), kg");
   flags.ball_restitution_option = run.add_option("--ball-restitution", flags.ball_restitution, "Ball restitution (every ball's), 0..1");
   flags.friction_option = run.add_option("--friction", flags.friction, "Ground Coulomb friction coefficient");
+  run.add_flag("--floating-base", flags.floating_base, "A URDF robot's root link floats instead of being welded to the world");
   flags.links_option = run.add_option("--links", flags.links, "Number of links of a chain or tree scene");
   flags.copies_option = run.add_option("--copies", flags.copies, "Copies of the scene's bodies, side by side");
   flags.steps_option = run.add_option("--steps", flags.steps, "Number of steps, in [1, 1e9] (default: the scene's duration / dt)");
@@ -378,6 +379,7 @@ LoadedRun load(const RunFlags& flags) {
   SceneOptions scene_options;
   if (given(flags.body_option)) scene_options.variant = flags.body;
   if (given(flags.links_option)) scene_options.links = flags.links;
+  scene_options.floating_base = flags.floating_base;
   if (given(flags.copies_option)) scene_options.copies = flags.copies;
   const bool embedded = flags.scene.empty();
   LoadedRun loaded;

@@ -45,6 +45,7 @@ struct RunFlags {
   int newton_iterations = 2;
   double compliance = 0;
   bool warm_start = false, long_range_attachments = false;
+  bool floating_base = false;  ///< --floating-base: a URDF robot's root link floats (SceneOptions::floating_base)
   bool profile = false;  ///< --profile: time each stage of the step (StepReport::profile) and print where the time went
   double stiffness = 0, damping = 0;
   std::string integrator, linear_solver = "ldlt";
