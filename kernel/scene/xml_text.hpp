@@ -10,6 +10,8 @@
 #include <string_view>
 #include <vector>
 
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+
 namespace limber::xml {
 
 /// The offset of each line's first character in `text` (the first line: 0).

@@ -45,7 +45,7 @@ Scene heavy_end_chain(ChainRelease release) {
   MethodSettings methods;
   methods.verlet.joints = ParticleJoints::shared_particle;
   methods.verlet.limb_masses = LimbMasses::lumps;
-  return {std::move(model), methods};
+  return {std::move(model), methods, {}};
 }
 
 Scene double_pendulum(double release_angle) {
@@ -54,7 +54,7 @@ Scene double_pendulum(double release_angle) {
   model.name = "double pendulum";
   MethodSettings methods;
   methods.verlet.joints = ParticleJoints::shared_particle;
-  return {std::move(model), methods};
+  return {std::move(model), methods, {}};
 }
 
 }  // namespace limber::study

@@ -162,7 +162,9 @@ TEST(MjcfModel, MujocosShippedModelsLoadOrAreRefusedByName) {
   EXPECT_NE(refused("hammock/hammock.xml").find("hammock.xml:52: <composite>"), std::string::npos);
   EXPECT_NE(refused("tendon_arm/arm26.xml").find("arm26.xml:"), std::string::npos);
   EXPECT_NE(refused("slider_crank/slider_crank.xml").find("slider_crank.xml:"), std::string::npos);
-  EXPECT_THROW(load_scene_file(models / "humanoid/humanoid.xml", SceneOptions{.copies = 2}), ModelError);
+  SceneOptions copies;
+  copies.copies = 2;
+  EXPECT_THROW(load_scene_file(models / "humanoid/humanoid.xml", copies), ModelError);
 }
 
 }  // namespace
