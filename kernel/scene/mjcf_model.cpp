@@ -274,7 +274,13 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
   for (std::size_t b = 0; b < document.bodies.size(); ++b) {
     const mjcf::Body& source = document.bodies[b];
     const int parent = source.parent < 0 ? kWorld : own[static_cast<std::size_t>(source.parent)];
-    own[b] = add_body(source, frames[b], parent, model);
+    if (source.name.empty()) {  // limber's bodies are named: an unnamed one takes MuJoCo's body id
+      mjcf::Body named = source;
+      named.name = "body" + std::to_string(b + 1);
+      own[b] = add_body(named, frames[b], parent, model);
+    } else {
+      own[b] = add_body(source, frames[b], parent, model);
+    }
     const bool jointed = !source.joints.empty() && source.joints.front().type != mjcf::JointType::free;
     if (jointed) joint_of[b] = static_cast<int>(model.joints.size()) - 1;  // add_body adds the body's joint last
   }

@@ -226,6 +226,24 @@ TEST(Cli, RejectsBadProjectionAndSubsteps) {
   expect_rejected({"run", "--method", "lagrange", "--substeps", "4"}, "--substeps");
 }
 
+// A model file: MJCF runs under the method that can represent it, its loader's notes on stderr;
+// a bad one is one line naming the file, the line and the element.
+TEST(Cli, RunsAnMjcfModelAndPrintsWhatItsLoaderDropped) {
+  const std::filesystem::path directory = std::filesystem::temp_directory_path() / "limber_cli_mjcf";
+  std::filesystem::create_directories(directory);
+  const std::string good = (directory / "pendulum.xml").string(), bad = (directory / "bad.xml").string();
+  std::ofstream(good) << "<mujoco model=\"pendulum\">\n<worldbody>\n<light pos=\"0 0 3\"/>\n<body pos=\"0 0 1\">\n"
+                         "<joint name=\"pivot\" axis=\"0 1 0\"/>\n<geom type=\"capsule\" fromto=\"0 0 0 0.3 0 0\" size=\"0.02\"/>\n"
+                         "</body>\n</worldbody>\n</mujoco>\n";
+  std::ofstream(bad) << "<mujoco>\n<worldbody>\n<body>\n<joint type=\"screw\"/>\n</body>\n</worldbody>\n</mujoco>\n";
+  const Result r = run({"run", good, "--method", "featherstone", "--steps", "50"});
+  ASSERT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("limber run: pendulum"));
+  EXPECT_THAT(r.err, HasSubstr("limber: note: " + good + ":3: <light>: ignored"));
+  expect_rejected({"run", bad, "--method", "featherstone"}, bad + ":4: <joint type>");
+  std::filesystem::remove_all(directory);
+}
+
 TEST(Cli, RunsJacobiAndTheSequentialSweep) {
   for (const char* solver : {"--solver=jacobi", "--sweep=sequential"}) {
     const Result r = run({"run", scene("chain.json"), "--steps", "20", solver});

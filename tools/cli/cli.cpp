@@ -527,7 +527,9 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
     if (view_command->parsed()) {
       return view(view_flags, run_arguments_of_view(argc, argv), view_run_flags, viewer, out, err);
     }
-    return simulate(load(flags), flags, out);
+    LoadedRun loaded = load(flags);
+    for (const std::string& note : loaded.scene.notes) err << "limber: note: " << note << "\n";  // what a model file's loader dropped
+    return simulate(std::move(loaded), flags, out);
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
   } catch (const InputError& error) {

@@ -394,7 +394,6 @@ LoadedRun load(const RunFlags& flags) {
   loaded.scene_path = flags.scene;
   loaded.scene = embedded ? load_scene_text(embedded_humanoid_scene(), loaded.source, scene_options)
                           : load_scene_file(flags.scene, scene_options);
-  for (const std::string& note : loaded.scene.notes) std::cerr << "limber: note: " << note << "\n";
   apply_overrides(loaded.scene.model, flags);
   loaded.options = method_options(flags, loaded.scene.methods);
   if (given(flags.out_option)) loaded.out_path = flags.out_path;
