@@ -18,7 +18,7 @@ ArticulatedJoint articulated_joint(JointType type) {
     case JointType::fixed: return ArticulatedJoint::fixed;
     case JointType::spherical:
     case JointType::universal:  // refused before
-    case JointType::serial: break;  // a chain of tree bodies (expand_serial_joint)
+    case JointType::serial: break;  // a chain of tree bodies (push_joint)
   }
   return ArticulatedJoint::spherical;
 }
