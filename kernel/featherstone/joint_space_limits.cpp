@@ -386,11 +386,99 @@ FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body) {
   return pose;
 }
 
+namespace {
+
+// Whether a drive pulls at all.
+bool acting(const std::optional<JointDrive>& drive) { return drive && (drive->stiffness > 0 || drive->damping > 0); }
+
+// The drives' force k·(target − x) + c·target_velocity and gain k·h + c on each driven velocity
+// (x, target and rates in the Model's coordinates, carried onto v), a serial joint's axes each
+// on its own velocity. Needs state.kinematics at the current (q, v).
+void gather_drive_forces(FeatherstoneState& state, double h) {
+  const JointControls& controls = state.joint_controls;
+  JointControlScratch& c = state.controls;
+  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+    const Joint& joint = controls.joints[k];
+    const TreeJoint& held = state.tree_joint[k];
+    if (!joint.drive || held.dofs == 0 || !awake(state, held)) continue;
+    const JointDrive& drive = *joint.drive;
+    if (!(drive.stiffness > 0 || drive.damping > 0)) continue;
+    const MeasuredJoint measured = measure_joint(state, k);
+    const JointCoordinates& q = measured.coordinates;
+    c.drive_gain.segment(held.offset, held.dofs).setConstant(drive.stiffness * h + drive.damping);
+    if (joint.type == JointType::spherical) {
+      // The turn E = D_target·D⁻¹ that takes the deviation D to the target (inboard frame), as a
+      // rotation vector, the shorter way round.
+      const JointFrame& frame = controls.frames[k];
+      Eigen::Quaterniond error = drive_target_rotation(drive, frame) * rotation_of(q.rotation).conjugate();
+      if (error.w() < 0) error.coeffs() = -error.coeffs();
+      const Eigen::AngleAxisd turn(error.normalized());
+      const Eigen::Vector3d torque =
+          drive.stiffness * turn.angle() * turn.axis() + drive.damping * (frame.inboard_rest.conjugate() * drive.target_angular_velocity);
+      c.drive_force.segment<3>(held.offset) = measured.inboard_to_velocity * torque;
+    } else {
+      const bool revolute = joint.type == JointType::revolute;
+      double error = drive.target - (revolute ? q.angle : q.slide);
+      if (revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
+      c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
+    }
+  }
+  // A serial joint's axes: each its own spring and damper on its own velocity.
+  for (const TreeSerialAxis& node : state.serial_axes) {
+    const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+    if (!acting(axis.drive) || !awake(state, state.tree_joint[static_cast<std::size_t>(node.joint)])) continue;
+    const JointDrive& drive = *axis.drive;
+    double error = drive.target - state.q[state.tree.position_offset(node.body)];
+    if (!axis.slide) error = std::remainder(error, 2 * std::numbers::pi);
+    c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
+    c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
+  }
+}
+
+// Joint friction's blocks, per joint and per serial axis, then their impulses (solve_friction):
+// the impulse j that stops each one's predicted velocity through (H + h·G)⁻¹, or (sliding)
+// friction·h against the velocity it then has.
+void gather_friction(FeatherstoneState& state, double h) {
+  const JointControls& controls = state.joint_controls;
+  JointControlScratch& c = state.controls;
+  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+    const TreeJoint& held = state.tree_joint[k];
+    if (!(controls.joints[k].friction > 0) || held.dofs == 0 || !awake(state, held)) continue;
+    JointFrictionBlock block;
+    block.island = island_of(state, held);
+    block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
+    block.bound = controls.joints[k].friction * h;
+    const Eigen::Matrix3d response = joint_block_response(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
+    if (held.dofs == 1) {
+      block.mass(0, 0) = 1 / response(0, 0);
+    } else {
+      block.mass = response.inverse();
+    }
+    for (int m = 0; m < held.dofs; ++m) block.rate[m] = c.predicted[held.offset + m];
+    c.friction.push_back(block);
+    if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
+  }
+  for (const TreeSerialAxis& node : state.serial_axes) {
+    const double bound = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)].friction;
+    const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
+    if (!(bound > 0) || !awake(state, held)) continue;
+    JointFrictionBlock block;
+    block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
+    block.bound = bound * h;
+    block.mass(0, 0) = 1 / joint_block_response(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
+    block.rate[0] = c.predicted[node.offset];
+    c.friction.push_back(block);
+    if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
+  }
+  solve_friction(state);
+}
+
+}  // namespace
+
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
   bool drives = false, friction = false;
-  const auto acting = [](const std::optional<JointDrive>& drive) { return drive && (drive->stiffness > 0 || drive->damping > 0); };
   for (std::size_t k = 0; k < controls.joints.size(); ++k) {
     const Joint& joint = controls.joints[k];
     const TreeJoint& held = state.tree_joint[k];
@@ -402,47 +490,8 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   if (!drives && !friction) return false;
   forward_kinematics(state.tree, state.q, state.v, state.kinematics);
 
-  // Drives: the force k·(target − x) + c·target_velocity and the gain k·h + c on each driven
-  // velocity (x, target and rates in the Model's coordinates, carried onto v).
   c.drive_force.setZero(), c.drive_gain.setZero();
-  if (drives) {
-    for (std::size_t k = 0; k < controls.joints.size(); ++k) {
-      const Joint& joint = controls.joints[k];
-      const TreeJoint& held = state.tree_joint[k];
-      if (!joint.drive || held.dofs == 0 || !awake(state, held)) continue;
-      const JointDrive& drive = *joint.drive;
-      if (!(drive.stiffness > 0 || drive.damping > 0)) continue;
-      const MeasuredJoint measured = measure_joint(state, k);
-      const JointCoordinates& q = measured.coordinates;
-      c.drive_gain.segment(held.offset, held.dofs).setConstant(drive.stiffness * h + drive.damping);
-      if (joint.type == JointType::spherical) {
-        // The turn E = D_target·D⁻¹ that takes the deviation D to the target (inboard frame), as a
-        // rotation vector, the shorter way round.
-        const JointFrame& frame = controls.frames[k];
-        Eigen::Quaterniond error = drive_target_rotation(drive, frame) * rotation_of(q.rotation).conjugate();
-        if (error.w() < 0) error.coeffs() = -error.coeffs();
-        const Eigen::AngleAxisd turn(error.normalized());
-        const Eigen::Vector3d torque =
-            drive.stiffness * turn.angle() * turn.axis() + drive.damping * (frame.inboard_rest.conjugate() * drive.target_angular_velocity);
-        c.drive_force.segment<3>(held.offset) = measured.inboard_to_velocity * torque;
-      } else {
-        const bool revolute = joint.type == JointType::revolute;
-        double error = drive.target - (revolute ? q.angle : q.slide);
-        if (revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
-        c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
-      }
-    }
-    // A serial joint's axes: each its own spring and damper on its own velocity.
-    for (const TreeSerialAxis& node : state.serial_axes) {
-      const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
-      if (!acting(axis.drive) || !awake(state, state.tree_joint[static_cast<std::size_t>(node.joint)])) continue;
-      const JointDrive& drive = *axis.drive;
-      double error = drive.target - state.q[state.tree.position_offset(node.body)];
-      if (!axis.slide) error = std::remainder(error, 2 * std::numbers::pi);
-      c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
-      c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
-    }
-  }
+  if (drives) gather_drive_forces(state, h);
   // Stable PD (Tan, Liu & Turk 2011): (H + h·G) v̇ = τ − C + F − G·v, G = diag(k·h + c), whose
   // v + h·v̇ is the velocity the drives' force F − G·(v + h·v̇) leaves at the step's end.
   c.armature = h * c.drive_gain;
@@ -451,42 +500,9 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   forward_dynamics(state.tree, state.q, state.v, c.explicit_force, c.armature, state.settings.gravity, s.articulated, c.acceleration);
   c.predicted = state.v + h * c.acceleration;
 
-  // Friction: per joint, the impulse j that stops its predicted velocity through (H + h·G)⁻¹,
-  // or (sliding) friction·h against the velocity it then has.
   c.friction.clear();
   c.islands.clear();
-  if (friction) {
-    for (std::size_t k = 0; k < controls.joints.size(); ++k) {
-      const TreeJoint& held = state.tree_joint[k];
-      if (!(controls.joints[k].friction > 0) || held.dofs == 0 || !awake(state, held)) continue;
-      JointFrictionBlock block;
-      block.island = island_of(state, held);
-      block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
-      block.bound = controls.joints[k].friction * h;
-      const Eigen::Matrix3d response = joint_block_response(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
-      if (held.dofs == 1) {
-        block.mass(0, 0) = 1 / response(0, 0);
-      } else {
-        block.mass = response.inverse();
-      }
-      for (int m = 0; m < held.dofs; ++m) block.rate[m] = c.predicted[held.offset + m];
-      c.friction.push_back(block);
-      if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
-    }
-    for (const TreeSerialAxis& node : state.serial_axes) {
-      const double bound = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)].friction;
-      const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
-      if (!(bound > 0) || !awake(state, held)) continue;
-      JointFrictionBlock block;
-      block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
-      block.bound = bound * h;
-      block.mass(0, 0) = 1 / joint_block_response(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
-      block.rate[0] = c.predicted[node.offset];
-      c.friction.push_back(block);
-      if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
-    }
-    solve_friction(state);
-  }
+  if (friction) gather_friction(state, h);
 
   // The forces held over the step: the loads, the drives' at the predicted velocity, friction's j/h.
   c.forces = loads + c.drive_force - c.drive_gain.cwiseProduct(c.predicted);

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
+#include <string_view>
 #include <optional>
 #include <unordered_map>
 #include <vector>
@@ -47,5 +49,25 @@ struct WorldInternals {
   /// The actuators' controls (Model::actuators order), as set_controls left them: 0 at first.
   std::vector<double> controls;
 };
+
+
+// Shared by the World's source files (world.cpp, world_joints.cpp).
+
+// old_body_of_new for an edit that keeps the first `kept` of `count` bodies where they were and
+// adds the rest (−1: new).
+inline std::vector<std::int64_t> first_bodies_kept(std::size_t count, std::size_t kept) {
+  std::vector<std::int64_t> old_body_of_new(count, -1);
+  for (std::size_t b = 0; b < kept; ++b) old_body_of_new[b] = static_cast<std::int64_t>(b);
+  return old_body_of_new;
+}
+
+// The position of `id`'s thing, or a WorldError naming the handle ("body handle 3: no such body
+// (removed?)"); `call` prefixes it when given.
+template <typename Id>
+std::size_t position_of(const HandleTable<Id>& table, Id id, std::string_view kind, std::string_view call = {}) {
+  if (const std::optional<std::size_t> position = table.find(id)) return *position;
+  throw WorldError((call.empty() ? std::string() : std::string(call) + ": ") + std::string(kind) + " handle " + std::to_string(id.slot) +
+                   ": no such " + std::string(kind) + " (removed?)");
+}
 
 }  // namespace limber
