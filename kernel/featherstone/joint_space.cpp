@@ -172,9 +172,7 @@ Eigen::VectorXd joint_passive_forces(const FeatherstoneState& state, const Model
   }
   for (std::size_t a = 0; a < model.actuators.size() && a < controls.size(); ++a) {
     const Actuator& actuator = model.actuators[a];
-    double control = controls[a];
-    if (actuator.control_range) control = std::clamp(control, actuator.control_range->min, actuator.control_range->max);
-    out[layout.joint_velocity[static_cast<std::size_t>(actuator.joint)] + actuator.axis] += actuator.gear * control;
+    out[layout.joint_velocity[static_cast<std::size_t>(actuator.joint)] + actuator.axis] += actuator_force(actuator, controls[a]);
   }
   return out;
 }

@@ -316,6 +316,12 @@ struct Actuator {
   std::optional<Range> control_range;
 };
 
+/// An actuator's joint force at `control`: gear × the control clamped to its range, N·m or N.
+inline double actuator_force(const Actuator& actuator, double control) {
+  if (const auto& range = actuator.control_range) control = control < range->min ? range->min : control > range->max ? range->max : control;
+  return actuator.gear * control;
+}
+
 /// The plane z = height, solid below. Coulomb friction and restitution against everything.
 struct Ground {
   double height = 0;       ///< m

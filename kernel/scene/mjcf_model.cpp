@@ -1,5 +1,7 @@
 #include "limber/kernel/scene/mjcf_model.hpp"
 
+#include "limber/kernel/scene/inertial_import.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -66,13 +68,8 @@ Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string n
 
 // An explicit <inertial> moved into a one-geom body's limber frame.
 void take_inertial(Body& body, const mjcf::Body& source, const Isometry& body_frame) {
-  const Eigen::Matrix3d to_limber = body.orientation().toRotationMatrix().transpose() * body_frame.linear();
-  Inertial inertial;
-  inertial.centre_of_mass = body.orientation().conjugate() * (body_frame * source.centre_of_mass - body.position);
-  inertial.inertia = to_limber * source.inertia * to_limber.transpose();
-  inertial.inertia = 0.5 * (inertial.inertia + inertial.inertia.transpose()).eval();
   body.mass = source.mass;
-  body.inertial = inertial;
+  body.inertial = inertial_in_body_frame(body, body_frame * source.centre_of_mass, body_frame.linear(), source.inertia);
 }
 
 // A fixed joint between two limber bodies (or a body and the world) at `point` (world, m).

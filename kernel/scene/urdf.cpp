@@ -10,6 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "limber/kernel/scene/inertial_import.hpp"
 #include "limber/kernel/scene/urdf_reader.hpp"
 
 namespace limber {
@@ -156,13 +157,8 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
   body.axis = (world.linear() * Eigen::Vector3d::UnitZ()).normalized();
   check_inertia(link);
   const urdf::Inertial& source = *link.inertial;
-  const Eigen::Matrix3d to_body = body.orientation().toRotationMatrix().transpose() * frame.linear() * source.origin.linear();
-  Inertial inertial;
-  inertial.centre_of_mass = body.orientation().conjugate() * (frame * source.origin.translation() - body.position);
-  inertial.inertia = to_body * source.inertia * to_body.transpose();
-  inertial.inertia = 0.5 * (inertial.inertia + inertial.inertia.transpose()).eval();
   body.mass = source.mass;
-  body.inertial = inertial;
+  body.inertial = inertial_in_body_frame(body, frame * source.origin.translation(), frame.linear() * source.origin.linear(), source.inertia);
   return body;
 }
 

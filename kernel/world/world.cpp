@@ -39,9 +39,7 @@ void apply_actuators(State& state, const Model& model, const std::vector<double>
                      std::vector<Eigen::Vector3d>& torque) {
   for (std::size_t a = 0; a < controls.size(); ++a) {
     const Actuator& actuator = model.actuators[a];
-    double control = controls[a];
-    if (actuator.control_range) control = std::clamp(control, actuator.control_range->min, actuator.control_range->max);
-    const double amount = actuator.gear * control;
+    const double amount = actuator_force(actuator, controls[a]);
     if (amount == 0) continue;
     const auto j = static_cast<std::size_t>(actuator.joint);
     if constexpr (requires { apply_joint_force(state, j, actuator.axis, amount); }) {

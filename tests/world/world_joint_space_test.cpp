@@ -28,9 +28,10 @@ Eigen::VectorXd random_vector(Eigen::Index size, std::mt19937& random, double sc
   return v;
 }
 
-// A random state: the 1-DOF coordinates moved a little (quaternions kept as they are), random rates.
+// The ragdoll at its pose with random rates (its positions include quaternions, which a random
+// vector would not keep unit).
 void set_random_state(World& world, std::mt19937& random) {
-  Eigen::VectorXd q = world.joint_positions();
+  const Eigen::VectorXd q = world.joint_positions();
   const Eigen::VectorXd v = random_vector(world.joint_velocities().size(), random, 1.5);
   world.set_joint_state(q, v);
 }
