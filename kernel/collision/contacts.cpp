@@ -37,7 +37,7 @@ PlaneFeatureConstraint plane_constraint(const VerletState<Scalar>& state, std::u
   const Plane& plane = state.planes[plane_index];
   return plane_feature_constraint(plane.normal, plane.offset, position_of(state.particles, feature.particle, previous),
                                   position_of(state.particles, feature.axis_partner, previous), feature.radius,
-                                  feature.is_disk);
+                                  feature.is_disk, feature.at_centre);
 }
 
 // Generalized inverse mass Σ w |∇C|² of a plane contact (a sphere: the particle's own w).
@@ -63,13 +63,16 @@ double plane_normal_speed(const VerletState<Scalar>& state, const ContactFeature
 
 // --- Ball–limb contacts ---
 
+// A sphere limb meets the ball at its centre: half way between its particles (axial ½).
 template <typename Scalar>
 SphereLimbContact ball_limb_geometry(const VerletState<Scalar>& state, const BallParticle& ball, std::uint32_t limb, double t) {
   const auto& particles = state.particles;
-  return sphere_limb_contact(position_at(particles, ball.particle, t), ball.radius,
-                             position_at(particles, state.limbs.head[limb], t),
-                             position_at(particles, state.limbs.tail[limb], t), state.limbs.shape[limb],
-                             state.limbs.radius[limb]);
+  Eigen::Vector3d head = position_at(particles, state.limbs.head[limb], t), tail = position_at(particles, state.limbs.tail[limb], t);
+  if (state.limbs.sphere[limb]) head = tail = 0.5 * (head + tail);
+  SphereLimbContact contact = sphere_limb_contact(position_at(particles, ball.particle, t), ball.radius, head, tail,
+                                                  state.limbs.shape[limb], state.limbs.radius[limb]);
+  if (state.limbs.sphere[limb]) contact.axial = 0.5;
+  return contact;
 }
 
 // From the limb's contact point to the ball's centre, at time t of the step.
@@ -329,18 +332,22 @@ double project_plane_contacts(VerletState<Scalar>& state, double dt) {
     contact.position_impulse += lambda;
     const std::uint32_t p = feature.particle, q = feature.axis_partner;
     Eigen::Vector3d delta = particles.inverse_mass[p] * lambda * constraint.gradient_point;
-    if (q != p) {
-      const Eigen::Vector3d delta_partner = particles.inverse_mass[q] * lambda * constraint.gradient_partner;
-      move(particles, q, delta_partner);
-      largest = std::max(largest, delta_partner.norm());
-    }
-    // Coulomb friction on the particle's tangential displacement this step, at most μ times the push.
+    Eigen::Vector3d delta_partner = particles.inverse_mass[q] * lambda * constraint.gradient_partner;
+    // Coulomb friction on the particle's tangential displacement this step (a sphere limb's: its
+    // centre's, taken from both), at most μ times the push.
     const Plane& plane = state.planes[contact.plane];
     if (particles.inverse_mass[p] > 0) {
-      const Eigen::Vector3d step = (particles.position(p) - particles.previous(p)).template cast<double>();
+      const auto step_of = [&](std::uint32_t k) -> Eigen::Vector3d { return (particles.position(k) - particles.previous(k)).template cast<double>(); };
+      const Eigen::Vector3d step = feature.at_centre ? Eigen::Vector3d(0.5 * (step_of(p) + step_of(q))) : step_of(p);
       const Eigen::Vector3d tangential = step - step.dot(plane.normal) * plane.normal;
       const double slide = tangential.norm(), grip = plane.friction * push;
-      if (slide > 0) delta -= (slide <= grip ? 1.0 : grip / slide) * tangential;
+      const Eigen::Vector3d held = slide > 0 ? Eigen::Vector3d((slide <= grip ? 1.0 : grip / slide) * tangential) : Eigen::Vector3d::Zero();
+      delta -= held;
+      if (feature.at_centre) delta_partner -= held;
+    }
+    if (q != p) {
+      move(particles, q, delta_partner);
+      largest = std::max(largest, delta_partner.norm());
     }
     move(particles, p, delta);
     largest = std::max(largest, delta.norm());

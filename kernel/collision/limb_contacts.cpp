@@ -46,6 +46,7 @@ void gather_segments(VerletState<Scalar>& state, int ahead) {
     LimbSegment& segment = state.limb_segments[body];
     segment.head = p.position(head).template cast<double>();
     segment.tail = p.position(tail).template cast<double>();
+    if (limbs.sphere[limb]) segment.head = segment.tail = 0.5 * (segment.head + segment.tail);  // a sphere: its centre
     segment.radius = limbs.radius[limb];
     state.limb_awake[body] = state.limb_island_awake[limb];
     const double motion = state.limb_awake[body] ? 2 * std::max(moved(segment.head, head), moved(segment.tail, tail)) : 0.0;
@@ -87,7 +88,8 @@ std::pair<std::uint32_t, std::uint32_t> ends_of(const VerletState<Scalar>& state
 
 // Places `place` and place + 1 of the row: the point `axial` of the way from head to tail,
 // times `sign`; a ball's one particle takes one place (a particle twice in a row would lose
-// one of its two moves when the sweep writes them back).
+// one of its two moves when the sweep writes them back). A sphere limb's segment is its centre:
+// its contacts act half way between its particles, whatever `axial` its point segment gave.
 inline void set_places(ContactRow& row, std::size_t place, std::pair<std::uint32_t, std::uint32_t> ends, double axial, double sign) {
   const auto [head, tail] = ends;
   row.particle[place] = head, row.coefficient[place] = sign * (1 - axial);
@@ -138,10 +140,13 @@ ContactRow contact_row(const VerletState<Scalar>& state, const LimbContact& cont
   ContactRow row;
   const std::uint32_t null_particle = state.particles.null_particle();
   row.particle.fill(null_particle);
-  set_places(row, 0, ends_of(state, contact.first), contact.axial_first, 1);
+  const auto axial = [&](std::uint32_t segment, double along) {
+    return segment < state.body_limb.size() && state.limbs.sphere[state.body_limb[segment]] ? 0.5 : along;
+  };
+  set_places(row, 0, ends_of(state, contact.first), axial(contact.first, contact.axial_first), 1);
   double offset = contact.offset;
   if (contact.second != kStaticShape) {
-    set_places(row, 2, ends_of(state, contact.second), contact.axial_second, -1);
+    set_places(row, 2, ends_of(state, contact.second), axial(contact.second, contact.axial_second), -1);
     offset = state.limb_segments[contact.first].radius + state.limb_segments[contact.second].radius;
   }
   row.normal = contact.normal;

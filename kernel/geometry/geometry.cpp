@@ -81,8 +81,13 @@ EndSupport end_support(const Eigen::Vector3d& normal, const Eigen::Vector3d& axi
 
 PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, double offset,
                                                 const Eigen::Vector3d& point, const Eigen::Vector3d& partner,
-                                                double radius, bool is_disk) {
+                                                double radius, bool is_disk, bool at_midpoint) {
   PlaneFeatureConstraint constraint;
+  if (at_midpoint) {
+    constraint.separation = normal.dot(0.5 * (point + partner)) - offset - radius;
+    constraint.gradient_point = constraint.gradient_partner = 0.5 * normal;
+    return constraint;
+  }
   constraint.gradient_point = normal;
   const Eigen::Vector3d along = point - partner;
   const double length = along.norm();

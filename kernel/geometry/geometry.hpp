@@ -66,6 +66,8 @@ inline double allowed_separation(double start_separation, double recovery) {
 ///   ∇_point C = n + (r·c / (f·L))·(n − c·u),   ∇_partner C = −(r·c / (f·L))·(n − c·u),
 /// L = |point − partner|; |n − c·u| = f, so the rim term has magnitude r|c|/L and stays finite
 /// (taken as 0 where the disk lies flat, f → 0, and the rim has no single lowest point).
+/// `at_midpoint`: a sphere of `radius` about (point + partner)/2 (a sphere limb's, whose two
+/// particles straddle its centre): ∇_point C = ∇_partner C = n/2.
 struct PlaneFeatureConstraint {
   double separation = 0;  ///< C, m
   Eigen::Vector3d gradient_point = Eigen::Vector3d::Zero();
@@ -73,6 +75,6 @@ struct PlaneFeatureConstraint {
 };
 PlaneFeatureConstraint plane_feature_constraint(const Eigen::Vector3d& normal, double offset,
                                                 const Eigen::Vector3d& point, const Eigen::Vector3d& partner,
-                                                double radius, bool is_disk);
+                                                double radius, bool is_disk, bool at_midpoint = false);
 
 }  // namespace limber

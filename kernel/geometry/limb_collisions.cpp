@@ -205,6 +205,44 @@ bool contact_before(const LimbContact& a, const LimbContact& b) {
 // Bodies welded by fixed joints are one rigid body (a compound shape: MuJoCo's weld bodies, a
 // torso of two capsules), so a joint joins their whole groups: no two of a group collide, nor any
 // two across a joint between groups. Without fixed joints, the joined pairs alone.
+namespace {
+
+// A body that collides with nothing (a serial joint's virtual link, scene/serial_links.hpp).
+bool collides_with_nothing(const Body& body) { return body.collision.group == 0 || body.collision.mask == 0; }
+
+// The pairs of bodies that joints join: directly, or through bodies that collide with nothing (a
+// hip's three hinges join the pelvis and the thigh through two virtual links).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> joined_pairs(const Model& model) {
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+  const auto body_count = static_cast<std::uint32_t>(model.bodies.size());
+  DisjointSets through(body_count);  // the bodies that collide with nothing, joined among themselves
+  bool any_ghost = false;
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
+    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
+    const bool a_ghost = collides_with_nothing(model.bodies[a]), b_ghost = collides_with_nothing(model.bodies[b]);
+    if (!a_ghost && !b_ghost) pairs.emplace_back(a, b);
+    if (a_ghost && b_ghost) through.unite(a, b);
+    any_ghost |= a_ghost || b_ghost;
+  }
+  if (!any_ghost) return pairs;
+  std::vector<std::vector<std::uint32_t>> ends(body_count);  // per ghost group: the bodies jointed to it
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard == kWorld) continue;
+    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
+    if (collides_with_nothing(model.bodies[a]) && !collides_with_nothing(model.bodies[b])) ends[through.find(a)].push_back(b);
+    if (collides_with_nothing(model.bodies[b]) && !collides_with_nothing(model.bodies[a])) ends[through.find(b)].push_back(a);
+  }
+  for (const std::vector<std::uint32_t>& group : ends) {
+    for (std::size_t i = 0; i < group.size(); ++i) {
+      for (std::size_t k = i + 1; k < group.size(); ++k) pairs.emplace_back(group[i], group[k]);
+    }
+  }
+  return pairs;
+}
+
+}  // namespace
+
 void LimbCollisions::exclude_joined_pairs(const Model& model) {
   DisjointSets welded(limb_count_);
   bool any_welded = false;
@@ -217,9 +255,7 @@ void LimbCollisions::exclude_joined_pairs(const Model& model) {
   const auto exclude = [&](std::uint32_t a, std::uint32_t b) {
     if (a != b) excluded_.emplace_back(std::min(a, b), std::max(a, b));
   };
-  for (const Joint& joint : model.joints) {
-    if (joint.inboard == kWorld || joint.inboard == joint.outboard) continue;
-    const auto a = static_cast<std::uint32_t>(joint.inboard), b = static_cast<std::uint32_t>(joint.outboard);
+  for (const auto [a, b] : joined_pairs(model)) {
     if (!any_welded) {
       exclude(a, b);
       continue;

@@ -1,5 +1,5 @@
 // The lagrange method's side of the World's calls (kernel/methods/method_contract.hpp): its held
-// points; every other call is the rigid bodies' (rigid/bodies.hpp).
+// points and its motors; every other call is the rigid bodies' (rigid/bodies.hpp).
 #pragma once
 
 #include <cstddef>
@@ -17,5 +17,11 @@ inline Eigen::Vector3d world_anchor(const LagrangeState& state, const Model&, st
 
 /// Moves the joint's world anchor to `target` for the next step; the body follows through the joint.
 inline void move_world_anchor(LagrangeState& state, const Model&, std::size_t joint, const Eigen::Vector3d& target) { state.joints.inboard_anchor[joint] = target; }
+
+/// Adds `force` (N·m on a hinge, N on a slide) to joint `joint`'s coordinate `axis` for the next
+/// step: the pair of loads it is on the joint's bodies (apply_coordinate_force).
+inline void apply_joint_force(LagrangeState& state, std::size_t joint, int axis, double force) {
+  apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
+}
 
 }  // namespace limber

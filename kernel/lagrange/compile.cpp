@@ -1,14 +1,23 @@
 #include "limber/kernel/lagrange/compile.hpp"
 
+#include <optional>
+
 #include "limber/kernel/lagrange/multipliers.hpp"
 #include "limber/kernel/model/capabilities.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 
 namespace limber {
 
-LagrangeState compile_lagrange(const Model& model, const LagrangeOptions& options) {
+LagrangeState compile_lagrange(const Model& input, const LagrangeOptions& options) {
+  // Serial joints run as revolute and prismatic joints through virtual links (serial_links.hpp).
+  require_supported(input, Method::lagrange);
+  std::optional<SerialExpansion> expansion;
+  if (needs_serial_expansion(input)) validate(input), expansion = expand_serial_joints(input);
+  const Model& model = expansion ? expansion->model : input;
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
-  require_supported(model, Method::lagrange);
+  if (expansion) validate(model), require_supported(model, Method::lagrange);
+  if (!input.actuators.empty()) state.coordinate_axes = expansion ? CoordinateAxes::of(*expansion) : CoordinateAxes::of(model);
   require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "lagrange");
   require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");
   state.options = options;

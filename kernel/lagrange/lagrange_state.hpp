@@ -18,6 +18,7 @@
 #include "limber/kernel/lagrange/joint_controls.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/options.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
@@ -34,6 +35,9 @@ struct LagrangeState : RigidScene {
   /// a drive, limit or friction given later to a joint compiled without them is not applied.
   JointControls joint_controls;
   JointControlSet controls;  ///< the controlled joints' rows (joint_controls.hpp)
+  /// Where motors act (Model::actuators; empty without them), serial joints through their
+  /// virtual links (scene/serial_links.hpp).
+  CoordinateAxes coordinate_axes;
   LagrangeOptions options;
   bool uses_tree = true;  ///< the solver chosen at compile (tree, or sparse for graphs with loops)
   RigidIntegratorScratch scratch;

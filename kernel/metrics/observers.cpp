@@ -191,6 +191,7 @@ void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& s
     const std::uint32_t limb = state.body_limb[body];
     segments[body] = {state.particles.position(state.limbs.head[limb]).template cast<double>(),
                       state.particles.position(state.limbs.tail[limb]).template cast<double>(), state.limbs.radius[limb]};
+    if (state.limbs.sphere[limb]) segments[body].head = segments[body].tail = 0.5 * (segments[body].head + segments[body].tail);
   }
   for (const BallParticle& ball : state.balls) {
     const Eigen::Vector3d centre = state.particles.position(ball.particle).template cast<double>();
@@ -205,7 +206,7 @@ void limb_segments(const RigidScene& scene, const Model& model, std::vector<Limb
     segments[body] = {world_point(scene, body, {0, 0, 0.5 * shape.length}), world_point(scene, body, {0, 0, -0.5 * shape.length}),
                       shape.radius};
   }
-  for (std::size_t ball = model.bodies.size(); ball < scene.bodies.size(); ++ball) {
+  for (std::size_t ball = scene.ball_begin; ball < scene.bodies.size(); ++ball) {
     segments.push_back({scene.bodies.state.position[ball], scene.bodies.state.position[ball], scene.shapes.radius[ball]});
   }
 }

@@ -14,7 +14,8 @@ namespace limber {
 struct MethodCapabilities {
   Method method;
   /// Joint types it compiles, indexed by JointType (spherical, revolute, prismatic, universal,
-  /// fixed, serial).
+  /// fixed, serial). Particles and Lagrange run a serial joint's axes as revolute (and, for
+  /// Lagrange, prismatic) joints through virtual links (serial_links.hpp); Featherstone exactly.
   std::array<bool, 6> joints;
   bool single_precision;  ///< a float state (WorldOptions::single_precision)
   bool threads;           ///< steps on more than one thread (VerletOptions::threads)
@@ -26,9 +27,9 @@ struct MethodCapabilities {
 /// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
     //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres
-    {Method::particles,    {true, true, false, true, true, false},              true,  true,   false, true,  false},
+    {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true},
     {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false},
-    {Method::lagrange,     {true, true, true, true, true, false},               false, false,  true,  true,  true},
+    {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true},
     {Method::featherstone, {true, true, true, false, true, true},               false, false,  false, false, true},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&

@@ -494,7 +494,7 @@ void require_supported(const Model& model, Method method) {
     const Shape& shape = model.bodies[b].shape;
     if (shape.type != ShapeType::capsule || shape.length > 0) continue;
     throw ModelError("bodies[" + std::to_string(b) + "] '" + model.bodies[b].name + "': the " + name +
-                     " method does not support spheres (a capsule of length 0: its limbs need an axis); lagrange and featherstone do");
+                     " method does not support spheres (a capsule of length 0: its springs need an axis); particles, lagrange and featherstone do");
   }
   if (!row.gears && !model.gears.empty()) {
     throw ModelError("gears[0] '" + model.gears[0].name + "': the " + name + " method does not support gears (velocity constraints); lagrange does");

@@ -20,6 +20,7 @@
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/model/options.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/particles/contact_rows.hpp"
 #include "limber/kernel/particles/joint_rows.hpp"
@@ -61,6 +62,9 @@ struct LimbBuffer {
   std::vector<double> head_mass, centre_mass, tail_mass;
   std::vector<double> radius;                 ///< m
   std::vector<ShapeType> shape;
+  /// Per limb: a sphere (a capsule of length 0), whose head and tail straddle its centre
+  /// (frames::axis_length): its contacts act at the centre, their midpoint.
+  std::vector<std::uint8_t> sphere;
   std::size_t size() const { return head.size(); }
 };
 
@@ -74,6 +78,8 @@ struct ContactFeature {
   bool is_disk = false;
   double restitution = 0;  ///< the feature's own (a ball's); a contact uses the larger of it and the plane's
   std::uint32_t limb = kNoLimb;  ///< the limb it belongs to (LimbBuffer index), kNoLimb for a ball
+  /// A sphere limb's: a sphere of `radius` about the midpoint of `particle` and `axis_partner`.
+  bool at_centre = false;
 };
 
 /// Active contacts of the current step (capacity fixed at compile: no allocation in step()).
@@ -181,6 +187,9 @@ struct VerletState {
   /// Limb–limb and limb–static collision (inactive for a scene with neither).
   LimbCollisions collisions;
   std::vector<BallParticle> balls;  ///< Model::balls, in order: the last particles and islands
+  /// Where motors act (Model::actuators; empty without them): each joint coordinate's joint, as
+  /// compiled (serial joints through virtual links, scene/serial_links.hpp).
+  CoordinateAxes coordinate_axes;
 
   // --- settings, resolved ---
   VerletOptions options;

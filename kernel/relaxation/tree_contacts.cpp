@@ -78,15 +78,17 @@ void evaluate(const VerletState<Scalar>& state, TreeContact& contact) {
   const PlaneContact& plane_contact = state.plane_contacts[contact.index];
   const ContactFeature& feature = state.features[plane_contact.feature];
   const Plane& plane = state.planes[plane_contact.plane];
-  const Eigen::Vector3d x = position(feature.particle), partner = position(feature.axis_partner);
-  const PlaneFeatureConstraint constraint = plane_feature_constraint(plane.normal, plane.offset, x, partner, feature.radius, feature.is_disk);
+  const Eigen::Vector3d point = position(feature.particle), partner = position(feature.axis_partner);
+  const PlaneFeatureConstraint constraint =
+      plane_feature_constraint(plane.normal, plane.offset, point, partner, feature.radius, feature.is_disk, feature.at_centre);
+  const Eigen::Vector3d x = feature.at_centre ? Eigen::Vector3d(0.5 * (point + partner)) : point;  // where it touches, less its radius
   const Eigen::Vector3d& centre = trees.centre[static_cast<std::size_t>(contact.limb[0])];
   contact.normal = plane.normal, contact.slip = x - contact.start;
   contact.separation = constraint.separation - allowed_separation(plane_contact.start_separation, trees.recovery);
   set_side(contact, 0, 1.0, x - centre);
   // The rim's own gradient (a tipped disk's lowest point moves as the limb turns): J = Σ_k [g_k; r_k × g_k].
   Vector6& j = contact.normal_jacobian[0];
-  j.head<3>() = constraint.gradient_point, j.tail<3>() = (x - centre).cross(constraint.gradient_point);
+  j.head<3>() = constraint.gradient_point, j.tail<3>() = (point - centre).cross(constraint.gradient_point);
   if (feature.axis_partner != feature.particle) {
     j.head<3>() += constraint.gradient_partner, j.tail<3>() += (partner - centre).cross(constraint.gradient_partner);
   }
@@ -201,7 +203,7 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
     TreeContact contact;
     contact.source = TreeContact::Source::plane, contact.index = static_cast<std::uint32_t>(c);
     contact.friction = state.planes[plane_contact.plane].friction;
-    contact.start = start_of(feature.particle);
+    contact.start = feature.at_centre ? Eigen::Vector3d(0.5 * (start_of(feature.particle) + start_of(feature.axis_partner))) : start_of(feature.particle);
     contact.limb[0] = limb;
     trees.contacts.push_back(contact);
   }

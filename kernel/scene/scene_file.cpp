@@ -905,6 +905,11 @@ Scene load_model_file_scene(const std::filesystem::path& path, const SceneOption
     throw ModelError(source + ": " + std::to_string(scene.model.bodies.size()) + " bodies, more than the " +
                      std::to_string(options.max_bodies) + " a scene may have");
   }
+  // The particle method's settings for articulated bodies, the ragdoll pile's (bench/ragdolls.md):
+  // each island's joints solved exactly as a tree, 2 substeps of 2 sweeps (the command line's
+  // flags override them).
+  scene.methods.verlet.joint_solve = JointSolve::tree;
+  scene.methods.relaxation.substeps = 2, scene.methods.relaxation.iterations = 2;
   validate(scene.methods);
   return scene;
 }

@@ -96,7 +96,9 @@ Motion body_motion(const VerletState<Scalar>& state, std::size_t body) {
 }
 
 /// A force at the limb's centre of mass (shared by its particles in proportion to its mass at
-/// each: apply_force) and the part of a torque across its axis, as a couple on its ends.
+/// each: apply_force) and a torque: its part across the axis as a couple on the limb's ends, its
+/// part along the axis as a couple on the frame's F± (a stick without a frame cannot spin: that
+/// part is lost).
 template <typename Scalar>
 void apply_body_load(VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& force, const Eigen::Vector3d& torque) {
   if (!force.isZero(0)) apply_force(state, static_cast<int>(body), force);
@@ -109,6 +111,24 @@ void apply_body_load(VerletState<Scalar>& state, std::size_t body, const Eigen::
   const std::uint32_t limb = state.body_limb[body];
   state.pending_forces.emplace_back(state.limbs.head[limb], at_head);
   state.pending_forces.emplace_back(state.limbs.tail[limb], -at_head);
+  // A limb with a frame spins: the part along its axis, as a couple on F⁺ and F⁻ (d ⟂ u, so
+  // d × ((τ × d)/|d|²) = τ).
+  const JointRowSet& rows = state.joint_rows;
+  if (rows.frame_plus.empty() || rows.frame_plus[body] == state.particles.null_particle()) return;
+  const Eigen::Vector3d d = state.particles.position(rows.frame_plus[body]).template cast<double>() -
+                            state.particles.position(rows.frame_minus[body]).template cast<double>();
+  const Eigen::Vector3d along = torque.dot(u) * u, d_across = d - d.dot(u) * u;
+  if (along.isZero(0) || !(d_across.squaredNorm() > 0)) return;
+  const Eigen::Vector3d at_plus = along.cross(d_across) / d_across.squaredNorm();
+  state.pending_forces.emplace_back(rows.frame_plus[body], at_plus);
+  state.pending_forces.emplace_back(rows.frame_minus[body], -at_plus);
+}
+
+/// Adds `force` (N·m on a hinge, N on a slide) to joint `joint`'s coordinate `axis` for the next
+/// step: the pair of loads it is on the joint's limbs (apply_coordinate_force).
+template <typename Scalar>
+void apply_joint_force(VerletState<Scalar>& state, std::size_t joint, int axis, double force) {
+  apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
 }
 
 /// The world position of `local_point` (the Model body frame, m).

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <sstream>
 
@@ -11,6 +12,7 @@
 #include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 #include "limber/kernel/verlet/bodies.hpp"
 #include "limber/kernel/verlet/frames.hpp"
@@ -188,8 +190,8 @@ void build_constraints(VerletState<Scalar>& state, const Model& model, const Pla
   auto add_joint_constraint = [&](std::size_t k) {
     if (shared || frame_plan.point_row[k]) return;  // a point row holds it (frames.hpp)
     const Joint& joint = model.joints[k];
-    double reference = model.bodies[joint.outboard].shape.length;
-    if (joint.inboard != kWorld) reference = 0.5 * (reference + model.bodies[joint.inboard].shape.length);
+    double reference = frames::axis_length(model.bodies[joint.outboard]);
+    if (joint.inboard != kWorld) reference = 0.5 * (reference + frames::axis_length(model.bodies[joint.inboard]));
     const std::uint32_t c = add_constraint(particle_of(joint_inboard_slot[k]), particle_of(joint_outboard_slot[k]), 0.0);
     state.joint_constraints.emplace_back(c, reference);
   };
@@ -206,19 +208,20 @@ void build_constraints(VerletState<Scalar>& state, const Model& model, const Pla
       for (std::uint32_t k : world_joints.row(b)) add_joint_constraint(k), joint_done[k] = true;
       if (tree_joint[b] >= 0) add_joint_constraint(static_cast<std::size_t>(tree_joint[b])), joint_done[tree_joint[b]] = true;
       const Body& body = model.bodies[b];
+      const double length = frames::axis_length(body);
       const std::uint32_t head = particle_of(head_slot(b)), tail = particle_of(tail_slot(b));
       const std::uint32_t centre = centres ? particle_of(centre_slot(b)) : kNoCentre;
       state.body_limb[b] = checked_index(state.limbs.size());
       state.limbs.head.push_back(head);
       state.limbs.tail.push_back(tail);
       state.limbs.centre.push_back(centre);
-      state.limbs.link_constraint.push_back(add_constraint(head, tail, body.shape.length));
+      state.limbs.link_constraint.push_back(add_constraint(head, tail, length));
       if (centres) {
-        add_constraint(head, centre, 0.5 * body.shape.length);
-        add_constraint(centre, tail, 0.5 * body.shape.length);
+        add_constraint(head, centre, 0.5 * length);
+        add_constraint(centre, tail, 0.5 * length);
       }
       if (frame_plan.framed[b]) {  // the triangle head, tail, F⁺ (F⁻ by the frame's point row)
-        const double diagonal = std::hypot(0.5 * body.shape.length, frame_plan.spacing[b]);
+        const double diagonal = std::hypot(0.5 * length, frame_plan.spacing[b]);
         add_constraint(head, particle_of(frame_slot(b, 0)), diagonal);
         add_constraint(tail, particle_of(frame_slot(b, 0)), diagonal);
       }
@@ -227,6 +230,7 @@ void build_constraints(VerletState<Scalar>& state, const Model& model, const Pla
       state.limbs.tail_mass.push_back(limb_masses[b].tail);
       state.limbs.radius.push_back(body.shape.radius);
       state.limbs.shape.push_back(body.shape.type);
+      state.limbs.sphere.push_back(body.shape.length > 0 ? 0 : 1);
     }
     // Joints that close loops inside the island come last.
     for (std::uint32_t b : island_bodies(island_index)) {
@@ -312,6 +316,10 @@ void add_plane_features(VerletState<Scalar>& state, const Model& model) {
         const bool disk = state.limbs.shape[limb] == ShapeType::cylinder;
         const double radius = state.limbs.radius[limb];
         const std::uint32_t head = state.limbs.head[limb], tail = state.limbs.tail[limb];
+        if (state.limbs.sphere[limb]) {  // one sphere about its centre
+          state.features.push_back({head, tail, radius, false, 0.0, limb, /*at_centre=*/true});
+          continue;
+        }
         state.features.push_back({head, disk ? tail : head, radius, disk, 0.0, limb});
         state.features.push_back({tail, disk ? head : tail, radius, disk, 0.0, limb});
       }
@@ -374,11 +382,25 @@ void build_joint_rows(VerletState<Scalar>& state, const Model& model, const Plan
 // The passes in order (kernel/PIPELINE.md lists them): check, plan the particles, fill the state,
 // then number, colour and prepare what the step needs.
 template <typename Scalar>
-VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
-  validate(model);
+VerletState<Scalar> compile(const Model& input, const VerletOptions& options) {
+  validate(input);
   validate(options.relaxation);
   validate(options.verlet);
-  require_supported(model, Method::particles);
+  require_supported(input, Method::particles);
+  // Serial joints run as revolute joints through virtual links (serial_links.hpp), and anchors
+  // that may move without changing their joints move into their limbs' frame planes
+  // (frames::place_anchors). Either makes a copy of the Model; neither, none.
+  std::optional<SerialExpansion> expansion;
+  if (needs_serial_expansion(input)) expansion = expand_serial_joints(input);
+  CoordinateAxes coordinate_axes;  // motors' axes (Model::actuators)
+  if (!input.actuators.empty()) coordinate_axes = expansion ? CoordinateAxes::of(*expansion) : CoordinateAxes::of(input);
+  std::optional<Model> placed;
+  if (frames::anchors_to_place(expansion ? expansion->model : input)) {
+    placed = expansion ? std::move(expansion->model) : input;
+    frames::place_anchors(*placed);
+  }
+  const Model& model = placed ? *placed : expansion ? expansion->model : input;
+  if (expansion) validate(model), require_supported(model, Method::particles);
   require_joint_controls(model, {true, true, true}, "verlet");
 
   Plan plan;
@@ -393,6 +415,7 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options) {
   state.settings = model.settings;
   state.gravity = model.settings.gravity.cast<Scalar>();
   state.previous_time_step = model.settings.time_step;
+  state.coordinate_axes = std::move(coordinate_axes);
   place_particles(state, model, plan);
   build_constraints(state, model, plan);
   record_particle_origins(state, model, plan);

@@ -48,11 +48,93 @@ Eigen::Matrix3d particle_frame(const Body& body, const Vector3& direction) {
   return frame;
 }
 
+// A body's anchors off its axis, in joint order, must lie in the plane of the first: `normal`,
+// set from it (⟂ the axis, body frame).
+struct AnchorPlane {
+  std::optional<Vector3> normal;
+  // Whether `anchor` (body frame) fits, setting the plane from it when it is the first.
+  bool fits(const Body& body, const Vector3& anchor) {
+    const Vector3 r = radial(anchor);
+    if (anchor_end(body, anchor) || r.norm() <= 1e-9 * std::max(1.0, axis_length(body))) return true;
+    if (!normal) {
+      normal = Vector3::UnitZ().cross(r).normalized();
+      return true;
+    }
+    return std::abs(normal->dot(r)) <= 1e-9 * std::max(1.0, r.norm());
+  }
+};
+
+// Each fixed joint's anchors at its inboard limb's centre (the world's point for a weld to it).
+bool weld_at_inboard_centres(Model& model) {
+  bool moved = false;
+  for (Joint& joint : model.joints) {
+    if (joint.type != JointType::fixed || joint.inboard == kWorld || joint.inboard_anchor.isZero(0)) continue;
+    const Body& inboard = model.bodies[static_cast<std::size_t>(joint.inboard)];
+    const Body& outboard = model.bodies[static_cast<std::size_t>(joint.outboard)];
+    joint.inboard_anchor.setZero();
+    joint.outboard_anchor = outboard.orientation().conjugate() * (inboard.position - outboard.position);
+    moved = true;
+  }
+  return moved;
+}
+
 }  // namespace
 
+bool anchors_to_place(const Model& model) {
+  std::vector<AnchorPlane> planes(model.bodies.size());
+  for (const Joint& joint : model.joints) {
+    if (joint.inboard != kWorld && !planes[static_cast<std::size_t>(joint.inboard)].fits(model.bodies[static_cast<std::size_t>(joint.inboard)], joint.inboard_anchor)) return true;
+    if (!planes[static_cast<std::size_t>(joint.outboard)].fits(model.bodies[static_cast<std::size_t>(joint.outboard)], joint.outboard_anchor)) return true;
+  }
+  return false;
+}
+
+bool place_anchors(Model& model) {
+  bool moved = weld_at_inboard_centres(model);
+  std::vector<AnchorPlane> planes(model.bodies.size());
+  const auto body = [&](int b) -> const Body& { return model.bodies[static_cast<std::size_t>(b)]; };
+  const auto anchor_of = [](const Joint& joint, int b) { return b == joint.inboard ? joint.inboard_anchor : joint.outboard_anchor; };
+  for (Joint& joint : model.joints) {
+    const int inboard = joint.inboard, outboard = joint.outboard;
+    AnchorPlane in = inboard == kWorld ? AnchorPlane{} : planes[static_cast<std::size_t>(inboard)];
+    AnchorPlane out = planes[static_cast<std::size_t>(outboard)];
+    const bool inboard_fits = inboard == kWorld || in.fits(body(inboard), joint.inboard_anchor);
+    const bool outboard_fits = out.fits(body(outboard), joint.outboard_anchor);
+    if (inboard_fits && outboard_fits) {
+      if (inboard != kWorld) planes[static_cast<std::size_t>(inboard)] = in;
+      planes[static_cast<std::size_t>(outboard)] = out;
+      continue;
+    }
+    if (joint.type != JointType::revolute || (!inboard_fits && !outboard_fits)) continue;  // plan() refuses
+    // Slide the anchor along the hinge by t into the plane of the side that does not fit; the
+    // other side takes it if it still fits there.
+    const int side = inboard_fits ? outboard : inboard, other = inboard_fits ? inboard : outboard;
+    const Body& b = body(side);
+    const Vector3 local = anchor_of(joint, side), normal = *planes[static_cast<std::size_t>(side)].normal;
+    const double along = normal.dot(b.orientation().conjugate() * joint.axis);
+    if (std::abs(along) < 1e-6) continue;  // the hinge runs in the plane: plan() refuses
+    const Vector3 world = b.to_world(local) - (normal.dot(radial(local)) / along) * joint.axis;
+    Joint slid = joint;
+    slid.outboard_anchor = body(outboard).orientation().conjugate() * (world - body(outboard).position);
+    slid.inboard_anchor = inboard == kWorld ? world : Vector3(body(inboard).orientation().conjugate() * (world - body(inboard).position));
+    AnchorPlane other_plane = other == kWorld ? AnchorPlane{} : planes[static_cast<std::size_t>(other)];
+    AnchorPlane side_plane = planes[static_cast<std::size_t>(side)];
+    if (!side_plane.fits(b, anchor_of(slid, side))) continue;
+    if (other != kWorld && !other_plane.fits(body(other), anchor_of(slid, other))) continue;
+    joint = slid, moved = true;
+    planes[static_cast<std::size_t>(side)] = side_plane;
+    if (other != kWorld) planes[static_cast<std::size_t>(other)] = other_plane;
+  }
+  return moved;
+}
+
+double axis_length(const Body& body) {
+  return body.shape.length > 0 ? body.shape.length : std::sqrt(2.0) * body.shape.radius;
+}
+
 std::optional<End> anchor_end(const Body& body, const Vector3& anchor) {
-  const double half = 0.5 * body.shape.length;
-  const double tolerance = 1e-9 * std::max(1.0, body.shape.length);
+  const double half = 0.5 * axis_length(body);
+  const double tolerance = 1e-9 * std::max(1.0, axis_length(body));
   if ((anchor - Vector3(0, 0, half)).norm() <= tolerance) return End::head;
   if ((anchor - Vector3(0, 0, -half)).norm() <= tolerance) return End::tail;
   return std::nullopt;
@@ -83,7 +165,7 @@ Plan plan(const Model& model, bool shared_particles, std::vector<std::array<doub
       if (needs_frame) result.framed[b] = true;
       const bool at_end = anchor_end(model.bodies[b], anchor).has_value();
       const Vector3 off_axis = radial(anchor);
-      if (!at_end && off_axis.norm() > 1e-9 * std::max(1.0, model.bodies[b].shape.length)) {
+      if (!at_end && off_axis.norm() > 1e-9 * std::max(1.0, axis_length(model.bodies[b]))) {
         result.framed[b] = true;
         if (!has_radial[b]) {
           has_radial[b] = true, radial_joint[b] = k;
@@ -125,7 +207,7 @@ Plan plan(const Model& model, bool shared_particles, std::vector<std::array<doub
     }
     result.frame_mass[b] = m;
     const double axial_inertia = body_mass_properties(body).inertia(2, 2);
-    result.spacing[b] = std::max(std::sqrt(axial_inertia / (2 * m)), kSmallestSpacing * body.shape.length);
+    result.spacing[b] = std::max(std::sqrt(axial_inertia / (2 * m)), kSmallestSpacing * axis_length(body));
   }
   return result;
 }
@@ -184,7 +266,7 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
   // The anchor as affine coefficients of head, tail, F⁺, F⁻ (the frame's plane through the axis).
   const auto anchor_coefficients = [&](std::size_t b, const Vector3& anchor) {
     const Body& body = model.bodies[b];
-    const double along = anchor.z() / body.shape.length;
+    const double along = anchor.z() / axis_length(body);
     std::array<double, 4> c{0.5 + along, 0.5 - along, 0, 0};
     if (plan.framed[b]) {
       const double off = radial(anchor).dot(plan.direction[b]) / (2 * plan.spacing[b]);
@@ -216,9 +298,9 @@ JointRowSet build_rows(const Model& model, const Plan& plan, const std::function
       }
       const auto c = anchor_coefficients(static_cast<std::size_t>(joint.outboard), joint.outboard_anchor);
       for (std::size_t i = 0; i < 4; ++i) row.particle[5 + i] = b.particles[i], row.direction[5 + i] = -c[i];
-      const double outboard_length = model.bodies[static_cast<std::size_t>(joint.outboard)].shape.length;
+      const double outboard_length = axis_length(model.bodies[static_cast<std::size_t>(joint.outboard)]);
       row.reference = joint.inboard == kWorld ? outboard_length
-                                              : 0.5 * (outboard_length + model.bodies[static_cast<std::size_t>(joint.inboard)].shape.length);
+                                              : 0.5 * (outboard_length + axis_length(model.bodies[static_cast<std::size_t>(joint.inboard)]));
       set.rows.push_back(row);
     }
     const Body& outboard = model.bodies[static_cast<std::size_t>(joint.outboard)];

@@ -13,9 +13,25 @@
 
 namespace limber::frames {
 
+/// The length of a limb's particle axis, head to tail, m: its shape's, or for a sphere (a capsule
+/// of length 0, which has no axis) √2 × its radius along its body z. Two end particles of m/2
+/// there give a sphere's transverse inertia 5/4 of a solid sphere's (2/5 m r²); with a centre
+/// particle (limb_masses "inertia"), exactly it.
+double axis_length(const Body& body);
+
 /// Which axis end point an anchor is (the particle method's head and tail particles), if any.
 enum class End : std::uint8_t { head, tail };
 std::optional<End> anchor_end(const Body& body, const Vector3& anchor);
+
+/// Moves the joint anchors that the particle method may place elsewhere without changing the
+/// joint, so that each limb's off-axis anchors lie in one plane through its axis (its frame's,
+/// which plan() requires): a fixed joint's to its inboard limb's centre (any common point welds
+/// the same two bodies), and a revolute joint's along its hinge axis into the plane its limb's
+/// first off-axis anchor set. Returns whether it moved any; leaves for plan() to refuse what no
+/// such move fits. Exact: every joint holds the same relative motion as before.
+bool place_anchors(Model& model);
+/// Whether place_anchors would move anything (some limb's off-axis anchors are not in one plane).
+bool anchors_to_place(const Model& model);
 
 /// What compile needs to know before it places particles.
 struct Plan {

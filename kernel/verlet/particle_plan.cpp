@@ -41,13 +41,13 @@ LimbParticleMasses inertia_particle_masses(const Model& model, std::size_t index
   message << "bodies[" << index << "] '" << body.name << "': limb_masses \"inertia\" needs ";
   const MassProperties properties = body_mass_properties(body);
   const Vector3& centre_of_mass = properties.centre_of_mass;
-  if (centre_of_mass.head<2>().norm() > 1e-9 * body.shape.length) {
+  if (centre_of_mass.head<2>().norm() > 1e-9 * frames::axis_length(body)) {
     message << "the centre of mass on the limb's axis (body-frame x = y = 0), got [" << format_number(centre_of_mass.x())
             << ", " << format_number(centre_of_mass.y()) << ", " << format_number(centre_of_mass.z())
             << "] m; move the point masses onto the axis or use limb_masses \"ends\"";
     throw ModelError(message.str());
   }
-  const double mass = body.mass, h = 0.5 * body.shape.length, c = centre_of_mass.z();
+  const double mass = body.mass, h = 0.5 * frames::axis_length(body), c = centre_of_mass.z();
   const double transverse_inertia = 0.5 * (properties.inertia(0, 0) + properties.inertia(1, 1));
   const double second_moment = transverse_inertia + mass * c * c;
   LimbParticleMasses masses;
@@ -88,15 +88,15 @@ LimbParticleMasses lump_particle_masses(const Model& model, std::size_t index) {
     throw ModelError(message.str());
   };
   if (body.point_masses.empty()) refuse(0, "needs point_masses on every body; this one has a uniform density");
-  const double half = 0.5 * body.shape.length, tolerance = 1e-9 * body.shape.length;
+  const double length = frames::axis_length(body), half = 0.5 * length, tolerance = 1e-9 * length;
   LimbParticleMasses masses;
   for (std::size_t k = 0; k < body.point_masses.size(); ++k) {
     const PointMass& lump = body.point_masses[k];
     if (lump.position.head<2>().norm() > tolerance) refuse(k, "needs every point mass on the limb's axis (x = y = 0)");
     if (std::abs(lump.position.z()) > half + tolerance) refuse(k, "needs every point mass between the limb's ends (|z| <= length/2)");
     const double z = std::clamp(lump.position.z(), -half, half);
-    masses.head += lump.mass * (z + half) / body.shape.length;
-    masses.tail += lump.mass * (half - z) / body.shape.length;
+    masses.head += lump.mass * (z + half) / length;
+    masses.tail += lump.mass * (half - z) / length;
   }
   return masses;
 }
@@ -165,9 +165,10 @@ void place_slots(const Model& model, Plan& plan) {
   plan.slot_pinned.assign(slot_count, false);
   for (std::size_t b = 0; b < model.bodies.size(); ++b) {
     const Body& body = model.bodies[b];
-    const Vector3 head_local(0, 0, 0.5 * body.shape.length);
-    slot_position[plan.head_slot(b)] = body.head();
-    slot_position[plan.tail_slot(b)] = body.tail();
+    const double half = 0.5 * frames::axis_length(body);  // Body::head() and tail(), of a sphere too
+    const Vector3 head_local(0, 0, half);
+    slot_position[plan.head_slot(b)] = body.position + half * body.axis;
+    slot_position[plan.tail_slot(b)] = body.position - half * body.axis;
     slot_velocity[plan.head_slot(b)] = body.velocity_at(head_local);
     slot_velocity[plan.tail_slot(b)] = body.velocity_at(-head_local);
     slot_mass[plan.head_slot(b)] = plan.limb_masses[b].head;

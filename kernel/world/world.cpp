@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "limber/kernel/model/capabilities.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/methods/method_contract.hpp"
 #include "limber/kernel/metrics/observers.hpp"
@@ -95,6 +96,11 @@ Observation World::observe() const {
 
 void World::segments(std::vector<LimbSegment>& out) const {
   std::visit([&](const auto& state) { limb_segments(state, model_, out); }, internals_->state);
+  // A method's virtual links (its serial joints', scene/serial_links.hpp) sit between the
+  // Model's bodies and the balls: not the Model's, so not shown.
+  const std::size_t bodies = model_.bodies.size(), shown = bodies + model_.balls.size();
+  const std::size_t links = out.size() > shown ? out.size() - shown : 0;
+  if (links > 0) out.erase(out.begin() + static_cast<std::ptrdiff_t>(bodies), out.begin() + static_cast<std::ptrdiff_t>(bodies + links));
 }
 
 // --- Handles
@@ -536,6 +542,8 @@ BallMotion World::ball(BallId ball) const {
 void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_body_of_new,
                       const std::vector<std::uint32_t>& joint_handles, std::optional<std::vector<std::int64_t>> old_ball_of_new) {
   Survivors survivors{old_body_of_new, {}};
+  // The maximal-coordinate methods run serial joints through virtual links: those carry too.
+  if (options_.method != Method::featherstone) survivors.bodies = with_virtual_links(model_, edited, std::move(survivors.bodies));
   if (old_ball_of_new) {
     survivors.balls = std::move(*old_ball_of_new);
   } else {

@@ -129,10 +129,9 @@ struct RunRecord {
   StepProfile profile;                 ///< summed over the run's steps (zeros without --profile)
 };
 
-// The deepest overlap of `state`'s limbs now, measured alike for every method (observers.hpp).
-template <typename State>
-double penetration_now(const State& state, const Model& model, LimbCollisions& collisions, std::vector<LimbSegment>& segments) {
-  limb_segments(state, model, segments);
+// The deepest overlap of the world's limbs now, measured alike for every method (observers.hpp).
+double penetration_now(const World& world, const Model& model, LimbCollisions& collisions, std::vector<LimbSegment>& segments) {
+  world.segments(segments);
   const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
   return std::max(between, ground_penetration(model, segments));
 }
@@ -145,7 +144,7 @@ RunRecord run_steps(World& world, const State& state, long steps, std::ostream* 
   RunRecord record;
   LimbCollisions collisions(model);
   std::vector<LimbSegment> segments;
-  record.deepest_penetration = penetration_now(state, model, collisions, segments);
+  record.deepest_penetration = penetration_now(world, model, collisions, segments);
   record.start = record.end = observe(state);
   record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
   record.largest_limit_violation = record.start.joints.limit_violation;
@@ -163,7 +162,7 @@ RunRecord run_steps(World& world, const State& state, long steps, std::ostream* 
     record.end = observe(state);
     record.contacts = report.contacts;
     record.most_contacts = std::max(record.most_contacts, report.contacts);
-    record.deepest_penetration = std::max(record.deepest_penetration, penetration_now(state, model, collisions, segments));
+    record.deepest_penetration = std::max(record.deepest_penetration, penetration_now(world, model, collisions, segments));
     knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
     record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
     record.largest_stretch = std::max(record.largest_stretch, record.end.max_link_stretch);

@@ -1,0 +1,94 @@
+// Serial joints for the maximal-coordinate methods: each axis a revolute or prismatic joint, with
+// a light virtual link between consecutive axes.
+//
+// Featherstone runs a serial joint exactly, its k − 1 joint frames massless (featherstone/README.md).
+// A particle or rigid-body method needs a body between two axes, so the joint becomes a chain
+//   inboard —axis 0→ link 0 —axis 1→ link 1 … link k−2 —axis k−1→ outboard,
+// each link a cylinder that collides with nothing, of mass kVirtualLinkMassShare × the outboard's,
+// taken out of the outboard (its mass properties scaled) so the total mass is the Model's. The
+// error this leaves is O(share): tests/model/serial_links_test.cpp measures it against Featherstone.
+//
+// Armature (MuJoCo's reflected rotor inertia, a term on the mass matrix's diagonal) becomes a
+// rotor carried by the body after the hinge: a solid disc's inertia, a about the axis and a/2
+// across it (a disc, so the body's tensor stays physical). Its kinetic energy ½a(ω·s)² is
+// MuJoCo's ½a·q̇² plus cross terms with the axes before it: an approximation, measured in the
+// same test. A slide's armature has no such form and stays on the joint, for the method to refuse.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "limber/kernel/model/model.hpp"
+
+namespace limber {
+
+/// Each virtual link's mass as a share of its serial joint's outboard body's mass.
+inline constexpr double kVirtualLinkMassShare = 1e-2;
+
+/// A Model with its serial joints expanded (`model`), and where each axis went.
+///
+/// The Model's bodies and joints keep their indices: joint j's axis 0 is joint j of the
+/// expansion (revolute or prismatic); its axes 1 … k−1 and its k − 1 links are appended after
+/// the Model's joints and bodies, joint by joint. Names: "<joint>/<axis name>" for the joints
+/// of axes 1…, "<joint>/link<i>" for the links; axis 0 keeps the joint's name. Each actuator
+/// moves to its axis's joint.
+struct SerialExpansion {
+  Model model;
+  /// Per Model joint: the expansion's joint of its axis 1 (axes 1… are consecutive); unused
+  /// for a joint that is not serial.
+  std::vector<std::uint32_t> first_added_joint;
+  std::size_t model_bodies = 0;  ///< the Model's body count: the links are bodies model_bodies…
+
+  /// The expansion's joint of Model joint `joint`'s coordinate `axis` (0 for a joint that is not serial).
+  std::uint32_t joint_of_axis(std::size_t joint, int axis) const {
+    return axis == 0 ? static_cast<std::uint32_t>(joint) : first_added_joint[joint] + static_cast<std::uint32_t>(axis - 1);
+  }
+};
+
+/// Whether expand_serial_joints would change `model`: it has a serial joint or hinge armature.
+bool needs_serial_expansion(const Model& model);
+
+/// `model` with every serial joint expanded into revolute and prismatic joints through virtual
+/// links of `link_mass_share` of the outboard's mass each (in (0, 1/6)), and every hinge's
+/// armature turned into a rotor on the body after it (above). A Model without serial joints or
+/// hinge armature comes back unchanged.
+SerialExpansion expand_serial_joints(const Model& model, double link_mass_share = kVirtualLinkMassShare);
+
+/// Extends `old_body_of_new` (Survivors::bodies: one entry per body of `fresh`) over the virtual
+/// links of `fresh`'s expansion, for a recompile: each link continues the one at the same place
+/// of the old Model's serial joint of the same name and axis count, else is new (−1).
+std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model& fresh, std::vector<std::int64_t> old_body_of_new);
+
+/// Where a motor's joint force acts in an expansion: each joint coordinate's joint of the
+/// expansion, its bodies and its axis in the outboard body's frame. A maximal-coordinate state
+/// keeps one (apply_coordinate_force).
+struct CoordinateAxes {
+  struct Axis {
+    int inboard = kWorld, outboard = 0;            ///< the expansion's body indices
+    Vector3 local_axis = Vector3::UnitX();         ///< unit, the outboard body's frame
+    bool slide = false;                            ///< a prismatic joint's: a force, not a torque
+  };
+  std::vector<std::uint32_t> first_added_joint;   ///< SerialExpansion::first_added_joint
+  std::vector<Axis> joints;                       ///< per joint of the expansion
+
+  /// The axes of `expansion`'s joints, for the coordinates of the Model it expanded.
+  static CoordinateAxes of(const SerialExpansion& expansion);
+  /// The same for a Model that needed no expansion.
+  static CoordinateAxes of(const Model& model);
+};
+
+/// Applies the joint force `amount` (N·m on a hinge, N on a slide) on Model joint `joint`'s
+/// coordinate `axis` to a maximal-coordinate state: the pair ±amount·a of loads on the joint's
+/// two bodies, a its axis as the outboard body holds it now. `State` has body_pose and
+/// apply_body_load (kernel/methods/method_contract.hpp).
+template <typename State>
+void apply_coordinate_force(State& state, const CoordinateAxes& axes, std::size_t joint, int axis, double amount) {
+  const std::uint32_t j = axis == 0 ? static_cast<std::uint32_t>(joint) : axes.first_added_joint[joint] + static_cast<std::uint32_t>(axis - 1);
+  const CoordinateAxes::Axis& at = axes.joints[j];
+  const Vector3 along = amount * (body_pose(state, static_cast<std::size_t>(at.outboard)).orientation * at.local_axis);
+  const Vector3 zero = Vector3::Zero();
+  apply_body_load(state, static_cast<std::size_t>(at.outboard), at.slide ? along : zero, at.slide ? zero : along);
+  if (at.inboard != kWorld) apply_body_load(state, static_cast<std::size_t>(at.inboard), at.slide ? Vector3(-along) : zero, at.slide ? zero : Vector3(-along));
+}
+
+}  // namespace limber

@@ -1,0 +1,193 @@
+// Serial joints under the maximal-coordinate methods: revolute joints through virtual links
+// (kernel/scene/serial_links.hpp). The expansion keeps the Model's indices, mass and joint points;
+// a motion under Lagrange and under the particles approaches Featherstone's exact one as the
+// links' mass share shrinks (first order); limits hold on every axis; motors act on the axis
+// they name; bodies a serial joint joins do not collide.
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/geometry/limb_collisions.hpp"
+#include "limber/kernel/lagrange/compile.hpp"
+#include "limber/kernel/lagrange/step.hpp"
+#include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
+#include "limber/kernel/world/world.hpp"
+#include "tests/support/models.hpp"
+
+namespace limber {
+namespace {
+
+// A 1 m rod hanging from two hinges in a row at its top: about y through the origin, then about
+// z through a point 0.1 m down the rod (skew axes, as MuJoCo's humanoid's ankles), swinging.
+Model rod_on_two_skew_hinges() {
+  Model model = testing::rod_held_at_head(JointType::serial);
+  Joint& joint = model.joints[0];
+  SerialAxis about_y, about_z;
+  about_y.name = "about_y", about_y.axis = Eigen::Vector3d::UnitY();
+  about_z.name = "about_z", about_z.axis = Eigen::Vector3d::UnitZ(), about_z.point = Eigen::Vector3d(0.1, 0, 0);
+  joint.serial_axes = {about_y, about_z};
+  joint.outboard_anchor = Eigen::Vector3d(0, 0, 0.4);  // the last axis's point on the rod
+  model.bodies[0].angular_velocity = Eigen::Vector3d(0, 1, 0);
+  model.bodies[0].linear_velocity = Eigen::Vector3d(0, 1, 0).cross(model.bodies[0].position);
+  model.settings.gravity = Eigen::Vector3d(0, 0, -9.81);
+  return model;
+}
+
+// The rod's tip (its tail) after `steps` steps of 1 ms, by a method's World.
+Eigen::Vector3d tip_after(const Model& model, Method method, int steps, std::vector<double> controls = {}) {
+  WorldOptions options;
+  options.method = method;
+  options.lagrange.integrator = Integrator::rk4;
+  options.featherstone.integrator = Integrator::rk4;
+  options.particles.relaxation.substeps = 4;
+  options.particles.verlet.joint_solve = JointSolve::tree;
+  options.particles.verlet.limb_masses = LimbMasses::inertia;  // the rod's inertia exact, as the rigid methods' is
+  options.particles.relaxation.projection = ProjectionRule::rattle;
+  World world(model, options);
+  if (!controls.empty()) world.set_controls(controls);
+  for (int n = 0; n < steps; ++n) world.step(1e-3);
+  const Pose pose = world.pose(world.body("rod"));
+  return pose.position + pose.orientation * Eigen::Vector3d(0, 0, -0.5);
+}
+
+TEST(SerialLinks, TheExpansionKeepsIndicesMassAndJointPoints) {
+  const Model model = rod_on_two_skew_hinges();
+  const SerialExpansion expansion = expand_serial_joints(model);
+  const Model& out = expansion.model;
+  ASSERT_EQ(out.bodies.size(), 2u);
+  ASSERT_EQ(out.joints.size(), 2u);
+  EXPECT_EQ(out.bodies[0].name, "rod");
+  EXPECT_EQ(out.joints[0].type, JointType::revolute);
+  EXPECT_EQ(out.joints[1].name, "hinge/about_z");
+  EXPECT_EQ(expansion.joint_of_axis(0, 0), 0u);
+  EXPECT_EQ(expansion.joint_of_axis(0, 1), 1u);
+  EXPECT_NEAR(out.body_mass(), model.body_mass(), 1e-15);
+  EXPECT_FALSE(filters_collide(out.bodies[1].collision, CollisionFilter{}));
+  // Each joint's two anchors are one world point, on its axis.
+  for (const Joint& joint : out.joints) {
+    const Body& b = out.bodies[static_cast<std::size_t>(joint.outboard)];
+    const Eigen::Vector3d inboard = joint.inboard == kWorld ? joint.inboard_anchor : out.bodies[static_cast<std::size_t>(joint.inboard)].to_world(joint.inboard_anchor);
+    EXPECT_LT((inboard - b.to_world(joint.outboard_anchor)).norm(), 1e-15) << joint.name;
+  }
+  EXPECT_LT((out.bodies[0].to_world(out.joints[1].outboard_anchor) - Eigen::Vector3d(0.1, 0, 0)).norm(), 1e-15);
+  validate(out);
+}
+
+// Against Featherstone's exact motion, 0.5 s of a swing about both axes under gravity: the gap
+// shrinks with the links' mass share, at first order (ten times less mass, about ten times less
+// gap), so it is the virtual links' mass and nothing else.
+TEST(SerialLinks, LagrangeApproachesFeatherstoneAsTheLinksLighten) {
+  const Model model = rod_on_two_skew_hinges();
+  const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 500);
+  double gaps[2];
+  const double shares[2] = {1e-2, 1e-3};
+  for (int k = 0; k < 2; ++k) {
+    const Model expanded = expand_serial_joints(model, shares[k]).model;
+    gaps[k] = (tip_after(expanded, Method::lagrange, 500) - exact).norm();
+    std::printf("share %g: tip %.3g m from Featherstone's\n", shares[k], gaps[k]);
+  }
+  EXPECT_GT(gaps[0], 5 * gaps[1]);
+  EXPECT_LT(gaps[1], 1e-3);
+  // The default share through the World, serial joint and all, is the first of these.
+  EXPECT_NEAR((tip_after(model, Method::lagrange, 500) - exact).norm(), gaps[0], 1e-12);
+}
+
+TEST(SerialLinks, ParticlesFollowFeatherstone) {
+  const Model model = rod_on_two_skew_hinges();
+  const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 500);
+  const double gap = (tip_after(model, Method::particles, 500) - exact).norm();
+  std::printf("particles: tip %.3g m from Featherstone's (the rod's tip moved %.3g m)\n", gap,
+              (exact - Eigen::Vector3d(1, 0, 0)).norm());
+  EXPECT_LT(gap, 0.05 * (exact - Eigen::Vector3d(1, 0, 0)).norm());
+}
+
+// A motor on the second axis turns the rod about z: the same way, and about as far, as under
+// Featherstone (no gravity, so only the motor moves it).
+TEST(SerialLinks, AMotorActsOnTheAxisItNames) {
+  Model model = rod_on_two_skew_hinges();
+  model.settings.gravity.setZero();
+  model.bodies[0].angular_velocity.setZero(), model.bodies[0].linear_velocity.setZero();
+  model.actuators.push_back({.name = "turn", .joint = 0, .axis = 1, .gear = 0.5});
+  const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 300, {1.0});
+  ASSERT_GT(exact.y(), 0.01);  // turned about +z: the tip, at +x, moves to +y
+  for (Method method : {Method::lagrange, Method::particles}) {
+    const Eigen::Vector3d tip = tip_after(model, method, 300, {1.0});
+    EXPECT_LT((tip - exact).norm(), 0.05 * exact.y()) << method_name(method);
+  }
+}
+
+// Each axis's range holds under every method: a rod jointed by the two hinges to a heavier free
+// body, swung hard about both axes without gravity, stays within both ranges (the angles of its
+// direction relative to the other body). The particles solve the joints as trees (a light link
+// between heavy bodies is what the trees solve exactly; relaxation sweeps converge slowly there).
+TEST(SerialLinks, EveryAxisHoldsItsRange) {
+  Model model = rod_on_two_skew_hinges();
+  model.joints[0].serial_axes[0].range = Range{-0.3, 0.3};
+  model.joints[0].serial_axes[1].range = Range{-0.2, 0.2};
+  Body upper = model.bodies[0];
+  upper.name = "upper", upper.position = Eigen::Vector3d(-0.5, 0, 0), upper.mass = 2;
+  upper.angular_velocity.setZero(), upper.linear_velocity.setZero();
+  model.bodies.insert(model.bodies.begin(), upper);  // the root first (Featherstone's tree)
+  Joint& joint = model.joints[0];
+  joint.inboard = 0, joint.outboard = 1, joint.inboard_anchor = Eigen::Vector3d(0, 0, -0.5);
+  model.bodies[1].angular_velocity = Eigen::Vector3d(0, 4, 3);
+  model.bodies[1].linear_velocity = model.bodies[1].angular_velocity.cross(model.bodies[1].position);
+  model.settings.gravity.setZero();
+  const Eigen::Quaterniond upper_rest = model.bodies[0].orientation(), rod_rest = model.bodies[1].orientation();
+  for (Method method : {Method::featherstone, Method::lagrange, Method::particles}) {
+    WorldOptions options;
+    options.method = method;
+    options.particles.verlet.joint_solve = JointSolve::tree;
+    options.particles.relaxation.iterations = 4;
+    World world(model, options);
+    double pitch = 0, yaw = 0;
+    for (int n = 0; n < 1000; ++n) {
+      world.step(1e-3);
+      const Eigen::Quaterniond turned = (world.pose(world.body("upper")).orientation * upper_rest.conjugate()).conjugate() *
+                                        (world.pose(world.body("rod")).orientation * rod_rest.conjugate());
+      const Eigen::Vector3d d = turned * Eigen::Vector3d::UnitX();  // to the rod's tip, +x at rest
+      pitch = std::max(pitch, std::abs(std::atan2(-d.z(), d.x())));  // the angle about y: +x turns to −z
+      yaw = std::max(yaw, std::abs(std::atan2(d.y(), std::hypot(d.x(), d.z()))));  // then about the carried z
+    }
+    EXPECT_LT(pitch, 0.3 + 1e-3) << method_name(method);
+    EXPECT_GT(pitch, 0.3 - 1e-3) << method_name(method) << ": the swing reached the pitch range";
+    EXPECT_LT(yaw, 0.2 + 1e-3) << method_name(method);
+    EXPECT_GT(yaw, 0.2 - 1e-3) << method_name(method) << ": the swing reached the yaw range";
+  }
+}
+
+// Bodies a serial joint joins overlap at the joint by design (a hip's pelvis and thigh): they do
+// not collide, through the virtual links between them, while a body jointed to neither does.
+TEST(SerialLinks, TheBodiesItJoinsDoNotCollide) {
+  Model model = rod_on_two_skew_hinges();
+  Body upper = model.bodies[0];
+  upper.name = "upper", upper.position = Eigen::Vector3d(0.5, 5, 0);  // apart at rest: no rest overlap
+  model.bodies.push_back(upper);
+  Body other = upper;
+  other.name = "other", other.position = Eigen::Vector3d(0.5, -5, 0);
+  model.bodies.push_back(other);
+  model.joints[0].inboard = 1, model.joints[0].inboard_anchor = Eigen::Vector3d(0, 0, 0.5);
+  const Model expanded = expand_serial_joints(model).model;
+  LimbCollisions collisions(expanded);
+  std::vector<LimbSegment> segments;
+  for (const Body& body : expanded.bodies) segments.push_back({body.head(), body.tail(), body.shape.radius});
+  // "upper" and "other" now cross the rod, upright through (0.5, 0, 0) and (0.7, 0, 0).
+  segments[1].head = Eigen::Vector3d(0.5, 0, 0.5), segments[1].tail = Eigen::Vector3d(0.5, 0, -0.5);
+  segments[2].head = Eigen::Vector3d(0.7, 0, 0.5), segments[2].tail = Eigen::Vector3d(0.7, 0, -0.5);
+  std::vector<std::uint8_t> awake(segments.size(), 1);
+  std::vector<LimbContact> contacts;
+  collisions.find(segments, awake, 0.01, contacts);
+  bool rod_other = false;
+  for (const LimbContact& c : contacts) {
+    EXPECT_FALSE(c.first == 0 && c.second == 1) << "the rod touched the body it hangs from";
+    rod_other |= (c.first == 0 && c.second == 2);
+  }
+  EXPECT_TRUE(rod_other);
+}
+
+}  // namespace
+}  // namespace limber
