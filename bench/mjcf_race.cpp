@@ -8,14 +8,18 @@
 // MODEL defaults to MuJoCo's humanoid.xml and 22_humanoids.xml (libmujoco-samples). Each round
 // runs every engine from the file's initial state for S simulated seconds (default 5), one engine
 // after the other, so a busy machine slows them alike; a row gives the median over R rounds
-// (default 3) of the stepping thread's CPU time. The measures come from the first round:
+// (default 3) of the stepping thread's CPU time (of the wall time, for the particles on 2
+// threads, whose helper thread works too). limber runs with the import's settings
+// (scene.methods: the particles' joint trees, 2 substeps of 2 sweeps). The measures come from
+// the first round:
 // - joint gap: limber's observer (relative to the limbs' length); MuJoCo's joints are its
 //   coordinates, closed by construction;
 // - penetration: MuJoCo's deepest contact (−dist), limber's deepest overlap of its limbs with
 //   each other and the ground (the CLI's measure);
 // - energy: each engine's own, at the start and the end: MuJoCo's potential (gravity and joint
 //   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs).
-// Method M is featherstone (default) or any method that can run the model.
+// Method M is any method that can run the model (default: particles, on 1 and 2 threads, and
+// featherstone).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -80,9 +84,21 @@ Measures run_mujoco(const mjModel* model, mjData* data, long steps, bool measure
   return out;
 }
 
-Measures run_limber(const Scene& scene, Method method, long steps, bool measure) {
-  WorldOptions options;
-  options.method = method;
+// A limber method on `threads` threads (the particles' only).
+struct Runner {
+  Method method = Method::particles;
+  int threads = 1;
+};
+
+// The stepping thread's CPU time, s; the wall time when helper threads work too.
+double clock_seconds(int threads) {
+  if (threads == 1) return thread_seconds();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure) {
+  WorldOptions options = world_options(runner.method, scene.methods);
+  options.particles.threads = runner.threads;
   World world(scene.model, options);
   LimbCollisions collisions(scene.model);
   std::vector<LimbSegment> segments;
@@ -90,9 +106,9 @@ Measures run_limber(const Scene& scene, Method method, long steps, bool measure)
   if (measure) out.energy_start = world.observe().energy();
   double stepping = 0;
   for (long n = 0; n < steps; ++n) {
-    const double start = thread_seconds();
+    const double start = clock_seconds(runner.threads);
     if (world.step(scene.model.settings.time_step) != StepStatus::ok) throw std::runtime_error("limber: the step failed");
-    stepping += thread_seconds() - start;
+    stepping += clock_seconds(runner.threads) - start;
     if (!measure) continue;
     out.largest_gap = std::max(out.largest_gap, world.observe().max_joint_gap);
     world.segments(segments);
@@ -111,7 +127,7 @@ void print_row(const char* engine, double load, const std::vector<double>& times
               1e6 * per_humanoid_frame, first.largest_gap, first.deepest_penetration, first.energy_start, first.energy_end);
 }
 
-void race(const std::filesystem::path& file, double seconds, int rounds, const std::vector<Method>& methods) {
+void race(const std::filesystem::path& file, double seconds, int rounds, const std::vector<Runner>& methods) {
   char error[1000] = "";
   mjModel* model = mj_loadXML(file.c_str(), nullptr, error, sizeof error);
   if (!model) throw std::runtime_error(file.string() + ": mj_loadXML: " + error);
@@ -149,7 +165,8 @@ void race(const std::filesystem::path& file, double seconds, int rounds, const s
   std::printf("|---|---:|---:|---:|---:|---:|---|\n");
   print_row("MuJoCo 2.2.2 mj_step", mujoco_load, mujoco_times, mujoco_first, steps, dt, humanoids);
   for (std::size_t k = 0; k < methods.size(); ++k) {
-    const std::string name = "limber " + std::string(method_name(methods[k])) + ", 1 thread";
+    const std::string name = "limber " + std::string(method_name(methods[k].method)) + ", " + std::to_string(methods[k].threads) +
+                             (methods[k].threads == 1 ? " thread" : " threads");
     print_row(name.c_str(), limber_load, limber_times[k], limber_first[k], steps, dt, humanoids);
   }
   mj_deleteData(data);
@@ -162,7 +179,7 @@ void race(const std::filesystem::path& file, double seconds, int rounds, const s
 int main(int argc, char** argv) {
   using namespace limber;
   std::vector<std::filesystem::path> files;
-  std::vector<Method> methods;
+  std::vector<Runner> methods;
   double seconds = 5;
   int rounds = 3;
   try {
@@ -176,14 +193,14 @@ int main(int argc, char** argv) {
         const std::string name = argv[++i];
         bool known = false;
         for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
-          if (method_name(method) == name) methods.push_back(method), known = true;
+          if (method_name(method) == name) methods.push_back({method, 1}), known = true;
         }
         if (!known) throw std::invalid_argument("unknown method " + name + " (particles, springs, lagrange or featherstone)");
       } else {
         files.emplace_back(argument);
       }
     }
-    if (methods.empty()) methods.push_back(Method::featherstone);
+    if (methods.empty()) methods = {{Method::particles, 1}, {Method::particles, 2}, {Method::featherstone, 1}};
     if (files.empty()) files = {"/usr/share/mujoco/model/humanoid/humanoid.xml", "/usr/share/mujoco/model/humanoid/22_humanoids.xml"};
     for (const auto& file : files) race(file, seconds, rounds, methods);
   } catch (const std::exception& error) {
