@@ -182,14 +182,6 @@ std::vector<Ball> read_balls(const Object& root) {
   return balls;
 }
 
-/// A body as read, before its mass is settled: variants may still change radius and mass, and
-/// a density becomes a mass only afterwards.
-struct BodySpec {
-  Body body;
-  std::optional<double> density;  ///< set instead of body.mass when the mass comes from density
-  std::string density_path;       ///< where that density was given, for messages
-};
-
 /// Reads "mass" or "density" (exactly one, > 0) into `spec`; `object` is a body or an override.
 void read_mass(const Object& object, BodySpec& spec, bool required) {
   const bool has_mass = object.find("mass") != nullptr;
@@ -259,7 +251,9 @@ BodySpec read_body(const Object& object) {
   shape.allow_only({"type", "length", "radius"});
   body.shape.type = read_shape_type(shape.at("type"), shape.path("type"));
   body.shape.length = shape.number("length");
-  require_positive(body.shape.length, shape.path("length"));
+  // A capsule of length 0 is a sphere (model.hpp's Shape); its radius must then be > 0 (validate).
+  if (body.shape.type == ShapeType::capsule) require_non_negative(body.shape.length, shape.path("length"));
+  else require_positive(body.shape.length, shape.path("length"));
   body.shape.radius = shape.number("radius");
   require_non_negative(body.shape.radius, shape.path("radius"));
 
@@ -508,137 +502,10 @@ const Variant* select_variant(const Object& root,
   return options.variant ? find(*options.variant) : file_choice;
 }
 
-/// "head" | "tail" (the axis end points of `shape`) or a 3-vector; a world point when `shape`
-/// is null (inboard "world").
-Vector3 read_anchor(const Json& value, const std::string& path, const Shape* shape) {
-  if (value.is_string()) {
-    const std::string end = value.get<std::string>();
-    if (!shape) {
-      fail(path,
-           "must be a world point [x, y, z] when inboard is \"world\", got " + in_quotes(end));
-    }
-    if (end == "head") return {0, 0, 0.5 * shape->length};
-    if (end == "tail") return {0, 0, -0.5 * shape->length};
-    fail(path, "must be \"head\", \"tail\" or [x, y, z], got " + in_quotes(end));
-  }
-  return read_vector(value, path);
-}
-
-/// The index of the body that field `key` names, or kWorld for "world" where that is allowed.
-int read_body_name(const Object& object, const std::string& key, const std::unordered_map<std::string, int>& body_index,
-                   bool world_allowed) {
-  const std::string name = object.string(key);
-  if (name == "world") {
-    if (!world_allowed) fail(object.path(key), "must name a body, not \"world\"");
-    return kWorld;
-  }
-  const auto found = body_index.find(name);
-  if (found == body_index.end()) fail(object.path(key), "no body named " + in_quotes(name));
-  return found->second;
-}
-
-/// [min, max]: two finite numbers (the Model's validation checks their bounds).
-Range read_range(const Json& value, const std::string& path) {
-  if (!value.is_array() || value.size() != 2) fail(path, "must be [min, max], two numbers");
-  Range range{read_number(value[0], path + "[0]"), read_number(value[1], path + "[1]")};
-  if (range.min > range.max) fail(path, "min must be <= max, got [" + format_number(range.min) + ", " + format_number(range.max) + "]");
-  return range;
-}
-
-JointLimits read_limits(const Object& object) {
-  object.allow_only({"swing", "swing_axis", "twist", "range"});
-  JointLimits limits;
-  if (object.find("swing")) limits.swing = object.number("swing");
-  if (object.find("swing_axis")) limits.swing_axis = object.direction("swing_axis");
-  if (const Json* twist = object.find("twist")) limits.twist = read_range(*twist, object.path("twist"));
-  if (const Json* range = object.find("range")) limits.range = read_range(*range, object.path("range"));
-  return limits;
-}
-
-JointDrive read_drive(const Object& object) {
-  object.allow_only({"stiffness", "damping", "target", "target_velocity", "target_rotation", "target_angular_velocity"});
-  JointDrive drive;
-  object.optional("stiffness", drive.stiffness);
-  object.optional("damping", drive.damping);
-  object.optional("target", drive.target);
-  object.optional("target_velocity", drive.target_velocity);
-  object.optional("target_rotation", drive.target_rotation);
-  object.optional("target_angular_velocity", drive.target_angular_velocity);
-  return drive;
-}
-
-Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies,
-                 const std::unordered_map<std::string, int>& body_index) {
-  object.allow_only({"name", "type", "inboard", "outboard", "inboard_anchor", "outboard_anchor", "axis", "second_axis",
-                     "stiffness", "damping", "limits", "friction", "drive"});
-  Joint joint;
-  joint.name = object.string("name");
-  require_name(joint.name, object.path("name"), /*is_body=*/false);
-  const std::string type = object.string("type");
-  constexpr JointType kTypes[] = {JointType::spherical, JointType::revolute, JointType::prismatic, JointType::universal,
-                                  JointType::fixed};
-  const auto known = std::find_if(std::begin(kTypes), std::end(kTypes), [&](JointType t) { return joint_type_name(t) == type; });
-  if (known == std::end(kTypes)) {
-    fail(object.path("type"),
-         "must be \"spherical\", \"revolute\", \"prismatic\", \"universal\" or \"fixed\", got " + in_quotes(type));
-  }
-  joint.type = *known;
-  // Axes: required exactly where the type uses them, refused elsewhere (a stray axis is a mistake).
-  const bool uses_axis = joint.type != JointType::spherical && joint.type != JointType::fixed;
-  const bool uses_second_axis = joint.type == JointType::universal;
-  if (!uses_axis && object.find("axis")) fail(object.path("axis"), "is not used by a " + type + " joint");
-  if (!uses_second_axis && object.find("second_axis")) fail(object.path("second_axis"), "is used by universal joints only");
-  if (uses_axis) joint.axis = object.direction("axis");
-  if (uses_second_axis) joint.second_axis = object.direction("second_axis");
-
-  joint.inboard = read_body_name(object, "inboard", body_index, /*world_allowed=*/true);
-  joint.outboard = read_body_name(object, "outboard", body_index, /*world_allowed=*/false);
-  if (joint.inboard == joint.outboard) {
-    fail(object.path("outboard"),
-         "must differ from inboard, both are " + in_quotes(bodies[joint.outboard].body.name));
-  }
-
-  const Shape* inboard_shape =
-      joint.inboard == kWorld ? nullptr : &bodies[joint.inboard].body.shape;
-  joint.inboard_anchor =
-      read_anchor(object.at("inboard_anchor"), object.path("inboard_anchor"), inboard_shape);
-  joint.outboard_anchor = read_anchor(object.at("outboard_anchor"), object.path("outboard_anchor"),
-                                      &bodies[joint.outboard].body.shape);
-  if (object.find("stiffness")) {
-    joint.stiffness = object.number("stiffness");
-    require_positive(*joint.stiffness, object.path("stiffness"));
-  }
-  if (object.find("damping")) {
-    joint.damping = object.number("damping");
-    require_non_negative(*joint.damping, object.path("damping"));
-  }
-  if (const Json* limits = object.find("limits")) joint.limits = read_limits(Object(*limits, object.path("limits")));
-  object.optional("friction", joint.friction);
-  if (const Json* drive = object.find("drive")) joint.drive = read_drive(Object(*drive, object.path("drive")));
-  return joint;
-}
-
-Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index) {
-  object.allow_only({"name", "first", "second", "first_axis", "second_axis", "ratio"});
-  Gear gear;
-  gear.name = object.string("name");
-  require_name(gear.name, object.path("name"), /*is_body=*/false);
-  gear.first = read_body_name(object, "first", body_index, /*world_allowed=*/false);
-  gear.second = read_body_name(object, "second", body_index, /*world_allowed=*/false);
-  if (gear.first == gear.second) {
-    fail(object.path("second"), "must differ from first, both are " + in_quotes(bodies[gear.first].body.name));
-  }
-  gear.first_axis = object.direction("first_axis");
-  gear.second_axis = object.direction("second_axis");
-  gear.ratio = object.number("ratio");
-  if (gear.ratio == 0) fail(object.path("ratio"), "must not be 0 (the second gear would be held still)");
-  return gear;
-}
-
 Scene read_scene(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball", "balls",
-                   "bodies", "joints", "gears", "chain", "tree", "grid", "copies", "variants", "variant", "colliders"});
+                   "bodies", "joints", "gears", "actuators", "chain", "tree", "grid", "copies", "variants", "variant", "colliders"});
   const int version = root.integer("limber_scene");
   if (version != 1) {
     fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
@@ -736,6 +603,10 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
       model.gears.push_back(read_gear(Object((*gears_json)[i], indexed("gears", i)), bodies, body_index));
     }
     require_unique_names(model.gears, [](const Gear& gear) -> std::string_view { return gear.name; }, "gears");
+  }
+  if (const Json* actuators = root.find("actuators")) {
+    model.actuators = read_actuators(*actuators, "actuators", model.joints);
+    require_unique_names(model.actuators, [](const Actuator& actuator) -> std::string_view { return actuator.name; }, "actuators");
   }
   for (BodySpec& spec : bodies) model.bodies.push_back(std::move(spec.body));
 

@@ -54,7 +54,8 @@
 //   "bodies": [ {                              required unless "chain" is given
 //       "name": "neck",                        required, unique, non-empty, not "world"
 //       "shape": { "type": "cylinder", "length": 0.05, "radius": 0.02 },
-//                                              required; type "cylinder" | "capsule"; length > 0; radius ≥ 0
+//                                              required; type "cylinder" | "capsule"; length > 0 (a
+//                                              capsule: ≥ 0, a sphere of length 0 and radius > 0); radius ≥ 0
 //       "mass": 2.268,                         exactly one of "mass" (kg, > 0),
 //       "density": 1000,                       "density" (kg/m³, > 0; mass = density × volume(shape)) or
 //       "point_masses": [ {"position": [0, 0, 0.01], "mass": 1.2, "radius": 0.02}, ... ],
@@ -75,7 +76,7 @@
 //   "joints": [ {                              optional (none)
 //       "name": "head-neck",                   required, unique, non-empty
 //       "type": "spherical",                   required: "spherical" | "revolute" | "prismatic" |
-//                                              "universal" | "fixed" (model.hpp's JointType)
+//                                              "universal" | "fixed" | "serial" (model.hpp's JointType)
 //       "inboard": "head",                     required: a body name, or "world"
 //       "outboard": "neck",                    required: a body name, different from inboard
 //       "inboard_anchor": "tail",              required: "head" | "tail" (the axis end points,
@@ -95,7 +96,22 @@
 //         "stiffness": 300, "damping": 30,     prismatic); each field optional (0): N·m/rad, N·m·s/rad
 //         "target": 0.5, "target_velocity": 0, revolute: rad, rad/s; prismatic: m, m/s
 //         "target_rotation": [0, 0.3, 0],      spherical: rotation vector from rest, rad, world axes at rest
-//         "target_angular_velocity": [0, 0, 0] } } ],   spherical: rad/s
+//         "target_angular_velocity": [0, 0, 0] },      spherical: rad/s
+//       "armature": 0.01,                      optional (0): revolute, prismatic: kg·m² or kg on the
+//                                              coordinate's diagonal of the mass matrix
+//       "serial_axes": [ {                     serial: required, 1 to 6, in order from the inboard body
+//         "name": "hip_x",                     required, unique among the Model's axes
+//         "slide": false,                      optional (false): a hinge; true: a slide
+//         "axis": [1, 0, 0], "point": [0, 0, 1],  required, world at rest: the axis and a point on it
+//         "range": [-0.5, 0.5],                optional: rad (m for a slide), min <= 0 <= max
+//         "drive": { ...as above... },         optional: the coordinate's spring and damper
+//         "friction": 0, "armature": 0 } ] } ],  optional (0 each)
+//   "actuators": [ {                           optional (none): motors, torque = gear × control
+//       "name": "hip",                         required, unique
+//       "joint": "right_hip",                  required: a revolute, prismatic or serial joint's name
+//       "axis": "hip_x",                       serial joints only, required: the axis's name
+//       "gear": 40,                            required, N·m (or N) per unit of control
+//       "control_range": [-1, 1] } ],          optional: controls outside are clamped to it
 //   "chain": {                                 optional generator of a straight chain of links
 //       "links": 5,                            required integer ≥ 1 (SceneOptions::links overrides)
 //       "shape": "capsule",                    required: "cylinder" | "capsule"

@@ -1,5 +1,6 @@
 // The scene loader's typed reading of JSON values, shared by its files (scene_file.cpp, the
-// sections; scene_colliders.cpp, the static colliders). Internal to kernel/scene: it includes
+// sections; scene_joints.cpp, joints, gears and actuators; scene_colliders.cpp, the static
+// colliders). Internal to kernel/scene: it includes
 // nlohmann-json, which limber keeps private, so no public header may include this one.
 //
 // Every reader checks as it reads and fails with ModelError "<path>: <problem>", the path in the
@@ -10,9 +11,11 @@
 #include <climits>
 #include <cstdint>
 #include <initializer_list>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -177,6 +180,25 @@ class Object {
   const Json& json_;
   std::string path_;
 };
+
+/// A body as read, before its mass is settled: variants may still change radius and mass, and
+/// a density becomes a mass only afterwards.
+struct BodySpec {
+  Body body;
+  std::optional<double> density;  ///< set instead of body.mass when the mass comes from density
+  std::string density_path;       ///< where that density was given, for messages
+};
+
+// ---- Defined in scene_joints.cpp
+
+/// Entry `object` of "joints" (any type, serial joints' "serial_axes" and armature included);
+/// `bodies` as read so far, `body_index` their names.
+Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index);
+/// Entry `object` of "gears".
+Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index);
+/// The top-level "actuators": motors on the coordinates of `joints` (by name; a serial joint's
+/// axis by its name too).
+std::vector<Actuator> read_actuators(const Json& value, const std::string& path, const std::vector<Joint>& joints);
 
 // ---- Defined in scene_colliders.cpp
 

@@ -169,3 +169,153 @@ TEST(MjcfModel, MujocosShippedModelsLoadOrAreRefusedByName) {
 
 }  // namespace
 }  // namespace limber
+
+namespace limber {
+namespace {
+
+// kLeg written by hand in limber's JSON scene format: each geom a body at its centre, its axis
+// the geom's z (MuJoCo's fromto runs it from `to` to `from`), anchors in the bodies' frames (the
+// body frame is the shortest turn of z onto the axis: the torso's, about +x, takes world (0,0,-0.3)
+// to local (0,-0.3,0)), contype and conaffinity 1 as group and mask 1, ranges and the spring's
+// rest less ref, the motors on the hip's axes.
+const char* kLegJson = R"({
+  "limber_scene": 1, "name": "leg",
+  "settings": {"gravity": [0, 0, -9], "time_step": 0.004, "duration": 5, "limb_friction": 1, "sleep": {"enabled": false}},
+  "ground": {"height": 0, "restitution": 0, "friction": 1},
+  "bodies": [
+    {"name": "torso", "shape": {"type": "capsule", "length": 0.2, "radius": 0.05}, "density": 1000, "position": [0, 0, 2], "axis": [0, -1, 0], "collision": {"group": 1, "mask": 1}},
+    {"name": "torso/belly", "shape": {"type": "capsule", "length": 0.2, "radius": 0.05}, "density": 1000, "position": [0, 0, 1.8], "axis": [0, -1, 0], "collision": {"group": 1, "mask": 1}},
+    {"name": "leg", "shape": {"type": "cylinder", "length": 0.4, "radius": 0.04}, "density": 1000, "position": [0, 0, 1.5], "axis": [0, 0, 1], "collision": {"group": 1, "mask": 1}},
+    {"name": "foot", "shape": {"type": "capsule", "length": 0, "radius": 0.05}, "density": 1000, "position": [0, 0, 1.25], "axis": [0, 0, 1], "collision": {"group": 1, "mask": 1}}
+  ],
+  "joints": [
+    {"name": "torso/belly.weld", "type": "fixed", "inboard": "torso", "outboard": "torso/belly",
+     "inboard_anchor": [0, -0.2, 0], "outboard_anchor": [0, 0, 0]},
+    {"name": "hip_x+hip_y", "type": "serial", "inboard": "torso", "outboard": "leg",
+     "inboard_anchor": [0, -0.3, 0], "outboard_anchor": [0, 0, 0.22],
+     "serial_axes": [
+       {"name": "hip_x", "axis": [1, 0, 0], "point": [0, 0, 1.7], "range": [-0.7, 0.5],
+        "drive": {"stiffness": 4, "damping": 0.5, "target": 0.1}, "armature": 0.01},
+       {"name": "hip_y", "axis": [0, 1, 0], "point": [0, 0, 1.72], "friction": 0.1}]},
+    {"name": "foot.weld", "type": "fixed", "inboard": "leg", "outboard": "foot",
+     "inboard_anchor": [0, 0, -0.25], "outboard_anchor": [0, 0, 0]}
+  ],
+  "actuators": [
+    {"name": "actuator0", "joint": "hip_x+hip_y", "axis": "hip_y", "gear": 30, "control_range": [-1, 1]},
+    {"name": "abduct", "joint": "hip_x+hip_y", "axis": "hip_x", "gear": 20}
+  ]
+})";
+
+void expect_near(const Vector3& a, const Vector3& b, const std::string& what) { EXPECT_LT((a - b).norm(), 1e-12) << what; }
+
+void expect_same_drive(const std::optional<JointDrive>& a, const std::optional<JointDrive>& b, const std::string& what) {
+  ASSERT_EQ(a.has_value(), b.has_value()) << what;
+  if (!a) return;
+  EXPECT_NEAR(a->stiffness, b->stiffness, 1e-12) << what;
+  EXPECT_NEAR(a->damping, b->damping, 1e-12) << what;
+  EXPECT_NEAR(a->target, b->target, 1e-12) << what;
+  EXPECT_NEAR(a->target_velocity, b->target_velocity, 1e-12) << what;
+}
+
+void expect_same_range(const std::optional<Range>& a, const std::optional<Range>& b, const std::string& what) {
+  ASSERT_EQ(a.has_value(), b.has_value()) << what;
+  if (!a) return;
+  EXPECT_NEAR(a->min, b->min, 1e-12) << what;
+  EXPECT_NEAR(a->max, b->max, 1e-12) << what;
+}
+
+TEST(MjcfModel, TheSameModelFromMjcfAndFromItsJson) {
+  const Model mjcf = model_of(kLeg);
+  const Model json = load_scene_text(kLegJson, "leg.json").model;
+  EXPECT_EQ(json.name, mjcf.name);
+  ASSERT_EQ(json.bodies.size(), mjcf.bodies.size());
+  for (std::size_t b = 0; b < mjcf.bodies.size(); ++b) {
+    const Body &x = mjcf.bodies[b], &y = json.bodies[b];
+    const std::string what = "bodies[" + std::to_string(b) + "] " + x.name;
+    EXPECT_EQ(y.name, x.name);
+    EXPECT_EQ(y.shape.type, x.shape.type) << what;
+    EXPECT_NEAR(y.shape.length, x.shape.length, 1e-12) << what;
+    EXPECT_NEAR(y.shape.radius, x.shape.radius, 1e-12) << what;
+    EXPECT_NEAR(y.mass, x.mass, 1e-12 * x.mass) << what;
+    EXPECT_EQ(y.inertial.has_value(), x.inertial.has_value()) << what;
+    EXPECT_EQ(y.point_masses.size(), x.point_masses.size()) << what;
+    expect_near(y.position, x.position, what + " position");
+    expect_near(y.axis, x.axis, what + " axis");
+    EXPECT_EQ(y.collision.group, x.collision.group) << what;
+    EXPECT_EQ(y.collision.mask, x.collision.mask) << what;
+  }
+  ASSERT_EQ(json.joints.size(), mjcf.joints.size());
+  for (std::size_t j = 0; j < mjcf.joints.size(); ++j) {
+    const Joint &x = mjcf.joints[j], &y = json.joints[j];
+    const std::string what = "joints[" + std::to_string(j) + "] " + x.name;
+    EXPECT_EQ(y.name, x.name);
+    EXPECT_EQ(y.type, x.type) << what;
+    EXPECT_EQ(y.inboard, x.inboard) << what;
+    EXPECT_EQ(y.outboard, x.outboard) << what;
+    expect_near(y.inboard_anchor, x.inboard_anchor, what + " inboard_anchor");
+    expect_near(y.outboard_anchor, x.outboard_anchor, what + " outboard_anchor");
+    EXPECT_EQ(y.friction, x.friction) << what;
+    EXPECT_EQ(y.armature, x.armature) << what;
+    expect_same_drive(y.drive, x.drive, what);
+    EXPECT_EQ(y.limits.any(), x.limits.any()) << what;
+    ASSERT_EQ(y.serial_axes.size(), x.serial_axes.size()) << what;
+    for (std::size_t a = 0; a < x.serial_axes.size(); ++a) {
+      const SerialAxis &p = x.serial_axes[a], &q = y.serial_axes[a];
+      const std::string axis = what + " axis " + p.name;
+      EXPECT_EQ(q.name, p.name) << axis;
+      EXPECT_EQ(q.slide, p.slide) << axis;
+      expect_near(q.axis, p.axis, axis + " axis");
+      expect_near(q.point, p.point, axis + " point");
+      expect_same_range(q.range, p.range, axis + " range");
+      expect_same_drive(q.drive, p.drive, axis + " drive");
+      EXPECT_NEAR(q.friction, p.friction, 1e-15) << axis;
+      EXPECT_NEAR(q.armature, p.armature, 1e-15) << axis;
+    }
+  }
+  ASSERT_EQ(json.actuators.size(), mjcf.actuators.size());
+  for (std::size_t a = 0; a < mjcf.actuators.size(); ++a) {
+    const Actuator &x = mjcf.actuators[a], &y = json.actuators[a];
+    EXPECT_EQ(y.name, x.name);
+    EXPECT_EQ(y.joint, x.joint) << x.name;
+    EXPECT_EQ(y.axis, x.axis) << x.name;
+    EXPECT_EQ(y.gear, x.gear) << x.name;
+    expect_same_range(y.control_range, x.control_range, x.name);
+  }
+  ASSERT_TRUE(json.ground && mjcf.ground);
+  EXPECT_EQ(json.ground->height, mjcf.ground->height);
+  EXPECT_EQ(json.ground->friction, mjcf.ground->friction);
+  EXPECT_EQ(json.ground->restitution, mjcf.ground->restitution);
+  EXPECT_EQ(json.settings.gravity, mjcf.settings.gravity);
+  EXPECT_EQ(json.settings.time_step, mjcf.settings.time_step);
+  EXPECT_EQ(json.settings.duration, mjcf.settings.duration);
+  EXPECT_EQ(json.settings.limb_friction, mjcf.settings.limb_friction);
+  EXPECT_EQ(json.settings.sleep.enabled, mjcf.settings.sleep.enabled);
+  EXPECT_TRUE(json.colliders.empty() && mjcf.colliders.empty());
+}
+
+TEST(MjcfModel, TheJsonFormatRefusesABadSerialJointOrActuatorByField) {
+  const auto refusal_of = [](std::string json) {
+    try {
+      load_scene_text(json, "leg.json");
+    } catch (const ModelError& error) {
+      return std::string(error.what());
+    }
+    return std::string("(accepted)");
+  };
+  const std::string leg = kLegJson;
+  const auto replaced = [&](const std::string& from, const std::string& to) {
+    std::string text = leg;
+    text.replace(text.find(from), from.size(), to);
+    return text;
+  };
+  EXPECT_EQ(refusal_of(replaced(R"("axis": "hip_y")", R"("axis": "hip_z")")),
+            "leg.json: actuators[0].axis: joint \"hip_x+hip_y\" has no axis named \"hip_z\"");
+  EXPECT_EQ(refusal_of(replaced(R"("joint": "hip_x+hip_y", "axis": "hip_x")", R"("joint": "knee", "axis": "hip_x")")),
+            "leg.json: actuators[1].joint: no joint named \"knee\"");
+  EXPECT_EQ(refusal_of(replaced(R"("type": "serial",)", R"("type": "revolute", "axis": [1, 0, 0],)")),
+            "leg.json: joints[1].serial_axes: is for serial joints only");
+  EXPECT_NE(refusal_of(replaced(R"("range": [-0.7, 0.5])", R"("range": [0.1, 0.5])")).find("joints[1].serial_axes[0].range"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace limber

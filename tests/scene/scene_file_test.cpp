@@ -714,7 +714,7 @@ TEST(SceneJoints, JointTypesAndAxesAreRead) {
 
 TEST(SceneJoints, BadJointTypesAndAxesAreNamed) {
   EXPECT_EQ(pendulum_error(R"("name": "pin", "type": "spherical")", R"("name": "pin", "type": "hinge")"),
-            "test.json: joints[0].type: must be \"spherical\", \"revolute\", \"prismatic\", \"universal\" or \"fixed\", got \"hinge\"");
+            "test.json: joints[0].type: must be \"spherical\", \"revolute\", \"prismatic\", \"universal\", \"fixed\" or \"serial\", got \"hinge\"");
   EXPECT_EQ(pendulum_error(R"("name": "pin", "type": "spherical")", R"("name": "pin", "type": "revolute")"),
             "test.json: joints[0].axis: missing required field");
   EXPECT_EQ(pendulum_error(R"("outboard_anchor": "head"},)", R"("outboard_anchor": "head", "axis": [1, 0, 0]},)"),
