@@ -126,7 +126,6 @@ std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model
 SerialExpansion expand_serial_joints(const Model& model, double link_mass_share) {
   SerialExpansion result;
   result.model = model;
-  result.model_bodies = model.bodies.size();
   result.first_added_joint.assign(model.joints.size(), 0);
   Model& out = result.model;
   for (std::size_t j = 0; j < model.joints.size(); ++j) {

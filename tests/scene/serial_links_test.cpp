@@ -191,3 +191,36 @@ TEST(SerialLinks, TheBodiesItJoinsDoNotCollide) {
 
 }  // namespace
 }  // namespace limber
+
+namespace limber {
+namespace {
+
+// A hinge's armature under Lagrange is a rotor on the body after it (serial_links.hpp). On one
+// hinge to the world it is the armature exactly (the rod turns about that axis alone). On two
+// skew hinges the rod's rotor also turns with the first hinge, and its a/2 across its axis (the
+// least that keeps a thin rod's tensor physical) adds to that hinge's inertia, which MuJoCo's
+// diagonal term does not: the swing is then only closer to Featherstone's with armature than
+// without any (0.069 m against 0.157 m off after 0.5 s, armature 0.05 on each axis).
+TEST(SerialLinks, ArmatureAsARotorFollowsFeatherstonesArmature) {
+  Model model = testing::rod_held_at_head(JointType::revolute);
+  model.settings.gravity = Eigen::Vector3d(0, 0, -9.81);
+  model.joints[0].armature = 0.2;  // beside the rod's 1/3 kg·m² about the hinge
+  const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 500);
+  const double with_rotor = (tip_after(model, Method::lagrange, 500) - exact).norm();
+  Model without = model;
+  without.joints[0].armature = 0;
+  const double without_armature = (tip_after(without, Method::lagrange, 500) - exact).norm();
+  std::printf("one hinge: tip from Featherstone's with armature: %.3g m with the rotor, %.3g m without armature\n", with_rotor, without_armature);
+  EXPECT_LT(with_rotor, 1e-6);
+  Model pair = rod_on_two_skew_hinges();
+  for (SerialAxis& axis : pair.joints[0].serial_axes) axis.armature = 0.05;
+  const Eigen::Vector3d pair_exact = tip_after(pair, Method::featherstone, 500);
+  const double pair_rotor = (tip_after(pair, Method::lagrange, 500) - pair_exact).norm();
+  for (SerialAxis& axis : pair.joints[0].serial_axes) axis.armature = 0;
+  const double pair_without = (tip_after(pair, Method::lagrange, 500) - pair_exact).norm();
+  std::printf("two skew hinges: %.3g m with the rotors, %.3g m without armature\n", pair_rotor, pair_without);
+  EXPECT_LT(pair_rotor, 0.5 * pair_without);
+}
+
+}  // namespace
+}  // namespace limber
