@@ -16,7 +16,7 @@ LagrangeState compile_lagrange(const Model& input, const LagrangeOptions& option
   const Model& model = expansion ? expansion->model : input;
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
-  if (expansion) validate(model), require_supported(model, Method::lagrange);
+  if (expansion) require_supported(model, Method::lagrange);  // compile_rigid_scene validated it
   if (!input.actuators.empty()) state.coordinate_axes = expansion ? CoordinateAxes::of(*expansion) : CoordinateAxes::of(model);
   require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "lagrange");
   require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");

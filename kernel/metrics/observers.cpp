@@ -184,9 +184,12 @@ Observation observe(const FeatherstoneState& state) {
   return out;
 }
 
+namespace {
+
+// The first `bodies` limbs' segments, then the balls'.
 template <typename Scalar>
-void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments) {
-  segments.resize(state.body_limb.size());
+void particle_limb_segments(const VerletState<Scalar>& state, std::size_t bodies, std::vector<LimbSegment>& segments) {
+  segments.resize(bodies);
   for (std::size_t body = 0; body < segments.size(); ++body) {
     const std::uint32_t limb = state.body_limb[body];
     segments[body] = {state.particles.position(state.limbs.head[limb]).template cast<double>(),
@@ -197,6 +200,18 @@ void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& s
     const Eigen::Vector3d centre = state.particles.position(ball.particle).template cast<double>();
     segments.push_back({centre, centre, ball.radius});
   }
+}
+
+}  // namespace
+
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, const Model& model, std::vector<LimbSegment>& segments) {
+  particle_limb_segments(state, model.bodies.size(), segments);
+}
+
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments) {
+  particle_limb_segments(state, state.body_limb.size(), segments);
 }
 
 void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments) {
@@ -231,6 +246,8 @@ double ground_penetration(const Model& model, std::span<const LimbSegment> segme
 
 template void limb_segments<float>(const VerletState<float>&, std::vector<LimbSegment>&);
 template void limb_segments<double>(const VerletState<double>&, std::vector<LimbSegment>&);
+template void limb_segments<float>(const VerletState<float>&, const Model&, std::vector<LimbSegment>&);
+template void limb_segments<double>(const VerletState<double>&, const Model&, std::vector<LimbSegment>&);
 template Observation observe<float>(const VerletState<float>&);
 template Observation observe<double>(const VerletState<double>&);
 

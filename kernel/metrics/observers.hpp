@@ -35,15 +35,14 @@ Observation observe(const FeatherstoneState& state);
 /// limb_collisions.hpp), then the ball's (head = tail = its centre) when there is one, into
 /// `segments`: what LimbCollisions::deepest_penetration measures every
 /// method with. The stiff-spring, Lagrange and Featherstone states share the rigid scene's.
+/// A method's virtual links (its serial joints', scene/serial_links.hpp) are not the Model's
+/// bodies and are left out.
+template <typename Scalar>
+void limb_segments(const VerletState<Scalar>& state, const Model& model, std::vector<LimbSegment>& segments);
+void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments);
+/// Every limb the particle state has (its virtual links too), then the balls.
 template <typename Scalar>
 void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments);
-void limb_segments(const RigidScene& scene, const Model& model, std::vector<LimbSegment>& segments);
-/// The particle limbs' as the rigid methods' are called (method_contract.hpp): the Model is not
-/// needed, the particles are the limbs.
-template <typename Scalar>
-void limb_segments(const VerletState<Scalar>& state, const Model&, std::vector<LimbSegment>& segments) {
-  limb_segments(state, segments);
-}
 
 /// How far the limbs reach below the ground now (m, ≥ 0; 0 without a ground): the deepest end
 /// sphere of a capsule, or end rim of a cylinder, under the ground plane.

@@ -27,6 +27,12 @@ namespace limber {
 /// Each virtual link's mass as a share of its serial joint's outboard body's mass.
 inline constexpr double kVirtualLinkMassShare = 1e-2;
 
+/// The expansion's joint of Model joint `joint`'s coordinate `axis`: axis 0 keeps the joint's
+/// index, axes 1… follow `first_added_joint[joint]` (SerialExpansion below).
+inline std::uint32_t joint_of_axis(const std::vector<std::uint32_t>& first_added_joint, std::size_t joint, int axis) {
+  return axis == 0 ? static_cast<std::uint32_t>(joint) : first_added_joint[joint] + static_cast<std::uint32_t>(axis - 1);
+}
+
 /// A Model with its serial joints expanded (`model`), and where each axis went.
 ///
 /// The Model's bodies and joints keep their indices: joint j's axis 0 is joint j of the
@@ -41,9 +47,7 @@ struct SerialExpansion {
   std::vector<std::uint32_t> first_added_joint;
 
   /// The expansion's joint of Model joint `joint`'s coordinate `axis` (0 for a joint that is not serial).
-  std::uint32_t joint_of_axis(std::size_t joint, int axis) const {
-    return axis == 0 ? static_cast<std::uint32_t>(joint) : first_added_joint[joint] + static_cast<std::uint32_t>(axis - 1);
-  }
+  std::uint32_t joint_of_axis(std::size_t joint, int axis) const { return limber::joint_of_axis(first_added_joint, joint, axis); }
 };
 
 /// Whether expand_serial_joints would change `model`: it has a serial joint or hinge armature.
@@ -61,8 +65,8 @@ SerialExpansion expand_serial_joints(const Model& model, double link_mass_share 
 std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model& fresh, std::vector<std::int64_t> old_body_of_new);
 
 /// Where a motor's joint force acts in an expansion: each joint coordinate's joint of the
-/// expansion, its bodies and its axis in the outboard body's frame. A maximal-coordinate state
-/// keeps one (apply_coordinate_force).
+/// expansion, its bodies and its axis in the outboard body's frame. Each maximal-coordinate state
+/// keeps one (apply_coordinate_force), empty without actuators.
 struct CoordinateAxes {
   struct Axis {
     int inboard = kWorld, outboard = 0;            ///< the expansion's body indices
@@ -84,8 +88,7 @@ struct CoordinateAxes {
 /// apply_body_load (kernel/methods/method_contract.hpp).
 template <typename State>
 void apply_coordinate_force(State& state, const CoordinateAxes& axes, std::size_t joint, int axis, double amount) {
-  const std::uint32_t j = axis == 0 ? static_cast<std::uint32_t>(joint) : axes.first_added_joint[joint] + static_cast<std::uint32_t>(axis - 1);
-  const CoordinateAxes::Axis& at = axes.joints[j];
+  const CoordinateAxes::Axis& at = axes.joints[joint_of_axis(axes.first_added_joint, joint, axis)];
   const Vector3 along = amount * (body_pose(state, static_cast<std::size_t>(at.outboard)).orientation * at.local_axis);
   const Vector3 zero = Vector3::Zero();
   apply_body_load(state, static_cast<std::size_t>(at.outboard), at.slide ? along : zero, at.slide ? zero : along);

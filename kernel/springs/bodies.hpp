@@ -18,4 +18,10 @@ inline Eigen::Vector3d world_anchor(const SpringState& state, const Model&, std:
 /// Moves the spring's world anchor to `target` for the next step; the body follows through the joint.
 inline void move_world_anchor(SpringState& state, const Model&, std::size_t joint, const Eigen::Vector3d& target) { state.springs.inboard_anchor[joint] = target; }
 
+/// Adds `force` (N·m on a hinge, N on a slide) to joint `joint`'s coordinate `axis` for the next
+/// step: the pair of loads it is on the joint's bodies (apply_coordinate_force).
+inline void apply_joint_force(SpringState& state, std::size_t joint, int axis, double force) {
+  apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
+}
+
 }  // namespace limber

@@ -66,6 +66,7 @@ SpringState compile_springs(const Model& model, const SpringOptions& options) {
   state.scratch.resize(body_count);
   state.scratch_world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
   if (options.integrator == Integrator::backward_euler) prepare_implicit_system(state);
+  if (!model.actuators.empty()) state.coordinate_axes = CoordinateAxes::of(model);
   return state;
 }
 

@@ -24,6 +24,7 @@
 #include "limber/kernel/numerics/integrator.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/scene/serial_links.hpp"
 #include "limber/layouts/bodies/rigid_body_buffer.hpp"
 
 namespace limber {
@@ -69,6 +70,7 @@ struct SpringState : RigidScene {
   /// drive may change between steps: World::set_joint_drive writes joint_controls.joints[k].drive).
   JointControls joint_controls;
   std::vector<std::uint32_t> controlled_joints;  ///< joints with a limit, friction or drive
+  CoordinateAxes coordinate_axes;  ///< where motors act (Model::actuators; empty without them)
   SpringOptions options;
   double time_step = 0;  ///< Δt of the step under way (friction's regularization reads it)
   RigidIntegratorScratch scratch;

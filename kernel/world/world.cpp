@@ -32,28 +32,14 @@ std::string vector_text(const Eigen::Vector3d& v) {
   return text.str();
 }
 
-// The actuators' joint forces for this step: a generalized force where the method takes one
-// (apply_joint_force), else, on a revolute or prismatic joint, the pair of loads it is: ±force·a
-// as torques about the hinge's axis now, or as forces along the slide.
+// The actuators' joint forces for this step, each method's way (apply_joint_force): a generalized
+// force under Featherstone, the pair of loads ±force·a on the joint's bodies under the others.
 template <typename State>
-void apply_actuators(State& state, const Model& model, const std::vector<double>& controls, std::vector<Eigen::Vector3d>& force,
-                     std::vector<Eigen::Vector3d>& torque) {
+void apply_actuators(State& state, const Model& model, const std::vector<double>& controls) {
   for (std::size_t a = 0; a < controls.size(); ++a) {
     const Actuator& actuator = model.actuators[a];
     const double amount = actuator_force(actuator, controls[a]);
-    if (amount == 0) continue;
-    const auto j = static_cast<std::size_t>(actuator.joint);
-    if constexpr (requires { apply_joint_force(state, j, actuator.axis, amount); }) {
-      apply_joint_force(state, j, actuator.axis, amount);
-    } else {
-      const Joint& joint = model.joints[j];
-      const auto outboard = static_cast<std::size_t>(joint.outboard);
-      const Eigen::Vector3d along =
-          amount * (body_pose(state, outboard).orientation * (model.bodies[outboard].orientation().conjugate() * joint.axis));
-      std::vector<Eigen::Vector3d>& loads = joint.type == JointType::revolute ? torque : force;
-      loads[outboard] += along;
-      if (joint.inboard != kWorld) loads[static_cast<std::size_t>(joint.inboard)] -= along;
-    }
+    if (amount != 0) apply_joint_force(state, static_cast<std::size_t>(actuator.joint), actuator.axis, amount);
   }
 }
 
@@ -96,11 +82,6 @@ Observation World::observe() const {
 
 void World::segments(std::vector<LimbSegment>& out) const {
   std::visit([&](const auto& state) { limb_segments(state, model_, out); }, internals_->state);
-  // A method's virtual links (its serial joints', scene/serial_links.hpp) sit between the
-  // Model's bodies and the balls: not the Model's, so not shown.
-  const std::size_t bodies = model_.bodies.size(), shown = bodies + model_.balls.size();
-  const std::size_t links = out.size() > shown ? out.size() - shown : 0;
-  if (links > 0) out.erase(out.begin() + static_cast<std::ptrdiff_t>(bodies), out.begin() + static_cast<std::ptrdiff_t>(bodies + links));
 }
 
 // --- Handles
@@ -186,7 +167,7 @@ StepStatus World::step(double dt) {
   }
   StepReport report = std::visit(
       [&](auto& s) {
-        apply_actuators(s, model_, internals_->controls, load_force_, load_torque_);
+        apply_actuators(s, model_, internals_->controls);
         for (std::size_t b = 0; b < load_force_.size(); ++b) {
           if (load_force_[b].isZero(0) && load_torque_[b].isZero(0)) continue;
           apply_body_load(s, b, load_force_[b], load_torque_[b]);
