@@ -1,6 +1,8 @@
 #include "limber/kernel/scene/mjcf_model.hpp"
 
+#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
+#include "limber/kernel/scene/mjcf_reader.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -45,19 +47,28 @@ std::string geom_element(const mjcf::Geom& geom) {
 Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string name) {
   Body body;
   body.name = std::move(name);
-  switch (geom.type) {
-    case mjcf::GeomType::sphere: body.shape = {ShapeType::capsule, 0, geom.size[0]}; break;
-    case mjcf::GeomType::capsule: body.shape = {ShapeType::capsule, 2 * geom.size[1], geom.size[0]}; break;
-    case mjcf::GeomType::cylinder: body.shape = {ShapeType::cylinder, 2 * geom.size[1], geom.size[0]}; break;
-    default:
-      refuse(geom.at, geom_element(geom),
-             "not supported on a moving body yet (limber's bodies are capsules, cylinders and spheres)");
-  }
   if (!(geom.mass > 0)) refuse(geom.at, geom_element(geom), "a moving body's geom needs a mass > 0 (mass or density)");
   const Isometry world = body_frame * pose(geom.position, geom.orientation);
   body.mass = geom.mass;
   body.position = world.translation();
-  body.axis = (world.linear() * Eigen::Vector3d::UnitZ()).normalized();
+  int along = 2;  // the geom frame's axis that is the body's
+  switch (geom.type) {
+    case mjcf::GeomType::sphere: body.shape = {ShapeType::capsule, 0, geom.size[0]}; break;
+    case mjcf::GeomType::capsule: body.shape = {ShapeType::capsule, 2 * geom.size[1], geom.size[0]}; break;
+    case mjcf::GeomType::cylinder: body.shape = {ShapeType::cylinder, 2 * geom.size[1], geom.size[0]}; break;
+    case mjcf::GeomType::box:
+    case mjcf::GeomType::ellipsoid: {
+      const CapsuleProxy proxy = capsule_proxy(geom.size);
+      body.shape = proxy.shape, along = proxy.along;
+      break;
+    }
+    case mjcf::GeomType::plane: refuse(geom.at, geom_element(geom), "a plane must belong to the worldbody");
+  }
+  body.axis = world.linear().col(along).normalized();
+  if (geom.type == mjcf::GeomType::box || geom.type == mjcf::GeomType::ellipsoid) {  // the shape is a proxy: the mass is the geom's
+    const Eigen::Vector3d moments = mjcf::detail::geom_principal_moments(geom.type, geom.size, geom.mass);
+    body.inertial = inertial_in_body_frame(body, world.translation(), world.linear(), moments.asDiagonal());
+  }
   body.collision = {static_cast<std::uint32_t>(geom.contype), static_cast<std::uint32_t>(geom.conaffinity)};
   if (geom.contype != geom.conaffinity) {
     refuse(geom.at, geom_element(geom),
@@ -255,6 +266,23 @@ Actuator motor(const mjcf::Document& document, const mjcf::Actuator& source, con
   return actuator;
 }
 
+// One note for the box and ellipsoid geoms of moving bodies, at the first of them.
+void note_capsule_proxies(const mjcf::Document& document, std::vector<std::string>& notes) {
+  const mjcf::Geom* first = nullptr;
+  std::size_t count = 0;
+  for (const mjcf::Body& body : document.bodies) {
+    for (const mjcf::Geom& geom : body.geoms) {
+      if (geom.type != mjcf::GeomType::box && geom.type != mjcf::GeomType::ellipsoid) continue;
+      if (count++ == 0) first = &geom;
+    }
+  }
+  if (count == 0) return;
+  notes.push_back(first->at.file + ":" + std::to_string(first->at.line) + ": <" + geom_element(*first) + ">: " +
+                  (count == 1 ? std::string("this box or ellipsoid") : "this and " + std::to_string(count - 1) + " more box and ellipsoid geoms") +
+                  " on moving bodies collide as the capsule along the longest axis, radius the shortest half-size; mass and inertia exact "
+                  "(kernel/scene/capsule_proxy.hpp)");
+}
+
 }  // namespace
 
 Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& notes) {
@@ -281,6 +309,7 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
     const bool jointed = !source.joints.empty() && source.joints.front().type != mjcf::JointType::free;
     if (jointed) joint_of[b] = static_cast<int>(model.joints.size()) - 1;  // add_body adds the body's joint last
   }
+  note_capsule_proxies(document, notes);
   add_world_geoms(document, model, body_friction);
   for (const mjcf::Actuator& actuator : document.actuators) model.actuators.push_back(motor(document, actuator, model, joint_of));
   validate(model);

@@ -10,6 +10,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
 #include "limber/kernel/scene/urdf_reader.hpp"
 
@@ -147,14 +148,17 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
   const urdf::Collision& collision = link.collisions.front();
   Body body;
   body.name = link.name;
+  int along = 2;  // the collision frame's axis that is the body's
   if (collision.type == urdf::GeometryType::box) {
-    refuse(collision.shape_at, "<box> of link '" + link.name + "'", "not supported on a moving body yet (limber's bodies are capsules, cylinders and spheres)");
+    const CapsuleProxy proxy = capsule_proxy(collision.size / 2);
+    body.shape = proxy.shape, along = proxy.along;
+  } else {
+    body.shape = collision.type == urdf::GeometryType::cylinder ? Shape{ShapeType::cylinder, collision.length, collision.radius}
+                                                                  : Shape{ShapeType::capsule, 0, collision.radius};
   }
-  body.shape = collision.type == urdf::GeometryType::cylinder ? Shape{ShapeType::cylinder, collision.length, collision.radius}
-                                                                : Shape{ShapeType::capsule, 0, collision.radius};
   const Isometry world = frame * collision.origin;
   body.position = world.translation();
-  body.axis = (world.linear() * Eigen::Vector3d::UnitZ()).normalized();
+  body.axis = world.linear().col(along).normalized();
   check_inertia(link);
   const urdf::Inertial& source = *link.inertial;
   body.mass = source.mass;
@@ -263,6 +267,10 @@ void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, M
       continue;
     }
     model.bodies.push_back(link_body(link, frame[index]));
+    if (link.collisions.front().type == urdf::GeometryType::box) {
+      notes.push_back(urdf::where(link.collisions.front().shape_at) + "<box> of link '" + link.name +
+                      "': collides as the capsule along its longest side, radius its shortest half-side (kernel/scene/capsule_proxy.hpp)");
+    }
     const int own = static_cast<int>(model.bodies.size()) - 1;
     body_of[index] = own;
     if (l == floats) continue;

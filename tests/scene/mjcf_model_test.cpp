@@ -1,6 +1,7 @@
 // MJCF documents into limber's Model (kernel/scene/mjcf_model.hpp): compound bodies, spheres,
 // joints of several axes, ranges and springs measured from ref, motors; and each refusal names
 // the file, the line and the element. MuJoCo's own agreement is mjcf_featherstone_test.cpp.
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -122,8 +123,6 @@ TEST(MjcfModel, WhatCannotBeRepresentedIsRefusedNamingFileLineAndElement) {
   const auto body_with = [](const std::string& inside) {
     return "<mujoco>\n<worldbody>\n<body name=\"b\">\n<freejoint/>\n" + inside + "\n</body>\n</worldbody>\n</mujoco>";
   };
-  EXPECT_EQ(refusal(body_with("<geom type=\"box\" size=\"0.1 0.1 0.1\"/>")),
-            "test.xml:5: <geom type=box>: not supported on a moving body yet (limber's bodies are capsules, cylinders and spheres)");
   EXPECT_EQ(refusal(body_with("<geom size=\"0.1\" contype=\"1\" conaffinity=\"2\"/>")).substr(0, 32), "test.xml:5: <geom type=sphere>: ");
   EXPECT_NE(refusal(body_with("<geom size=\"0.1\"/><geom size=\"0.1\" pos=\"0 0 1\"/><inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"1 1 1\"/>"))
                 .find("test.xml:3: <body name='b'>: an <inertial> on a body of several geoms"),
@@ -158,13 +157,57 @@ TEST(MjcfModel, MujocosShippedModelsLoadOrAreRefusedByName) {
     }
     return std::string("(accepted)");
   };
-  EXPECT_NE(refused("humanoid100/humanoid100.xml").find("humanoid100.xml:"), std::string::npos);
+  const Scene hundred = load_scene_file(models / "humanoid100/humanoid100.xml");
+  EXPECT_EQ(body_islands(hundred.model).count, 101u);  // the humanoid and 100 free objects
   EXPECT_NE(refused("hammock/hammock.xml").find("hammock.xml:52: <composite>"), std::string::npos);
   EXPECT_NE(refused("tendon_arm/arm26.xml").find("arm26.xml:"), std::string::npos);
   EXPECT_NE(refused("slider_crank/slider_crank.xml").find("slider_crank.xml:"), std::string::npos);
   SceneOptions copies;
   copies.copies = 2;
   EXPECT_THROW(load_scene_file(models / "humanoid/humanoid.xml", copies), ModelError);
+}
+
+// A box or ellipsoid on a moving body collides as a capsule (capsule_proxy.hpp) and keeps the
+// geom's mass, centre and inertia: every one-geom body of humanoid100.xml (capsules, ellipsoids,
+// boxes, cylinders, spheres) carries the document's mass properties, which mjcf_mujoco_test.cpp
+// checks against mj_loadXML, moved into the world.
+TEST(MjcfModel, BoxesAndEllipsoidsKeepTheirMassCentreAndInertia) {
+  const std::filesystem::path file = "/usr/share/mujoco/model/humanoid100/humanoid100.xml";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << file << " is missing: install libmujoco-samples";
+  const mjcf::Document document = mjcf::load_mjcf(file);
+  std::vector<std::string> notes;
+  const Model model = model_from_mjcf(document, notes);
+  int checked = 0, proxies = 0;
+  Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
+  for (std::size_t b = 0; b < document.bodies.size(); ++b) {
+    const mjcf::Body& source = document.bodies[b];
+    if (source.parent >= 0 || source.geoms.size() != 1) continue;  // the free objects: children of the world
+    frame.linear() = source.orientation.normalized().toRotationMatrix();
+    frame.translation() = source.position;
+    const std::string name = source.name.empty() ? "body" + std::to_string(b + 1) : source.name;
+    const auto body = std::find_if(model.bodies.begin(), model.bodies.end(), [&](const Body& each) { return each.name == name; });
+    ASSERT_NE(body, model.bodies.end()) << name;
+    SCOPED_TRACE(name);
+    const MassProperties limber = body_mass_properties(*body);
+    const Eigen::Matrix3d to_world = body->orientation().toRotationMatrix();
+    EXPECT_LE(std::abs(limber.mass - source.mass), 1e-12 * source.mass);
+    EXPECT_LE((body->to_world(limber.centre_of_mass) - frame * source.centre_of_mass).norm(), 1e-12);
+    const Eigen::Matrix3d mujoco = frame.linear() * source.inertia * frame.linear().transpose();
+    EXPECT_LE((to_world * limber.inertia * to_world.transpose() - mujoco).cwiseAbs().maxCoeff(), 1e-10 * mujoco.norm());
+    const mjcf::GeomType type = source.geoms.front().type;
+    if (type == mjcf::GeomType::box || type == mjcf::GeomType::ellipsoid) {
+      ++proxies;
+      const Eigen::Vector3d half = source.geoms.front().size;
+      EXPECT_EQ(body->shape.type, ShapeType::capsule);
+      EXPECT_DOUBLE_EQ(body->shape.radius, half.minCoeff());
+      EXPECT_DOUBLE_EQ(body->shape.length + 2 * body->shape.radius, 2 * half.maxCoeff()) << "the proxy spans the longest axis";
+    }
+    ++checked;
+  }
+  EXPECT_EQ(checked, 100);
+  EXPECT_EQ(proxies, 40);
+  EXPECT_EQ(std::count_if(notes.begin(), notes.end(), [](const std::string& note) { return note.find("capsule_proxy.hpp") != std::string::npos; }), 1)
+      << "one note says how the 40 collide";
 }
 
 }  // namespace
