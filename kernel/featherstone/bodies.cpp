@@ -39,6 +39,12 @@ void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, do
   state.actuation[held.offset + axis] += held.sign * force;
 }
 
+CoordinateMotion coordinate_motion(const FeatherstoneState& state, std::size_t joint, int axis) {
+  const TreeJoint& held = state.tree_joint[joint];
+  const int node = held.body - (held.dofs - 1 - axis);  // a serial joint's axes are consecutive tree bodies, its last the child
+  return {held.sign * state.q[state.tree.position_offset(node)], held.sign * state.v[held.offset + axis]};
+}
+
 bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,
                  const Survivors& survivors, std::string& problem) {
   // The joint a tree body hangs from, by name (empty: floating), and its parent's old index.

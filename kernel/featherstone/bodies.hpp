@@ -18,6 +18,9 @@ namespace limber {
 /// Adds `force` (N·m on a hinge, N on a slide) to joint `joint`'s coordinate `axis` (a serial
 /// joint's axis; 0 otherwise) for the next step: a generalized force, as an actuator's.
 void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, double force);
+/// Joint `joint`'s coordinate `axis` (a revolute or prismatic joint's, or a serial joint's axis)
+/// as the tree holds it.
+CoordinateMotion coordinate_motion(const FeatherstoneState& state, std::size_t joint, int axis);
 /// Where joint `joint` (to the world) holds its body: its world anchor, m.
 Eigen::Vector3d world_anchor(const FeatherstoneState& state, const Model& model, std::size_t joint);
 /// Refused before it is called (World::pin refuses a Featherstone world: a joint to the world

@@ -172,7 +172,8 @@ Eigen::VectorXd joint_passive_forces(const FeatherstoneState& state, const Model
   }
   for (std::size_t a = 0; a < model.actuators.size() && a < controls.size(); ++a) {
     const Actuator& actuator = model.actuators[a];
-    out[layout.joint_velocity[static_cast<std::size_t>(actuator.joint)] + actuator.axis] += actuator_force(actuator, controls[a]);
+    const int r = layout.joint_velocity[static_cast<std::size_t>(actuator.joint)] + actuator.axis;
+    out[r] += actuator_force(actuator, controls[a], q[layout.angle_or_slide[static_cast<std::size_t>(r)]], v[r]);
   }
   return out;
 }

@@ -24,4 +24,9 @@ inline void apply_joint_force(LagrangeState& state, std::size_t joint, int axis,
   apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
 }
 
+/// Joint `joint`'s coordinate `axis` now (coordinate_motion over the bodies' poses and motions).
+inline CoordinateMotion coordinate_motion(const LagrangeState& state, std::size_t joint, int axis) {
+  return coordinate_motion(state, state.coordinate_axes, joint, axis);
+}
+
 }  // namespace limber

@@ -46,7 +46,10 @@ concept MethodContract = requires(State& state, const State& read, const State& 
   { body_centre_of_mass(read, index) } -> std::same_as<Eigen::Vector3d>;
   { body_point(read, index, vector) } -> std::same_as<Eigen::Vector3d>;
   apply_body_load(state, index, vector, vector);  // force at the centre of mass, torque
-  // Joints: drives (false: compiled without one), held points (joints to the world).
+  // Joints: a coordinate's force over the next step and its value now (an actuator's), drives
+  // (false: compiled without one), held points (joints to the world).
+  apply_joint_force(state, index, 0, 1.0);
+  { coordinate_motion(read, index, 0) } -> std::same_as<CoordinateMotion>;
   { set_joint_drive(state, index, drive) } -> std::same_as<bool>;
   { world_anchor(read, model, index) } -> std::same_as<Eigen::Vector3d>;
   move_world_anchor(state, model, index, vector);  // a kinematic target for the next step

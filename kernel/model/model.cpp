@@ -340,6 +340,9 @@ void validate_actuator(const Actuator& actuator, const Model& model, std::size_t
     fail(path("axis"), "must be in [0, " + std::to_string(axes) + ") for '" + joint.name + "', got " + std::to_string(actuator.axis));
   }
   require_finite(actuator.gear, path("gear"));
+  require_finite(actuator.reference, path("reference"));
+  if (!(actuator.gain >= 0) || !std::isfinite(actuator.gain)) fail(path("gain"), "must be finite and >= 0, got " + format_number(actuator.gain));
+  if (actuator.kind == ActuatorKind::motor && actuator.gain != 0) fail(path("gain"), "a motor has no gain (its force is gear x control)");
   if (const auto& range = actuator.control_range) {
     require_finite(range->min, path("control_range.min")), require_finite(range->max, path("control_range.max"));
     if (!(range->min <= range->max)) fail(path("control_range"), "min must be <= max, got [" + format_number(range->min) + ", " + format_number(range->max) + "]");

@@ -134,6 +134,12 @@ struct Motion {
   Eigen::Vector3d angular = Eigen::Vector3d::Zero();
 };
 
+/// A joint coordinate's value q (rad or m, 0 at the initial poses) and rate q̇ (rad/s or m/s).
+struct CoordinateMotion {
+  double position = 0;
+  double velocity = 0;
+};
+
 /// What a joint lets its outboard body do relative to its inboard body (rows: the constraint
 /// equations it adds in maximal coordinates; DOF: the coordinates it adds in reduced ones).
 enum class JointType {
@@ -302,23 +308,44 @@ struct Gear {
   double ratio = -1;                        ///< finite, ≠ 0
 };
 
-/// A motor on one joint coordinate (MuJoCo's <motor>): the joint force gear × control, N·m on a
-/// hinge, N on a slide, with the control set while stepping (World::set_controls) and 0 until
-/// then. The force acts between the joint's two bodies and nowhere else: a generalized force on
-/// the coordinate.
+/// What an actuator's force answers to (MuJoCo's <motor>, <position>, <velocity>).
+enum class ActuatorKind { motor, position, velocity };
+
+/// An actuator on one joint coordinate: a joint force, N·m on a hinge, N on a slide, with the
+/// control set while stepping (World::set_controls) and 0 until then. The force acts between the
+/// joint's two bodies and nowhere else: a generalized force on the coordinate, computed from the
+/// state at the start of each step (explicit, as MuJoCo's are). MuJoCo's actuator models
+/// (XMLreference, "actuator"), u the control and l = gear·(q + reference) the actuator's length:
+/// - motor: gear·u;
+/// - position: gear·gain·(u − l), a PD servo's P (MuJoCo's kp);
+/// - velocity: gear·gain·(u − l̇), l̇ = gear·q̇ (MuJoCo's kv).
 struct Actuator {
   std::string name;
   int joint = 0;  ///< Model joint index: revolute, prismatic or serial
   int axis = 0;   ///< a serial joint's axis (serial_axes index); 0 for revolute and prismatic
-  double gear = 1;  ///< N·m (or N) per unit of control, finite
+  ActuatorKind kind = ActuatorKind::motor;
+  double gear = 1;  ///< motor: N·m (or N) per unit of control; position, velocity: length per unit of q. Finite
+  /// position: N·m/rad (N/m) per unit of length (kp); velocity: N·m·s/rad (N·s/m) (kv); ≥ 0,
+  /// finite; 0 for a motor.
+  double gain = 0;
+  /// The coordinate's value at the initial poses, where limber's q is 0 (MuJoCo's joint ref),
+  /// rad or m, finite: a position actuator's length is gear·(q + reference).
+  double reference = 0;
   /// The controls it takes: a control outside is clamped to it (MuJoCo's ctrlrange with
   /// ctrllimited). Unset: any finite control.
   std::optional<Range> control_range;
 };
 
-/// An actuator's joint force at `control`: gear × the control clamped to its range, N·m or N.
-inline double actuator_force(const Actuator& actuator, double control) {
+/// An actuator's joint force at `control` with its coordinate at q = `position` (rad or m, 0 at
+/// the initial poses) moving at q̇ = `velocity`: the force of its kind (Actuator), the control
+/// clamped to its range first. N·m or N.
+inline double actuator_force(const Actuator& actuator, double control, double position = 0, double velocity = 0) {
   if (const auto& range = actuator.control_range) control = control < range->min ? range->min : control > range->max ? range->max : control;
+  switch (actuator.kind) {
+    case ActuatorKind::position: return actuator.gear * actuator.gain * (control - actuator.gear * (position + actuator.reference));
+    case ActuatorKind::velocity: return actuator.gear * actuator.gain * (control - actuator.gear * velocity);
+    case ActuatorKind::motor: break;
+  }
   return actuator.gear * control;
 }
 

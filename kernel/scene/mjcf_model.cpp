@@ -247,21 +247,26 @@ void set_friction(const mjcf::Document& document, Model& model, std::vector<std:
   }
 }
 
-// A <motor> on a hinge or slide: the joint (and serial axis) that holds its coordinate.
-Actuator motor(const mjcf::Document& document, const mjcf::Actuator& source, const Model& model, const std::vector<int>& joint_of) {
+// A <motor>, <position> or <velocity> on a hinge or slide: the joint (and serial axis) that
+// holds its coordinate, its kind and gain, and the joint's ref (MuJoCo's length is gear·qpos).
+Actuator actuator(const mjcf::Document& document, const mjcf::Actuator& source, const Model& model, const std::vector<int>& joint_of) {
   const char* kinds[] = {"motor", "position", "velocity"};
   const std::string element = std::string(kinds[static_cast<int>(source.type)]) + (source.name.empty() ? "" : " name='" + source.name + "'");
-  if (source.type != mjcf::ActuatorType::motor) refuse(source.at, element, "position and velocity actuators are not supported yet (motors are)");
   if (source.forcelimited) refuse(source.at, element, "forcerange is not supported yet (ctrlrange is)");
   const mjcf::Joint& joint = document.bodies[static_cast<std::size_t>(source.joint_body)].joints[static_cast<std::size_t>(source.joint)];
   if (joint.type != mjcf::JointType::hinge && joint.type != mjcf::JointType::slide) {
-    refuse(source.at, element, "a motor on a ball or free joint is not supported yet (hinges and slides are)");
+    refuse(source.at, element, "an actuator on a ball or free joint is not supported yet (hinges and slides are)");
   }
   Actuator actuator;
   actuator.name = source.name.empty() ? "actuator" + std::to_string(model.actuators.size()) : source.name;
   actuator.joint = joint_of[static_cast<std::size_t>(source.joint_body)];
   actuator.axis = model.joints[static_cast<std::size_t>(actuator.joint)].type == JointType::serial ? source.joint : 0;
   actuator.gear = source.gear;
+  switch (source.type) {
+    case mjcf::ActuatorType::motor: break;
+    case mjcf::ActuatorType::position: actuator.kind = ActuatorKind::position, actuator.gain = source.kp, actuator.reference = joint.ref; break;
+    case mjcf::ActuatorType::velocity: actuator.kind = ActuatorKind::velocity, actuator.gain = source.kv; break;
+  }
   if (source.ctrllimited) actuator.control_range = Range{source.ctrl_min, source.ctrl_max};
   return actuator;
 }
@@ -311,7 +316,7 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
   }
   note_capsule_proxies(document, notes);
   add_world_geoms(document, model, body_friction);
-  for (const mjcf::Actuator& actuator : document.actuators) model.actuators.push_back(motor(document, actuator, model, joint_of));
+  for (const mjcf::Actuator& each : document.actuators) model.actuators.push_back(actuator(document, each, model, joint_of));
   validate(model);
   return model;
 }

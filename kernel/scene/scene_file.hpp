@@ -106,11 +106,16 @@
 //         "range": [-0.5, 0.5],                optional: rad (m for a slide), min <= 0 <= max
 //         "drive": { ...as above... },         optional: the coordinate's spring and damper
 //         "friction": 0, "armature": 0 } ] } ],  optional (0 each)
-//   "actuators": [ {                           optional (none): motors, torque = gear × control
+//   "actuators": [ {                           optional (none): model.hpp's Actuator, u the control
 //       "name": "hip",                         required, unique
 //       "joint": "right_hip",                  required: a revolute, prismatic or serial joint's name
 //       "axis": "hip_x",                       serial joints only, required: the axis's name
-//       "gear": 40,                            required, N·m (or N) per unit of control
+//       "kind": "motor",                       optional ("motor"): force gear·u; "position":
+//                                              gear·gain·(u − gear·(q + reference)); "velocity": gear·gain·(u − gear·q̇)
+//       "gear": 40,                            required: N·m (or N) per unit of control; position and
+//                                              velocity: actuator length per unit of q
+//       "gain": 100,                           position, velocity: required, ≥ 0 (MuJoCo's kp, kv)
+//       "reference": 0,                        position: optional (0): q's value at the initial pose (MuJoCo's ref)
 //       "control_range": [-1, 1] } ],          optional: controls outside are clamped to it
 //   "chain": {                                 optional generator of a straight chain of links
 //       "links": 5,                            required integer ≥ 1 (SceneOptions::links overrides)

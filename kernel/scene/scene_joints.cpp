@@ -175,7 +175,7 @@ std::vector<Actuator> read_actuators(const Json& value, const std::string& path,
   std::vector<Actuator> actuators;
   for (std::size_t i = 0; i < value.size(); ++i) {
     const Object object(value[i], indexed(path, i));
-    object.allow_only({"name", "joint", "axis", "gear", "control_range"});
+    object.allow_only({"name", "joint", "axis", "kind", "gear", "gain", "reference", "control_range"});
     Actuator actuator;
     actuator.name = object.string("name");
     require_name(actuator.name, object.path("name"), /*is_body=*/false);
@@ -192,6 +192,17 @@ std::vector<Actuator> read_actuators(const Json& value, const std::string& path,
       fail(object.path("axis"), "names a serial joint's axis; joint " + in_quotes(joint_name) + " is " + std::string(joint_type_name(joint->type)));
     }
     actuator.gear = object.number("gear");
+    object.optional_choice("kind", actuator.kind,
+                           {{"motor", ActuatorKind::motor}, {"position", ActuatorKind::position}, {"velocity", ActuatorKind::velocity}});
+    if (actuator.kind == ActuatorKind::motor) {
+      for (const char* key : {"gain", "reference"}) {
+        if (object.find(key)) fail(object.path(key), "a motor has none (its force is gear x control)");
+      }
+    } else {
+      actuator.gain = object.number("gain");
+      if (actuator.kind == ActuatorKind::velocity && object.find("reference")) fail(object.path("reference"), "a velocity actuator has none");
+      object.optional("reference", actuator.reference);
+    }
     if (const Json* range = object.find("control_range")) actuator.control_range = read_range(*range, object.path("control_range"));
     actuators.push_back(std::move(actuator));
   }

@@ -196,8 +196,8 @@ struct BodySpec {
 Joint read_joint(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index);
 /// Entry `object` of "gears".
 Gear read_gear(const Object& object, const std::vector<BodySpec>& bodies, const std::unordered_map<std::string, int>& body_index);
-/// The top-level "actuators": motors on the coordinates of `joints` (by name; a serial joint's
-/// axis by its name too).
+/// The top-level "actuators": motors, position and velocity actuators on the coordinates of
+/// `joints` (by name; a serial joint's axis by its name too).
 std::vector<Actuator> read_actuators(const Json& value, const std::string& path, const std::vector<Joint>& joints);
 
 // ---- Defined in scene_colliders.cpp

@@ -97,9 +97,11 @@ CoordinateAxes CoordinateAxes::of(const SerialExpansion& expansion) {
 CoordinateAxes CoordinateAxes::of(const Model& model) {
   CoordinateAxes axes;
   axes.first_added_joint.assign(model.joints.size(), 0);
-  for (const Joint& joint : model.joints) {
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const Joint& joint = model.joints[j];
     const Body& outboard = model.bodies[static_cast<std::size_t>(joint.outboard)];
-    axes.joints.push_back({joint.inboard, joint.outboard, outboard.orientation().conjugate() * joint.axis, joint.type == JointType::prismatic});
+    axes.joints.push_back({joint.inboard, joint.outboard, outboard.orientation().conjugate() * joint.axis, joint.type == JointType::prismatic,
+                           joint, joint_frame(model, j)});
   }
   return axes;
 }

@@ -20,6 +20,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/model.hpp"
 
 namespace limber {
@@ -64,14 +65,17 @@ SerialExpansion expand_serial_joints(const Model& model, double link_mass_share 
 /// of the old Model's serial joint of the same name and axis count, else is new (−1).
 std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model& fresh, std::vector<std::int64_t> old_body_of_new);
 
-/// Where a motor's joint force acts in an expansion: each joint coordinate's joint of the
-/// expansion, its bodies and its axis in the outboard body's frame. Each maximal-coordinate state
-/// keeps one (apply_coordinate_force), empty without actuators.
+/// Where an actuator's joint force acts in an expansion, and how its coordinate is measured: each
+/// joint coordinate's joint of the expansion, its bodies, its axis in the outboard body's frame
+/// and the joint as the expansion has it. Each maximal-coordinate state keeps one
+/// (apply_coordinate_force, coordinate_motion), empty without actuators.
 struct CoordinateAxes {
   struct Axis {
     int inboard = kWorld, outboard = 0;            ///< the expansion's body indices
     Vector3 local_axis = Vector3::UnitX();         ///< unit, the outboard body's frame
     bool slide = false;                            ///< a prismatic joint's: a force, not a torque
+    Joint joint;                                   ///< the expansion's joint (revolute or prismatic)
+    JointFrame frame;                              ///< its rest frame (joint_coordinates.hpp)
   };
   std::vector<std::uint32_t> first_added_joint;   ///< SerialExpansion::first_added_joint
   std::vector<Axis> joints;                       ///< per joint of the expansion
@@ -93,6 +97,27 @@ void apply_coordinate_force(State& state, const CoordinateAxes& axes, std::size_
   const Vector3 zero = Vector3::Zero();
   apply_body_load(state, static_cast<std::size_t>(at.outboard), at.slide ? along : zero, at.slide ? zero : along);
   if (at.inboard != kWorld) apply_body_load(state, static_cast<std::size_t>(at.inboard), at.slide ? Vector3(-along) : zero, at.slide ? zero : Vector3(-along));
+}
+
+/// Model joint `joint`'s coordinate `axis` in a maximal-coordinate state, from its bodies' poses
+/// and motions (joint_coordinates.hpp): a hinge's angle and the outboard's angular velocity
+/// relative to the inboard's along the hinge axis; a slide's travel and its rate, the outboard
+/// anchor's velocity relative to the inboard's along the axis the inboard carries. `State` has
+/// body_pose and body_motion (kernel/methods/method_contract.hpp).
+template <typename State>
+CoordinateMotion coordinate_motion(const State& state, const CoordinateAxes& axes, std::size_t joint, int axis) {
+  const CoordinateAxes::Axis& at = axes.joints[joint_of_axis(axes.first_added_joint, joint, axis)];
+  const auto pose_of = [&](int body) { return body == kWorld ? Pose{} : body_pose(state, static_cast<std::size_t>(body)); };
+  const auto motion_of = [&](int body) { return body == kWorld ? Motion{} : body_motion(state, static_cast<std::size_t>(body)); };
+  const Pose in = pose_of(at.inboard), out = pose_of(at.outboard);
+  const Motion in_motion = motion_of(at.inboard), out_motion = motion_of(at.outboard);
+  const JointCoordinates now = joint_coordinates(at.joint, at.frame, {in.orientation, in.position}, {out.orientation, out.position});
+  if (!at.slide) return {now.angle, (out_motion.angular - in_motion.angular).dot(out.orientation * at.local_axis)};
+  const Vector3 axis_now = in.orientation * at.frame.axis;  // the inboard carries a slide's axis
+  const Vector3 p_in = in.position + in.orientation * at.joint.inboard_anchor, p_out = out.position + out.orientation * at.joint.outboard_anchor;
+  const Vector3 v_in = in_motion.linear + in_motion.angular.cross(p_in - in.position);
+  const Vector3 v_out = out_motion.linear + out_motion.angular.cross(p_out - out.position);
+  return {now.slide, (v_out - v_in).dot(axis_now) + (p_out - p_in).dot(in_motion.angular.cross(axis_now))};
 }
 
 }  // namespace limber

@@ -131,6 +131,12 @@ void apply_joint_force(VerletState<Scalar>& state, std::size_t joint, int axis, 
   apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
 }
 
+/// Joint `joint`'s coordinate `axis` now (coordinate_motion over the expansion's bodies).
+template <typename Scalar>
+CoordinateMotion coordinate_motion(const VerletState<Scalar>& state, std::size_t joint, int axis) {
+  return coordinate_motion(state, state.coordinate_axes, joint, axis);
+}
+
 /// The world position of `local_point` (the Model body frame, m).
 template <typename Scalar>
 Eigen::Vector3d body_point(const VerletState<Scalar>& state, std::size_t body, const Eigen::Vector3d& local_point) {

@@ -38,8 +38,10 @@ template <typename State>
 void apply_actuators(State& state, const Model& model, const std::vector<double>& controls) {
   for (std::size_t a = 0; a < controls.size(); ++a) {
     const Actuator& actuator = model.actuators[a];
-    const double amount = actuator_force(actuator, controls[a]);
-    if (amount != 0) apply_joint_force(state, static_cast<std::size_t>(actuator.joint), actuator.axis, amount);
+    const auto joint = static_cast<std::size_t>(actuator.joint);
+    const CoordinateMotion now = actuator.kind == ActuatorKind::motor ? CoordinateMotion{} : coordinate_motion(state, joint, actuator.axis);
+    const double amount = actuator_force(actuator, controls[a], now.position, now.velocity);
+    if (amount != 0) apply_joint_force(state, joint, actuator.axis, amount);
   }
 }
 

@@ -152,9 +152,10 @@ class World {
   /// drive; giving a joint its first drive, or removing one (nullopt), recompiles. Throws
   /// WorldError on a bad value or a joint type without drives.
   void set_joint_drive(JointId joint, const std::optional<JointDrive>& drive);
-  /// The motors' controls, one per Model::actuators entry in its order: from the next step on,
-  /// each actuator's joint gets the generalized force gear × control (its control clamped to its
-  /// range), until set again; 0 until the first call. Throws WorldError when the count is not
+  /// The actuators' controls, one per Model::actuators entry in its order: from each next step
+  /// on, each actuator's joint gets its generalized force at the state the step starts from
+  /// (model.hpp's actuator_force: a motor's gear × control, a position or velocity servo's pull),
+  /// until set again; 0 until the first call. Throws WorldError when the count is not
   /// the actuators' or a control is not finite (nothing changes).
   void set_controls(std::span<const double> controls);
   /// The controls as set (before clamping), Model::actuators order.
@@ -176,7 +177,7 @@ class World {
   Eigen::MatrixXd joint_mass_matrix() const;
   /// C(q, v): gravity, Coriolis and centrifugal forces, nv (τ = M v̇ + C).
   Eigen::VectorXd joint_bias_forces() const;
-  /// The joints' springs and dampers (explicit) and the motors at the current controls, nv.
+  /// The joints' springs and dampers (explicit) and the actuators at the current controls, nv.
   Eigen::VectorXd joint_passive_forces() const;
   /// v̇ = M⁻¹(τ − C) for joint forces τ (nv): no contacts, limits, springs or motors.
   Eigen::VectorXd joint_accelerations(const Eigen::VectorXd& forces) const;

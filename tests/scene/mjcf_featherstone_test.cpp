@@ -1,7 +1,8 @@
 // MuJoCo's own humanoid (Debian's libmujoco-samples) loaded by limber and by MuJoCo 2.2.2: the
 // Featherstone method's joint-space mass matrix and accelerations are MuJoCo's, with the
-// armature, joint springs and damping the file gives and its 21 motors at random controls. Skipped, with a message, where the model
-// file is missing.
+// armature, joint springs and damping the file gives and its 21 motors at random controls; and
+// a small arm's position, velocity and motor actuators give MuJoCo's joint forces. Skipped, with
+// a message, where the model file is missing.
 //
 // Coordinates. The hinges are the same in both (angle from the file's pose, ref = 0 in
 // humanoid.xml), matched by name; the serial joints' axes are tree bodies of their own
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <random>
 #include <string>
@@ -285,6 +287,76 @@ TEST(MjcfHumanoid, TheWorldsJointSpaceIsInMujocosOrder) {
   const Eigen::MatrixXd limber = world.joint_mass_matrix();
   EXPECT_LT((limber.bottomRightCorner(nv - 6, nv - 6) - mujoco.bottomRightCorner(nv - 6, nv - 6)).norm(),
             1e-12 * mujoco.bottomRightCorner(nv - 6, nv - 6).norm());
+}
+
+// Position, velocity and motor actuators with ref, springref, stiffness and damping on an arm
+// welded to the world (so both engines' coordinates are the hinges and the slide, q = qpos − ref):
+// at 20 random states and controls, limber's joint_passive_forces (the joints' springs and
+// dampers and the actuators) are MuJoCo's qfrc_passive + qfrc_actuator.
+TEST(MjcfActuators, PositionVelocityAndMotorForcesAreMujocos) {
+  const std::string xml = R"(<mujoco>
+  <worldbody>
+    <body name="a" pos="0 0 1">
+      <joint name="h1" axis="0 1 0" ref="0.2" stiffness="3" springref="0.5" damping="0.4"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+      <body name="b" pos="0.3 0 0">
+        <joint name="h2" axis="0 0 1" ref="-0.1" damping="0.2"/>
+        <joint name="h3" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.03"/>
+        <body name="c" pos="0.3 0 0">
+          <joint name="s" type="slide" axis="1 0 0" ref="0.05"/>
+          <geom type="sphere" size="0.05"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>
+    <position joint="h1" kp="20" gear="1.5"/>
+    <velocity joint="h1" kv="2" gear="1.5"/>
+    <position joint="h2" kp="7" ctrllimited="true" ctrlrange="-0.5 0.5"/>
+    <velocity joint="h3" kv="1.3" gear="0.7"/>
+    <position joint="s" kp="40" gear="2"/>
+    <motor joint="h3" gear="3"/>
+  </actuator>
+</mujoco>)";
+  const auto file = std::filesystem::temp_directory_path() / "limber_mjcf_actuators.xml";
+  std::ofstream(file) << xml;
+  char error[1000] = "";
+  mjModel* mj = mj_loadXML(file.c_str(), nullptr, error, sizeof error);
+  ASSERT_NE(mj, nullptr) << error;
+  mjData* data = mj_makeData(mj);
+  World world(load_scene_file(file).model, WorldOptions{.method = Method::featherstone});
+  const std::vector<std::string> names = world.joint_space_names();
+  ASSERT_EQ(static_cast<int>(names.size()), mj->nv);
+  ASSERT_EQ(mj->nq, mj->nv);
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> unit(-1, 1);
+  double largest = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::VectorXd q(mj->nv), v(mj->nv);
+    for (int k = 0; k < mj->nv; ++k) {
+      const int j = mj_name2id(mj, mjOBJ_JOINT, names[static_cast<std::size_t>(k)].c_str());
+      ASSERT_GE(j, 0) << names[static_cast<std::size_t>(k)];
+      const int at = mj->jnt_qposadr[j];
+      data->qpos[at] = mj->qpos0[at] + unit(random), data->qvel[mj->jnt_dofadr[j]] = 2 * unit(random);
+      q[k] = data->qpos[at] - mj->qpos0[at], v[k] = data->qvel[mj->jnt_dofadr[j]];
+    }
+    std::vector<double> controls(static_cast<std::size_t>(mj->nu));
+    for (int a = 0; a < mj->nu; ++a) controls[static_cast<std::size_t>(a)] = data->ctrl[a] = unit(random);
+    mj_forward(mj, data);
+    world.set_joint_state(q, v);
+    world.set_controls(controls);
+    const Eigen::VectorXd limber = world.joint_passive_forces();
+    for (int k = 0; k < mj->nv; ++k) {
+      const int dof = mj->jnt_dofadr[mj_name2id(mj, mjOBJ_JOINT, names[static_cast<std::size_t>(k)].c_str())];
+      const double mujoco = data->qfrc_passive[dof] + data->qfrc_actuator[dof];
+      EXPECT_NEAR(limber[k], mujoco, 1e-12 * (1 + std::abs(mujoco))) << names[static_cast<std::size_t>(k)] << ", state " << trial;
+      largest = std::max(largest, std::abs(limber[k] - mujoco));
+    }
+  }
+  std::printf("actuator and passive forces: largest difference from MuJoCo's over 20 states %.2g N·m\n", largest);
+  mj_deleteData(data);
+  mj_deleteModel(mj);
 }
 
 }  // namespace

@@ -54,6 +54,8 @@ const char* kLeg = R"(<mujoco model="leg">
   <actuator>
     <motor joint="hip_y" gear="30" ctrllimited="true" ctrlrange="-1 1"/>
     <motor name="abduct" joint="hip_x" gear="20"/>
+    <position name="hold" joint="hip_x" gear="2" kp="50"/>
+    <velocity name="spin" joint="hip_y" kv="3"/>
   </actuator>
 </mujoco>)";
 
@@ -99,7 +101,7 @@ TEST(MjcfModel, GeomsAreWeldedBodiesAndJointsKeepTheirAxes) {
   EXPECT_EQ(model.ground->friction, 1.0);  // the larger of the floor's 0.8 and the body geoms' 1
   EXPECT_EQ(model.settings.time_step, 0.004);
   EXPECT_EQ(model.settings.gravity, Eigen::Vector3d(0, 0, -9));
-  ASSERT_EQ(model.actuators.size(), 2u);
+  ASSERT_EQ(model.actuators.size(), 4u);
   EXPECT_EQ(model.actuators[0].joint, 1);
   EXPECT_EQ(model.actuators[0].axis, 1);
   EXPECT_EQ(model.actuators[0].gear, 30);
@@ -107,6 +109,12 @@ TEST(MjcfModel, GeomsAreWeldedBodiesAndJointsKeepTheirAxes) {
   EXPECT_EQ(model.actuators[1].name, "abduct");
   EXPECT_EQ(model.actuators[1].axis, 0);
   EXPECT_FALSE(model.actuators[1].control_range.has_value());
+  EXPECT_EQ(model.actuators[2].kind, ActuatorKind::position);  // MuJoCo's length gear·qpos, qpos = limber's q + ref
+  EXPECT_EQ(model.actuators[2].gain, 50);
+  EXPECT_EQ(model.actuators[2].reference, 0.2);
+  EXPECT_EQ(model.actuators[3].kind, ActuatorKind::velocity);
+  EXPECT_EQ(model.actuators[3].gain, 3);
+  EXPECT_EQ(model.actuators[3].gear, 1);
 }
 
 TEST(MjcfModel, ACompoundBodysMassCentreIsItsGeomsWeightedMean) {
@@ -131,10 +139,10 @@ TEST(MjcfModel, WhatCannotBeRepresentedIsRefusedNamingFileLineAndElement) {
       "<mujoco>\n<compiler angle=\"radian\"/>\n<worldbody>\n<body>\n<geom size=\"0.1\"/>\n"
       "<joint name=\"h\" limited=\"true\" range=\"0.1 0.5\"/>\n</body>\n</worldbody>\n</mujoco>";
   EXPECT_EQ(refusal(hinge_off_ref).substr(0, 55), "test.xml:6: <joint name='h'>: range [0.100000, 0.500000");
-  const std::string position_actuator =
+  const std::string force_limited =
       "<mujoco>\n<worldbody>\n<body>\n<geom size=\"0.1\"/>\n<joint name=\"h\"/>\n</body>\n</worldbody>\n"
-      "<actuator>\n<position joint=\"h\"/>\n</actuator>\n</mujoco>";
-  EXPECT_EQ(refusal(position_actuator), "test.xml:9: <position>: position and velocity actuators are not supported yet (motors are)");
+      "<actuator>\n<position joint=\"h\" forcelimited=\"true\" forcerange=\"-1 1\"/>\n</actuator>\n</mujoco>";
+  EXPECT_EQ(refusal(force_limited), "test.xml:9: <position>: forcerange is not supported yet (ctrlrange is)");
 }
 
 TEST(MjcfModel, MujocosShippedModelsLoadOrAreRefusedByName) {
@@ -245,7 +253,9 @@ const char* kLegJson = R"({
   ],
   "actuators": [
     {"name": "actuator0", "joint": "hip_x+hip_y", "axis": "hip_y", "gear": 30, "control_range": [-1, 1]},
-    {"name": "abduct", "joint": "hip_x+hip_y", "axis": "hip_x", "gear": 20}
+    {"name": "abduct", "joint": "hip_x+hip_y", "axis": "hip_x", "gear": 20},
+    {"name": "hold", "joint": "hip_x+hip_y", "axis": "hip_x", "kind": "position", "gear": 2, "gain": 50, "reference": 0.2},
+    {"name": "spin", "joint": "hip_x+hip_y", "axis": "hip_y", "kind": "velocity", "gear": 1, "gain": 3}
   ]
 })";
 
@@ -322,6 +332,9 @@ TEST(MjcfModel, TheSameModelFromMjcfAndFromItsJson) {
     EXPECT_EQ(y.joint, x.joint) << x.name;
     EXPECT_EQ(y.axis, x.axis) << x.name;
     EXPECT_EQ(y.gear, x.gear) << x.name;
+    EXPECT_EQ(y.kind, x.kind) << x.name;
+    EXPECT_EQ(y.gain, x.gain) << x.name;
+    EXPECT_EQ(y.reference, x.reference) << x.name;
     expect_same_range(y.control_range, x.control_range, x.name);
   }
   ASSERT_TRUE(json.ground && mjcf.ground);
@@ -357,6 +370,9 @@ TEST(MjcfModel, TheJsonFormatRefusesABadSerialJointOrActuatorByField) {
             "leg.json: actuators[1].joint: no joint named \"knee\"");
   EXPECT_EQ(refusal_of(replaced(R"("type": "serial",)", R"("type": "revolute", "axis": [1, 0, 0],)")),
             "leg.json: joints[1].serial_axes: is for serial joints only");
+  EXPECT_EQ(refusal_of(replaced(R"("gear": 20})", R"("gear": 20, "gain": 1})")), "leg.json: actuators[1].gain: a motor has none (its force is gear x control)");
+  EXPECT_NE(refusal_of(replaced(R"("kind": "velocity", "gear": 1, "gain": 3)", R"("kind": "velocity", "gear": 1)")).find("actuators[3].gain"),
+            std::string::npos);
   EXPECT_NE(refusal_of(replaced(R"("range": [-0.7, 0.5])", R"("range": [0.1, 0.5])")).find("joints[1].serial_axes[0].range"), std::string::npos);
 }
 
