@@ -32,16 +32,17 @@ using namespace scene_json;
 
 // ---- Sections
 
-Settings read_settings(const Object& object) {
+// `settings` with the fields `object` gives; `complete`: gravity, time_step and duration are
+// required (a scene's own settings), else each may be left as it is (a wrapped model file's).
+Settings read_settings(const Object& object, Settings settings = {}, bool complete = true) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
                      "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact",
                      "limb_friction"});
-  Settings settings;
-  settings.gravity = object.vector("gravity");
-  settings.time_step = object.number("time_step");
+  if (complete || object.find("gravity")) settings.gravity = object.vector("gravity");
+  if (complete || object.find("time_step")) settings.time_step = object.number("time_step");
   require_positive(settings.time_step, object.path("time_step"));
   object.optional("release_drives_on_impact", settings.release_drives_on_impact);
-  settings.duration = object.number("duration");
+  if (complete || object.find("duration")) settings.duration = object.number("duration");
   require_positive(settings.duration, object.path("duration"));
   object.optional("damping", settings.damping);
   require_non_negative(settings.damping, object.path("damping"));
@@ -77,9 +78,9 @@ Settings read_settings(const Object& object) {
   return settings;
 }
 
-/// The settings' method part ("relaxation", "verlet", "springs"; read_settings allows the keys).
-MethodSettings read_method_settings(const Object& object) {
-  MethodSettings methods;
+/// `methods` with the settings' method part ("relaxation", "verlet", "springs"; read_settings
+/// allows the keys).
+MethodSettings read_method_settings(const Object& object, MethodSettings methods = {}) {
   if (const Json* json = object.find("relaxation")) {
     const Object relaxation(*json, object.path("relaxation"));
     relaxation.allow_only({"iterations", "tolerance", "budget_us", "over_relaxation", "projection", "substeps"});
@@ -502,14 +503,16 @@ const Variant* select_variant(const Object& root,
   return options.variant ? find(*options.variant) : file_choice;
 }
 
+void require_version(const Object& root) {
+  const int version = root.integer("limber_scene");
+  if (version != 1) fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
+}
+
 Scene read_scene(const Json& json, const SceneOptions& options) {
   const Object root(json, "");
   root.allow_only({"limber_scene", "name", "description", "settings", "ground", "bounds", "ball", "balls",
                    "bodies", "joints", "gears", "actuators", "chain", "tree", "grid", "copies", "variants", "variant", "colliders"});
-  const int version = root.integer("limber_scene");
-  if (version != 1) {
-    fail("limber_scene", "unsupported version " + std::to_string(version) + ", this build reads 1");
-  }
+  require_version(root);
 
   Scene scene;
   Model& model = scene.model;
@@ -741,28 +744,6 @@ std::string parse_error_message(std::string_view text, std::string_view source) 
          ": malformed JSON: " + locator.detail;
 }
 
-}  // namespace
-
-Scene load_scene_text(std::string_view json_text, std::string_view source,
-                      const SceneOptions& options) {
-  Json json;
-  try {
-    json = Json::parse(json_text.begin(), json_text.end());
-  } catch (const Json::exception&) {  // parse_error, or out_of_range for 1e999
-    throw ModelError(parse_error_message(json_text, source));
-  }
-  try {
-    Scene scene = read_scene(json, options);
-    validate(scene.model);
-    validate(scene.methods);
-    return scene;
-  } catch (const ModelError& error) {
-    throw ModelError(std::string(source) + ": " + error.what());
-  }
-}
-
-namespace {
-
 // An MJCF or URDF model file as a Scene: its Model, the methods' defaults, and the loader's notes.
 Scene load_model_file_scene(const std::filesystem::path& path, const SceneOptions& options, bool urdf) {
   const std::string source = path.string();
@@ -785,7 +766,59 @@ Scene load_model_file_scene(const std::filesystem::path& path, const SceneOption
   return scene;
 }
 
+
+// A scene that wraps a model file (scene_file.hpp, "A scene that wraps a model file"): the file's
+// Scene, with the wrapper's name and settings over its own. The model's path is relative to the
+// wrapper's directory (`source`).
+Scene read_model_wrapper(const Json& json, std::string_view source, const SceneOptions& options) {
+  const Object root(json, "");
+  static constexpr std::string_view kKeys[] = {"limber_scene", "name", "description", "model", "floating_base", "settings"};
+  for (const auto& [key, value] : json.items()) {
+    if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
+      fail(key, "a scene that wraps a model file takes only limber_scene, name, description, model, floating_base and settings");
+    }
+  }
+  require_version(root);
+  std::filesystem::path file = root.string("model");
+  if (file.extension() != ".xml" && file.extension() != ".urdf") {
+    fail("model", "must name an MJCF (.xml) or URDF (.urdf) file, got " + in_quotes(file.string()));
+  }
+  if (file.is_relative()) file = std::filesystem::path(source).parent_path() / file;
+  if (root.find("description")) root.string("description");  // type-checked, not kept
+  SceneOptions model_options = options;
+  root.optional("floating_base", model_options.floating_base);
+  Scene scene = load_model_file_scene(file, model_options, file.extension() == ".urdf");
+  if (root.find("name")) {
+    scene.model.name = root.string("name");
+    if (scene.model.name.empty()) fail("name", "must be a non-empty name");
+  }
+  if (const Json* settings = root.find("settings")) {
+    const Object object(*settings, "settings");
+    scene.model.settings = read_settings(object, scene.model.settings, /*complete=*/false);
+    scene.methods = read_method_settings(object, scene.methods);
+  }
+  return scene;
+}
+
 }  // namespace
+
+Scene load_scene_text(std::string_view json_text, std::string_view source,
+                      const SceneOptions& options) {
+  Json json;
+  try {
+    json = Json::parse(json_text.begin(), json_text.end());
+  } catch (const Json::exception&) {  // parse_error, or out_of_range for 1e999
+    throw ModelError(parse_error_message(json_text, source));
+  }
+  try {
+    Scene scene = json.is_object() && json.contains("model") ? read_model_wrapper(json, source, options) : read_scene(json, options);
+    validate(scene.model);
+    validate(scene.methods);
+    return scene;
+  } catch (const ModelError& error) {
+    throw ModelError(std::string(source) + ": " + error.what());
+  }
+}
 
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options) {
   if (path.extension() == ".xml" || path.extension() == ".urdf") return load_model_file_scene(path, options, path.extension() == ".urdf");

@@ -186,6 +186,18 @@
 //   "variant": "medium"                        required when "variants" is given: the default one
 // }
 //
+// A scene that wraps a model file: limber's settings over an MJCF or URDF file's.
+// {
+//   "limber_scene": 1,                         required, must be 1
+//   "model": "humanoid.xml",                   required: an MJCF (.xml) or URDF (.urdf) file, relative
+//                                              to this file's directory
+//   "name": "...", "description": "...",       optional: the name replaces the model file's
+//   "floating_base": false,                    optional (false), URDF only: SceneOptions::floating_base
+//   "settings": { ... }                        optional: any of the settings above, each replacing
+//                                              the model file's (or the import's default for the
+//                                              methods: load_scene_file); nothing else is allowed
+// }
+//
 // Errors: ModelError whose what() is one line "<source>: <path>: <problem>", the path in JSON
 // terms (e.g. "bodies[3].shape.radius", "joints[1].outboard", "colliders[2].triangles[5]",
 // "variants.thin.neck.mass"). A malformed file reports "<source>:<line>:<column>: malformed

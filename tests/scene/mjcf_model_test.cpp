@@ -3,6 +3,7 @@
 // the file, the line and the element. MuJoCo's own agreement is mjcf_featherstone_test.cpp.
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -347,6 +348,49 @@ TEST(MjcfModel, TheSameModelFromMjcfAndFromItsJson) {
   EXPECT_EQ(json.settings.limb_friction, mjcf.settings.limb_friction);
   EXPECT_EQ(json.settings.sleep.enabled, mjcf.settings.sleep.enabled);
   EXPECT_TRUE(json.colliders.empty() && mjcf.colliders.empty());
+}
+
+// A JSON scene that wraps kLeg: the model file's bodies, joints and actuators, the wrapper's name
+// and settings over the file's (the rest kept), and its errors named by field.
+TEST(MjcfModel, ASceneFileWrapsAModelFileWithLimbersSettings) {
+  const auto dir = std::filesystem::temp_directory_path() / "limber_scene_wrapper";
+  std::filesystem::create_directories(dir / "models");
+  std::ofstream(dir / "models" / "leg.xml") << kLeg;
+  const auto write = [&](const std::string& text) {
+    std::ofstream(dir / "wrap.json") << text;
+    return dir / "wrap.json";
+  };
+  const Scene plain = load_scene_file(dir / "models" / "leg.xml");
+  const Scene wrapped = load_scene_file(write(R"({"limber_scene": 1, "model": "models/leg.xml", "name": "leg, finer",
+    "settings": {"time_step": 0.001, "limb_friction": 0.3, "relaxation": {"iterations": 8}}})"));
+  EXPECT_EQ(wrapped.model.name, "leg, finer");
+  EXPECT_EQ(wrapped.model.bodies.size(), plain.model.bodies.size());
+  EXPECT_EQ(wrapped.model.joints.size(), plain.model.joints.size());
+  EXPECT_EQ(wrapped.model.actuators.size(), plain.model.actuators.size());
+  EXPECT_EQ(wrapped.model.settings.time_step, 0.001);
+  EXPECT_EQ(wrapped.model.settings.limb_friction, 0.3);
+  EXPECT_EQ(wrapped.model.settings.gravity, plain.model.settings.gravity) << "the file's, kept";
+  EXPECT_EQ(wrapped.methods.relaxation.iterations, 8);
+  EXPECT_EQ(wrapped.methods.relaxation.substeps, plain.methods.relaxation.substeps) << "the import's, kept";
+  EXPECT_EQ(wrapped.methods.verlet.joint_solve, JointSolve::tree);
+  EXPECT_EQ(wrapped.notes, plain.notes);
+  const auto refusal_of = [&](const std::string& text) {
+    try {
+      load_scene_file(write(text));
+    } catch (const ModelError& error) {
+      return std::string(error.what());
+    }
+    return std::string("(accepted)");
+  };
+  const std::string wrap = (dir / "wrap.json").string();
+  EXPECT_EQ(refusal_of(R"({"limber_scene": 1, "model": "models/leg.xml", "bodies": []})"),
+            wrap + ": bodies: a scene that wraps a model file takes only limber_scene, name, description, model, floating_base and settings");
+  EXPECT_EQ(refusal_of(R"({"limber_scene": 1, "model": "models/leg.json"})"),
+            wrap + ": model: must name an MJCF (.xml) or URDF (.urdf) file, got \"models/leg.json\"");
+  EXPECT_NE(refusal_of(R"({"limber_scene": 1, "model": "models/leg.xml", "settings": {"time_step": -1}})").find(wrap + ": settings.time_step:"),
+            std::string::npos);
+  EXPECT_NE(refusal_of(R"({"limber_scene": 1, "model": "models/arm.xml"})").find("models/arm.xml: cannot read"), std::string::npos);
+  EXPECT_NE(refusal_of(R"({"limber_scene": 1, "model": "models/leg.xml", "floating_base": true})").find("only a URDF robot"), std::string::npos);
 }
 
 TEST(MjcfModel, TheJsonFormatRefusesABadSerialJointOrActuatorByField) {
