@@ -6,6 +6,7 @@
 
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/rigid/bodies.hpp"
 
 namespace limber {
 namespace {
@@ -149,6 +150,29 @@ Eigen::VectorXd inverse_joint_dynamics(const FeatherstoneState& state, const Joi
   inverse_dynamics(state.tree, state.q, state.v, to_tree(layout, accelerations, state.tree.velocity_count()), state.settings.gravity,
                    workspace, forces);
   return from_tree(layout, forces);
+}
+
+std::vector<JointReaction> joint_reactions(const FeatherstoneState& state, const Model& model, const JointSpaceLayout& layout,
+                                           const Eigen::VectorXd& accelerations) {
+  require_size(accelerations, layout.velocity.size(), "joint accelerations");
+  DynamicsWorkspace workspace;
+  Eigen::VectorXd forces;
+  body_poses(state.tree, state.q, workspace);  // ⁱX_0, which the inverse dynamics leaves as it is
+  inverse_dynamics(state.tree, state.q, state.v, to_tree(layout, accelerations, state.tree.velocity_count()), state.settings.gravity,
+                   workspace, forces);
+  std::vector<JointReaction> reactions(model.joints.size());
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    const TreeJoint& held = state.tree_joint[j];
+    const auto node = static_cast<std::size_t>(held.body);  // a serial joint's last axis: the outboard's own body
+    // f_i on the tree's child from its parent, about the world origin; the Model's outboard
+    // takes −f_i where the tree turned the joint round (its child is the Model's inboard).
+    const SpatialVector world = held.sign * workspace.world_to_body[node].transpose_apply_force(workspace.bias_force[node]);
+    const Joint& joint = model.joints[j];
+    const Eigen::Vector3d anchor = body_point(state, static_cast<std::size_t>(joint.outboard), joint.outboard_anchor);
+    reactions[j].force = world.tail<3>();
+    reactions[j].torque = world.head<3>() - anchor.cross(reactions[j].force);
+  }
+  return reactions;
 }
 
 Eigen::VectorXd joint_passive_forces(const FeatherstoneState& state, const Model& model, const JointSpaceLayout& layout,

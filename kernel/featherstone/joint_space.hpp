@@ -55,6 +55,14 @@ Eigen::VectorXd joint_bias_forces(const FeatherstoneState& state, const JointSpa
 Eigen::VectorXd forward_joint_dynamics(const FeatherstoneState& state, const JointSpaceLayout& layout, const Eigen::VectorXd& forces);
 Eigen::VectorXd inverse_joint_dynamics(const FeatherstoneState& state, const JointSpaceLayout& layout, const Eigen::VectorXd& accelerations);
 
+/// What each Model joint transmits (Model::joints order) at the current state for accelerations
+/// `accelerations` (layout, nv): the recursive Newton–Euler algorithm's f_i (Featherstone,
+/// "Rigid Body Dynamics Algorithms", Table 5.1; MuJoCo's cfrc_int), the joint's own generalized
+/// force along its axes included, the armature's not. Gravity and the bodies' inertia alone:
+/// no contact forces.
+std::vector<JointReaction> joint_reactions(const FeatherstoneState& state, const Model& model, const JointSpaceLayout& layout,
+                                           const Eigen::VectorXd& accelerations);
+
 /// The forces of the joints' springs and dampers (their drives: k·(target − x) + c·(target rate −
 /// ẋ), explicit, as MuJoCo's qfrc_passive) and of the motors at `controls` (gear × control clamped,
 /// qfrc_actuator), in the layout (nv). Revolute, prismatic and serial joints' drives; a spherical

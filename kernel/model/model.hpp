@@ -140,6 +140,13 @@ struct CoordinateMotion {
   double velocity = 0;
 };
 
+/// What a joint transmits: the force (N) and the torque (N·m, about the joint's anchor on the
+/// outboard body) its inboard body exerts on its outboard body through it, world frame.
+struct JointReaction {
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+};
+
 /// What a joint lets its outboard body do relative to its inboard body (rows: the constraint
 /// equations it adds in maximal coordinates; DOF: the coordinates it adds in reduced ones).
 enum class JointType {

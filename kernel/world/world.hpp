@@ -183,6 +183,12 @@ class World {
   Eigen::VectorXd joint_accelerations(const Eigen::VectorXd& forces) const;
   /// τ = M v̇ + C for accelerations v̇ (nv).
   Eigen::VectorXd inverse_dynamics(const Eigen::VectorXd& accelerations) const;
+  /// What each joint transmits for accelerations v̇ (nv; e.g. joint_accelerations(τ)), in
+  /// Model::joints order: the force and torque (about its outboard anchor) the inboard body
+  /// exerts on the outboard body, world frame (model.hpp's JointReaction; MuJoCo's cfrc_int, by
+  /// recursive Newton–Euler). The joint's own force along its axes is in it; contact forces are
+  /// not taken, so it is a body out of contact's.
+  std::vector<JointReaction> joint_reactions(const Eigen::VectorXd& accelerations) const;
 
   /// The joint's drive now: the Model's, or the last set_joint_drive's, limp once
   /// Settings::release_drives_on_impact has released it.

@@ -93,6 +93,17 @@ Eigen::VectorXd World::inverse_dynamics(const Eigen::VectorXd& accelerations) co
   }
 }
 
+std::vector<JointReaction> World::joint_reactions(const Eigen::VectorXd& accelerations) const {
+  if (!accelerations.allFinite()) throw WorldError("joint_reactions: the accelerations must be finite");
+  try {
+    return with_joint_space<std::vector<JointReaction>>(
+        internals_->state, model_, [&](auto& s, const JointSpaceLayout& layout) { return limber::joint_reactions(s, model_, layout, accelerations); },
+        [this] { refuse_joint_space("joint_reactions"); });
+  } catch (const std::invalid_argument& error) {
+    throw WorldError(std::string("joint_reactions: ") + error.what());
+  }
+}
+
 void World::set_joint_state(const Eigen::VectorXd& positions, const Eigen::VectorXd& velocities) {
   if (!positions.allFinite() || !velocities.allFinite()) throw WorldError("set_joint_state: the positions and velocities must be finite");
   try {

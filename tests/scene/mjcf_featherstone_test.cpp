@@ -27,6 +27,9 @@
 
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/rigid/bodies.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/featherstone/joint_space.hpp"
 #include "limber/kernel/mass/mass_properties.hpp"
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
@@ -265,6 +268,49 @@ TEST(MjcfHumanoid, AccelerationsAreMujocosWithSpringsDampingArmatureAndMotors) {
   }
   std::printf("accelerations: largest difference from MuJoCo's qacc over 20 states %.2g of the largest |qacc|; "
               "inverse dynamics returns the forces to %.2g\n", largest, largest_inverse);
+}
+
+// What each joint transmits, at 20 random states with every motor on: limber's joint_reactions
+// at its own accelerations against MuJoCo's cfrc_int (mj_rnePostConstraint, contacts off) at its
+// own, each moved to a torque about the joint's anchor. cfrc_int is a body's, at the subtree
+// centre of mass of its tree's root, world axes: the force the parent exerts on the body.
+TEST(MjcfHumanoid, JointReactionsAreMujocosInteractionForces) {
+  SKIP_WITHOUT_HUMANOID();
+  BothEngines both(kHumanoid);
+  const Model& model = both.model();
+  FeatherstoneState& state = both.state();
+  const JointSpaceLayout layout = joint_space_layout(state, model);
+  std::mt19937 random(23);
+  double largest = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    both.set_random_state(random);
+    refresh_rigid_bodies(state);
+    mj_forward(both.mj(), both.data());
+    mj_rnePostConstraint(both.mj(), both.data());
+    const Eigen::VectorXd tree_forces = both.joint_forces();
+    Eigen::VectorXd forces(static_cast<Eigen::Index>(layout.velocity.size()));
+    for (std::size_t r = 0; r < layout.velocity.size(); ++r) forces[static_cast<Eigen::Index>(r)] = layout.velocity_sign[r] * tree_forces[layout.velocity[r]];
+    const std::vector<JointReaction> reactions = joint_reactions(state, model, layout, forward_joint_dynamics(state, layout, forces));
+    double scale = 0;
+    for (int b = 1; b < both.mj()->nbody; ++b) scale = std::max(scale, Eigen::Map<const Eigen::Vector3d>(both.data()->cfrc_int + 6 * b + 3).norm());
+    int compared = 0;
+    for (std::size_t j = 0; j < model.joints.size(); ++j) {
+      const Joint& joint = model.joints[j];
+      const int b = mj_name2id(both.mj(), mjOBJ_BODY, model.bodies[static_cast<std::size_t>(joint.outboard)].name.c_str());
+      if (b < 0) continue;  // a weld inside a compound body: no MuJoCo body of its own
+      const mjtNum* wrench = both.data()->cfrc_int + 6 * b;
+      const Eigen::Vector3d centre = Eigen::Map<const Eigen::Vector3d>(both.data()->subtree_com + 3 * both.mj()->body_rootid[b]);
+      const Eigen::Vector3d anchor = body_point(state, static_cast<std::size_t>(joint.outboard), joint.outboard_anchor);
+      const Eigen::Vector3d force(wrench[3], wrench[4], wrench[5]);
+      const Eigen::Vector3d torque = Eigen::Vector3d(wrench[0], wrench[1], wrench[2]) + (centre - anchor).cross(force);
+      EXPECT_LT((reactions[j].force - force).norm(), 1e-8 * scale) << joint.name << ", state " << trial;
+      EXPECT_LT((reactions[j].torque - torque).norm(), 1e-8 * scale) << joint.name << ", state " << trial;
+      largest = std::max({largest, (reactions[j].force - force).norm() / scale, (reactions[j].torque - torque).norm() / scale});
+      ++compared;
+    }
+    EXPECT_EQ(compared, both.mj()->nbody - 2) << "every body but the world and the free torso";
+  }
+  std::printf("joint reactions: largest difference from MuJoCo's cfrc_int over 20 states %.2g of the largest force\n", largest);
 }
 
 TEST(MjcfHumanoid, TheWorldsJointSpaceIsInMujocosOrder) {

@@ -1,7 +1,8 @@
 // Joint space through the World (world.hpp, "Joint space"): coordinates set and read back bit
 // for bit; M v̇ + C = τ for the accelerations the forward dynamics gives; the inverse dynamics of
 // those returns τ; ½ vᵀ M v is the bodies' kinetic energy; springs and motors are the passive
-// forces; the methods without joint coordinates refuse by name.
+// forces; a hinge's reaction is a falling rod's; the methods without joint coordinates refuse
+// by name.
 #include <random>
 #include <string>
 
@@ -89,6 +90,28 @@ TEST(WorldJointSpace, PassiveForcesAreTheSpringsAndTheMotors) {
   EXPECT_EQ(world.joint_space_names(), std::vector<std::string>{"hinge"});
 }
 
+// A rod (1 kg, 1 m) on a hinge at its end, released horizontal from rest: its centre falls at
+// a = (L/2)·α, α = m g (L/2) / I, so the hinge holds it up with m (g − a), a quarter of its weight
+// for a thin rod (I = m L²/3), and transmits no torque (nothing turns it about its centre but
+// the hinge's force, and the torque is taken about the hinge).
+TEST(WorldJointSpace, AHingedRodReleasedLevelHangsOnAQuarterOfItsWeight) {
+  WorldOptions options;
+  options.method = Method::featherstone;
+  const double radius = 0.01;
+  World world(testing::rod_held_at_head(JointType::revolute, Eigen::Vector3d::UnitY(), radius), options);
+  const double g = -world.model().settings.gravity.z(), inertia = 1.0 / 3 + radius * radius / 4;  // about the hinge
+  const Eigen::VectorXd acceleration = world.joint_accelerations(Eigen::VectorXd::Zero(1));
+  const std::vector<JointReaction> reactions = world.joint_reactions(acceleration);
+  ASSERT_EQ(reactions.size(), 1u);
+  const Eigen::Vector3d expected(0, 0, g * (1 - 0.25 / inertia));
+  EXPECT_LT((reactions[0].force - expected).norm(), 1e-12 * g) << reactions[0].force.transpose();
+  EXPECT_LT(reactions[0].torque.norm(), 1e-12 * g) << reactions[0].torque.transpose();
+  // At rest under its weight alone (v̇ = 0: held by a motor's torque), the hinge carries all of it.
+  const std::vector<JointReaction> held = world.joint_reactions(Eigen::VectorXd::Zero(1));
+  EXPECT_LT((held[0].force - Eigen::Vector3d(0, 0, g)).norm(), 1e-12 * g);
+  EXPECT_LT((held[0].torque - Eigen::Vector3d(0, -g * 0.5, 0)).norm(), 1e-12 * g) << "the motor's torque m g L/2 about -y";
+}
+
 TEST(WorldJointSpace, MethodsWithoutJointCoordinatesRefuseByName) {
   WorldOptions options;
   options.method = Method::lagrange;
@@ -99,6 +122,7 @@ TEST(WorldJointSpace, MethodsWithoutJointCoordinatesRefuseByName) {
   } catch (const WorldError& error) {
     EXPECT_EQ(std::string(error.what()), "joint_mass_matrix: the lagrange method has no joint coordinates (its bodies are maximal coordinates); featherstone has");
   }
+  EXPECT_THROW(world.joint_reactions(Eigen::VectorXd::Zero(1)), WorldError);
 }
 
 }  // namespace
