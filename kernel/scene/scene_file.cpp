@@ -766,7 +766,6 @@ Scene load_model_file_scene(const std::filesystem::path& path, const SceneOption
   return scene;
 }
 
-
 // A scene that wraps a model file (scene_file.hpp, "A scene that wraps a model file"): the file's
 // Scene, with the wrapper's name and settings over its own. The model's path is relative to the
 // wrapper's directory (`source`).
