@@ -15,6 +15,7 @@
 #             valgrind (tools/cachegrind_layouts.sh)
 #   clang     clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer: the fuzzer
 #             and the sanitizer runs build with it
+#   python    Python 3's headers, pybind11, NumPy and pytest: the module `limber` and its tests
 set -euo pipefail
 packages=()
 for purpose in "$@"; do
@@ -24,7 +25,8 @@ for purpose in "$@"; do
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib valgrind) ;;
     clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
-    *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench or clang)" >&2; exit 2 ;;
+    python) packages+=(python3-dev pybind11-dev python3-numpy python3-pytest) ;;
+    *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench, clang or python)" >&2; exit 2 ;;
   esac
 done
 if [ "${LIMBER_SKIP_INSTALL:-0}" = 1 ]; then exit 0; fi

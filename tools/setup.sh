@@ -2,15 +2,18 @@
 # Installs the Debian packages limber needs (only the missing ones), then configures and builds
 # what was asked for: the library and the `limber` program by default, the viewer with --viewer,
 # the test suite with --tests, the benchmarks and studies (and the other engines they compare
-# with) with --bench.
+# with) with --bench, the Python module with --python (or --tests).
 #
-#   tools/setup.sh [--viewer] [--tests] [--bench] [--portable] [--debug]
+#   tools/setup.sh [--viewer] [--tests] [--bench] [--python] [--portable] [--debug]
 #
 #   --viewer     also GLFW, OpenGL (Mesa), Dear ImGui and stb: `limber view`; and Xvfb, which runs it
 #                headless (xvfb-run -a limber view SCENE --frames N --screenshot out.png)
 #   --tests      also GoogleTest, GoogleMock and MuJoCo (the Featherstone cross-check), and the
-#                viewer's packages (its tests render under Xvfb); builds the tests
+#                viewer's packages (its tests render under Xvfb), and --python's (its tests are
+#                the suite's too); builds the tests
 #   --bench      also Google Benchmark, Bullet, ODE and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
+#   --python     also python3-dev, pybind11, NumPy and pytest; builds the module `limber`
+#                (build/python/limber: PYTHONPATH=build/python; LIMBER_BUILD_PYTHON)
 #   --portable   build for baseline x86-64 instead of -march=native
 #   --debug      Debug build instead of Release
 #
@@ -25,15 +28,17 @@ native=ON
 build_type=Release
 tests=OFF
 bench=OFF
+python=OFF
 viewer=OFF
 for arg in "$@"; do
   case "$arg" in
     --viewer) viewer=ON ;;
-    --tests) tests=ON; viewer=ON ;;
+    --tests) tests=ON; viewer=ON; python=ON ;;
     --bench) bench=ON ;;
+    --python) python=ON ;;
     --portable) native=OFF ;;
     --debug) build_type=Debug ;;
-    *) echo "setup.sh: unknown option '$arg' (expected --viewer, --tests, --bench, --portable or --debug)" >&2; exit 2 ;;
+    *) echo "setup.sh: unknown option '$arg' (expected --viewer, --tests, --bench, --python, --portable or --debug)" >&2; exit 2 ;;
   esac
 done
 build_dir=${LIMBER_BUILD_DIR:-build}
@@ -42,6 +47,7 @@ if [ "$tests" = ON ] || [ "$bench" = ON ]; then build_all=ON; fi
 if [ -f "$build_dir/CMakeCache.txt" ]; then
   grep -q '^LIMBER_BUILD_TESTS:BOOL=ON' "$build_dir/CMakeCache.txt" && tests=ON
   grep -q '^LIMBER_BUILD_BENCHMARKS:BOOL=ON' "$build_dir/CMakeCache.txt" && bench=ON
+  grep -q '^LIMBER_BUILD_PYTHON:BOOL=ON' "$build_dir/CMakeCache.txt" && python=ON
 fi
 
 # Debian 12 packages: the library's, and the tests', the viewer's and the benchmarks' on request.
@@ -49,6 +55,7 @@ purposes=(library)
 if [ "$tests" = ON ]; then purposes+=(tests); fi
 if [ "$viewer" = ON ]; then purposes+=(viewer); fi
 if [ "$bench" = ON ]; then purposes+=(bench); fi
+if [ "$python" = ON ]; then purposes+=(python); fi
 tools/install_packages.sh "${purposes[@]}"
 
 # Configure once (or again when the options change), then build only what was asked for. The
@@ -56,7 +63,7 @@ tools/install_packages.sh "${purposes[@]}"
 . tools/progress.sh
 mkdir -p "$build_dir"
 if ! cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \
-  -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" >"$build_dir/configure.log" 2>&1; then
+  -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" -DLIMBER_BUILD_PYTHON="$python" >"$build_dir/configure.log" 2>&1; then
   cat "$build_dir/configure.log" >&2
   stage "configuring $build_dir/ failed (above)"
   exit 1
