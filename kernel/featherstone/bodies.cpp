@@ -41,8 +41,7 @@ void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, do
 
 CoordinateMotion coordinate_motion(const FeatherstoneState& state, std::size_t joint, int axis) {
   const TreeJoint& held = state.tree_joint[joint];
-  const int node = held.body - (held.dofs - 1 - axis);  // a serial joint's axes are consecutive tree bodies, its last the child
-  return {held.sign * state.q[state.tree.position_offset(node)], held.sign * state.v[held.offset + axis]};
+  return {held.sign * state.q[state.tree.position_offset(held.axis_body(axis))], held.sign * state.v[held.offset + axis]};
 }
 
 bool carry_state(const FeatherstoneState& old, const Model& old_model, FeatherstoneState& fresh, const Model& new_model,

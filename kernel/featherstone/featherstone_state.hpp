@@ -70,6 +70,10 @@ struct TreeJoint {
   /// round: the Model's coordinate rates are sign·(rates of v) (rotated into the child's frame
   /// for a spherical joint).
   double sign = 1;
+
+  /// The tree body of a revolute or prismatic joint's coordinate (axis 0), or of a serial
+  /// joint's axis `axis`: its axes are consecutive tree bodies, the last the child.
+  int axis_body(int axis) const { return body - (dofs - 1 - axis); }
 };
 
 /// One axis of a serial joint as the tree holds it.

@@ -50,8 +50,7 @@ void add_joint(JointSpaceLayout& layout, const FeatherstoneState& state, const J
     case JointType::serial: {
       const auto count = static_cast<int>(joint.serial_axes.size());
       for (int a = 0; a < count; ++a) {
-        const int node = held.body - (count - 1 - a);
-        add(layout, tree.position_offset(node), held.offset + a, 1, joint.serial_axes[static_cast<std::size_t>(a)].name);
+        add(layout, tree.position_offset(held.axis_body(a)), held.offset + a, 1, joint.serial_axes[static_cast<std::size_t>(a)].name);
       }
       return;
     }

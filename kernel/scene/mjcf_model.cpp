@@ -43,6 +43,9 @@ std::string geom_element(const mjcf::Geom& geom) {
   return "geom" + (geom.name.empty() ? std::string() : " name='" + geom.name + "'") + " type=" + kNames[static_cast<int>(geom.type)];
 }
 
+// A box or ellipsoid: on a moving body, a capsule stands in for its shape (capsule_proxy.hpp).
+bool collides_as_proxy(const mjcf::Geom& geom) { return geom.type == mjcf::GeomType::box || geom.type == mjcf::GeomType::ellipsoid; }
+
 // A geom of a moving body as a limber body at its world pose, with the geom's mass over its shape.
 Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string name) {
   Body body;
@@ -65,7 +68,7 @@ Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string n
     case mjcf::GeomType::plane: refuse(geom.at, geom_element(geom), "a plane must belong to the worldbody");
   }
   body.axis = world.linear().col(along).normalized();
-  if (geom.type == mjcf::GeomType::box || geom.type == mjcf::GeomType::ellipsoid) {  // the shape is a proxy: the mass is the geom's
+  if (collides_as_proxy(geom)) {  // the shape stands in: the mass distribution is the geom's
     const Eigen::Vector3d moments = mjcf::detail::geom_principal_moments(geom.type, geom.size, geom.mass);
     body.inertial = inertial_in_body_frame(body, world.translation(), world.linear(), moments.asDiagonal());
   }
@@ -277,7 +280,7 @@ void note_capsule_proxies(const mjcf::Document& document, std::vector<std::strin
   std::size_t count = 0;
   for (const mjcf::Body& body : document.bodies) {
     for (const mjcf::Geom& geom : body.geoms) {
-      if (geom.type != mjcf::GeomType::box && geom.type != mjcf::GeomType::ellipsoid) continue;
+      if (!collides_as_proxy(geom)) continue;
       if (count++ == 0) first = &geom;
     }
   }

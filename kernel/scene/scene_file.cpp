@@ -771,12 +771,8 @@ Scene load_model_file_scene(const std::filesystem::path& path, const SceneOption
 // wrapper's directory (`source`).
 Scene read_model_wrapper(const Json& json, std::string_view source, const SceneOptions& options) {
   const Object root(json, "");
-  static constexpr std::string_view kKeys[] = {"limber_scene", "name", "description", "model", "floating_base", "settings"};
-  for (const auto& [key, value] : json.items()) {
-    if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
-      fail(key, "a scene that wraps a model file takes only limber_scene, name, description, model, floating_base and settings");
-    }
-  }
+  root.allow_only({"limber_scene", "name", "description", "model", "floating_base", "settings"},
+                  "a scene that wraps a model file takes only limber_scene, name, description, model, floating_base and settings");
   require_version(root);
   std::filesystem::path file = root.string("model");
   if (file.extension() != ".xml" && file.extension() != ".urdf") {

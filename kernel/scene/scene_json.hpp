@@ -118,10 +118,12 @@ class Object {
     if (!json.is_object()) wrong_type(json, path_, "an object");
   }
 
-  void allow_only(std::initializer_list<std::string_view> known) const {
+  /// Fails at the first key not in `known`: "unknown field", or at the key with `why` when given.
+  void allow_only(std::initializer_list<std::string_view> known, std::string_view why = {}) const {
     for (const auto& [key, value] : json_.items()) {
       if (std::find(known.begin(), known.end(), key) == known.end()) {
-        fail(path_, "unknown field " + in_quotes(key));
+        if (why.empty()) fail(path_, "unknown field " + in_quotes(key));
+        fail(child(path_, key), std::string(why));
       }
     }
   }

@@ -32,7 +32,7 @@ TYPED_TEST_SUITE(ColouredRelaxation, Scalars);
 Scene heavy_end_chain(std::size_t links) {
   std::vector<double> masses(links, 0.01);
   masses.back() = 6.7;
-  Scene scene{make_chain(masses, 0.05, true), {}};
+  Scene scene{make_chain(masses, 0.05, true), {}, {}};
   scene.methods.relaxation.iterations = 20;
   return scene;
 }
@@ -59,7 +59,7 @@ Scene mixed_scene() {
   model.bodies.push_back(branch);
   model.joints.push_back(spherical_joint("branch_joint", 2, static_cast<int>(model.bodies.size() - 1),
                           Vector3(0, 0, -0.05), Vector3(0, 0, 0.05)));
-  Scene scene{model, {}};
+  Scene scene{model, {}, {}};
   scene.methods.relaxation.iterations = 15;
   return scene;
 }

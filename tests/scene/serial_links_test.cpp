@@ -111,7 +111,7 @@ TEST(SerialLinks, AMotorActsOnTheAxisItNames) {
   Model model = rod_on_two_skew_hinges();
   model.settings.gravity.setZero();
   model.bodies[0].angular_velocity.setZero(), model.bodies[0].linear_velocity.setZero();
-  model.actuators.push_back({.name = "turn", .joint = 0, .axis = 1, .gear = 0.5});
+  model.actuators.push_back({.name = "turn", .joint = 0, .axis = 1, .gear = 0.5, .control_range = {}});
   const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 300, {1.0});
   ASSERT_GT(exact.y(), 0.01);  // turned about +z: the tip, at +x, moves to +y
   for (Method method : {Method::lagrange, Method::particles}) {
