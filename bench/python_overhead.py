@@ -31,7 +31,7 @@ def cpp_seconds(scene, links, steps):
 
 
 def python_seconds(scene, links, steps):
-    world = limber.World(limber.load_scene(str(scene), links=links), method="particles")
+    world = limber.World(limber.load_scene(str(scene), links=links), method="weighted")
     start = time.perf_counter()
     for _ in range(steps):
         world.step()

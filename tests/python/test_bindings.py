@@ -13,7 +13,7 @@ import limber
 SCENES = pathlib.Path(os.environ.get("LIMBER_SOURCE_DIR", pathlib.Path(__file__).parents[2])) / "tools" / "scenes"
 
 
-def ragdoll(method="particles"):
+def ragdoll(method="weighted"):
     return limber.World(limber.load_scene(str(SCENES / "ragdoll.json")), method=method)
 
 
@@ -66,7 +66,7 @@ def test_bad_calls_raise_world_errors_and_change_nothing():
         world.set_controls(np.ones(3))  # the ragdoll has no actuators
     with pytest.raises(limber.WorldError, match="featherstone has"):
         world.joint_positions()
-    with pytest.raises(ValueError, match="not one of"):
+    with pytest.raises(limber.OptionError, match="--method: verlet not in"):
         limber.World(limber.load_scene(str(SCENES / "ragdoll.json")), method="verlet")
     with pytest.raises(ValueError, match="expected 3 numbers"):
         world.apply_torque(world.body_names[0], np.zeros(2))

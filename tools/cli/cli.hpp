@@ -51,6 +51,13 @@ LoadedRun load_run(const std::vector<std::string>& run_arguments);
 /// "featherstone"). Throws std::exception naming the method when it is none of these.
 WorldOptions options_for_method(const std::string& method, const MethodSettings& scene);
 
+/// The options `limber run`'s flags ask for on a scene already loaded (the arguments after
+/// "run", without a scene file), with the changes they make to its model (--dt, --friction,
+/// --ball-*) made on `scene`: the options of Python's World(scene, method, **options). The flags
+/// that load a scene (--body, --links, --copies, --floating-base) or belong to a run (--steps,
+/// --out) are refused by name. Throws std::exception whose what() is `limber run`'s one line.
+WorldOptions options_for_scene(Scene& scene, const std::vector<std::string>& run_arguments);
+
 /// What `limber view` was asked for.
 struct ViewRequest {
   std::vector<std::string> run_arguments;  ///< the run flags given to `view` (load_run's input)

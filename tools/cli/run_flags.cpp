@@ -429,4 +429,16 @@ WorldOptions options_for_method(const std::string& method, const MethodSettings&
   return with_run_flags({"--method", method}, [&](const RunFlags& flags) { return method_options(flags, scene); });
 }
 
+WorldOptions options_for_scene(Scene& scene, const std::vector<std::string>& run_arguments) {
+  return with_run_flags(run_arguments, [&](const RunFlags& flags) {
+    if (!flags.scene.empty()) throw InputError("'" + flags.scene + "': a scene file is loaded by load_scene, not given with the options");
+    for (const CLI::Option* option : {flags.body_option, flags.links_option, flags.copies_option, flags.steps_option, flags.out_option}) {
+      if (given(option)) throw InputError(option->get_name() + ": is not an option of a loaded scene's World (load_scene takes --body, --links, --copies; a run's --steps and --out are the caller's)");
+    }
+    if (flags.floating_base) throw InputError("--floating-base: is not an option of a loaded scene's World (load_scene takes it)");
+    apply_overrides(scene.model, flags);
+    return method_options(flags, scene.methods);
+  });
+}
+
 }  // namespace limber::cli

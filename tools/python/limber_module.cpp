@@ -4,6 +4,7 @@
 // limber.ModelError and limber.WorldError (ValueError), carrying the C++ message whole (a bad
 // scene field names the file and the field). World.step releases the GIL, so Worlds on two
 // Python threads step at once; one World is not to be used from two threads at a time.
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <span>
@@ -18,45 +19,13 @@
 
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "tools/cli/cli.hpp"
+#include "tools/python/module.hpp"
 
-namespace py = pybind11;
 using namespace limber;
+using namespace limber::python;
 
-namespace {
-
-using Array = py::array_t<double, py::array::c_style>;
-
-constexpr std::array kMethods{Method::particles, Method::springs, Method::lagrange, Method::featherstone};
-
-Method method_named(const std::string& name) {
-  for (const Method method : kMethods) {
-    if (method_name(method) == name) return method;
-  }
-  throw py::value_error("method: '" + name + "' is not one of 'particles', 'springs', 'lagrange', 'featherstone'");
-}
-
-const char* status_name(StepStatus status) {
-  switch (status) {
-    case StepStatus::ok: return "ok";
-    case StepStatus::diverged_non_finite: return "diverged_non_finite";
-    case StepStatus::diverged_speed: return "diverged_speed";
-    case StepStatus::diverged_energy: return "diverged_energy";
-    case StepStatus::diverged_joint_gap: return "diverged_joint_gap";
-    case StepStatus::invalid_time_step: return "invalid_time_step";
-  }
-  return "unknown";
-}
-
-void put(double* row, const Eigen::Vector3d& v) { row[0] = v.x(), row[1] = v.y(), row[2] = v.z(); }
-
-// An (rows × columns) float64 array filled by `fill(row, pointer to its first value)`.
-template <typename Fill>
-Array rows(std::size_t count, py::ssize_t columns, Fill fill) {
-  Array out({static_cast<py::ssize_t>(count), columns});
-  double* data = out.mutable_data();
-  for (std::size_t r = 0; r < count; ++r) fill(r, data + static_cast<py::ssize_t>(r) * columns);
-  return out;
-}
+namespace limber::python {
 
 Eigen::Vector3d vector3(const Array& in, const char* what) {
   if (in.ndim() != 1 || in.shape(0) != 3) throw py::value_error(std::string(what) + ": expected 3 numbers");
@@ -66,6 +35,55 @@ Eigen::Vector3d vector3(const Array& in, const char* what) {
 Eigen::VectorXd vector(const Array& in, const char* what) {
   if (in.ndim() != 1) throw py::value_error(std::string(what) + ": expected a one-dimensional array");
   return Eigen::Map<const Eigen::VectorXd>(in.data(), in.shape(0));
+}
+
+}  // namespace limber::python
+
+namespace {
+
+// A keyword option as `limber run` spells it: "newton_iterations" → "--newton-iterations".
+std::string flag_name(const std::string& keyword) {
+  std::string flag = "--" + keyword;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return flag;
+}
+
+// World options (Python keywords) as `limber run`'s arguments: True is a bare flag, False none, a
+// sequence is comma-joined, anything else its str() (a float's shortest exact spelling).
+std::vector<std::string> run_arguments(const std::string& method, const py::dict& options) {
+  std::vector<std::string> arguments{"--method", method};
+  for (const auto& [key, value] : options) {
+    const std::string flag = flag_name(py::str(key));
+    if (py::isinstance<py::bool_>(value)) {
+      if (value.cast<bool>()) arguments.push_back(flag);
+      continue;
+    }
+    arguments.push_back(flag);
+    if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+      std::string joined;
+      for (const py::handle item : value) {
+        if (!joined.empty()) joined += ',';
+        joined += std::string(py::str(item));
+      }
+      arguments.push_back(joined);
+    } else {
+      arguments.push_back(py::str(value));
+    }
+  }
+  return arguments;
+}
+
+// World(scene, method, options): the scene's copy with `limber run`'s flags applied.
+World world_with_options(Scene scene, const std::string& method, const py::dict& options) {
+  WorldOptions world_options;
+  try {
+    world_options = cli::options_for_scene(scene, run_arguments(method, options));
+  } catch (const ModelError&) {
+    throw;
+  } catch (const std::exception& error) {
+    throw OptionError(std::string("World: ") + error.what());
+  }
+  return World(std::move(scene.model), world_options);
 }
 
 py::dict observation(const Observation& o) {
@@ -98,33 +116,25 @@ void bind_scene(py::module_& m) {
       .def_property_readonly("notes", [](const Scene& s) { return s.notes; }, "what a model file's loader dropped or approximated");
   m.def(
       "load_scene",
-      [](const std::string& path, std::optional<std::string> variant, std::optional<long> links, std::optional<long> copies) {
+      [](const std::string& path, std::optional<std::string> body, std::optional<long> links, std::optional<long> copies, bool floating_base) {
         SceneOptions options;
-        options.variant = std::move(variant), options.links = links, options.copies = copies;
+        options.variant = std::move(body), options.links = links, options.copies = copies, options.floating_base = floating_base;
         return load_scene_file(path, options);
       },
-      py::arg("path"), py::kw_only(), py::arg("variant") = py::none(), py::arg("links") = py::none(), py::arg("copies") = py::none(),
-      "Loads a scene file: limber's JSON, MuJoCo's MJCF (.xml) or a URDF robot (.urdf). Raises ModelError naming the file and field.");
+      py::arg("path"), py::kw_only(), py::arg("body") = py::none(), py::arg("links") = py::none(), py::arg("copies") = py::none(),
+      py::arg("floating_base") = false,
+      "Loads a scene file: limber's JSON, MuJoCo's MJCF (.xml) or a URDF robot (.urdf), with `limber run`'s scene flags: body (a "
+      "variant: the humanoid's thin, medium, wide), links (a chain or tree generator's), copies (side by side), floating_base (a "
+      "URDF robot's root floats). Raises ModelError naming the file and field.");
 }
 
-using WorldClass = py::class_<World>;
-
-// Construction, stepping and what identifies the World.
-void bind_stepping(WorldClass& world) {
-  world.def(py::init([](const Scene& scene, const std::string& method) { return World(scene, method_named(method)); }), py::arg("scene"),
-           py::arg("method") = "particles", "method: 'particles', 'springs', 'lagrange' or 'featherstone', with the scene's settings")
-      .def(
-          "step", [](World& w, std::optional<double> dt) {
-            StepStatus status;
-            {
-              py::gil_scoped_release release;
-              status = dt ? w.step(*dt) : w.step();
-            }
-            return status_name(status);
-          },
-          py::arg("dt") = py::none(), "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not.")
+// Construction and what identifies the World (limber.World, in limber/__init__.py, wraps the
+// constructor with keyword options and keeps the method's name).
+void bind_identity(WorldClass& world) {
+  world
+      .def(py::init(&world_with_options), py::arg("scene"), py::arg("method"), py::arg("options"),
+           "A World of a copy of `scene` under `method` (limber run's --method) with `options`, a dict of limber run's flags")
       .def_property_readonly("time", &World::time, "s")
-      .def_property_readonly("method", [](const World& w) { return std::string(method_name(w.method())); })
       .def_property_readonly("body_names", [](const World& w) {
         std::vector<std::string> names;
         for (const BodyId id : w.bodies()) names.push_back(w.body_description(id).name);
@@ -221,10 +231,12 @@ PYBIND11_MODULE(_limber, m) {
   m.doc() = "limber: articulated bodies with distributed mass (https://github.com/…/limber; README.md)";
   py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError);
   py::register_exception<WorldError>(m, "WorldError", PyExc_ValueError);
-  m.attr("methods") = std::vector<std::string>{"particles", "springs", "lagrange", "featherstone"};
+  py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
+  m.attr("methods") = std::vector<std::string>{"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   bind_scene(m);
   WorldClass world(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
-  bind_stepping(world);
+  bind_identity(world);
+  bind_running(world);
   bind_read_outs(world);
   bind_loads(world);
   bind_joint_space(world);

@@ -7,10 +7,36 @@
         assert world.step() == "ok"
     positions, orientations = world.poses()   # N×3 m, N×4 (w, x, y, z)
 
-Units are SI. Errors are limber.ModelError (a bad scene: the message names the file and the
-field) and limber.WorldError (a bad call), both ValueErrors. World.step releases the GIL.
-The C++ reference is kernel/world/world.hpp.
+Units are SI. A World's options are `limber run`'s flags, spelled with underscores
+(World(scene, "weighted", iterations=20, substeps=4, dt=1/240)); limber.sweep runs grids of them.
+Errors are limber.ModelError (a bad scene: the message names the file and the field),
+limber.OptionError (a bad option) and limber.WorldError (a bad call), all ValueErrors.
+World.step and World.run release the GIL. The C++ reference is kernel/world/world.hpp;
+tools/python/README.md maps each C++ call to its Python counterpart.
 """
-from ._limber import ModelError, Scene, World, WorldError, load_scene, methods
+from . import _limber
+from ._limber import ModelError, OptionError, Scene, WorldError, load_scene, methods
 
-__all__ = ["ModelError", "Scene", "World", "WorldError", "load_scene", "methods"]
+
+class World(_limber.World):
+    """One scene under one method, stepped and read (kernel/world/world.hpp).
+
+    method: 'weighted', 'unweighted', 'springs-explicit', 'springs-implicit', 'lagrange' or
+    'featherstone' (`limber run --method`). options: `limber run`'s other flags with '_' for '-'
+    (dt, iterations, substeps, projection, solver, newton_iterations, integrator, stiffness,
+    threads, ...; `limber run --help` lists them): True is a bare flag, a sequence is
+    comma-joined. The flags that load a scene (body, links, copies, floating_base) belong to
+    load_scene. The World steps a copy of `scene` with the options' changes (dt, friction, ball_*).
+    Raises OptionError with limber run's message for a bad option.
+    """
+
+    def __init__(self, scene, method="weighted", **options):
+        super().__init__(scene, method, options)
+        self.method = method
+        self.options = dict(options)
+
+    def __repr__(self):
+        return f"limber.World(method={self.method!r}, bodies={len(self.body_names)}, time={self.time:g} s)"
+
+
+__all__ = ["ModelError", "OptionError", "Scene", "World", "WorldError", "load_scene", "methods"]

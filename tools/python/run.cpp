@@ -1,0 +1,110 @@
+// World.step and World.run: stepping with the GIL released, one step or many metered in C++ —
+// the run a sweep measures (tools/python/limber/sweep.py).
+#include <chrono>
+#include <vector>
+
+#include "limber/kernel/study/run_metrics.hpp"
+#include "tools/python/module.hpp"
+
+namespace limber::python {
+namespace {
+
+// What World.run returns: the RunErrors of the steps taken (kernel/study/run_metrics.hpp),
+// the wall time spent in World::step alone, and the sampled body positions.
+struct MeteredRun {
+  long steps = 0;
+  StepStatus status = StepStatus::ok;
+  double step_seconds = 0;
+  study::RunErrors errors;
+  std::vector<double> samples;  // K × bodies × 3, m
+  std::size_t sample_count = 0;
+};
+
+MeteredRun metered_run(World& world, long steps, long sample_every, bool observe) {
+  MeteredRun run;
+  std::vector<Pose> poses(world.bodies().size());
+  const auto sample = [&] {
+    world.poses(poses);
+    for (const Pose& pose : poses) run.samples.insert(run.samples.end(), {pose.position.x(), pose.position.y(), pose.position.z()});
+    ++run.sample_count;
+  };
+  std::optional<study::ErrorMeter> meter;
+  if (observe) meter.emplace(world.observe(), study::energy_scale(world.model()));
+  if (sample_every > 0) sample();
+  using Clock = std::chrono::steady_clock;
+  while (run.steps < steps) {
+    const Clock::time_point start = Clock::now();
+    run.status = world.step();
+    run.step_seconds += std::chrono::duration<double>(Clock::now() - start).count();
+    if (run.status != StepStatus::ok) break;
+    ++run.steps;
+    if (meter) meter->add(world.observe());
+    if (sample_every > 0 && run.steps % sample_every == 0) sample();
+  }
+  if (meter) run.errors = meter->result();
+  return run;
+}
+
+py::dict as_dict(MeteredRun&& run, bool observe) {
+  py::dict out;
+  out["steps"] = run.steps;
+  out["status"] = status_name(run.status);
+  out["step_seconds"] = run.step_seconds;
+  if (observe) {
+    const study::RunErrors& e = run.errors;
+    out["max_joint_gap"] = e.max_joint_gap, out["rms_joint_gap"] = e.rms_joint_gap, out["max_link_stretch"] = e.max_link_stretch;
+    out["energy_drift"] = e.energy_drift, out["energy_gain"] = e.energy_gain, out["energy_scale"] = e.energy_scale;
+  }
+  const std::size_t bodies = run.sample_count ? run.samples.size() / (3 * run.sample_count) : 0;
+  Array samples({static_cast<py::ssize_t>(run.sample_count), static_cast<py::ssize_t>(bodies), py::ssize_t{3}});
+  std::copy(run.samples.begin(), run.samples.end(), samples.mutable_data());
+  out["samples"] = samples;
+  return out;
+}
+
+}  // namespace
+
+const char* status_name(StepStatus status) {
+  switch (status) {
+    case StepStatus::ok: return "ok";
+    case StepStatus::diverged_non_finite: return "diverged_non_finite";
+    case StepStatus::diverged_speed: return "diverged_speed";
+    case StepStatus::diverged_energy: return "diverged_energy";
+    case StepStatus::diverged_joint_gap: return "diverged_joint_gap";
+    case StepStatus::invalid_time_step: return "invalid_time_step";
+  }
+  return "unknown";
+}
+
+void bind_running(WorldClass& world) {
+  world
+      .def(
+          "step", [](World& w, std::optional<double> dt) {
+            StepStatus status;
+            {
+              py::gil_scoped_release release;
+              status = dt ? w.step(*dt) : w.step();
+            }
+            return status_name(status);
+          },
+          py::arg("dt") = py::none(), "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not.")
+      .def(
+          "run", [](World& w, long steps, long sample_every, bool observe) {
+            if (steps < 0) throw py::value_error("run: steps must be ≥ 0, got " + std::to_string(steps));
+            if (sample_every < 0) throw py::value_error("run: sample_every must be ≥ 0, got " + std::to_string(sample_every));
+            MeteredRun run;
+            {
+              py::gil_scoped_release release;
+              run = metered_run(w, steps, sample_every, observe);
+            }
+            return as_dict(std::move(run), observe);
+          },
+          py::arg("steps"), py::kw_only(), py::arg("sample_every") = 0, py::arg("observe") = true,
+          "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', as a dict: steps (taken), status "
+          "(the stopping step's, or 'ok'), step_seconds (wall time inside the steps alone, s); with observe, the run's errors over "
+          "every step (kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch (relative to link length), "
+          "energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL (J); samples: the body "
+          "positions (K × N × 3 m) before the first step and after every sample_every steps (K = 0 when sample_every is 0).");
+}
+
+}  // namespace limber::python
