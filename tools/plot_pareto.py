@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Pareto plots of run time against error from bench/pareto_study's CSVs, and the README's table.
 
-Usage: tools/plot_pareto.py OUT_PNG SCENE_CSV [SCENE_CSV ...]
+Usage: tools/plot_pareto.py OUT_PNG CSV [CSV ...]
+Each CSV is bench/pareto_study's (one scene) or a limber.sweep table (python3 -m limber.sweep
+bench/pareto_sweep/grid.json; one panel per scene in it), whose rows are named by the same series.
 One panel per scene: wall time per simulated second against the error, log-log, one series per
 method (a line through its settings, in CSV order). The error is the trajectory error against
 the reference (m) where the CSV has one, else the largest joint gap or link stretch (relative).
@@ -52,12 +54,49 @@ def pareto_front(rows):
     return front
 
 
-def main():
-    out_png, paths = sys.argv[1], sys.argv[2:]
-    scenes = []
+# A sweep row's series: its method and the options that are not a setting along the series.
+SWEEP_SERIES = {
+    ("weighted", "gauss-seidel", "pbd"): "verlet gauss-seidel", ("weighted", "jacobi", "pbd"): "verlet jacobi",
+    ("weighted", "direct", "pbd"): "verlet direct", ("weighted", "gauss-seidel", "rattle"): "verlet rattle gauss-seidel",
+    ("weighted", "direct", "rattle"): "verlet rattle direct", ("springs-explicit",): "springs explicit",
+    ("springs-implicit",): "springs implicit", ("lagrange", "semi-implicit", "baumgarte"): "lagrange baumgarte",
+    ("lagrange", "semi-implicit", "projection"): "lagrange projection", ("lagrange", "rk4", "projection"): "lagrange rk4 projection",
+    ("featherstone", "rk4"): "featherstone rk4", ("featherstone", "semi-implicit"): "featherstone semi-implicit",
+}
+SWEEP_SETTINGS = ("iterations", "newton_iterations", "substeps", "stiffness")
+
+
+def from_sweep(row):
+    """A limber.sweep row in pareto_study's shape. Stable: the step never diverged, and the run
+    stayed within kernel/study/run_metrics.hpp's StabilityBounds (gain ≤ 0.5, gap ≤ 0.5)."""
+    present = lambda key: row.get(key, "nan") not in ("nan", "")
+    key = (row["method"], *(row[k] for k in ("solver", "integrator", "projection", "stabilization") if present(k)))
+    key = {"weighted": key[:3], "lagrange": key[:3], "featherstone": key[:2]}.get(row["method"], key[:1])
+    rate = float(row["steps_per_second"]) * float(row["dt"])
+    stable = (row["status"] == "ok" and float(row["energy_gain"]) <= 0.5
+              and max(float(row["max_joint_gap"]), float(row["max_link_stretch"])) <= 0.5)
+    return {"scene": row["scene"], "series": SWEEP_SERIES.get(key, " ".join(key)), "time_step": row["dt"],
+            "setting": " ".join(f"{k} {float(row[k]):g}" for k in SWEEP_SETTINGS if present(k)),
+            "wall_per_simulated_second": str(1 / rate if rate > 0 else math.inf), "trajectory_error": row["trajectory_error"],
+            "max_joint_gap": row["max_joint_gap"], "max_link_stretch": row["max_link_stretch"],
+            "relative_energy_drift": row["energy_drift"], "stability": "stable" if stable else "diverged"}
+
+
+def read_scenes(paths):
+    """One list of pareto_study-shaped rows per scene, in the files' order."""
+    scenes = {}
     for path in paths:
         with open(path, newline="") as handle:
-            scenes.append(list(csv.DictReader(handle)))
+            rows = list(csv.DictReader(handle))
+        for row in rows:
+            row = from_sweep(row) if "steps_per_second" in row else row
+            scenes.setdefault((path, row["scene"]), []).append(row)
+    return list(scenes.values())
+
+
+def main():
+    out_png, paths = sys.argv[1], sys.argv[2:]
+    scenes = read_scenes(paths)
     figure, axes = plt.subplots(1, len(scenes), figsize=(5.2 * len(scenes), 5.6), squeeze=False)
     for panel, rows in zip(axes[0], scenes):
         scene = rows[0]["scene"]
