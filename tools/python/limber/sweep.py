@@ -35,6 +35,7 @@ lacks (resume). The reference is one run per scene with the grid's "reference" o
 """
 import argparse
 import concurrent.futures
+import dataclasses
 import itertools
 import json
 import math
@@ -58,6 +59,17 @@ MEASURED = ["steps_per_second"]  # wall-time measurements: the only columns that
 
 class GridError(ValueError):
     """A bad grid: the message names the file (or 'grid'), the field and the problem."""
+
+
+@dataclasses.dataclass(frozen=True)
+class Grid:
+    """A checked grid: scene entries (paths resolved), the methods' and settings' expansions."""
+    duration: float
+    sample_interval: float
+    scenes: list
+    methods: list
+    settings: list
+    reference: dict = None
 
 
 def _expand(options, where):
@@ -84,7 +96,8 @@ def load_grid(path):
 
 
 def check_grid(grid, source="grid", base=None):
-    """The grid with defaults and scene paths resolved; GridError names `source` and the field."""
+    """The Grid a dict describes, defaults set and scene paths resolved against `base`; GridError
+    names `source` and the field."""
     if not isinstance(grid, dict):
         raise GridError(f"{source}: expected a JSON object")
     for key in grid:
@@ -120,14 +133,13 @@ def check_grid(grid, source="grid", base=None):
     reference = grid.get("reference")
     if reference is not None and (not isinstance(reference, dict) or "method" not in reference):
         raise GridError(f"{source}: reference: expected an object with a 'method'")
-    return {"duration": float(duration), "sample_interval": float(interval), "scenes": scenes, "methods": methods,
-            "settings": settings, "reference": reference}
+    return Grid(float(duration), float(interval), scenes, methods, settings, reference)
 
 
 def configurations(grid):
     """Every configuration of a checked grid, in order: dicts of scene, method and options."""
     out = []
-    for scene, method, setting in itertools.product(grid["scenes"], grid["methods"], grid["settings"]):
+    for scene, method, setting in itertools.product(grid.scenes, grid.methods, grid.settings):
         options = {**method, **setting}
         out.append({"index": len(out), "scene": scene["name"], **options})
     return out
@@ -152,9 +164,9 @@ def _run(scene, options, duration, interval):
 
 def reference_samples(scene, grid):
     """The reference run's samples (K × N × 3 m) on `scene`, or None without a reference."""
-    if grid["reference"] is None:
+    if grid.reference is None:
         return None
-    run = _run(scene, grid["reference"], grid["duration"], grid["sample_interval"])
+    run = _run(scene, grid.reference, grid.duration, grid.sample_interval)
     if run["status"] != "ok":
         raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['status']}")
     return run["samples"]
@@ -181,7 +193,7 @@ def run_configuration(configuration, scene, grid, reference):
         return _error_row(configuration, f"reference: {reference}")
     options = {k: v for k, v in configuration.items() if k not in ("index", "scene")}
     try:
-        run = _run(scene, options, grid["duration"], grid["sample_interval"])
+        run = _run(scene, options, grid.duration, grid.sample_interval)
     except Exception as error:  # a failed configuration is a row, never a lost sweep
         return _error_row(configuration, f"{type(error).__name__}: {error}")
     scale, seconds = run["energy_scale"], run["step_seconds"]
@@ -206,7 +218,7 @@ def _read_finished(out):
 
 
 def sweep(grid, client=None, *, workers=None, out=None, progress=None):
-    """Runs every configuration of `grid` (a dict, or a JSON file's path) and returns the table, one
+    """Runs every configuration of `grid` (a Grid, a dict, or a JSON file's path) and returns the table, one
     row per configuration in grid order (a pandas DataFrame; its columns are in the module's
     docstring).
 
@@ -215,7 +227,10 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
     out: a CSV file the rows are appended to as they finish; the configurations it holds already
     are not run again. progress: called with (rows done, rows in all) as rows finish.
     """
-    grid = load_grid(grid) if isinstance(grid, (str, os.PathLike)) else check_grid(grid)
+    if isinstance(grid, (str, os.PathLike)):
+        grid = load_grid(grid)
+    elif not isinstance(grid, Grid):
+        grid = check_grid(grid)
     every = configurations(grid)
     option_columns = list(dict.fromkeys(k for c in every for k in c if k not in ("index", "scene")))
     columns = ["index", "scene", *option_columns, *METRICS]
@@ -234,7 +249,7 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
         if progress:
             progress(len(done) + len(rows), len(every))
 
-    scenes = {scene["name"]: scene for scene in grid["scenes"] if any(c["scene"] == scene["name"] for c in remaining)}
+    scenes = {scene["name"]: scene for scene in grid.scenes if any(c["scene"] == scene["name"] for c in remaining)}
     if client is not None:
         _run_on_dask(client, grid, scenes, remaining, finish)
     elif (workers or os.cpu_count() or 1) == 1:
@@ -250,16 +265,24 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
 
 
 def _run_on_processes(workers, grid, scenes, remaining, finish):
+    """Each scene's reference first; its configurations are submitted as soon as it is done."""
     # spawn, not fork: the parent's kernel may hold worker threads a forked child would lack.
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        names = list(scenes)
-        references = dict(zip(names, pool.map(_reference_or_error, [scenes[n] for n in names], itertools.repeat(grid))))
-        futures = {pool.submit(run_configuration, c, scenes[c["scene"]], grid, references[c["scene"]]): c for c in remaining}
-        for future in concurrent.futures.as_completed(futures):
-            try:
-                finish(future.result())
-            except Exception as error:  # the process died (a crash): the row says so
-                finish(_error_row(futures[future], f"worker: {type(error).__name__}: {error}"))
+        futures = {pool.submit(_reference_or_error, scene, grid): (None, name) for name, scene in scenes.items()}
+        while futures:
+            done, _ = concurrent.futures.wait(futures, return_when=concurrent.futures.FIRST_COMPLETED)
+            for future in done:
+                configuration, name = futures.pop(future)
+                try:
+                    result = future.result()
+                except Exception as error:  # the process died (a crash): the rows say so
+                    result = RuntimeError(f"worker: {type(error).__name__}: {error}")
+                if configuration is not None:
+                    finish(_error_row(configuration, str(result)) if isinstance(result, Exception) else result)
+                    continue
+                for c in remaining:
+                    if c["scene"] == name:
+                        futures[pool.submit(run_configuration, c, scenes[name], grid, result)] = (c, name)
 
 
 def _run_on_dask(client, grid, scenes, remaining, finish):

@@ -1,0 +1,89 @@
+#!/usr/bin/python3
+"""One grid swept four ways, raced in one run: wall time of each and whether their tables agree.
+
+    PYTHONPATH=build/python bench/sweep_scaling.py [--grid bench/pareto_sweep/grid.json] [--out T.csv]
+
+1. one process (limber.sweep's workers=1: this process runs every configuration);
+2. 2 local processes (workers=2);
+3. a Dask LocalCluster of 2 worker processes on 127.0.0.1;
+4. a scheduler and 2 workers started as separate processes (dask-scheduler, dask-worker) on
+   127.0.0.1, reached through their address as `python3 -m limber.sweep --scheduler` does.
+Every table must equal the first in every column but the measured steps/s, bit for bit. Prints a
+markdown table; --out keeps the one-process table (tools/plot_pareto.py draws it). Needs Debian's
+python3-distributed. Run it on a quiet machine: the workers share its cores.
+"""
+import argparse
+import contextlib
+import os
+import subprocess
+import sys
+import time
+
+import distributed
+import pandas as pd
+
+import limber.sweep
+
+
+@contextlib.contextmanager
+def separate_cluster(port=8786):
+    """dask-scheduler and 2 dask-worker processes on 127.0.0.1, stopped on exit."""
+    address = f"tcp://127.0.0.1:{port}"
+    environment = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    processes = [subprocess.Popen(["dask-scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard"],
+                                  env=environment, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    try:
+        for _ in range(2):
+            processes.append(subprocess.Popen(["dask-worker", address, "--nworkers", "1", "--nthreads", "1", "--no-dashboard",
+                                               "--host", "127.0.0.1"], env=environment, stdout=subprocess.DEVNULL,
+                                              stderr=subprocess.DEVNULL))
+        with distributed.Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+            yield client
+    finally:
+        for process in reversed(processes):
+            process.terminate()
+        for process in processes:
+            process.wait(timeout=30)
+
+
+def timed(run):
+    start = time.perf_counter()
+    table = run()
+    return time.perf_counter() - start, table
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--grid", default="bench/pareto_sweep/grid.json")
+    parser.add_argument("--out", help="the one-process table, CSV")
+    arguments = parser.parse_args()
+    grid = limber.sweep.load_grid(arguments.grid)
+    count = len(limber.sweep.configurations(grid))
+    results = []
+    results.append(("1 process", *timed(lambda: limber.sweep.sweep(grid, workers=1))))
+    one = results[0][2]
+    results.append(("2 local processes", *timed(lambda: limber.sweep.sweep(grid, workers=2))))
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+        results.append(("Dask LocalCluster, 2 workers", *timed(lambda: limber.sweep.sweep(grid, client=client))))
+    with separate_cluster() as client:
+        results.append(("dask-scheduler + 2 dask-workers, 127.0.0.1", *timed(lambda: limber.sweep.sweep(grid, client=client))))
+    if arguments.out:
+        one.to_csv(arguments.out, index=False, na_rep="nan")
+    deterministic = [c for c in one.columns if c not in limber.sweep.MEASURED]
+    print(f"{arguments.grid}: {count} configurations, {int((one['status'] == 'error').sum())} error rows, "
+          f"{int((one['status'].str.startswith('diverged')).sum())} diverged\n")
+    print("| runs on | wall s | speed-up | table |")
+    print("|---|---:|---:|---|")
+    for name, seconds, table in results:
+        try:
+            pd.testing.assert_frame_equal(table[deterministic], one[deterministic], check_exact=True)
+            same = "identical"
+        except AssertionError as difference:
+            same = f"DIFFERS: {str(difference).splitlines()[0]}"
+        print(f"| {name} | {seconds:.1f} | {results[0][1] / seconds:.2f}× | {same} |")
+
+
+if __name__ == "__main__":
+    main()
