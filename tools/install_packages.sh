@@ -15,7 +15,8 @@
 #             valgrind (tools/cachegrind_layouts.sh)
 #   clang     clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer: the fuzzer
 #             and the sanitizer runs build with it
-#   python    Python 3's headers, pybind11, NumPy and pytest: the module `limber` and its tests
+#   python    Python 3's headers, pybind11, NumPy and pytest: the module `limber` and its tests;
+#             pandas and Dask distributed: its sweeps (limber.sweep)
 set -euo pipefail
 packages=()
 for purpose in "$@"; do
@@ -25,7 +26,7 @@ for purpose in "$@"; do
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib valgrind) ;;
     clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
-    python) packages+=(python3-dev pybind11-dev python3-numpy python3-pytest) ;;
+    python) packages+=(python3-dev pybind11-dev python3-numpy python3-pytest python3-pandas python3-distributed) ;;
     *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench, clang or python)" >&2; exit 2 ;;
   esac
 done

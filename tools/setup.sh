@@ -12,7 +12,7 @@
 #                viewer's packages (its tests render under Xvfb), and --python's (its tests are
 #                the suite's too); builds the tests
 #   --bench      also Google Benchmark, Bullet, ODE and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
-#   --python     also python3-dev, pybind11, NumPy and pytest; builds the module `limber`
+#   --python     also python3-dev, pybind11, NumPy, pytest, pandas and Dask; builds the module `limber`
 #                (build/python/limber: PYTHONPATH=build/python; LIMBER_BUILD_PYTHON)
 #   --portable   build for baseline x86-64 instead of -march=native
 #   --debug      Debug build instead of Release

@@ -186,21 +186,21 @@ def _error_row(configuration, message):
     return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": "error", "error": message}
 
 
-def run_configuration(configuration, scene, grid, reference):
-    """One row of the table: `configuration`'s metrics, or an 'error' row with the message.
-    `reference`: the scene's reference samples, None, or the exception that stopped them."""
-    if isinstance(reference, Exception):
-        return _error_row(configuration, f"reference: {reference}")
+def run_configuration(configuration, scene, grid):
+    """One run: (`configuration`'s row but its trajectory_error, its samples), or (an 'error' row
+    with the message, None). The samples meet the reference's in the sweep's process, so no run
+    waits for its scene's reference."""
     options = {k: v for k, v in configuration.items() if k not in ("index", "scene")}
     try:
         run = _run(scene, options, grid.duration, grid.sample_interval)
     except Exception as error:  # a failed configuration is a row, never a lost sweep
-        return _error_row(configuration, f"{type(error).__name__}: {error}")
+        return _error_row(configuration, f"{type(error).__name__}: {error}"), None
     scale, seconds = run["energy_scale"], run["step_seconds"]
-    return {**configuration, "steps": run["steps"], "steps_per_second": run["steps"] / seconds if seconds > 0 else math.nan,
-            "trajectory_error": trajectory_error(run["samples"], reference), "max_joint_gap": run["max_joint_gap"],
-            "rms_joint_gap": run["rms_joint_gap"], "max_link_stretch": run["max_link_stretch"],
-            "energy_drift": run["energy_drift"] / scale, "energy_gain": run["energy_gain"] / scale, "status": run["status"], "error": ""}
+    row = {**configuration, "steps": run["steps"], "steps_per_second": run["steps"] / seconds if seconds > 0 else math.nan,
+           "trajectory_error": math.nan, "max_joint_gap": run["max_joint_gap"], "rms_joint_gap": run["rms_joint_gap"],
+           "max_link_stretch": run["max_link_stretch"], "energy_drift": run["energy_drift"] / scale,
+           "energy_gain": run["energy_gain"] / scale, "status": run["status"], "error": ""}
+    return row, run["samples"]
 
 
 def _reference_or_error(scene, grid):
@@ -208,6 +208,35 @@ def _reference_or_error(scene, grid):
         return reference_samples(scene, grid)
     except Exception as error:
         return error
+
+
+class _Rows:
+    """Completes each row when both its run and its scene's reference have arrived, in whatever
+    order they come, and hands it to `finish`."""
+
+    def __init__(self, finish):
+        self.finish, self.references, self.waiting = finish, {}, {}
+
+    def deliver(self, task, result):
+        kind, item = task
+        if isinstance(result, Exception) and kind == "run":  # the process running it died
+            result = (_error_row(item, f"worker: {type(result).__name__}: {result}"), None)
+        if kind == "reference":
+            self.references[item] = result
+            for row, samples in self.waiting.pop(item, []):
+                self._complete(row, samples)
+        elif item["scene"] in self.references:
+            self._complete(*result)
+        else:
+            self.waiting.setdefault(item["scene"], []).append(result)
+
+    def _complete(self, row, samples):
+        reference = self.references[row["scene"]]
+        if samples is not None and isinstance(reference, Exception):
+            row = {**row, "error": f"reference: {reference}"}
+        elif samples is not None:
+            row = {**row, "trajectory_error": trajectory_error(samples, reference)}
+        self.finish(row)
 
 
 def _read_finished(out):
@@ -250,51 +279,40 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
             progress(len(done) + len(rows), len(every))
 
     scenes = {scene["name"]: scene for scene in grid.scenes if any(c["scene"] == scene["name"] for c in remaining)}
+    # The references first: they are the longest runs, and each scene's rows wait for its own.
+    tasks = [(("reference", name), _reference_or_error, (scene, grid)) for name, scene in scenes.items()]
+    tasks += [(("run", c), run_configuration, (c, scenes[c["scene"]], grid)) for c in remaining]
+    collector = _Rows(finish)
     if client is not None:
-        _run_on_dask(client, grid, scenes, remaining, finish)
+        results = _on_dask(client, tasks)
     elif (workers or os.cpu_count() or 1) == 1:
-        references = {name: _reference_or_error(scene, grid) for name, scene in scenes.items()}
-        for c in remaining:
-            finish(run_configuration(c, scenes[c["scene"]], grid, references[c["scene"]]))
+        results = ((task, function(*arguments)) for task, function, arguments in tasks)
     else:
-        _run_on_processes(workers or os.cpu_count(), grid, scenes, remaining, finish)
+        results = _on_processes(workers or os.cpu_count(), tasks)
+    for task, result in results:
+        collector.deliver(task, result)
     table = pd.DataFrame(rows, columns=columns)
     if finished is not None:
         table = pd.concat([finished.reindex(columns=columns), table], ignore_index=True)
     return table.sort_values("index", kind="stable").reset_index(drop=True)
 
 
-def _run_on_processes(workers, grid, scenes, remaining, finish):
-    """Each scene's reference first; its configurations are submitted as soon as it is done."""
+def _on_processes(workers, tasks):
+    """(task, result) pairs as local processes finish them; a process that died gives its exception."""
     # spawn, not fork: the parent's kernel may hold worker threads a forked child would lack.
     with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(_reference_or_error, scene, grid): (None, name) for name, scene in scenes.items()}
-        while futures:
-            done, _ = concurrent.futures.wait(futures, return_when=concurrent.futures.FIRST_COMPLETED)
-            for future in done:
-                configuration, name = futures.pop(future)
-                try:
-                    result = future.result()
-                except Exception as error:  # the process died (a crash): the rows say so
-                    result = RuntimeError(f"worker: {type(error).__name__}: {error}")
-                if configuration is not None:
-                    finish(_error_row(configuration, str(result)) if isinstance(result, Exception) else result)
-                    continue
-                for c in remaining:
-                    if c["scene"] == name:
-                        futures[pool.submit(run_configuration, c, scenes[name], grid, result)] = (c, name)
+        futures = {pool.submit(function, *arguments): task for task, function, arguments in tasks}
+        for future in concurrent.futures.as_completed(futures):
+            yield futures[future], future.exception() or future.result()
 
 
-def _run_on_dask(client, grid, scenes, remaining, finish):
+def _on_dask(client, tasks):
+    """(task, result) pairs as the cluster finishes them; a worker that died gives its exception."""
     import distributed
 
-    references = {name: client.submit(_reference_or_error, scene, grid, pure=False) for name, scene in scenes.items()}
-    futures = {client.submit(run_configuration, c, scenes[c["scene"]], grid, references[c["scene"]], pure=False): c for c in remaining}
+    futures = {client.submit(function, *arguments, pure=False): task for task, function, arguments in tasks}
     for future in distributed.as_completed(futures):
-        try:
-            finish(future.result())
-        except Exception as error:  # a worker died (KilledWorker): the row says so
-            finish(_error_row(futures[future], f"worker: {type(error).__name__}: {error}"))
+        yield futures[future], future.exception() or future.result()
 
 
 def main(argv=None):
