@@ -275,10 +275,13 @@ PYBIND11_MODULE(_limber, m) {
   py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
   m.attr("methods") = std::vector<std::string>{"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   bind_scene(m);
+  bind_handles(m);
   WorldClass world(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
   bind_identity(world);
   bind_running(world);
   bind_read_outs(world);
   bind_loads(world);
   bind_joint_space(world);
+  bind_edits(world);
+  bind_report_calls(world);
 }
