@@ -275,6 +275,7 @@ PYBIND11_MODULE(_limber, m) {
   py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
   m.attr("methods") = std::vector<std::string>{"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   bind_scene(m);
+  bind_generators(m);
   bind_handles(m);
   WorldClass world(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
   bind_identity(world);

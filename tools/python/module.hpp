@@ -76,5 +76,7 @@ void bind_handles(py::module_& m);
 void bind_edits(WorldClass& world);
 /// World's step report, segments, one body's pose, motion and description, drives (reports.cpp).
 void bind_report_calls(WorldClass& world);
+/// The model generators returning a limber.Scene: chain, tree, grid, humanoid_pile, copies (generators.cpp).
+void bind_generators(py::module_& m);
 
 }  // namespace limber::python
