@@ -142,29 +142,70 @@ void bind_identity(WorldClass& world) {
       });
 }
 
+// The arrays a bulk read-out fills: `out`'s pair, each a writeable C-contiguous float64 array of
+// shape (rows, columns[k]) (ValueError naming it otherwise), or new ones when `out` is None.
+std::array<py::array, 2> out_arrays(const py::object& out, const char* call, const std::array<const char*, 2>& names, std::size_t rows,
+                                    const std::array<py::ssize_t, 2>& columns) {
+  const auto shape = [&](std::size_t k) { return "(" + std::to_string(rows) + ", " + std::to_string(columns[k]) + ")"; };
+  if (out.is_none()) return {Array({static_cast<py::ssize_t>(rows), columns[0]}), Array({static_cast<py::ssize_t>(rows), columns[1]})};
+  if (!py::isinstance<py::tuple>(out) || py::len(out) != 2) {
+    throw py::value_error(std::string(call) + ": out must be a tuple (" + names[0] + " " + shape(0) + ", " + names[1] + " " + shape(1) +
+                          ") of float64 arrays");
+  }
+  const auto take = [&](std::size_t k) {
+    const py::handle given = out.cast<py::tuple>()[k];
+    const auto refuse = [&](const std::string& got) {
+      throw py::value_error(std::string(call) + ": out[" + std::to_string(k) + "] (" + names[k] +
+                            ") must be a writeable C-contiguous float64 array of shape " + shape(k) + ", got " + got);
+    };
+    if (!py::isinstance<py::array>(given)) refuse(py::str(given.get_type().attr("__name__")));
+    const py::array array = given.cast<py::array>();
+    const bool contiguous = (array.flags() & py::array::c_style) != 0;
+    if (!py::isinstance<Array>(array) || !contiguous || !array.writeable() || array.ndim() != 2 ||
+        array.shape(0) != static_cast<py::ssize_t>(rows) || array.shape(1) != columns[k]) {
+      refuse(std::string(py::str(array.dtype())) + " of shape " + std::string(py::str(given.attr("shape"))) +
+             (contiguous ? "" : ", not C-contiguous") + (array.writeable() ? "" : ", read-only"));
+    }
+    return array;
+  };
+  return {take(0), take(1)};
+}
+
 // The bodies' state as arrays, and the observers.
 void bind_read_outs(WorldClass& world) {
   world.def(
-          "poses", [](const World& w) {
-            std::vector<Pose> poses(w.bodies().size());
+          "poses", [](const World& w, const py::object& out) -> py::object {
+            thread_local std::vector<Pose> poses;  // kept between calls: a read into `out` allocates nothing
+            poses.resize(w.model().bodies.size());
             w.poses(poses);
-            Array position = rows(poses.size(), 3, [&](std::size_t r, double* row) { put(row, poses[r].position); });
-            Array orientation = rows(poses.size(), 4, [&](std::size_t r, double* row) {
+            std::array<py::array, 2> arrays = out_arrays(out, "poses", {"positions", "orientations"}, poses.size(), {3, 4});
+            double* position = static_cast<double*>(arrays[0].mutable_data());
+            double* orientation = static_cast<double*>(arrays[1].mutable_data());
+            for (std::size_t r = 0; r < poses.size(); ++r) {
               const Eigen::Quaterniond& q = poses[r].orientation;
+              put(position + 3 * r, poses[r].position);
+              double* row = orientation + 4 * r;
               row[0] = q.w(), row[1] = q.x(), row[2] = q.y(), row[3] = q.z();
-            });
-            return py::make_tuple(position, orientation);
+            }
+            return out.is_none() ? py::object(py::make_tuple(arrays[0], arrays[1])) : out;
           },
-          "(positions N×3 m, orientations N×4 w x y z): each body frame's origin and rotation (body → world)")
+          py::arg("out") = py::none(),
+          "(positions N×3 m, orientations N×4 w x y z): each body frame's origin and rotation (body → world). With out=(positions, "
+          "orientations), preallocated C-contiguous float64 arrays of those shapes, fills and returns them, allocating nothing; "
+          "ValueError naming the argument otherwise.")
       .def(
-          "motions", [](const World& w) {
-            std::vector<Motion> motions(w.bodies().size());
+          "motions", [](const World& w, const py::object& out) -> py::object {
+            thread_local std::vector<Motion> motions;
+            motions.resize(w.model().bodies.size());
             w.motions(motions);
-            Array linear = rows(motions.size(), 3, [&](std::size_t r, double* row) { put(row, motions[r].linear); });
-            Array angular = rows(motions.size(), 3, [&](std::size_t r, double* row) { put(row, motions[r].angular); });
-            return py::make_tuple(linear, angular);
+            std::array<py::array, 2> arrays = out_arrays(out, "motions", {"linear", "angular"}, motions.size(), {3, 3});
+            double* linear = static_cast<double*>(arrays[0].mutable_data());
+            double* angular = static_cast<double*>(arrays[1].mutable_data());
+            for (std::size_t r = 0; r < motions.size(); ++r) put(linear + 3 * r, motions[r].linear), put(angular + 3 * r, motions[r].angular);
+            return out.is_none() ? py::object(py::make_tuple(arrays[0], arrays[1])) : out;
           },
-          "(linear N×3 m/s of each body frame's origin, angular N×3 rad/s), world")
+          py::arg("out") = py::none(),
+          "(linear N×3 m/s of each body frame's origin, angular N×3 rad/s), world; out= as poses()'s")
       .def("observe", [](const World& w) { return observation(w.observe()); },
            "energy (J), momentum (kg·m/s), joint gaps (relative to link length), limits (rad) as a dict");
 }
@@ -234,10 +275,14 @@ PYBIND11_MODULE(_limber, m) {
   py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
   m.attr("methods") = std::vector<std::string>{"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   bind_scene(m);
+  bind_generators(m);
+  bind_handles(m);
   WorldClass world(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
   bind_identity(world);
   bind_running(world);
   bind_read_outs(world);
   bind_loads(world);
   bind_joint_space(world);
+  bind_edits(world);
+  bind_report_calls(world);
 }

@@ -3,7 +3,11 @@
 // body (or joint, ball) in the World's order.
 #pragma once
 
+#include <algorithm>
+#include <initializer_list>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 #include <pybind11/numpy.h>
@@ -40,10 +44,39 @@ Array rows(std::size_t count, py::ssize_t columns, Fill fill) {
 
 /// Three numbers (a 3-vector argument named `what`), or ValueError naming it.
 Eigen::Vector3d vector3(const Array& in, const char* what);
+/// An optional 3-vector argument: vector3(*in, what), or `otherwise` when it is None.
+inline Eigen::Vector3d vector3_or(const std::optional<Array>& in, const Eigen::Vector3d& otherwise, const char* what) {
+  return in ? vector3(*in, what) : otherwise;
+}
 /// A one-dimensional array as a vector, or ValueError naming `what`.
 Eigen::VectorXd vector(const Array& in, const char* what);
+/// Four numbers w, x, y, z (a quaternion argument named `what`), or ValueError naming it.
+Eigen::Quaterniond quaternion(const Array& in, const char* what);
+
+/// A one-dimensional float64 array of `values` (a 3-vector, a quaternion w x y z).
+inline Array numbers(std::initializer_list<double> values) {
+  Array out(static_cast<py::ssize_t>(values.size()));
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+inline Array numbers(const Eigen::Vector3d& v) { return numbers({v.x(), v.y(), v.z()}); }
+
+/// The scene that `sections` (top-level scene-file entries, e.g. {"bodies": [description]}) make
+/// over a minimal valid scene, read by the kernel's scene reader (scene_elements.cpp): a Python
+/// element checked as a scene file's is. Throws ModelError "<call>: <path>: <problem>".
+Scene scene_of(std::string_view call, const py::dict& sections);
+/// A body's Model entry as a scene file's "bodies" entry: what scene_of reads back to it.
+py::dict body_dict(const Body& body);
 
 /// World's stepping and metered runs (run.cpp): step, run.
 void bind_running(WorldClass& world);
+/// limber.Ball and limber.Pin, the handles of balls and held points (edits.cpp); before the World.
+void bind_handles(py::module_& m);
+/// World's structural edits, held points, teleports and sleep (edits.cpp).
+void bind_edits(WorldClass& world);
+/// World's step report, segments, one body's pose, motion and description, drives (reports.cpp).
+void bind_report_calls(WorldClass& world);
+/// The model generators returning a limber.Scene: chain, tree, grid, humanoid_pile, copies (generators.cpp).
+void bind_generators(py::module_& m);
 
 }  // namespace limber::python

@@ -7,6 +7,11 @@
         assert world.step() == "ok"
     positions, orientations = world.poses()   # N×3 m, N×4 (w, x, y, z)
 
+Scenes come from files (load_scene) or the generators (chain, tree, grid, humanoid_pile, copies).
+A World is edited while it runs: add_body, add_joint, add_collider and add_ball take dicts in the
+scene file's terms (kernel/scene/scene_file.hpp), read by the scene loader itself; pin returns a
+limber.Pin and add_ball a limber.Ball (handles; bodies, joints and colliders go by name).
+
 Units are SI. A World's options are `limber run`'s flags, spelled with underscores
 (World(scene, "weighted", iterations=20, substeps=4, dt=1/240)); limber.sweep runs grids of them.
 Errors are limber.ModelError (a bad scene: the message names the file and the field),
@@ -15,7 +20,8 @@ World.step and World.run release the GIL. The C++ reference is kernel/world/worl
 tools/python/README.md maps each C++ call to its Python counterpart.
 """
 from . import _limber
-from ._limber import ModelError, OptionError, Scene, WorldError, load_scene, methods
+from ._limber import (Ball, ModelError, OptionError, Pin, Scene, WorldError, chain, copies, grid, humanoid_pile, load_scene,
+                      methods, tree)
 
 
 class World(_limber.World):
@@ -39,4 +45,5 @@ class World(_limber.World):
         return f"limber.World(method={self.method!r}, bodies={len(self.body_names)}, time={self.time:g} s)"
 
 
-__all__ = ["ModelError", "OptionError", "Scene", "World", "WorldError", "load_scene", "methods"]
+__all__ = ["Ball", "ModelError", "OptionError", "Pin", "Scene", "World", "WorldError", "chain", "copies", "grid", "humanoid_pile",
+           "load_scene", "methods", "tree"]
