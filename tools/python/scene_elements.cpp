@@ -2,10 +2,12 @@
 // joint, collider or ball given as a dict is written into a minimal scene's JSON text and read by
 // the kernel's own scene reader (load_scene_text), so each field is checked as a scene file's is
 // and an error names it the same way: "add_body: bodies[0].mass: must be > 0, got -1". No field
-// is read here; this file only writes JSON.
+// is read here; this file only writes JSON (with nlohmann-json).
 #include <cmath>
 #include <string>
 #include <string_view>
+
+#include <nlohmann/json.hpp>
 
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
@@ -14,65 +16,42 @@
 namespace limber::python {
 namespace {
 
-// `text` as a JSON string: quoted, with '"', '\' and control characters escaped (UTF-8 kept).
-void write_string(std::string& out, std::string_view text) {
-  out += '"';
-  for (const char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\', out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      static constexpr char kHex[] = "0123456789abcdef";
-      out += "\\u00", out += kHex[(c >> 4) & 0xF], out += kHex[c & 0xF];
-    } else {
-      out += c;
-    }
-  }
-  out += '"';
-}
+using Json = nlohmann::ordered_json;
 
-// A Python value as JSON: dicts (string keys), lists and tuples, NumPy arrays and scalars, str,
-// bool, int, float and None. A non-finite float, a key that is not a string or any other type is
-// a ModelError naming `call` and the value's path, as the scene reader names a field.
-void write_json(std::string& out, py::handle value, const std::string& path, std::string_view call) {
+// A Python value as JSON (nlohmann-json builds the text): dicts (string keys), lists and tuples,
+// NumPy arrays and scalars, str, bool, int, float and None. A non-finite float, a key that is not
+// a string or any other type is a ModelError naming `call` and the value's path, as the scene
+// reader names a field.
+Json to_json(py::handle value, const std::string& path, std::string_view call) {
   const auto refuse = [&](std::string_view problem) { checks::fail(std::string(call) + ": " + path, problem); };
-  if (value.is_none()) {
-    out += "null";
-  } else if (py::isinstance<py::bool_>(value)) {
-    out += value.cast<bool>() ? "true" : "false";
-  } else if (py::isinstance<py::int_>(value)) {
-    out += py::str(value).cast<std::string>();
-  } else if (py::isinstance<py::float_>(value)) {
+  if (value.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>();
+  if (py::isinstance<py::int_>(value)) return value.cast<long long>();
+  if (py::isinstance<py::float_>(value)) {
     const double number = value.cast<double>();
     if (!std::isfinite(number)) refuse("must be a finite number, got " + checks::format_number(number));
-    out += checks::format_number(number);
-  } else if (py::isinstance<py::str>(value)) {
-    write_string(out, value.cast<std::string>());
-  } else if (py::isinstance<py::dict>(value)) {
-    out += '{';
-    bool first = true;
+    return number;
+  }
+  if (py::isinstance<py::str>(value)) return value.cast<std::string>();
+  if (py::isinstance<py::dict>(value)) {
+    Json object = Json::object();
     for (const auto& [key, item] : value.cast<py::dict>()) {
       if (!py::isinstance<py::str>(key)) refuse("keys must be strings, got " + py::repr(key).cast<std::string>());
       const std::string name = key.cast<std::string>();
-      if (!first) out += ',';
-      first = false;
-      write_string(out, name);
-      out += ':';
-      write_json(out, item, path.empty() ? name : path + "." + name, call);
+      object[name] = to_json(item, path.empty() ? name : path + "." + name, call);
     }
-    out += '}';
-  } else if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
-    out += '[';
-    std::size_t k = 0;
-    for (const py::handle item : value) {
-      if (k) out += ',';
-      write_json(out, item, checks::indexed(path, k++), call);
-    }
-    out += ']';
-  } else if (py::isinstance<py::array>(value) || py::isinstance(value, py::module_::import("numpy").attr("generic"))) {
-    write_json(out, value.attr("tolist")(), path, call);  // an array as nested lists, a scalar as its Python number
-  } else {
-    refuse("must be a number, string, bool, None, list or dict, got " + py::str(value.get_type().attr("__name__")).cast<std::string>());
+    return object;
   }
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
+    Json array = Json::array();
+    for (const py::handle item : value) array.push_back(to_json(item, checks::indexed(path, array.size()), call));
+    return array;
+  }
+  if (py::isinstance<py::array>(value) || py::isinstance(value, py::module_::import("numpy").attr("generic"))) {
+    return to_json(value.attr("tolist")(), path, call);  // an array as nested lists, a scalar as its Python number
+  }
+  refuse("must be a number, string, bool, None, list or dict, got " + py::str(value.get_type().attr("__name__")).cast<std::string>());
+  return nullptr;
 }
 
 py::list triple(const Vector3& v) { return py::cast(std::vector<double>{v.x(), v.y(), v.z()}); }
@@ -85,9 +64,7 @@ Scene scene_of(std::string_view call, const py::dict& sections) {
   py::dict scene;
   scene["limber_scene"] = 1, scene["name"] = std::string(call), scene["settings"] = settings, scene["bodies"] = py::list();
   for (const auto& [key, value] : sections) scene[key] = value;
-  std::string text;
-  write_json(text, scene, "", call);
-  return load_scene_text(text, call);
+  return load_scene_text(to_json(scene, "", call).dump(), call);
 }
 
 py::dict body_dict(const Body& body) {
