@@ -1,20 +1,23 @@
 #!/usr/bin/python3
 """One grid swept four ways, raced in one run: wall time of each and whether their tables agree.
 
-    PYTHONPATH=build/python bench/sweep_scaling.py [--grid bench/pareto_sweep/grid.json] [--out T.csv]
+    PYTHONPATH=build/python bench/sweep_scaling.py [--grid bench/pareto_sweep/grid.json] [--rounds 3] [--out T.csv]
 
 1. one process (limber.sweep's workers=1: this process runs every configuration);
 2. 2 local processes (workers=2);
 3. a Dask LocalCluster of 2 worker processes on 127.0.0.1;
 4. a scheduler and 2 workers started as separate processes (dask-scheduler, dask-worker) on
    127.0.0.1, reached through their address as `python3 -m limber.sweep --scheduler` does.
-Every table must equal the first in every column but the measured steps/s, bit for bit. Prints a
-markdown table; --out keeps the one-process table (tools/plot_pareto.py draws it). Needs Debian's
+Each round runs the four in turn (a cluster is started before its sweep is timed and stopped after);
+the table gives each one's median wall time over the rounds. Every table must equal the first in
+every column but the measured steps/s, bit for bit. Prints a markdown table; --out keeps the last
+one-process table (tools/plot_pareto.py draws it). Needs Debian's
 python3-distributed. Run it on a quiet machine: the workers share its cores.
 """
 import argparse
 import contextlib
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -57,32 +60,43 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--grid", default="bench/pareto_sweep/grid.json")
     parser.add_argument("--out", help="the one-process table, CSV")
+    parser.add_argument("--rounds", type=int, default=3)
     arguments = parser.parse_args()
     grid = limber.sweep.load_grid(arguments.grid)
-    count = len(limber.sweep.configurations(grid))
-    results = []
-    results.append(("1 process", *timed(lambda: limber.sweep.sweep(grid, workers=1))))
-    one = results[0][2]
-    results.append(("2 local processes", *timed(lambda: limber.sweep.sweep(grid, workers=2))))
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-        results.append(("Dask LocalCluster, 2 workers", *timed(lambda: limber.sweep.sweep(grid, client=client))))
-    with separate_cluster() as client:
-        results.append(("dask-scheduler + 2 dask-workers, 127.0.0.1", *timed(lambda: limber.sweep.sweep(grid, client=client))))
+    names = ["1 process", "2 local processes", "Dask LocalCluster, 2 workers", "dask-scheduler + 2 dask-workers, 127.0.0.1"]
+    seconds, tables = {name: [] for name in names}, {name: [] for name in names}
+
+    def record(name, run):
+        elapsed, table = timed(run)
+        seconds[name].append(elapsed), tables[name].append(table)
+
+    for _ in range(arguments.rounds):
+        record(names[0], lambda: limber.sweep.sweep(grid, workers=1))
+        record(names[1], lambda: limber.sweep.sweep(grid, workers=2))
+        with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                      dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+            record(names[2], lambda: limber.sweep.sweep(grid, client=client))
+        with separate_cluster() as client:
+            record(names[3], lambda: limber.sweep.sweep(grid, client=client))
+    one = tables[names[0]][0]
     if arguments.out:
-        one.to_csv(arguments.out, index=False, na_rep="nan")
+        tables[names[0]][-1].to_csv(arguments.out, index=False, na_rep="nan")
     deterministic = [c for c in one.columns if c not in limber.sweep.MEASURED]
-    print(f"{arguments.grid}: {count} configurations, {int((one['status'] == 'error').sum())} error rows, "
-          f"{int((one['status'].str.startswith('diverged')).sum())} diverged\n")
-    print("| runs on | wall s | speed-up | table |")
-    print("|---|---:|---:|---|")
-    for name, seconds, table in results:
+    print(f"{arguments.grid}: {len(one)} configurations, {int((one['status'] == 'error').sum())} error rows, "
+          f"{int((one['status'].str.startswith('diverged')).sum())} diverged; medians of {arguments.rounds} rounds\n")
+    print("| runs on | wall s (median) | every round, s | speed-up | tables |")
+    print("|---|---:|---|---:|---|")
+    base = statistics.median(seconds[names[0]])
+    for name in names:
         try:
-            pd.testing.assert_frame_equal(table[deterministic], one[deterministic], check_exact=True)
+            for table in tables[name]:
+                pd.testing.assert_frame_equal(table[deterministic], one[deterministic], check_exact=True)
             same = "identical"
         except AssertionError as difference:
-            same = f"DIFFERS: {str(difference).splitlines()[0]}"
-        print(f"| {name} | {seconds:.1f} | {results[0][1] / seconds:.2f}× | {same} |")
+            same = f"DIFFER: {str(difference).splitlines()[0]}"
+        median = statistics.median(seconds[name])
+        rounds = ", ".join(f"{t:.1f}" for t in seconds[name])
+        print(f"| {name} | {median:.1f} | {rounds} | {base / median:.2f}× | {same} |")
 
 
 if __name__ == "__main__":

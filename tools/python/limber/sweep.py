@@ -46,9 +46,8 @@ import sys
 import time
 
 import numpy as np
-import pandas as pd
 
-import limber
+import limber  # pandas is imported where tables are made: the workers that run configurations never need it
 
 GRID_KEYS = {"duration", "sample_interval", "scenes", "methods", "settings", "reference"}
 SCENE_KEYS = {"scene", "name", "body", "links", "copies", "floating_base"}
@@ -162,11 +161,11 @@ def _run(scene, options, duration, interval):
     return world.run(max(1, round(duration / dt)), sample_every=round(every))
 
 
-def reference_samples(scene, grid):
-    """The reference run's samples (K × N × 3 m) on `scene`, or None without a reference."""
-    if grid.reference is None:
+def reference_samples(scene, reference, duration, sample_interval):
+    """The run of `reference` (World options, or None) on `scene`: its samples (K × N × 3 m), or None."""
+    if reference is None:
         return None
-    run = _run(scene, grid.reference, grid.duration, grid.sample_interval)
+    run = _run(scene, reference, duration, sample_interval)
     if run["status"] != "ok":
         raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['status']}")
     return run["samples"]
@@ -186,13 +185,13 @@ def _error_row(configuration, message):
     return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": "error", "error": message}
 
 
-def run_configuration(configuration, scene, grid):
+def run_configuration(configuration, scene, duration, sample_interval):
     """One run: (`configuration`'s row but its trajectory_error, its samples), or (an 'error' row
     with the message, None). The samples meet the reference's in the sweep's process, so no run
     waits for its scene's reference."""
     options = {k: v for k, v in configuration.items() if k not in ("index", "scene")}
     try:
-        run = _run(scene, options, grid.duration, grid.sample_interval)
+        run = _run(scene, options, duration, sample_interval)
     except Exception as error:  # a failed configuration is a row, never a lost sweep
         return _error_row(configuration, f"{type(error).__name__}: {error}"), None
     scale, seconds = run["energy_scale"], run["step_seconds"]
@@ -203,9 +202,9 @@ def run_configuration(configuration, scene, grid):
     return row, run["samples"]
 
 
-def _reference_or_error(scene, grid):
+def _reference_or_error(*arguments):
     try:
-        return reference_samples(scene, grid)
+        return reference_samples(*arguments)
     except Exception as error:
         return error
 
@@ -243,6 +242,8 @@ def _read_finished(out):
     """The rows an output file already holds (a resumed sweep keeps them), or None."""
     if out is None or not pathlib.Path(out).exists() or pathlib.Path(out).stat().st_size == 0:
         return None
+    import pandas as pd
+
     return pd.read_csv(out, float_precision="round_trip", keep_default_na=False, na_values=["nan", "NaN"])
 
 
@@ -256,6 +257,8 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
     out: a CSV file the rows are appended to as they finish; the configurations it holds already
     are not run again. progress: called with (rows done, rows in all) as rows finish.
     """
+    import pandas as pd
+
     if isinstance(grid, (str, os.PathLike)):
         grid = load_grid(grid)
     elif not isinstance(grid, Grid):
@@ -280,8 +283,9 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
 
     scenes = {scene["name"]: scene for scene in grid.scenes if any(c["scene"] == scene["name"] for c in remaining)}
     # The references first: they are the longest runs, and each scene's rows wait for its own.
-    tasks = [(("reference", name), _reference_or_error, (scene, grid)) for name, scene in scenes.items()]
-    tasks += [(("run", c), run_configuration, (c, scenes[c["scene"]], grid)) for c in remaining]
+    length = (grid.duration, grid.sample_interval)
+    tasks = [(("reference", name), _reference_or_error, (scene, grid.reference, *length)) for name, scene in scenes.items()]
+    tasks += [(("run", c), run_configuration, (c, scenes[c["scene"]], *length)) for c in remaining]
     collector = _Rows(finish)
     if client is not None:
         results = _on_dask(client, tasks)
@@ -311,8 +315,9 @@ def _on_dask(client, tasks):
     import distributed
 
     futures = {client.submit(function, *arguments, pure=False): task for task, function, arguments in tasks}
-    for future in distributed.as_completed(futures):
-        yield futures[future], future.exception() or future.result()
+    # with_results: results come in batches, not one round trip each; an error comes as (type, value, traceback).
+    for future, result in distributed.as_completed(futures, with_results=True, raise_errors=False):
+        yield futures[future], result[1] if future.status == "error" else result
 
 
 def main(argv=None):
