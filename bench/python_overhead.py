@@ -15,6 +15,8 @@ import statistics
 import subprocess
 import time
 
+import numpy as np
+
 import limber
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -31,11 +33,12 @@ def cpp_seconds(scene, links, steps):
 
 
 def python_seconds(scene, links, steps):
-    world = limber.World(limber.load_scene(str(scene), links=links), method="weighted")
+    world = limber.World(limber.load_scene(str(scene), links=links), method="weighted", threads=1)
+    count = len(world.body_names)
+    out = (np.empty((count, 3)), np.empty((count, 4)))
     start = time.perf_counter()
     for _ in range(steps):
-        world.step()
-        world.poses()
+        world.step(poses=out)
     return time.perf_counter() - start
 
 

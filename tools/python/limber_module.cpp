@@ -171,24 +171,34 @@ std::array<py::array, 2> out_arrays(const py::object& out, const char* call, con
   return {take(0), take(1)};
 }
 
+}  // namespace
+
+namespace limber::python {
+
+py::object read_poses(const World& w, const py::object& out) {
+  thread_local std::vector<Pose> poses;  // kept between calls: a read into `out` allocates nothing
+  poses.resize(w.model().bodies.size());
+  w.poses(poses);
+  std::array<py::array, 2> arrays = out_arrays(out, "poses", {"positions", "orientations"}, poses.size(), {3, 4});
+  double* position = static_cast<double*>(arrays[0].mutable_data());
+  double* orientation = static_cast<double*>(arrays[1].mutable_data());
+  for (std::size_t r = 0; r < poses.size(); ++r) {
+    const Eigen::Quaterniond& q = poses[r].orientation;
+    put(position + 3 * r, poses[r].position);
+    double* row = orientation + 4 * r;
+    row[0] = q.w(), row[1] = q.x(), row[2] = q.y(), row[3] = q.z();
+  }
+  return out.is_none() ? py::object(py::make_tuple(arrays[0], arrays[1])) : out;
+}
+
+}  // namespace limber::python
+
+namespace {
+
 // The bodies' state as arrays, and the observers.
 void bind_read_outs(WorldClass& world) {
   world.def(
-          "poses", [](const World& w, const py::object& out) -> py::object {
-            thread_local std::vector<Pose> poses;  // kept between calls: a read into `out` allocates nothing
-            poses.resize(w.model().bodies.size());
-            w.poses(poses);
-            std::array<py::array, 2> arrays = out_arrays(out, "poses", {"positions", "orientations"}, poses.size(), {3, 4});
-            double* position = static_cast<double*>(arrays[0].mutable_data());
-            double* orientation = static_cast<double*>(arrays[1].mutable_data());
-            for (std::size_t r = 0; r < poses.size(); ++r) {
-              const Eigen::Quaterniond& q = poses[r].orientation;
-              put(position + 3 * r, poses[r].position);
-              double* row = orientation + 4 * r;
-              row[0] = q.w(), row[1] = q.x(), row[2] = q.y(), row[3] = q.z();
-            }
-            return out.is_none() ? py::object(py::make_tuple(arrays[0], arrays[1])) : out;
-          },
+          "poses", &read_poses,
           py::arg("out") = py::none(),
           "(positions N×3 m, orientations N×4 w x y z): each body frame's origin and rotation (body → world). With out=(positions, "
           "orientations), preallocated C-contiguous float64 arrays of those shapes, fills and returns them, allocating nothing; "

@@ -68,6 +68,11 @@ Scene scene_of(std::string_view call, const py::dict& sections);
 /// A body's Model entry as a scene file's "bodies" entry: what scene_of reads back to it.
 py::dict body_dict(const Body& body);
 
+/// World.poses: every body's (positions N×3, orientations N×4) into `out`'s two arrays (None: new
+/// ones), returned; ValueError naming the array when `out` is not two writeable C-contiguous
+/// float64 arrays of those shapes.
+py::object read_poses(const World& world, const py::object& out);
+
 /// World's stepping and metered runs (run.cpp): step, run.
 void bind_running(WorldClass& world);
 /// limber.Ball and limber.Pin, the handles of balls and held points (edits.cpp); before the World.

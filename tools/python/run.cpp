@@ -79,15 +79,19 @@ const char* status_name(StepStatus status) {
 void bind_running(WorldClass& world) {
   world
       .def(
-          "step", [](World& w, std::optional<double> dt) {
+          "step", [](World& w, std::optional<double> dt, const py::object& poses) {
             StepStatus status;
             {
               py::gil_scoped_release release;
               status = dt ? w.step(*dt) : w.step();
             }
+            if (!poses.is_none()) read_poses(w, poses);
             return status_name(status);
           },
-          py::arg("dt") = py::none(), "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not.")
+          py::arg("dt") = py::none(), py::kw_only(), py::arg("poses") = py::none(),
+          "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not. poses=(positions N×3, "
+          "orientations N×4): arrays as poses(out=) takes, filled after the step — a loop that reads every pose each step makes "
+          "one call a step, not two.")
       .def(
           "run", [](World& w, long steps, long sample_every, bool observe) {
             if (steps < 0) throw py::value_error("run: steps must be ≥ 0, got " + std::to_string(steps));
