@@ -107,3 +107,17 @@ def test_two_worlds_on_two_threads_give_the_bits_of_one_after_the_other():
     for a, b in zip(alone, together):
         for x, y in zip(a.poses() + a.motions(), b.poses() + b.motions()):
             np.testing.assert_array_equal(x, y)
+
+
+def test_step_with_poses_fills_the_arrays_poses_returns_after_the_step():
+    stepped, read = ragdoll("featherstone"), ragdoll("featherstone")
+    count = len(stepped.body_names)
+    out = (np.full((count, 3), np.nan), np.full((count, 4), np.nan))
+    for _ in range(5):
+        assert stepped.step(poses=out) == "ok" and read.step() == "ok"
+    positions, orientations = read.poses()
+    assert np.array_equal(out[0], positions) and np.array_equal(out[1], orientations)
+    time = stepped.time
+    with pytest.raises(ValueError, match="out"):
+        stepped.step(poses=(np.zeros((count, 3)), np.zeros((count, 3))))  # orientations need 4 columns
+    assert stepped.time == time  # refused before the step

@@ -175,11 +175,14 @@ std::array<py::array, 2> out_arrays(const py::object& out, const char* call, con
 
 namespace limber::python {
 
-py::object read_poses(const World& w, const py::object& out) {
+std::array<py::array, 2> pose_arrays(const World& w, const py::object& out) {
+  return out_arrays(out, "poses", {"positions", "orientations"}, w.model().bodies.size(), {3, 4});
+}
+
+void fill_poses(const World& w, std::array<py::array, 2>& arrays) {
   thread_local std::vector<Pose> poses;  // kept between calls: a read into `out` allocates nothing
   poses.resize(w.model().bodies.size());
   w.poses(poses);
-  std::array<py::array, 2> arrays = out_arrays(out, "poses", {"positions", "orientations"}, poses.size(), {3, 4});
   double* position = static_cast<double*>(arrays[0].mutable_data());
   double* orientation = static_cast<double*>(arrays[1].mutable_data());
   for (std::size_t r = 0; r < poses.size(); ++r) {
@@ -188,6 +191,11 @@ py::object read_poses(const World& w, const py::object& out) {
     double* row = orientation + 4 * r;
     row[0] = q.w(), row[1] = q.x(), row[2] = q.y(), row[3] = q.z();
   }
+}
+
+py::object read_poses(const World& w, const py::object& out) {
+  std::array<py::array, 2> arrays = pose_arrays(w, out);
+  fill_poses(w, arrays);
   return out.is_none() ? py::object(py::make_tuple(arrays[0], arrays[1])) : out;
 }
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <initializer_list>
 #include <optional>
+#include <array>
 #include <string>
 #include <string_view>
 
@@ -72,6 +73,9 @@ py::dict body_dict(const Body& body);
 /// ones), returned; ValueError naming the array when `out` is not two writeable C-contiguous
 /// float64 arrays of those shapes.
 py::object read_poses(const World& world, const py::object& out);
+/// read_poses in two halves: the arrays `out` names, checked (or new ones), then filled.
+std::array<py::array, 2> pose_arrays(const World& world, const py::object& out);
+void fill_poses(const World& world, std::array<py::array, 2>& arrays);
 
 /// World's stepping and metered runs (run.cpp): step, run.
 void bind_running(WorldClass& world);

@@ -80,12 +80,14 @@ void bind_running(WorldClass& world) {
   world
       .def(
           "step", [](World& w, std::optional<double> dt, const py::object& poses) {
+            std::optional<std::array<py::array, 2>> arrays;
+            if (!poses.is_none()) arrays = pose_arrays(w, poses);  // checked before the step: a bad call changes nothing
             StepStatus status;
             {
               py::gil_scoped_release release;
               status = dt ? w.step(*dt) : w.step();
             }
-            if (!poses.is_none()) read_poses(w, poses);
+            if (arrays) fill_poses(w, *arrays);
             return status_name(status);
           },
           py::arg("dt") = py::none(), py::kw_only(), py::arg("poses") = py::none(),
