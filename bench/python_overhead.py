@@ -7,7 +7,8 @@ For each scene, each round runs the same loop twice, one after the other: in C++
 (build/bench/world_readout: World::step, then World::poses into one buffer) and in Python
 (World.step(), then World.poses(), which returns new N x 3 and N x 4 arrays). Both start from
 the scene's initial state and step the particle method with the scene's settings on one thread.
-The ratio is Python's wall time over C++'s, the median over the rounds.
+The ratios are Python's wall time over C++'s: the median of the rounds' ratios, and the ratio of
+each side's fastest round (the least disturbed on a shared machine).
 """
 import argparse
 import pathlib
@@ -46,7 +47,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=5)
     rounds = parser.parse_args().rounds
-    print("| scene | steps | C++ ms/step | Python ms/step | Python / C++ |")
+    print("| scene | steps | C++ ms/step (median, fastest) | Python ms/step (median, fastest) | Python / C++ (median, fastest) |")
     print("|---|---:|---:|---:|---:|")
     for label, scene, links, steps in SCENES:
         cpp, python = [], []
@@ -54,8 +55,8 @@ def main():
             cpp.append(cpp_seconds(scene, links, steps))
             python.append(python_seconds(scene, links, steps))
         ratio = statistics.median(p / c for p, c in zip(python, cpp))
-        print(f"| {label} | {steps} | {1e3 * statistics.median(cpp) / steps:.4f} | "
-              f"{1e3 * statistics.median(python) / steps:.4f} | {ratio:.3f} |")
+        print(f"| {label} | {steps} | {1e3 * statistics.median(cpp) / steps:.4f}, {1e3 * min(cpp) / steps:.4f} | "
+              f"{1e3 * statistics.median(python) / steps:.4f}, {1e3 * min(python) / steps:.4f} | {ratio:.3f}, {min(python) / min(cpp):.3f} |")
 
 
 if __name__ == "__main__":
