@@ -75,6 +75,8 @@ if [ "$build_all" = ON ]; then
   stage "building $what in $build_dir/ ($build_type; about 25 min from nothing on 2 cores, seconds when up to date)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2
 else
+  targets=(limber_program)
+  if [ "$python" = ON ]; then targets+=(limber_python); what="$what, the Python module"; fi
   stage "building $what in $build_dir/ ($build_type; about 8 min from nothing on 2 cores, seconds when up to date)"
-  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target limber_program
+  quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${targets[@]}"
 fi
