@@ -122,3 +122,12 @@ def test_a_file_of_another_grid_is_neither_resumed_nor_written_over(tmp_path):
     with pytest.raises(limber.sweep.GridError, match="another grid's table"):
         limber.sweep.sweep(GRID, workers=1, out=out)
     assert out.read_text() == "index,something\n0,1\n"
+
+
+def test_a_bad_grid_names_its_field():
+    with pytest.raises(limber.sweep.GridError, match=r"scenes\[1\]\.name: 'chain-5' names an earlier scene"):
+        limber.sweep.sweep(dict(GRID, scenes=GRID["scenes"] * 2), workers=1)
+    with pytest.raises(limber.sweep.GridError, match="methods: required, a non-empty list"):
+        limber.sweep.sweep(dict(GRID, methods=[]), workers=1)
+    with pytest.raises(limber.sweep.GridError, match=r"settings\.dt: an empty list"):
+        limber.sweep.sweep(dict(GRID, settings={"dt": []}), workers=1)

@@ -16,7 +16,8 @@ A grid (a dict, or a JSON file of one):
 
 A scene entry is load_scene's arguments (scene: the file, relative to the grid file; body, links,
 copies, floating_base) and an optional name. A method entry and "settings" are World's options,
-`limber run`'s flags with '_' for '-'; a list is a dimension. The configurations are every scene
+`limber run`'s flags with '_' for '-'; a list is a dimension (so a flag of three numbers, ball_direction,
+is a string "1,0,0"). The configurations are every scene
 × every method entry's expansion × every setting's expansion, in that order. Each runs for
 `duration` s of simulated time (rounded to whole steps of its dt) and gives one row:
 
@@ -32,6 +33,9 @@ copies, floating_base) and an optional name. A method entry and "settings" are W
 A configuration that raises is an 'error' row, never a lost sweep. With an output file the rows
 are appended as they finish, and a sweep over an existing file runs only the configurations it
 lacks (resume). The reference is one run per scene with the grid's "reference" options.
+
+Local processes are spawned, so a script that sweeps without a client needs the
+`if __name__ == "__main__":` guard, as multiprocessing and Dask's LocalCluster do.
 """
 import argparse
 import concurrent.futures
@@ -120,6 +124,8 @@ def check_grid(grid, source="grid", base=None):
                 raise GridError(f"{where}.{key}: unknown field (the fields are {', '.join(sorted(SCENE_KEYS))})")
         scene = dict(scene)
         scene.setdefault("name", pathlib.Path(scene["scene"]).stem)
+        if any(other["name"] == scene["name"] for other in scenes):
+            raise GridError(f"{where}.name: '{scene['name']}' names an earlier scene too; give each scene its own name")
         if base is not None:
             scene["scene"] = str(pathlib.Path(base) / scene["scene"])
         scenes.append(scene)
