@@ -35,7 +35,9 @@ are appended as they finish, and a sweep over an existing file runs only the con
 lacks (resume). The reference is one run per scene with the grid's "reference" options.
 
 Local processes are spawned, so a script that sweeps without a client needs the
-`if __name__ == "__main__":` guard, as multiprocessing and Dask's LocalCluster do.
+`if __name__ == "__main__":` guard, as multiprocessing and Dask's LocalCluster do. A cluster's
+workers import limber themselves: install it on their machines (`cmake --install`), or start
+them with it on PYTHONPATH; the scene files' paths must be valid where the workers run.
 """
 import argparse
 import concurrent.futures
