@@ -114,6 +114,8 @@ def test_the_command_runs_a_grid_file_and_refuses_a_bad_one(tmp_path):
     done = subprocess.run(command[:3] + [str(tmp_path / "bad.json"), "--out", str(tmp_path / "bad.csv")], capture_output=True, text=True)
     assert done.returncode == 2 and "bad.json: duraton: unknown field" in done.stderr
     assert not (tmp_path / "bad.csv").exists()
+    done = subprocess.run(command[:3] + [str(tmp_path / "grid.json"), "--out", str(tmp_path / "no" / "out.csv")], capture_output=True, text=True)
+    assert done.returncode == 2 and "its folder does not exist" in done.stderr
 
 
 def test_a_file_of_another_grid_is_neither_resumed_nor_written_over(tmp_path):

@@ -338,6 +338,8 @@ def main(argv=None):
     arguments = parser.parse_args(argv)
     if pathlib.Path(arguments.out).resolve() == pathlib.Path(arguments.grid).resolve():
         parser.exit(2, f"limber.sweep: --out {arguments.out}: is the grid itself; it would be written over\n")
+    if not pathlib.Path(arguments.out).resolve().parent.is_dir():
+        parser.exit(2, f"limber.sweep: --out {arguments.out}: its folder does not exist\n")
     try:
         grid = load_grid(arguments.grid)
     except GridError as error:
