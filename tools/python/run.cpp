@@ -28,6 +28,7 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
     for (const Pose& pose : poses) run.samples.insert(run.samples.end(), {pose.position.x(), pose.position.y(), pose.position.z()});
     ++run.sample_count;
   };
+  if (sample_every > 0) run.samples.reserve(static_cast<std::size_t>(steps / sample_every + 1) * poses.size() * 3);
   std::optional<study::ErrorMeter> meter;
   if (observe) meter.emplace(world.observe(), study::energy_scale(world.model()));
   if (sample_every > 0) sample();

@@ -42,6 +42,7 @@ them with it on PYTHONPATH; the scene files' paths must be valid where the worke
 import argparse
 import concurrent.futures
 import dataclasses
+import functools
 import itertools
 import json
 import math
@@ -152,9 +153,16 @@ def configurations(grid):
     return out
 
 
+@functools.lru_cache(maxsize=8)
+def _loaded(path, loading):
+    """A scene file loaded once per process: every configuration of a scene starts from it (a World
+    steps its own copy)."""
+    return limber.load_scene(path, **dict(loading))
+
+
 def _world(scene, options):
     """The World `options` ask for on `scene`, and its time step, s."""
-    loaded = limber.load_scene(scene["scene"], **{k: v for k, v in scene.items() if k not in ("scene", "name")})
+    loaded = _loaded(scene["scene"], tuple(sorted((k, v) for k, v in scene.items() if k not in ("scene", "name"))))
     options = dict(options)
     world = limber.World(loaded, options.pop("method"), **options)
     return world, options.get("dt", loaded.time_step)
