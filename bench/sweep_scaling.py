@@ -9,7 +9,9 @@
 4. a scheduler and 2 workers started as separate processes (dask-scheduler, dask-worker) on
    127.0.0.1, reached through their address as `python3 -m limber.sweep --scheduler` does.
 Each round runs the four in turn (a cluster is started before its sweep is timed and stopped after);
-the table gives each one's median wall time over the rounds. Every table must equal the first in
+the table gives each one's median wall time over the rounds, the CPU time this process spent
+(it gathers the rows; with a LocalCluster it also runs the scheduler), and, for the LocalCluster,
+the seconds its workers spent computing tasks (Dask's task stream). Every table must equal the first in
 every column but the measured steps/s, bit for bit. Prints a markdown table; --out keeps the last
 one-process table (tools/plot_pareto.py draws it). Needs Debian's
 python3-distributed. Run it on a quiet machine: the workers share its cores.
@@ -17,6 +19,7 @@ python3-distributed. Run it on a quiet machine: the workers share its cores.
 import argparse
 import contextlib
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -64,10 +67,14 @@ def main():
     arguments = parser.parse_args()
     grid = limber.sweep.load_grid(arguments.grid)
     names = ["1 process", "2 local processes", "Dask LocalCluster, 2 workers", "dask-scheduler + 2 dask-workers, 127.0.0.1"]
-    seconds, tables = {name: [] for name in names}, {name: [] for name in names}
+    seconds, tables, cpu = ({name: [] for name in names} for _ in range(3))
+    computing = []  # the LocalCluster workers' compute seconds, summed, per round
 
     def record(name, run):
+        before = resource.getrusage(resource.RUSAGE_SELF)
         elapsed, table = timed(run)
+        after = resource.getrusage(resource.RUSAGE_SELF)
+        cpu[name].append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
         seconds[name].append(elapsed), tables[name].append(table)
 
     for _ in range(arguments.rounds):
@@ -75,7 +82,10 @@ def main():
         record(names[1], lambda: limber.sweep.sweep(grid, workers=2))
         with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
                                       dashboard_address=None) as cluster, distributed.Client(cluster) as client:
-            record(names[2], lambda: limber.sweep.sweep(grid, client=client))
+            with distributed.get_task_stream(client) as stream:
+                record(names[2], lambda: limber.sweep.sweep(grid, client=client))
+            computing.append(sum(stop["stop"] - stop["start"] for task in stream.data for stop in task["startstops"]
+                                 if stop["action"] == "compute"))
         with separate_cluster() as client:
             record(names[3], lambda: limber.sweep.sweep(grid, client=client))
     one = tables[names[0]][0]
@@ -84,8 +94,8 @@ def main():
     deterministic = [c for c in one.columns if c not in limber.sweep.MEASURED]
     print(f"{arguments.grid}: {len(one)} configurations, {int((one['status'] == 'error').sum())} error rows, "
           f"{int((one['status'].str.startswith('diverged')).sum())} diverged; medians of {arguments.rounds} rounds\n")
-    print("| runs on | wall s (median) | every round, s | speed-up | tables |")
-    print("|---|---:|---|---:|---|")
+    print("| runs on | wall s (median) | every round, s | speed-up | this process's CPU s (median) | tables |")
+    print("|---|---:|---|---:|---:|---|")
     base = statistics.median(seconds[names[0]])
     for name in names:
         try:
@@ -96,7 +106,9 @@ def main():
             same = f"DIFFER: {str(difference).splitlines()[0]}"
         median = statistics.median(seconds[name])
         rounds = ", ".join(f"{t:.1f}" for t in seconds[name])
-        print(f"| {name} | {median:.1f} | {rounds} | {base / median:.2f}× | {same} |")
+        print(f"| {name} | {median:.1f} | {rounds} | {base / median:.2f}× | {statistics.median(cpu[name]):.2f} | {same} |")
+    print(f"\nThe LocalCluster's workers computed tasks for {statistics.median(computing):.1f} s (median), against "
+          f"{base:.1f} s of wall time for the same runs on one process.")
 
 
 if __name__ == "__main__":
