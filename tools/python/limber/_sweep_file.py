@@ -269,12 +269,13 @@ class Table:
                 self.note(f"{self.out} line {number}: {why}; moved to {damaged}, and its configuration runs again")
 
     def _rewrite(self, kept):
-        """The table as the header and `kept`, renamed over the old one (whole or not at all)."""
-        folder = os.path.dirname(os.path.abspath(self.out))
-        fd, temporary = tempfile.mkstemp(dir=folder, prefix=os.path.basename(self.out) + ".", suffix=".tmp")
+        """The table as the header and `kept`, renamed over the old one (whole or not at all; over
+        the file a symbolic link names, not over the link)."""
+        target = os.path.realpath(self.out)
+        fd, temporary = tempfile.mkstemp(dir=os.path.dirname(target), prefix=os.path.basename(target) + ".", suffix=".tmp")
         try:
             try:
-                os.fchmod(fd, stat.S_IMODE(os.stat(self.out).st_mode))
+                os.fchmod(fd, stat.S_IMODE(os.stat(target).st_mode))
             except FileNotFoundError:
                 os.fchmod(fd, 0o666 & ~_umask())
             data = (self.header + "".join(k + "\n" for k in kept)).encode("utf-8", "surrogateescape")
@@ -286,7 +287,7 @@ class Table:
             os.unlink(temporary)
             raise OutputError(f"{self.out}: cannot write: {problem.strerror}") from None
         os.close(fd)
-        os.replace(temporary, self.out)
+        os.replace(temporary, target)
 
 
 def _umask():
