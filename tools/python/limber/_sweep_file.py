@@ -193,19 +193,19 @@ class Table:
             raise OutputError(f"{self.out}: its columns are not this sweep's ({complete[0][:200]}); it is not resumed or "
                               "written over")
         kept, aside, seen = [], [], {}
-        for number, text_ in enumerate(complete[1:], start=2):
+        for number, row_text in enumerate(complete[1:], start=2):
             try:
-                fields = next(csv.reader([text_])) if text_ else []
+                fields = next(csv.reader([row_text])) if row_text else []
             except csv.Error as problem:
-                aside.append((number, f"not CSV: {problem}", text_))
+                aside.append((number, f"not CSV: {problem}", row_text))
                 continue
             why = self._problem(fields, seen)
             if why:
-                aside.append((number, why, text_))
+                aside.append((number, why, row_text))
                 continue
             seen[int(fields[0])] = number
             if fields[self.columns.index("status")] not in rerun:
-                kept.append(text_)
+                kept.append(row_text)
         if cut:
             aside.append((len(lines), "cut short: no newline at its end", cut))
         return kept, aside
