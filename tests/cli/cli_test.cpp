@@ -10,6 +10,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tests/cli/run_cli.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
@@ -20,21 +21,9 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result run(std::vector<std::string> arguments) {
-  arguments.insert(arguments.begin(), "limber");
-  std::vector<const char*> argv;
-  for (const std::string& a : arguments) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_main(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
-
-std::string scene(const std::string& file) { return std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file; }
+using test::Result;
+using test::run;
+using test::scene;
 
 // A bad input: exit code 2, nothing on stdout, exactly one line on stderr mentioning `needle`.
 void expect_rejected(const std::vector<std::string>& arguments, const std::string& needle) {
