@@ -122,8 +122,8 @@ TEST(Trajectory, EveryShippedSceneUnderEveryMethodNamesEveryColumn) {
   std::filesystem::remove_all(folder);
 }
 
-// Every MJCF file MuJoCo ships (Debian: libmujoco-samples), recursively. The loader refuses 12
-// of the 17, by name (mocap bodies, composites, fluid forces, mesh geoms, muscles, a fromto in
+// Every MJCF file MuJoCo ships (Debian: libmujoco-samples), recursively. The loader refuses 13
+// of the 18, by name (mocap bodies, composites, fluid forces, mesh geoms, muscles, a fromto in
 // a default class); the 5 humanoids load under the weighted particles, Lagrange and Featherstone.
 TEST(Trajectory, EveryMujocoModelUnderEveryMethodNamesEveryColumn) {
   const std::filesystem::path models = "/usr/share/mujoco/model";
