@@ -10,6 +10,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tests/cli/run_cli.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
@@ -20,21 +21,9 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::Not;
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-
-Result run(std::vector<std::string> arguments) {
-  arguments.insert(arguments.begin(), "limber");
-  std::vector<const char*> argv;
-  for (const std::string& a : arguments) argv.push_back(a.c_str());
-  std::ostringstream out, err;
-  const int code = run_main(static_cast<int>(argv.size()), argv.data(), out, err);
-  return {code, out.str(), err.str()};
-}
-
-std::string scene(const std::string& file) { return std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/" + file; }
+using test::Result;
+using test::run;
+using test::scene;
 
 // A bad input: exit code 2, nothing on stdout, exactly one line on stderr mentioning `needle`.
 void expect_rejected(const std::vector<std::string>& arguments, const std::string& needle) {
@@ -425,9 +414,10 @@ TEST(Cli, OutNeverWritesOverTheSceneFile) {
   expect_rejected({"run", copy, "--steps", "2", "--out", ::testing::TempDir()}, "directory");
 }
 
-// --out replaces only a regular file: a device, a pipe or a socket at its path (or at its
-// NAME.part) is refused before the run and stays what it was; /dev/null and /dev/full included
-// (as root, a rename would replace the device node itself).
+// --out replaces only a regular file: a device, a pipe or a socket at its path is refused
+// before the run and stays what it was; /dev/null and /dev/full included (as root, a rename
+// would replace the device node itself). Whatever is at NAME.part is no concern of the run's:
+// it writes a temporary file of its own.
 TEST(Cli, OutRefusesToReplaceAnythingButARegularFile) {
   const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "limber_cli_not_regular";
   std::filesystem::remove_all(folder);
@@ -440,13 +430,14 @@ TEST(Cli, OutRefusesToReplaceAnythingButARegularFile) {
     expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", path}, "not a regular file");
     expect_rejected({"view", scene("chain.json"), "--frames", "1", "--screenshot", path}, "not a regular file");
     EXPECT_EQ(std::filesystem::symlink_status(path).type(), before);
-    EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+    EXPECT_THAT(test::partial_files(std::filesystem::path(path).parent_path()), ::testing::IsEmpty());
   }
-  const std::string blocked = (folder / "out.csv").string();
-  ASSERT_EQ(mkfifo((blocked + ".part").c_str(), 0600), 0);
-  expect_rejected({"run", scene("chain.json"), "--steps", "2", "--out", blocked}, "partial file");
-  EXPECT_EQ(std::filesystem::symlink_status(blocked + ".part").type(), std::filesystem::file_type::fifo);
-  EXPECT_FALSE(std::filesystem::exists(blocked));
+  const std::string beside = (folder / "out.csv").string();
+  ASSERT_EQ(mkfifo((beside + ".part").c_str(), 0600), 0);
+  const Result r = run({"run", scene("chain.json"), "--steps", "2", "--out", beside});
+  EXPECT_EQ(r.code, kSuccess) << r.err;
+  EXPECT_EQ(std::filesystem::symlink_status(beside + ".part").type(), std::filesystem::file_type::fifo);
+  EXPECT_TRUE(std::filesystem::is_regular_file(beside));
   std::filesystem::remove_all(folder);
 }
 
@@ -476,11 +467,12 @@ TEST(Cli, OutWritesThroughASymbolicLinkAndKeepsIt) {
 // A trajectory that could not fit on the disk (10⁹ rows of 10⁴ links: petabytes) is refused
 // before the run, and leaves no file.
 TEST(Cli, OutRefusesATrajectoryLargerThanTheFreeSpace) {
-  const std::string path = ::testing::TempDir() + "/limber_cli_huge.csv";
-  std::filesystem::remove(path);
+  const std::filesystem::path folder = test::fresh_folder("limber_cli_huge");
+  const std::string path = (folder / "huge.csv").string();
   expect_rejected({"run", scene("chain.json"), "--links", "10000", "--steps", "1000000000", "--out", path}, "free in");
   EXPECT_FALSE(std::filesystem::exists(path));
-  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  EXPECT_THAT(test::partial_files(folder), ::testing::IsEmpty());
+  std::filesystem::remove_all(folder);
 }
 
 // A scene whose bodies would not fit in the memory available is refused before they are
@@ -510,24 +502,28 @@ TEST(Cli, RefusesBodiesThatNeedMoreMemoryThanIsAvailable) {
 TEST(Cli, AnOutputFileAppearsOnlyWhenComplete) {
   const std::string path = ::testing::TempDir() + "/limber_cli_output.csv";
   std::ofstream(path) << "an older result\n";
+  std::filesystem::path partial;
   {
     OutputFile file(path, "--out", {});
+    partial = file.partial_path();
+    EXPECT_TRUE(std::filesystem::is_regular_file(partial)) << partial;
     file.stream() << "half a trajectory";
   }  // abandoned: not committed
   std::ifstream older(path);
   std::string line;
   std::getline(older, line);
   EXPECT_EQ(line, "an older result");
-  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  EXPECT_FALSE(std::filesystem::exists(partial)) << partial;
   {
     OutputFile file(path, "--out", {});
+    partial = file.partial_path();
     file.stream() << "complete\n";
     file.commit();
   }
   std::ifstream done(path);
   std::getline(done, line);
   EXPECT_EQ(line, "complete");
-  EXPECT_FALSE(std::filesystem::exists(path + ".part"));
+  EXPECT_FALSE(std::filesystem::exists(partial)) << partial;
 }
 
 // The README's example of an error runs as written and prints the line the README shows.
