@@ -37,7 +37,7 @@ using namespace scene_json;
 Settings read_settings(const Object& object, Settings settings = {}, bool complete = true) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
                      "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact",
-                     "limb_friction"});
+                     "limb_friction", "tolerances"});
   if (complete || object.find("gravity")) settings.gravity = object.vector("gravity");
   if (complete || object.find("time_step")) settings.time_step = object.number("time_step");
   require_positive(settings.time_step, object.path("time_step"));
@@ -52,6 +52,21 @@ Settings read_settings(const Object& object, Settings settings = {}, bool comple
   require_non_negative(settings.contact_recovery_speed, object.path("contact_recovery_speed"));
   object.optional("limb_friction", settings.limb_friction);
   require_non_negative(settings.limb_friction, object.path("limb_friction"));
+
+  if (const Json* json = object.find("tolerances")) {
+    const Object tolerances(*json, object.path("tolerances"));
+    tolerances.allow_only({"joint_gap", "penetration", "limit", "energy_gain"});
+    Tolerances& target = settings.tolerances;
+    tolerances.optional("joint_gap", target.joint_gap);
+    require_non_negative(target.joint_gap, tolerances.path("joint_gap"));
+    tolerances.optional("limit", target.limit);
+    require_non_negative(target.limit, tolerances.path("limit"));
+    for (const auto& [key, bound] : {std::pair{"penetration", &target.penetration}, std::pair{"energy_gain", &target.energy_gain}}) {
+      if (!tolerances.find(key)) continue;
+      *bound = tolerances.number(key);
+      require_non_negative(**bound, tolerances.path(key));
+    }
+  }
 
   if (const Json* json = object.find("sleep")) {
     const Object sleep(*json, object.path("sleep"));

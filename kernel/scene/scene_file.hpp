@@ -19,6 +19,12 @@
 //     "release_drives_on_impact": false,       optional (false): every joint drive goes limp once the
 //                                              ball has touched a limb (an active ragdoll's switch)
 //     "limb_friction": 0.5,                    optional (0.5), ≥ 0: Coulomb friction between limbs that touch
+//     "tolerances": {                          optional; each field optional, ≥ 0: what a run's verdict
+//                                              calls accurate, over every step (model.hpp's Tolerances)
+//       "joint_gap": 0.01,                     (0.01) of a link: a joint's gap, a particle limb's stretch
+//       "penetration": 0.03,                   (the thinnest limb's radius) m: the deepest overlap
+//       "limit": 0.1,                          (0.1) rad (m for a prismatic range) past a joint's limit
+//       "energy_gain": 0.01 },                 (0.01; 1 with actuators or drives) of the energy scale
 //     "relaxation": {                          optional; each field optional
 //       "iterations": 100,                     (100) integer ≥ 1
 //       "tolerance": 0,                        (0) m, ≥ 0; 0 disables

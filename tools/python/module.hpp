@@ -29,8 +29,6 @@ class OptionError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-/// StepStatus as Python reads it: "ok", "diverged_non_finite", ...
-const char* status_name(StepStatus status);
 
 inline void put(double* row, const Eigen::Vector3d& v) { row[0] = v.x(), row[1] = v.y(), row[2] = v.z(); }
 

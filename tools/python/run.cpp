@@ -16,6 +16,7 @@ struct MeteredRun {
   StepStatus status = StepStatus::ok;
   double step_seconds = 0;
   study::RunErrors errors;
+  study::VerdictBounds bounds;
   std::vector<double> samples;  // K × bodies × 3, m
   std::size_t sample_count = 0;
 };
@@ -30,7 +31,11 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
   };
   if (sample_every > 0) run.samples.reserve(static_cast<std::size_t>(steps / sample_every + 1) * poses.size() * 3);
   std::optional<study::ErrorMeter> meter;
-  if (observe) meter.emplace(world.observe(), study::energy_scale(world.model()));
+  if (observe) {
+    const Observation start = world.observe();
+    meter.emplace(start, study::energy_scale(world.model()));
+    run.bounds = study::verdict_bounds(world.model(), start);
+  }
   if (sample_every > 0) sample();
   using Clock = std::chrono::steady_clock;
   while (run.steps < steps) {
@@ -43,18 +48,23 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
     if (sample_every > 0 && run.steps % sample_every == 0) sample();
   }
   if (meter) run.errors = meter->result();
+  run.errors.status = run.status;
   return run;
 }
 
-py::dict as_dict(MeteredRun&& run, bool observe) {
+py::dict as_dict(MeteredRun&& run, const Model& model, bool observe) {
   py::dict out;
   out["steps"] = run.steps;
-  out["status"] = status_name(run.status);
   out["step_seconds"] = run.step_seconds;
-  if (observe) {
+  if (observe) {  // the command line's verdict, over every step
+    const study::Verdict verdict = study::verdict(run.errors, model, run.bounds);
+    out["status"] = verdict.status, out["verdict"] = verdict.text;
     const study::RunErrors& e = run.errors;
     out["max_joint_gap"] = e.max_joint_gap, out["rms_joint_gap"] = e.rms_joint_gap, out["max_link_stretch"] = e.max_link_stretch;
     out["energy_drift"] = e.energy_drift, out["energy_gain"] = e.energy_gain, out["energy_scale"] = e.energy_scale;
+    out["deepest_penetration"] = e.deepest_penetration.depth, out["max_limit_violation"] = e.max_limit_violation;
+  } else {
+    out["status"] = name(run.status);
   }
   const std::size_t bodies = run.sample_count ? run.samples.size() / (3 * run.sample_count) : 0;
   Array samples({static_cast<py::ssize_t>(run.sample_count), static_cast<py::ssize_t>(bodies), py::ssize_t{3}});
@@ -64,18 +74,6 @@ py::dict as_dict(MeteredRun&& run, bool observe) {
 }
 
 }  // namespace
-
-const char* status_name(StepStatus status) {
-  switch (status) {
-    case StepStatus::ok: return "ok";
-    case StepStatus::diverged_non_finite: return "diverged_non_finite";
-    case StepStatus::diverged_speed: return "diverged_speed";
-    case StepStatus::diverged_energy: return "diverged_energy";
-    case StepStatus::diverged_joint_gap: return "diverged_joint_gap";
-    case StepStatus::invalid_time_step: return "invalid_time_step";
-  }
-  return "unknown";
-}
 
 void bind_running(WorldClass& world) {
   world
@@ -89,7 +87,7 @@ void bind_running(WorldClass& world) {
               status = dt ? w.step(*dt) : w.step();
             }
             if (arrays) fill_poses(w, *arrays);
-            return status_name(status);
+            return name(status);
           },
           py::arg("dt") = py::none(), py::kw_only(), py::arg("poses") = py::none(),
           "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not. poses=(positions N×3, "
@@ -104,14 +102,18 @@ void bind_running(WorldClass& world) {
               py::gil_scoped_release release;
               run = metered_run(w, steps, sample_every, observe);
             }
-            return as_dict(std::move(run), observe);
+            return as_dict(std::move(run), w.model(), observe);
           },
           py::arg("steps"), py::kw_only(), py::arg("sample_every") = 0, py::arg("observe") = true,
-          "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', as a dict: steps (taken), status "
-          "(the stopping step's, or 'ok'), step_seconds (wall time inside the steps alone, s); with observe, the run's errors over "
-          "every step (kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch (relative to link length), "
-          "energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL (J); samples: the body "
-          "positions (K × N × 3 m) before the first step and after every sample_every steps (K = 0 when sample_every is 0).");
+          "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', as a dict: steps (taken), "
+          "step_seconds (wall time inside the steps alone, s); status: with observe, the run's verdict over every step, the "
+          "command line's ('ok', 'inaccurate' when a joint gap, penetration, limit violation or energy gain passed the scene's "
+          "settings.tolerances at some step, or the stopping step's status, e.g. 'diverged_speed'), and verdict, the summary's "
+          "sentence; without, the stopping step's status or 'ok'. With observe, the run's errors over every step "
+          "(kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch (relative to link length), "
+          "energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL (J), deepest_penetration (m), "
+          "max_limit_violation (rad; m for a slide); samples: the body positions (K × N × 3 m) before the first step and after "
+          "every sample_every steps (K = 0 when sample_every is 0).");
 }
 
 }  // namespace limber::python
