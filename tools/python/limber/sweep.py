@@ -28,8 +28,10 @@ is a string "1,0,0"). The configurations are every scene
     between the bodies' origins and the reference run's; inf when the run stopped early; NaN
     without a reference), max_joint_gap, rms_joint_gap, max_link_stretch (relative to link
     length), energy_drift and energy_gain (max |E − E0| and max (E − E0) over the run, relative
-    to m·|g|·ΣL), status (World.run's verdict, or the sweep's own: 'error', 'timeout',
-    'worker_died'), error (why, for those; "reference: ..." when the scene's reference run failed).
+    to m·|g|·ΣL), deepest_penetration (m) and max_limit_violation (rad; m for a slide) over the
+    run, status (World.run's verdict: 'ok', 'inaccurate', 'diverged_...'; or the sweep's own:
+    'error', 'timeout', 'worker_died'), verdict (the verdict in `limber run`'s words), error (why,
+    for the sweep's own; "reference: ..." when the scene's reference run failed).
 
 A configuration is a row whatever happens to it, never a lost sweep:
 - 'error': it raised (a bad option, a scene that does not load). Deterministic: kept on resume.
@@ -85,8 +87,10 @@ from ._sweep_workers import Failure, WorkerStartError
 GRID_KEYS = {"duration", "sample_interval", "timeout", "scenes", "methods", "settings", "reference"}
 SCENE_KEYS = {"scene", "name", "body", "links", "copies", "floating_base"}
 METRICS = ["steps", "steps_per_second", "trajectory_error", "max_joint_gap", "rms_joint_gap", "max_link_stretch",
-           "energy_drift", "energy_gain", "status", "error"]
-NUMERIC = METRICS[:-2]
+           "energy_drift", "energy_gain", "deepest_penetration", "max_limit_violation", "status", "verdict", "error"]
+NUMERIC = METRICS[:-3]
+# World.run's verdicts of a run that went all the way (the others name the step that stopped it).
+COMPLETE = {"ok", "inaccurate"}
 MEASURED = ["steps_per_second"]  # wall-time measurements: the only columns that differ between runs
 RETRIES = 2  # times a configuration whose worker process died runs again before it is a 'worker_died' row
 RERUN = ("timeout", "worker_died")  # statuses a resumed sweep runs again: the next try may end otherwise
@@ -248,8 +252,8 @@ def reference_samples(scene, reference, duration, sample_interval, limit=None):
     run = _run(scene, reference, duration, sample_interval, limit)
     if _stopped(run, limit):
         raise Failure("timeout", _stopped(run, limit))
-    if run["status"] != "ok":
-        raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['status']}")
+    if run["status"] not in COMPLETE:
+        raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['verdict']}")
     return run["samples"]
 
 
@@ -265,7 +269,7 @@ def trajectory_error(samples, reference):
 
 def _error_row(configuration, message, status="error"):
     """A row without a run's result: its metrics NaN, steps 0; the message on one line, as the file holds it."""
-    return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": status,
+    return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": status, "verdict": "",
             "error": _sweep_file.text(message)}
 
 
@@ -283,7 +287,9 @@ def run_configuration(configuration, scene, duration, sample_interval, limit=Non
     row = {**configuration, "steps": run["steps"], "steps_per_second": run["steps"] / seconds if seconds > 0 else math.nan,
            "trajectory_error": math.nan, "max_joint_gap": run["max_joint_gap"], "rms_joint_gap": run["rms_joint_gap"],
            "max_link_stretch": run["max_link_stretch"], "energy_drift": run["energy_drift"] / scale,
-           "energy_gain": run["energy_gain"] / scale, "status": "timeout" if stopped else run["status"], "error": stopped or ""}
+           "energy_gain": run["energy_gain"] / scale, "deepest_penetration": run["deepest_penetration"],
+           "max_limit_violation": run["max_limit_violation"], "status": "timeout" if stopped else run["status"],
+           "verdict": _sweep_file.text(run["verdict"]), "error": stopped or ""}
     return row, run["samples"]
 
 
