@@ -1,9 +1,8 @@
 // MJCF's top level: the sections in MuJoCo's order, <compiler>, <option>, the <default> classes
 // and the body tree (an explicit stack: a chain of any depth loads), then the actuators.
 #include <algorithm>
-#include <fstream>
-#include <sstream>
 
+#include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
 
 namespace limber::mjcf {
@@ -338,11 +337,7 @@ Document parse_mjcf(std::string_view xml, const std::filesystem::path& file_name
 }
 
 Document load_mjcf(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ModelError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_mjcf(text.str(), file);
+  return parse_mjcf(scene_input::read_file(file, scene_input::FileKind::model), file);
 }
 
 }  // namespace limber::mjcf

@@ -3,7 +3,6 @@
 #include "limber/kernel/scene/urdf.hpp"
 
 #include <algorithm>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
@@ -12,6 +11,7 @@
 
 #include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
+#include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/urdf_reader.hpp"
 
 namespace limber {
@@ -308,11 +308,7 @@ Model parse_urdf(std::string_view xml, const std::filesystem::path& file_name, s
 }
 
 Model load_urdf(const std::filesystem::path& file, std::vector<std::string>& notes, bool floating_base) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ModelError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_urdf(text.str(), file, notes, floating_base);
+  return parse_urdf(scene_input::read_file(file, scene_input::FileKind::model), file, notes, floating_base);
 }
 
 }  // namespace limber
