@@ -1,6 +1,7 @@
 // MJCF's top level: the sections in MuJoCo's order, <compiler>, <option>, the <default> classes
 // and the body tree (an explicit stack: a chain of any depth loads), then the actuators.
 #include <algorithm>
+#include <cmath>
 
 #include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
@@ -200,6 +201,10 @@ void resolve_mass(Context& context, const Node& element, Body& body) {
   if (!summed) return;
   if (summed->geoms > 1 && summed->mass < mj_minval) {
     context.reader.fail(element, tag(element), "the geoms' total mass is too small to place a centre of mass");
+  }
+  if (!std::isfinite(summed->mass) || !summed->centre.allFinite() || !summed->inertia.allFinite()) {
+    context.reader.fail(element, tag(element), "its geoms' total mass, centre of mass or inertia is not finite: their sizes, "
+                                               "masses or positions overflow when summed");
   }
   body.mass = summed->mass;
   body.centre_of_mass = summed->centre;

@@ -13,6 +13,9 @@
 //   regular file only (a FIFO or /dev/zero is refused at the <include>), the main file and its
 //   includes within kMaxModelFileBytes together, each nested at most kMaxXmlDepth elements deep,
 //   includes inside includes' roots too. Names and every other attribute must be UTF-8.
+// - A value whose derived quantity overflows (a geom's size, fromto or density whose volume,
+//   mass or inertia is not finite; geoms whose sum is not) is refused at that attribute; what
+//   only the assembled Model shows names the element the body or joint came from.
 // - Sections apply in MuJoCo's order whatever their order in the file (compiler and option,
 //   defaults, worldbody, actuator), as mj_loadXML reads them.
 // - Defaults: a nested class copies its parent when it is read; several top-level <default>s
