@@ -523,7 +523,9 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
   if (const Json* bounds = root.find("bounds"))
     model.bounds = read_bounds(Object(*bounds, "bounds"));
   model.balls = read_balls(root);
-  if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders", options.max_triangles);
+  if (const Json* colliders = root.find("colliders")) {
+    model.colliders = read_colliders(*colliders, "colliders", options.max_triangles, scene.notes);
+  }
 
   // Bodies: the explicit ones, then the chain's links.
   const Json* bodies_json = root.find("bodies");
@@ -832,7 +834,11 @@ Scene load_scene_text(std::string_view json_text, std::string_view source,
     throw ModelError(parse_error_message(json_text, source));
   }
   try {
-    Scene scene = json.is_object() && json.contains("model") ? read_model_wrapper(json, source, options) : read_scene(json, options);
+    const bool wrapper = json.is_object() && json.contains("model");
+    Scene scene = wrapper ? read_model_wrapper(json, source, options) : read_scene(json, options);
+    if (!wrapper) {  // a model file's notes name it and their lines; a scene's own name the scene
+      for (std::string& note : scene.notes) note = std::string(source) + ": " + note;
+    }
     validate(scene.model);
     validate(scene.methods);
     return scene;

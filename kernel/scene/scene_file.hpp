@@ -165,7 +165,13 @@
 //               "length": 1, "radius": 0.05,   required, m: the core segment (≥ 0) and the radius (> 0)
 //     mesh:     "vertices": [[x, y, z], ...],  required, m
 //               "triangles": [[0, 1, 2], ...], required, ≥ 1: vertex indices, counter-clockwise seen from
-//                                              outside (the front; one-sided), none degenerate
+//                                              outside (the front; one-sided). Dropped at load, and
+//                                              counted in Scene::notes: a degenerate triangle (twice
+//                                              its area ≤ 1e-10 × its longest edge squared: repeated
+//                                              or collinear vertices) and a duplicate (the same three
+//                                              points, in the same turn, as an earlier triangle: it
+//                                              would cost a step its time and add nothing). A mesh
+//                                              left with none is refused.
 //               "position", "rotation",        optional (none): the frame the vertices are given in (the
 //                                              Model holds them in world coordinates)
 //               "thickness": 0.1,              optional (0.1), m, > 0: how far behind a triangle counts as inside
@@ -259,7 +265,8 @@ struct Scene {
   MethodSettings methods;
   /// What the loader dropped or approximated, one line each ("file:line: <element>: reason"):
   /// a model file's elements limber does not simulate (kernel/scene/mjcf_model.hpp,
-  /// kernel/scene/urdf.hpp). Empty for a JSON scene, which has no such fields.
+  /// kernel/scene/urdf.hpp); in a JSON scene, the triangles a mesh collider dropped
+  /// ("<source>: colliders[k].triangles: ...", the format above).
   std::vector<std::string> notes;
 };
 
