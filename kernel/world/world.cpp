@@ -85,7 +85,7 @@ Observation World::observe_state() const {
 Observation World::observe() const {
   Observation out = observe_state();
   std::optional<WorldInternals::PenetrationGauge>& gauge = internals_->penetration_gauge;
-  if (!gauge) gauge.emplace(LimbCollisions(model_));
+  if (!gauge) gauge.emplace(WorldInternals::PenetrationGauge{LimbCollisions(model_), {}});
   segments(gauge->segments);
   out.penetration = deepest_penetration(model_, gauge->collisions, gauge->segments);
   return out;
