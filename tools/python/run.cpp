@@ -77,7 +77,7 @@ const char* status_name(StepStatus status) {
   return "unknown";
 }
 
-void bind_running(WorldClass& world) {
+void bind_running(WorldMethods& world) {
   world
       .def(
           "step", [](World& w, std::optional<double> dt, const py::object& poses) {
@@ -97,8 +97,8 @@ void bind_running(WorldClass& world) {
           "one call a step, not two.")
       .def(
           "run", [](World& w, long steps, long sample_every, bool observe) {
-            if (steps < 0) throw py::value_error("run: steps must be ≥ 0, got " + std::to_string(steps));
-            if (sample_every < 0) throw py::value_error("run: sample_every must be ≥ 0, got " + std::to_string(sample_every));
+            if (steps < 0) throw WorldError("run: steps must be ≥ 0, got " + std::to_string(steps));
+            if (sample_every < 0) throw WorldError("run: sample_every must be ≥ 0, got " + std::to_string(sample_every));
             MeteredRun run;
             {
               py::gil_scoped_release release;
