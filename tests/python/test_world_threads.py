@@ -1,8 +1,13 @@
 """One World, one call at a time (tools/python/locked_world.hpp): two threads stepping one World
 make the steps one thread would, bit for bit, under every method; edits on one thread land
-between the steps of another."""
+between the steps of another; and World.run stops for Ctrl-C and for its wall_limit between two
+steps (tools/python/run.cpp)."""
 import os
 import pathlib
+import signal
+import subprocess
+import sys
+import textwrap
 import threading
 
 import numpy as np
@@ -107,3 +112,51 @@ def test_edits_on_one_thread_land_between_the_steps_of_another(method):
     assert world.time == serial.time  # every step taken, each of the scene's time step
     for array in state(world):
         assert np.isfinite(array).all()
+
+
+def test_run_stops_after_the_step_that_passes_its_wall_limit_and_says_so():
+    world = limber.World(limber.chain(links=2000), "weighted")
+    result = world.run(10**9, wall_limit=0.2)
+    assert result["stopped"] == "wall_limit"
+    assert result["status"] == "ok"
+    assert 0 < result["steps"] < 10**9
+    assert world.time == pytest.approx(result["steps"] * limber.chain(links=2000).time_step)
+    whole = world.run(3)
+    assert whole["stopped"] == "steps" and whole["steps"] == 3
+    with pytest.raises(limber.WorldError, match="wall_limit must be > 0"):
+        world.run(1, wall_limit=0)
+    with pytest.raises(limber.WorldError, match="wall_limit must be > 0"):
+        world.run(1, wall_limit=float("nan"))
+
+
+def test_a_run_that_diverges_says_it_stopped_at_the_status():
+    world = limber.World(limber.chain(links=5), "weighted", dt=0.01)
+    world.apply_impulse("link_4", np.array([0, 0, 1e9]), world.pose("link_4")[0])
+    result = world.run(100)
+    assert result["status"] != "ok" and result["stopped"] == "status" and result["steps"] < 100
+
+
+CTRL_C = textwrap.dedent("""
+    import limber
+    world = limber.World(limber.chain(links=2000), "weighted")
+    try:
+        print("running", flush=True)
+        world.run(10**9)  # hours
+    except KeyboardInterrupt:
+        print("interrupted at", repr(world.time), flush=True)
+        assert world.step() == "ok"  # left consistent: it steps on
+        raise
+""")
+
+
+def test_ctrl_c_stops_a_run_between_two_steps_with_keyboard_interrupt():
+    child = subprocess.Popen([sys.executable, "-c", CTRL_C], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline() == "running\n"
+        child.send_signal(signal.SIGINT)
+        out, err = child.communicate(timeout=60)  # ~50 ms unloaded; the limit only stops a run that ignores Ctrl-C
+    finally:
+        child.kill()
+    assert err.rstrip().endswith("KeyboardInterrupt"), err
+    assert child.returncode == -signal.SIGINT  # how Python ends on a KeyboardInterrupt nothing caught
+    assert float(out.split("interrupted at ")[1]) >= 0  # the World says how far it went

@@ -17,7 +17,7 @@ Units are SI. A World's options are `limber run`'s flags, spelled with underscor
 Errors are limber.ModelError (a bad scene or description: the message names the file or call,
 and the field), limber.OptionError (a bad option) and limber.WorldError (a bad call), all
 ValueErrors; besides them only TypeError (an argument of the wrong type, or an object made by
-__new__ without __init__).
+__new__ without __init__) and KeyboardInterrupt (Ctrl-C stops World.run between two steps).
 
 Threads: World.step and World.run release the GIL, so Worlds on several threads step at once.
 One World takes one call at a time: calls on it from several threads wait their turn (with the
