@@ -228,7 +228,7 @@ PairRules pair_rules(const Model& model) {
 // ---------------------------------------------------------------------------------------------
 // The deepest penetration, m (≥ 0), given every body's pose, measured alike on limber's and
 // Bullet's poses: limb–limb and limb–static collider overlaps by LimbCollisions::
-// deepest_penetration (kernel/geometry/limb_collisions.hpp: each limb as the capsule around its
+// deepest_overlap (kernel/geometry/limb_collisions.hpp: each limb as the capsule around its
 // segment, the pairs PairRules excludes left out, meshes with their thickness), and, THE BENCH'S
 // OWN PART, limb–ground: the ground height minus the limb's lowest point (a cylinder's exact rim).
 double deepest_penetration(const Model& model, LimbCollisions& collisions, const std::vector<FramePose>& poses) {
@@ -243,7 +243,7 @@ double deepest_penetration(const Model& model, LimbCollisions& collisions, const
       deepest = std::max(deepest, model.ground->height - (std::min(s.head.z(), s.tail.z()) - rim));
     }
   }
-  return std::max(deepest, collisions.deepest_penetration(limbs));
+  return std::max(deepest, -collisions.deepest_overlap(limbs).separation);
 }
 
 // The largest distance between a joint's two anchors, m, and the largest limit violation (rad),

@@ -32,7 +32,6 @@
 #include <mujoco/mujoco.h>
 
 #include "bench/thread_time.hpp"
-#include "limber/kernel/geometry/limb_collisions.hpp"
 #include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
@@ -100,8 +99,6 @@ Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure)
   WorldOptions options = world_options(runner.method, scene.methods);
   options.particles.threads = runner.threads;
   World world(scene.model, options);
-  LimbCollisions collisions(scene.model);
-  std::vector<LimbSegment> segments;
   Measures out;
   if (measure) out.energy_start = world.observe().energy();
   double stepping = 0;
@@ -111,9 +108,7 @@ Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure)
     stepping += clock_seconds(runner.threads) - start;
     if (!measure) continue;
     out.largest_gap = std::max(out.largest_gap, world.observe().max_joint_gap);
-    world.segments(segments);
-    const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
-    out.deepest_penetration = std::max({out.deepest_penetration, between, ground_penetration(scene.model, segments)});
+    out.deepest_penetration = std::max(out.deepest_penetration, world.observe().penetration.depth);
   }
   out.cpu_seconds = stepping;
   if (measure) out.energy_end = world.observe().energy();

@@ -3,7 +3,7 @@
 
     PYTHONPATH=build/python bench/sweep_scaling.py [--grid bench/pareto_sweep/grid.json] [--rounds 3] [--out T.csv]
 
-1. one process (limber.sweep's workers=1: this process runs every configuration);
+1. one worker process (limber.sweep's workers=1: one process runs every configuration);
 2. 2 local processes (workers=2);
 3. a Dask LocalCluster of 2 worker processes on 127.0.0.1;
 4. a scheduler and 2 workers started as separate processes (dask-scheduler, dask-worker) on

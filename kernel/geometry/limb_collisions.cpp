@@ -556,10 +556,12 @@ SweptTouch LimbCollisions::first_static_touch(std::uint32_t segment, const Vecto
   return first;
 }
 
-double LimbCollisions::deepest_penetration(std::span<const LimbSegment> limbs) {
+LimbContact LimbCollisions::deepest_overlap(std::span<const LimbSegment> limbs) {
   search(limbs, all_awake_, 0, scratch_, /*keep=*/false, /*runner=*/nullptr);
-  double deepest = 0;
-  for (const LimbContact& contact : scratch_) deepest = std::max(deepest, -contact.separation);
+  LimbContact deepest;
+  for (const LimbContact& contact : scratch_) {
+    if (contact.separation < deepest.separation) deepest = contact;  // the first of equals: the contacts' fixed order
+  }
   return deepest;
 }
 

@@ -117,9 +117,10 @@ class LimbCollisions {
   bool find_kept_pairs(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
                        std::vector<LimbContact>& out, BlockRunner* runner = nullptr);
 
-  /// The deepest overlap among `limbs` now (m, ≥ 0; 0 when nothing overlaps), between limbs and
-  /// static geometry and between limbs — the run summary's measure (every method alike).
-  double deepest_penetration(std::span<const LimbSegment> limbs);
+  /// The deepest overlap among `limbs` now, between limbs and static geometry and between limbs
+  /// — the run summary's measure (every method alike): its contact (depth −separation > 0), or a
+  /// contact of separation 0 when nothing overlaps.
+  LimbContact deepest_overlap(std::span<const LimbSegment> limbs);
 
   /// The pairs of segments the last find()'s sweep-and-prune broadphase gave (limb–limb and
   /// ball–ball, before the awake, filter and bounding-sphere tests; 0 when the model has no
@@ -171,7 +172,7 @@ class LimbCollisions {
     Block* blocks = nullptr;  // run_narrowphase's
     static double run(const void* context, std::size_t index);
   };
-  // find(), keeping its pairs for find_kept_pairs() or not (deepest_penetration).
+  // find(), keeping its pairs for find_kept_pairs() or not (deepest_overlap).
   void search(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake, double margin,
               std::vector<LimbContact>& out, bool keep, BlockRunner* runner);
   void check_sizes(std::span<const LimbSegment> limbs, std::span<const std::uint8_t> awake) const;
@@ -212,8 +213,8 @@ class LimbCollisions {
   std::vector<CandidatePair> kept_static_pairs_;  // (segment, StaticTree primitive) within the search reach
   std::vector<LimbSegment> searched_;             // the segments find() kept its pairs for
   std::vector<Block> blocks_;               // the narrowphase's on threads, kept between calls
-  std::vector<LimbContact> scratch_;        // deepest_penetration's contacts
-  std::vector<std::uint8_t> all_awake_;     // deepest_penetration's flags
+  std::vector<LimbContact> scratch_;        // deepest_overlap's contacts
+  std::vector<std::uint8_t> all_awake_;     // deepest_overlap's flags
   BallCandidates ball_candidates_;
   std::uint64_t set_up_comparisons_ = 0;
   std::size_t candidate_pairs_ = 0;         // the last find()'s broadphase pairs

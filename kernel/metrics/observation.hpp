@@ -8,6 +8,15 @@
 
 namespace limber {
 
+/// The deepest overlap of a state and what overlaps there (every method's limbs measured alike:
+/// each limb as the capsule or cylinder collision sees, LimbCollisions, and the ground).
+struct Penetration {
+  double depth = 0;   ///< m, ≥ 0; 0 when nothing overlaps
+  int first = -1;     ///< a Model body index, or bodies + k for ball k; −1 when nothing overlaps
+  int second = -1;    ///< the other body or ball, as `first`; −1 when it is the ground or a collider
+  int collider = -1;  ///< the Model::colliders index when the other side is one, else −1
+};
+
 struct Observation {
   double time = 0;                 ///< s
   /// Joint gaps |x_inboard − x_outboard| relative to the mean length of the two limbs joined
@@ -25,6 +34,10 @@ struct Observation {
   /// the largest violation of a limit (rad; m for a prismatic range) and the largest distance
   /// from a drive's target, over the joints that have them.
   JointMeasures joints;
+  /// The deepest overlap now. World::observe() measures it (a narrow phase over the limbs); the
+  /// state observers (observers.hpp), which the World's divergence check reads every step, leave
+  /// it empty.
+  Penetration penetration;
 
   double energy() const { return kinetic_energy + potential_energy; }
 };

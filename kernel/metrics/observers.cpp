@@ -226,9 +226,20 @@ void limb_segments(const RigidScene& scene, const Model& model, std::vector<Limb
   }
 }
 
-double ground_penetration(const Model& model, std::span<const LimbSegment> segments) {
-  if (!model.ground) return 0;
-  double deepest = 0;
+Penetration deepest_penetration(const Model& model, LimbCollisions& collisions, std::span<const LimbSegment> segments) {
+  Penetration deepest;
+  if (collisions.active()) {
+    const LimbContact contact = collisions.deepest_overlap(segments);
+    if (contact.separation < 0) {
+      deepest.depth = -contact.separation, deepest.first = static_cast<int>(contact.first);
+      if (contact.second == kStaticShape) {
+        deepest.collider = static_cast<int>(contact.collider);
+      } else {
+        deepest.second = static_cast<int>(contact.second);
+      }
+    }
+  }
+  if (!model.ground) return deepest;
   for (std::size_t body = 0; body < segments.size() && body < model.bodies.size(); ++body) {
     const LimbSegment& segment = segments[body];
     const Eigen::Vector3d axis = segment.tail - segment.head;
@@ -238,8 +249,8 @@ double ground_penetration(const Model& model, std::span<const LimbSegment> segme
     // An end's reach below its centre (end_support, geometry.hpp): the radius for a sphere, the
     // rim's r·√(1 − (n·u)²) for a disk.
     const double reach = disk ? end_support(up, axis / length, segment.radius, true).reach : segment.radius;
-    const double lowest = std::min(segment.head.z(), segment.tail.z()) - reach;
-    deepest = std::max(deepest, model.ground->height - lowest);
+    const double depth = model.ground->height - (std::min(segment.head.z(), segment.tail.z()) - reach);
+    if (depth > deepest.depth) deepest = {depth, static_cast<int>(body), -1, -1};
   }
   return deepest;
 }

@@ -44,9 +44,12 @@ void limb_segments(const RigidScene& scene, const Model& model, std::vector<Limb
 template <typename Scalar>
 void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& segments);
 
-/// How far the limbs reach below the ground now (m, ≥ 0; 0 without a ground): the deepest end
-/// sphere of a capsule, or end rim of a cylinder, under the ground plane.
-double ground_penetration(const Model& model, std::span<const LimbSegment> segments);
+/// The deepest overlap of `segments` (limb_segments': the Model bodies' limbs, then the balls)
+/// now, the same measure for every method: between limbs, and limbs and static geometry, by
+/// `collisions` (a LimbCollisions of `model`: each limb as the capsule or cylinder around its
+/// segment, the pairs it excludes left out); and below the ground, the deepest end sphere of a
+/// capsule or end rim of a cylinder. The first of equal depths, in that order.
+Penetration deepest_penetration(const Model& model, LimbCollisions& collisions, std::span<const LimbSegment> segments);
 
 extern template Observation observe<float>(const VerletState<float>&);
 extern template Observation observe<double>(const VerletState<double>&);

@@ -145,28 +145,40 @@ inline void require_box(const Vector3& min, const Vector3& max, std::string_view
   }
 }
 
-/// A triangle mesh (model.hpp's TriangleMesh): finite vertices, at least one triangle, indices
-/// naming vertices, no degenerate triangle (twice its area, |(v1 − v0) × (v2 − v0)|, must exceed
-/// 1e-10 of its longest edge squared: a sliver has no normal to push along). Fails at
-/// "<vertices_path>[i]" or "<triangles_path>[t]".
-inline void require_triangle_mesh(const TriangleMesh& mesh, std::string_view vertices_path, std::string_view triangles_path) {
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) require_finite(mesh.vertices[i], indexed(vertices_path, i));
+/// Whether triangle a, b, c is degenerate: twice its area, |(b − a) × (c − a)|, at most 1e-10 of
+/// its longest edge squared (a sliver has no normal to push along), or all three corners one point.
+inline bool degenerate_triangle(const Vector3& a, const Vector3& b, const Vector3& c) {
+  const Vector3 ab = b - a, ac = c - a;
+  const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
+  return !(ab.cross(ac).norm() > 1e-10 * longest) || longest == 0;
+}
+
+/// At least one triangle, and every triangle's indices name vertices. Fails at "<triangles_path>"
+/// or "<triangles_path>[t]".
+inline void require_vertex_indices(const TriangleMesh& mesh, std::string_view triangles_path) {
   if (mesh.triangles.empty()) fail(triangles_path, "must list at least one triangle");
   const std::size_t count = mesh.vertices.size();
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const auto& triangle = mesh.triangles[t];
-    for (const std::uint32_t index : triangle) {
+    for (const std::uint32_t index : mesh.triangles[t]) {
       if (index >= count) {
         fail(indexed(triangles_path, t), "vertex index " + std::to_string(index) + " names no vertex (there are " +
                                              std::to_string(count) + ")");
       }
     }
-    const Vector3& a = mesh.vertices[triangle[0]];
-    const Vector3 ab = mesh.vertices[triangle[1]] - a, ac = mesh.vertices[triangle[2]] - a;
-    const double longest = std::max({ab.squaredNorm(), ac.squaredNorm(), (ac - ab).squaredNorm()});
-    const double twice_area = ab.cross(ac).norm();
-    if (!(twice_area > 1e-10 * longest) || longest == 0) {
-      fail(indexed(triangles_path, t), "is degenerate (area " + format_number(0.5 * twice_area) +
+  }
+}
+
+/// A triangle mesh (model.hpp's TriangleMesh): finite vertices, at least one triangle, indices
+/// naming vertices, no degenerate triangle (degenerate_triangle). Fails at "<vertices_path>[i]"
+/// or "<triangles_path>[t]".
+inline void require_triangle_mesh(const TriangleMesh& mesh, std::string_view vertices_path, std::string_view triangles_path) {
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) require_finite(mesh.vertices[i], indexed(vertices_path, i));
+  require_vertex_indices(mesh, triangles_path);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& triangle = mesh.triangles[t];
+    const Vector3 &a = mesh.vertices[triangle[0]], &b = mesh.vertices[triangle[1]], &c = mesh.vertices[triangle[2]];
+    if (degenerate_triangle(a, b, c)) {
+      fail(indexed(triangles_path, t), "is degenerate (area " + format_number(0.5 * (b - a).cross(c - a).norm()) +
                                            " m^2): its vertices are repeated or in a line");
     }
   }

@@ -466,6 +466,11 @@ void validate_settings(const Settings& settings) {
   }
   require_non_negative(settings.sleep.speed_threshold, "settings.sleep.speed_threshold");
   require_non_negative(settings.sleep.time_to_sleep, "settings.sleep.time_to_sleep");
+  const Tolerances& tolerances = settings.tolerances;
+  require_non_negative(tolerances.joint_gap, "settings.tolerances.joint_gap");
+  if (tolerances.penetration) require_non_negative(*tolerances.penetration, "settings.tolerances.penetration");
+  require_non_negative(tolerances.limit, "settings.tolerances.limit");
+  if (tolerances.energy_gain) require_non_negative(*tolerances.energy_gain, "settings.tolerances.energy_gain");
 }
 
 }  // namespace

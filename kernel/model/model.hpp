@@ -434,6 +434,24 @@ struct DragSettings {
   Vector3 angular = Vector3::Zero();  ///< N·m·s about body x, y, z, ≥ 0
 };
 
+/// What a run may do and still be called accurate: its verdict (kernel/metrics/run_verdict.hpp)
+/// is "ok" only when, over every step, its joints, penetration, limits and energy stayed within
+/// these. An absent bound is derived from the Model, as said beside it.
+struct Tolerances {
+  /// Largest joint gap, or particle limb stretch, relative to the link length, ≥ 0.
+  double joint_gap = 0.01;
+  /// Deepest overlap of a limb into another, static geometry or the ground, m, ≥ 0. Absent: the
+  /// radius of the Model's thinnest limb with a radius (0.01 m without one): a limb sunk that deep
+  /// has half its thickness through whatever it met.
+  std::optional<double> penetration;
+  /// Largest violation of a joint limit, rad (m for a prismatic range), ≥ 0.
+  double limit = 0.1;
+  /// Largest energy gain, relative to the World's energy scale (kernel/metrics/divergence.hpp),
+  /// ≥ 0. Absent: 0.01 for a Model without actuators or drives (no method may gain energy then),
+  /// 1 with them (motors put energy in; a servo past its stability limit gains tens of scales).
+  std::optional<double> energy_gain;
+};
+
 struct Settings {
   Vector3 gravity{0, 0, -9.81};  ///< m/s²
   double time_step = 1.0 / 240;  ///< s, > 0
@@ -454,6 +472,7 @@ struct Settings {
   bool release_drives_on_impact = false;
   /// Coulomb friction between two limbs that touch (limb–limb contacts; restitution 0).
   double limb_friction = 0.5;
+  Tolerances tolerances;  ///< what a run's verdict calls accurate
 };
 
 /// A whole scene. Build one in C++ or load it with load_scene (kernel/scene/scene_file.hpp).

@@ -21,6 +21,32 @@ enum class StepStatus : std::uint8_t {
   invalid_time_step,    ///< Δt was not a finite number ≥ the method's minimum (kMinimumTimeStep); nothing was done
 };
 
+/// The status as an identifier: "ok", "diverged_non_finite", … (Python's, a sweep's column).
+inline const char* name(StepStatus status) {
+  switch (status) {
+    case StepStatus::ok: return "ok";
+    case StepStatus::diverged_non_finite: return "diverged_non_finite";
+    case StepStatus::diverged_speed: return "diverged_speed";
+    case StepStatus::diverged_energy: return "diverged_energy";
+    case StepStatus::diverged_joint_gap: return "diverged_joint_gap";
+    case StepStatus::invalid_time_step: return "invalid_time_step";
+  }
+  return "unknown";
+}
+
+/// The status as the run summary says it: "ok", "DIVERGED (a non-finite number in the state)", …
+inline const char* describe(StepStatus status) {
+  switch (status) {
+    case StepStatus::ok: return "ok";
+    case StepStatus::diverged_non_finite: return "DIVERGED (a non-finite number in the state)";
+    case StepStatus::diverged_speed: return "DIVERGED (speed above settings.divergence_speed)";
+    case StepStatus::diverged_energy: return "DIVERGED (energy gained past 100 energy scales of the scene)";
+    case StepStatus::diverged_joint_gap: return "DIVERGED (a joint gap or a link's stretch past a whole link)";
+    case StepStatus::invalid_time_step: return "invalid time step";
+  }
+  return "unknown";
+}
+
 /// The shortest step any method takes, s. Below it a step is refused (invalid_time_step): a
 /// subnormal Δt is zero once denormals are flushed, and steps this short carry a body's motion
 /// in the last digits of its coordinates (a particle moving at 1 m/s moves 10⁻⁹ m, 10⁷ ulps of

@@ -1,9 +1,9 @@
 // MJCF's top level: the sections in MuJoCo's order, <compiler>, <option>, the <default> classes
 // and the body tree (an explicit stack: a chain of any depth loads), then the actuators.
 #include <algorithm>
-#include <fstream>
-#include <sstream>
+#include <cmath>
 
+#include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
 
 namespace limber::mjcf {
@@ -202,6 +202,10 @@ void resolve_mass(Context& context, const Node& element, Body& body) {
   if (summed->geoms > 1 && summed->mass < mj_minval) {
     context.reader.fail(element, tag(element), "the geoms' total mass is too small to place a centre of mass");
   }
+  if (!std::isfinite(summed->mass) || !summed->centre.allFinite() || !summed->inertia.allFinite()) {
+    context.reader.fail(element, tag(element), "its geoms' total mass, centre of mass or inertia is not finite: their sizes, "
+                                               "masses or positions overflow when summed");
+  }
   body.mass = summed->mass;
   body.centre_of_mass = summed->centre;
   body.inertia = summed->inertia;
@@ -338,11 +342,7 @@ Document parse_mjcf(std::string_view xml, const std::filesystem::path& file_name
 }
 
 Document load_mjcf(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ModelError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_mjcf(text.str(), file);
+  return parse_mjcf(scene_input::read_file(file, scene_input::FileKind::model), file);
 }
 
 }  // namespace limber::mjcf

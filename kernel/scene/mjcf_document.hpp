@@ -9,7 +9,13 @@
 // may not expect:
 // - include: `<include file>` is resolved against the MAIN file's directory; the included file's
 //   root element is dropped and its children take the include's place. Including a file twice
-//   (or in a cycle) is an error.
+//   (or in a cycle) is an error. Every file is read as scene_file.hpp's load_scene_file says: a
+//   regular file only (a FIFO or /dev/zero is refused at the <include>), the main file and its
+//   includes within kMaxModelFileBytes together, each nested at most kMaxXmlDepth elements deep,
+//   includes inside includes' roots too. Names and every other attribute must be UTF-8.
+// - A value whose derived quantity overflows (a geom's size, fromto or density whose volume,
+//   mass or inertia is not finite; geoms whose sum is not) is refused at that attribute; what
+//   only the assembled Model shows names the element the body or joint came from.
 // - Sections apply in MuJoCo's order whatever their order in the file (compiler and option,
 //   defaults, worldbody, actuator), as mj_loadXML reads them.
 // - Defaults: a nested class copies its parent when it is read; several top-level <default>s

@@ -97,6 +97,25 @@ void place_from_to(const Reader& reader, const Node& element, const Eigen::Matri
   geom.orientation = z_axis_to_quaternion(along);
 }
 
+// A geom's derived size, volume, mass and inertia, each finite, or refused at the attribute that
+// made it overflow (a size or fromto near 1e308, a density that large times a volume, a mass
+// that large times a size squared): the element's line names it, where the Model's checks could
+// only name a mass of inf or nan.
+void check_geom_finite(const Reader& reader, const Node& element, const Geom& geom, bool from_to, bool explicit_mass) {
+  const char* shape = from_to ? "fromto" : "size";
+  const auto refuse = [&](const char* attribute, const std::string& problem) {
+    reader.fail(element, tag(element, attribute), problem + ": it overflows (no geom is that large)");
+  };
+  if (!geom.size.allFinite()) refuse(shape, "gives a size that is not finite");
+  if (!geom.position.allFinite()) refuse(shape, "gives a centre that is not finite");
+  const double volume = geom_volume(geom.type, geom.size);
+  if (!std::isfinite(volume)) refuse(shape, "gives a volume that is not finite");
+  if (!std::isfinite(geom.mass)) refuse("density", "density × volume, the geom's mass, is not finite");
+  if (!geom_principal_moments(geom.type, geom.size, geom.mass).allFinite()) {
+    refuse(explicit_mass ? "mass" : shape, "gives a moment of inertia (mass × size²) that is not finite");
+  }
+}
+
 }  // namespace
 
 static void read_joint_fields(Context& context, const Node& element, JointDefaults& joint) {
@@ -223,7 +242,8 @@ Geom make_geom(Context& context, const Node& element, int inherited, bool moving
   }
   const OrientationSpec spec = read_orientation(reader, element);
   Eigen::Matrix<double, 6, 1> from_to;
-  if (reader.numbers(element, "fromto", std::span<double>(from_to.data(), 6), true)) {
+  const bool placed = reader.numbers(element, "fromto", std::span<double>(from_to.data(), 6), true);
+  if (placed) {
     if (spec.quat || spec.axisangle || spec.euler || spec.xyaxes || spec.zaxis) {
       reader.fail(element, tag(element, "fromto"), "an orientation is given too (fromto orients the geom): give one");
     }
@@ -243,6 +263,7 @@ Geom make_geom(Context& context, const Node& element, int inherited, bool moving
     reader.fail(element, tag(element, fields.mass ? "mass" : "density"), "must not be negative");
   }
   geom.mass = geom_mass(geom.type, geom.size, fields.mass, fields.density);
+  check_geom_finite(reader, element, geom, placed, fields.mass.has_value());
   return geom;
 }
 
@@ -275,6 +296,9 @@ void read_inertial(Context& context, const Node& element, Body& body) {
       reader.fail(element, tag(element, error.attribute), error.problem);
     }
     if (moments.minCoeff() < 0) reader.fail(element, tag(element, "diaginertia"), "must not be negative");
+  }
+  if (!body.inertia.allFinite() || !moments.allFinite()) {
+    reader.fail(element, tag(element, diagonal ? "diaginertia" : "fullinertia"), "the inertia overflows (not finite once turned into the body frame)");
   }
   if (moments(0) + moments(1) < moments(2) || moments(0) + moments(2) < moments(1) || moments(1) + moments(2) < moments(0)) {
     reader.fail(element, tag(element, diagonal ? "diaginertia" : "fullinertia"),

@@ -3,6 +3,7 @@
 #include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
+#include "limber/kernel/scene/model_origins.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,9 +16,14 @@ namespace {
 
 using Isometry = Eigen::Isometry3d;
 
+// "FILE:LINE: <element>", where a problem is.
+std::string origin(const mjcf::Source& at, const std::string& element) {
+  return at.file + ":" + std::to_string(at.line) + ": <" + element + ">";
+}
+
 // "FILE:LINE: <element>: problem" as a ModelError.
 [[noreturn]] void refuse(const mjcf::Source& at, const std::string& element, const std::string& problem) {
-  throw ModelError(at.file + ":" + std::to_string(at.line) + ": <" + element + ">: " + problem);
+  throw ModelError(origin(at, element) + ": " + problem);
 }
 
 Isometry pose(const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation) {
@@ -52,6 +58,9 @@ Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string n
   body.name = std::move(name);
   if (!(geom.mass > 0)) refuse(geom.at, geom_element(geom), "a moving body's geom needs a mass > 0 (mass or density)");
   const Isometry world = body_frame * pose(geom.position, geom.orientation);
+  if (!world.translation().allFinite()) {
+    refuse(geom.at, geom_element(geom), "its world position is not finite: the pos of its body and the bodies above overflow when added up");
+  }
   body.mass = geom.mass;
   body.position = world.translation();
   int along = 2;  // the geom frame's axis that is the body's
@@ -171,7 +180,7 @@ Joint body_joint(const mjcf::Body& source, const Isometry& frame, const Model& m
 }
 
 // The world's own geoms: a plane facing +z is the ground; capsules and boxes are static colliders.
-void add_world_geoms(const mjcf::Document& document, Model& model, double body_friction) {
+void add_world_geoms(const mjcf::Document& document, Model& model, double body_friction, ModelOrigins& origins) {
   for (const mjcf::Geom& geom : document.world_geoms) {
     const Isometry world = pose(geom.position, geom.orientation);
     const Eigen::Vector3d normal = world.linear() * Eigen::Vector3d::UnitZ();
@@ -195,36 +204,41 @@ void add_world_geoms(const mjcf::Document& document, Model& model, double body_f
       refuse(geom.at, geom_element(geom), "a world geom must be a plane, capsule or box");
     }
     model.colliders.push_back(collider);
+    origins.colliders.push_back(origin(geom.at, geom_element(geom)));
   }
 }
 
 // One MJCF body's limber bodies (a geom each), welds between them, and its joint to its parent.
 // Returns its own (first) limber body.
-int add_body(const mjcf::Body& source, const Isometry& frame, int parent, Model& model) {
-  if (source.geoms.empty()) refuse(source.at, "body name='" + source.name + "'", "a body without geoms is not supported yet");
+int add_body(const mjcf::Body& source, const Isometry& frame, int parent, Model& model, ModelOrigins& origins) {
+  const std::string body_element = "body name='" + source.name + "'";
+  if (source.geoms.empty()) refuse(source.at, body_element, "a body without geoms is not supported yet");
   const int own = static_cast<int>(model.bodies.size());
   for (std::size_t g = 0; g < source.geoms.size(); ++g) {
     const mjcf::Geom& geom = source.geoms[g];
     std::string name = g == 0 ? source.name : source.name + "/" + (geom.name.empty() ? "geom" + std::to_string(g) : geom.name);
     model.bodies.push_back(geom_body(geom, frame, std::move(name)));
+    origins.bodies.push_back(origin(geom.at, geom_element(geom)));
   }
   if (source.explicit_inertial) {
-    if (source.geoms.size() > 1) {
-      refuse(source.at, "body name='" + source.name + "'", "an <inertial> on a body of several geoms is not supported yet");
-    }
+    if (source.geoms.size() > 1) refuse(source.at, body_element, "an <inertial> on a body of several geoms is not supported yet");
     take_inertial(model.bodies.back(), source, frame);
+    origins.bodies.back() = origin(source.at, body_element);  // the mass distribution is the body's <inertial>
   }
   for (std::size_t g = 1; g < source.geoms.size(); ++g) {
     const int part = own + static_cast<int>(g);
     model.joints.push_back(weld(model.bodies[part].name + ".weld", model, own, part, model.bodies[part].position));
+    origins.joints.push_back(origin(source.geoms[g].at, geom_element(source.geoms[g])));
   }
   const bool free = source.joints.size() == 1 && source.joints.front().type == mjcf::JointType::free;
   if (free) {
     if (parent != kWorld) refuse(source.joints.front().at, joint_element(source.joints.front()), "a free joint is only for a child of the worldbody");
   } else if (source.joints.empty()) {
     model.joints.push_back(weld(source.name + ".weld", model, parent, own, frame.translation()));
+    origins.joints.push_back(origin(source.at, body_element));
   } else {
     model.joints.push_back(body_joint(source, frame, model, parent, own));
+    origins.joints.push_back(origin(source.joints.front().at, joint_element(source.joints.front())));
   }
   return own;
 }
@@ -252,9 +266,13 @@ void set_friction(const mjcf::Document& document, Model& model, std::vector<std:
 
 // A <motor>, <position> or <velocity> on a hinge or slide: the joint (and serial axis) that
 // holds its coordinate, its kind and gain, and the joint's ref (MuJoCo's length is gear·qpos).
-Actuator actuator(const mjcf::Document& document, const mjcf::Actuator& source, const Model& model, const std::vector<int>& joint_of) {
+std::string actuator_element(const mjcf::Actuator& source) {
   const char* kinds[] = {"motor", "position", "velocity"};
-  const std::string element = std::string(kinds[static_cast<int>(source.type)]) + (source.name.empty() ? "" : " name='" + source.name + "'");
+  return std::string(kinds[static_cast<int>(source.type)]) + (source.name.empty() ? "" : " name='" + source.name + "'");
+}
+
+Actuator actuator(const mjcf::Document& document, const mjcf::Actuator& source, const Model& model, const std::vector<int>& joint_of) {
+  const std::string element = actuator_element(source);
   if (source.forcelimited) refuse(source.at, element, "forcerange is not supported yet (ctrlrange is)");
   const mjcf::Joint& joint = document.bodies[static_cast<std::size_t>(source.joint_body)].joints[static_cast<std::size_t>(source.joint)];
   if (joint.type != mjcf::JointType::hinge && joint.type != mjcf::JointType::slide) {
@@ -304,23 +322,27 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
   set_friction(document, model, notes, body_friction);
   const std::vector<Isometry> frames = world_frames(document);
   std::vector<int> own(document.bodies.size(), kWorld), joint_of(document.bodies.size(), -1);
+  ModelOrigins origins;
   for (std::size_t b = 0; b < document.bodies.size(); ++b) {
     const mjcf::Body& source = document.bodies[b];
     const int parent = source.parent < 0 ? kWorld : own[static_cast<std::size_t>(source.parent)];
     if (source.name.empty()) {  // limber's bodies are named: an unnamed one takes MuJoCo's body id
       mjcf::Body named = source;
       named.name = "body" + std::to_string(b + 1);
-      own[b] = add_body(named, frames[b], parent, model);
+      own[b] = add_body(named, frames[b], parent, model, origins);
     } else {
-      own[b] = add_body(source, frames[b], parent, model);
+      own[b] = add_body(source, frames[b], parent, model, origins);
     }
     const bool jointed = !source.joints.empty() && source.joints.front().type != mjcf::JointType::free;
     if (jointed) joint_of[b] = static_cast<int>(model.joints.size()) - 1;  // add_body adds the body's joint last
   }
   note_capsule_proxies(document, notes);
-  add_world_geoms(document, model, body_friction);
-  for (const mjcf::Actuator& each : document.actuators) model.actuators.push_back(actuator(document, each, model, joint_of));
-  validate(model);
+  add_world_geoms(document, model, body_friction, origins);
+  for (const mjcf::Actuator& each : document.actuators) {
+    model.actuators.push_back(actuator(document, each, model, joint_of));
+    origins.actuators.push_back(origin(each.at, actuator_element(each)));
+  }
+  validate_model_from(model, origins, document.file);
   return model;
 }
 

@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <sstream>
 
+#include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
+#include "limber/kernel/scene/scene_file.hpp"  // the caps: kMaxModelFileBytes, kMaxXmlDepth
 #include "limber/kernel/scene/xml_text.hpp"
 
 namespace limber::mjcf::detail {
@@ -17,14 +17,6 @@ using xml::parse_double;
 using xml::words;
 
 int line_of(const Buffer& buffer, std::ptrdiff_t offset) { return xml::line_of(buffer.line_starts, offset); }
-
-std::string read_file(const std::filesystem::path& path, bool& ok) {
-  std::ifstream in(path, std::ios::binary);
-  ok = static_cast<bool>(in);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 }  // namespace
 
@@ -45,6 +37,7 @@ const Buffer& Reader::parse(std::string file, std::string text) {
   buffer.file = std::move(file);
   buffer.text = std::move(text);
   buffer.line_starts = xml::line_starts(buffer.text);
+  bytes_ += buffer.text.size();
   pugi::xml_parse_result result =
       buffer.tree.load_buffer(buffer.text.data(), buffer.text.size(), pugi::parse_default, pugi::encoding_utf8);
   if (!result) {
@@ -52,6 +45,7 @@ const Buffer& Reader::parse(std::string file, std::string text) {
                      ": XML error: " + result.description());
   }
   if (!buffer.tree.document_element()) throw ModelError(buffer.file + ": XML error: no root element");
+  if (auto problem = xml::check_tree(buffer.tree, kMaxXmlDepth)) fail(Node{problem->node, &buffer}, problem->what, problem->problem);
   return buffer;
 }
 
@@ -71,15 +65,18 @@ const Buffer& Reader::include(const Node& element) {
   auto name = text(element, "file");
   if (!name || name->empty()) fail(element, tag(element, "file"), "missing: the file to include");
   const std::filesystem::path path = directory_ / std::filesystem::path(std::string(*name));
-  bool ok = false;
-  std::string content = read_file(path, ok);
-  if (!ok) fail(element, tag(element, "file"), "cannot read '" + path.string() + "'");
   std::error_code error;
   std::string key = std::filesystem::weakly_canonical(path, error).string();
   if (error) key = path.string();
   if (!included_.insert(key).second) {
     fail(element, tag(element, "file"),
          "'" + path.string() + "' is already included (a file may be read once: twice, or a cycle)");
+  }
+  std::string content;
+  try {
+    content = scene_input::read_file(path, scene_input::FileKind::model, bytes_);
+  } catch (const ModelError& problem) {
+    fail(element, tag(element, "file"), problem.what());
   }
   return parse(path.string(), std::move(content));
 }
@@ -93,9 +90,15 @@ std::vector<Node> Reader::children(const Node& element) {
       out.push_back(node);
       continue;
     }
+    // An include at the root of an included file recurses: its depth is bounded as elements' are.
+    if (include_depth_ >= kMaxXmlDepth) {
+      fail(node, tag(node), "includes nested more than " + std::to_string(kMaxXmlDepth) + " deep (through the files' roots)");
+    }
     const Buffer& included = include(node);
     Node root{included.tree.document_element(), &included};
+    ++include_depth_;
     for (Node& spliced : children(root)) out.push_back(spliced);
+    --include_depth_;
   }
   return out;
 }

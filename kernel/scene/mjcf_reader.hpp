@@ -86,6 +86,8 @@ class Reader {
   std::filesystem::path directory_;        // the main file's: includes are relative to it
   std::deque<Buffer> buffers_;             // stable addresses: Nodes point at them
   std::set<std::string> included_;         // canonical paths of the files read
+  std::size_t bytes_ = 0;                  // the files' bytes so far, against kMaxModelFileBytes
+  int include_depth_ = 0;                  // includes being spliced inside one another
   std::set<std::string> noted_;            // "file\n<what>" already in notes_
   std::vector<std::string> notes_;
 };

@@ -75,6 +75,60 @@ TriangleMesh read_mesh(const Object& object) {
   return mesh;
 }
 
+/// A mesh's triangle's corners, starting from the least (by x, then y, then z) and in the
+/// triangle's turn: a triangle listed again, from another corner or through other vertices at the
+/// same points, has the same corners; turned over (facing the other way), it has not.
+std::array<std::array<double, 3>, 3> corners(const TriangleMesh& mesh, const std::array<std::uint32_t, 3>& triangle) {
+  std::array<std::array<double, 3>, 3> points;
+  for (int k = 0; k < 3; ++k) {
+    const Vector3& v = mesh.vertices[triangle[static_cast<std::size_t>(k)]];
+    points[static_cast<std::size_t>(k)] = {v.x(), v.y(), v.z()};
+  }
+  std::rotate(points.begin(), std::min_element(points.begin(), points.end()), points.end());
+  return points;
+}
+
+/// Drops the triangles that add nothing but cost: degenerate ones (checks.hpp's
+/// degenerate_triangle) and duplicates (the same corners in the same turn as an earlier
+/// triangle: sorted by corners, each run keeps its first in file order). The rest keep their
+/// order. Adds a note when any is dropped; refuses a mesh left with none, by its name. The
+/// indices must name vertices (checked before).
+void drop_useless_triangles(TriangleMesh& mesh, const std::string& name, const std::string& path, std::vector<std::string>& notes) {
+  const std::size_t count = mesh.triangles.size();
+  std::vector<bool> useless(count, false);
+  std::size_t degenerate = 0, duplicate = 0;
+  std::vector<std::uint32_t> order;
+  order.reserve(count);
+  for (std::size_t t = 0; t < count; ++t) {
+    const auto& triangle = mesh.triangles[t];
+    if (degenerate_triangle(mesh.vertices[triangle[0]], mesh.vertices[triangle[1]], mesh.vertices[triangle[2]])) {
+      useless[t] = true, ++degenerate;
+    } else {
+      order.push_back(static_cast<std::uint32_t>(t));
+    }
+  }
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const auto first = corners(mesh, mesh.triangles[a]), second = corners(mesh, mesh.triangles[b]);
+    return first != second ? first < second : a < b;
+  });
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    if (corners(mesh, mesh.triangles[order[k]]) == corners(mesh, mesh.triangles[order[k - 1]])) useless[order[k]] = true, ++duplicate;
+  }
+  if (degenerate + duplicate == 0) return;
+  const std::string counts = std::to_string(degenerate) + " degenerate (no area: repeated or collinear vertices) and " +
+                             std::to_string(duplicate) + " duplicate (the same corners as an earlier triangle)";
+  if (degenerate + duplicate == count) {
+    fail(path, "mesh " + in_quotes(name) + " has no useful triangle: of " + std::to_string(count) + ", " + counts);
+  }
+  std::size_t kept = 0;
+  for (std::size_t t = 0; t < count; ++t) {
+    if (!useless[t]) mesh.triangles[kept++] = mesh.triangles[t];
+  }
+  mesh.triangles.resize(kept);
+  notes.push_back(path + ": dropped " + std::to_string(count - kept) + " of " + std::to_string(count) + " triangles of mesh " +
+                  in_quotes(name) + ", " + counts + ": they add no surface, only cost");
+}
+
 /// The "stairs" generator's fields, checked with their paths, as generators.hpp's StairsSpec.
 StairsSpec read_stairs(const Object& object) {
   StairsSpec spec;
@@ -105,7 +159,8 @@ void take_triangles(std::size_t triangles, std::size_t& budget, std::size_t max_
   budget -= triangles;
 }
 
-StaticCollider read_collider(const Object& object, std::size_t& triangle_budget, std::size_t max_triangles) {
+StaticCollider read_collider(const Object& object, std::size_t& triangle_budget, std::size_t max_triangles,
+                             std::vector<std::string>& notes) {
   object.allow_only({"name", "type", "position", "rotation", "axis", "half_extents", "length", "radius", "vertices", "triangles",
                      "thickness", "restitution", "friction", "collision", "steps", "rise", "run", "width", "landing", "direction"});
   StaticCollider collider;
@@ -151,6 +206,11 @@ StaticCollider read_collider(const Object& object, std::size_t& triangle_budget,
       const Vector3 position = object.find("position") ? object.vector("position") : Vector3::Zero();
       const Eigen::Quaterniond rotation = object.find("rotation") ? read_rotation(object) : Eigen::Quaterniond::Identity();
       for (Vector3& vertex : collider.mesh.vertices) vertex = rotation * vertex + position;
+      for (std::size_t i = 0; i < collider.mesh.vertices.size(); ++i) {
+        require_finite(collider.mesh.vertices[i], indexed(object.path("vertices"), i));
+      }
+      require_vertex_indices(collider.mesh, object.path("triangles"));
+      drop_useless_triangles(collider.mesh, collider.name, object.path("triangles"), notes);
     } else {
       const StairsSpec stairs = read_stairs(object);
       take_triangles(stairs_triangles(stairs), triangle_budget, max_triangles, object.path("steps"));
@@ -178,13 +238,14 @@ CollisionFilter read_collision_filter(const Object& object) {
   return filter;
 }
 
-std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles) {
+std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles,
+                                           std::vector<std::string>& notes) {
   if (!value.is_array()) wrong_type(value, path, "an array");
   std::vector<StaticCollider> colliders;
   colliders.reserve(value.size());
   std::size_t triangle_budget = max_triangles;
   for (std::size_t i = 0; i < value.size(); ++i) {
-    colliders.push_back(read_collider(Object(value[i], indexed(path, i)), triangle_budget, max_triangles));
+    colliders.push_back(read_collider(Object(value[i], indexed(path, i)), triangle_budget, max_triangles, notes));
   }
   require_unique_names(colliders, [](const StaticCollider& collider) -> std::string_view { return collider.name; }, path);
   return colliders;

@@ -12,18 +12,15 @@
 #include "limber/kernel/scene/urdf.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <climits>
 #include <cmath>
-#include <cstdio>
-#include <cstring>
-#include <memory>
 #include <unordered_map>
 #include <vector>
 
 #include "limber/kernel/model/checks.hpp"
-#include "limber/kernel/scene/scene_json.hpp"
 #include "limber/kernel/scene/generators.hpp"
+#include "limber/kernel/scene/input_file.hpp"
+#include "limber/kernel/scene/scene_json.hpp"
 
 namespace limber {
 namespace {
@@ -37,7 +34,7 @@ using namespace scene_json;
 Settings read_settings(const Object& object, Settings settings = {}, bool complete = true) {
   object.allow_only({"gravity", "time_step", "duration", "damping", "divergence_speed",
                      "contact_recovery_speed", "relaxation", "sleep", "verlet", "springs", "drag", "release_drives_on_impact",
-                     "limb_friction"});
+                     "limb_friction", "tolerances"});
   if (complete || object.find("gravity")) settings.gravity = object.vector("gravity");
   if (complete || object.find("time_step")) settings.time_step = object.number("time_step");
   require_positive(settings.time_step, object.path("time_step"));
@@ -52,6 +49,21 @@ Settings read_settings(const Object& object, Settings settings = {}, bool comple
   require_non_negative(settings.contact_recovery_speed, object.path("contact_recovery_speed"));
   object.optional("limb_friction", settings.limb_friction);
   require_non_negative(settings.limb_friction, object.path("limb_friction"));
+
+  if (const Json* json = object.find("tolerances")) {
+    const Object tolerances(*json, object.path("tolerances"));
+    tolerances.allow_only({"joint_gap", "penetration", "limit", "energy_gain"});
+    Tolerances& target = settings.tolerances;
+    tolerances.optional("joint_gap", target.joint_gap);
+    require_non_negative(target.joint_gap, tolerances.path("joint_gap"));
+    tolerances.optional("limit", target.limit);
+    require_non_negative(target.limit, tolerances.path("limit"));
+    for (const auto& [key, bound] : {std::pair{"penetration", &target.penetration}, std::pair{"energy_gain", &target.energy_gain}}) {
+      if (!tolerances.find(key)) continue;
+      *bound = tolerances.number(key);
+      require_non_negative(**bound, tolerances.path(key));
+    }
+  }
 
   if (const Json* json = object.find("sleep")) {
     const Object sleep(*json, object.path("sleep"));
@@ -526,7 +538,9 @@ Scene read_scene(const Json& json, const SceneOptions& options) {
   if (const Json* bounds = root.find("bounds"))
     model.bounds = read_bounds(Object(*bounds, "bounds"));
   model.balls = read_balls(root);
-  if (const Json* colliders = root.find("colliders")) model.colliders = read_colliders(*colliders, "colliders", options.max_triangles);
+  if (const Json* colliders = root.find("colliders")) {
+    model.colliders = read_colliders(*colliders, "colliders", options.max_triangles, scene.notes);
+  }
 
   // Bodies: the explicit ones, then the chain's links.
   const Json* bodies_json = root.find("bodies");
@@ -724,6 +738,15 @@ class ParseErrorLocator : public nlohmann::json_sax<Json> {
   }
 };
 
+// "<source>:<line>:<column>" of byte `offset` in `text` (1-based, in bytes).
+std::string place(std::string_view text, std::size_t offset, std::string_view source) {
+  const std::string_view before = text.substr(0, std::min(offset, text.size()));
+  const std::size_t line = 1 + std::count(before.begin(), before.end(), '\n');
+  const std::size_t line_start = before.rfind('\n');
+  const std::size_t column = before.size() - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
+  return std::string(source) + ":" + std::to_string(line) + ":" + std::to_string(column);
+}
+
 /// The message for text that nlohmann cannot parse: "<source>:<line>:<column>: malformed JSON:
 /// <detail>" (line and column 1-based, in bytes), or for a number beyond double range the usual
 /// "<source>: <path>: must be a finite number, got <token>".
@@ -734,14 +757,33 @@ std::string parse_error_message(std::string_view text, std::string_view source) 
     const std::string where = locator.path.empty() ? "" : locator.path + ": ";
     return std::string(source) + ": " + where + "must be a finite number, got " + locator.token;
   }
-  const std::size_t offset = std::min(locator.position > 0 ? locator.position - 1 : 0, text.size());
-  const std::string_view before = text.substr(0, offset);
-  const std::size_t line = 1 + std::count(before.begin(), before.end(), '\n');
-  const std::size_t line_start = before.rfind('\n');
-  const std::size_t column =
-      offset - (line_start == std::string_view::npos ? 0 : line_start + 1) + 1;
-  return std::string(source) + ":" + std::to_string(line) + ":" + std::to_string(column) +
-         ": malformed JSON: " + locator.detail;
+  return place(text, locator.position > 0 ? locator.position - 1 : 0, source) + ": malformed JSON: " + locator.detail;
+}
+
+// Refuses arrays and objects nested deeper than kMaxJsonDepth, at the first bracket too deep,
+// before anything parses the text. Nothing deeper is meaningful (the format needs 6 levels), and
+// depth is what every reader of a JSON tree pays for: recursion where it recurses, and the path
+// ParseErrorLocator spells for each open bracket (2·10⁵ of them took 4.5 s, 64 MiB of them would
+// take days). Brackets in strings are skipped; anything else malformed is left to the parser.
+void check_nesting(std::string_view text, std::string_view source) {
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') ++i;  // the escaped character, a quote or a backslash, is skipped
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) {
+        throw ModelError(place(text, i, source) + ": arrays and objects nested deeper than " + std::to_string(kMaxJsonDepth) +
+                         " (a scene needs at most 6)");
+      }
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
 }
 
 // An MJCF or URDF model file as a Scene: its Model, the methods' defaults, and the loader's notes.
@@ -799,6 +841,7 @@ Scene read_model_wrapper(const Json& json, std::string_view source, const SceneO
 
 Scene load_scene_text(std::string_view json_text, std::string_view source,
                       const SceneOptions& options) {
+  check_nesting(json_text, source);
   Json json;
   try {
     json = Json::parse(json_text.begin(), json_text.end());
@@ -806,7 +849,11 @@ Scene load_scene_text(std::string_view json_text, std::string_view source,
     throw ModelError(parse_error_message(json_text, source));
   }
   try {
-    Scene scene = json.is_object() && json.contains("model") ? read_model_wrapper(json, source, options) : read_scene(json, options);
+    const bool wrapper = json.is_object() && json.contains("model");
+    Scene scene = wrapper ? read_model_wrapper(json, source, options) : read_scene(json, options);
+    if (!wrapper) {  // a model file's notes name it and their lines; a scene's own name the scene
+      for (std::string& note : scene.notes) note = std::string(source) + ": " + note;
+    }
     validate(scene.model);
     validate(scene.methods);
     return scene;
@@ -819,23 +866,7 @@ Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& opt
   if (path.extension() == ".xml" || path.extension() == ".urdf") return load_model_file_scene(path, options, path.extension() == ".urdf");
   const std::string source = path.string();
   if (options.floating_base) throw ModelError(source + ": a floating base was asked for, which only a URDF robot takes");
-  const auto cannot_read = [&] {
-    throw ModelError(source + ": cannot read file: " + std::strerror(errno));
-  };
-  errno = 0;
-  const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(source.c_str(), "rb"),
-                                                             &std::fclose);
-  if (!file) cannot_read();
-  std::string text;
-  char buffer[1 << 16];
-  std::size_t count = 0;
-  while ((count = std::fread(buffer, 1, sizeof buffer, file.get())) > 0) {
-    text.append(buffer, count);
-    if (text.size() > kMaxSceneFileBytes) {
-      throw ModelError(source + ": larger than the " + std::to_string(kMaxSceneFileBytes >> 20) + " MiB a scene file may be");
-    }
-  }
-  if (std::ferror(file.get())) cannot_read();
+  const std::string text = scene_input::read_file(path, scene_input::FileKind::scene);
   if (text.empty()) throw ModelError(source + ": empty file (a scene is a JSON object)");
   return load_scene_text(text, source, options);
 }

@@ -19,6 +19,12 @@
 //     "release_drives_on_impact": false,       optional (false): every joint drive goes limp once the
 //                                              ball has touched a limb (an active ragdoll's switch)
 //     "limb_friction": 0.5,                    optional (0.5), ≥ 0: Coulomb friction between limbs that touch
+//     "tolerances": {                          optional; each field optional, ≥ 0: what a run's verdict
+//                                              calls accurate, over every step (model.hpp's Tolerances)
+//       "joint_gap": 0.01,                     (0.01) of a link: a joint's gap, a particle limb's stretch
+//       "penetration": 0.03,                   (the thinnest limb's radius) m: the deepest overlap
+//       "limit": 0.1,                          (0.1) rad (m for a prismatic range) past a joint's limit
+//       "energy_gain": 0.01 },                 (0.01; 1 with actuators or drives) of the energy scale
 //     "relaxation": {                          optional; each field optional
 //       "iterations": 100,                     (100) integer ≥ 1
 //       "tolerance": 0,                        (0) m, ≥ 0; 0 disables
@@ -165,7 +171,13 @@
 //               "length": 1, "radius": 0.05,   required, m: the core segment (≥ 0) and the radius (> 0)
 //     mesh:     "vertices": [[x, y, z], ...],  required, m
 //               "triangles": [[0, 1, 2], ...], required, ≥ 1: vertex indices, counter-clockwise seen from
-//                                              outside (the front; one-sided), none degenerate
+//                                              outside (the front; one-sided). Dropped at load, and
+//                                              counted in Scene::notes: a degenerate triangle (twice
+//                                              its area ≤ 1e-10 × its longest edge squared: repeated
+//                                              or collinear vertices) and a duplicate (the same three
+//                                              points, in the same turn, as an earlier triangle: it
+//                                              would cost a step its time and add nothing). A mesh
+//                                              left with none is refused.
 //               "position", "rotation",        optional (none): the frame the vertices are given in (the
 //                                              Model holds them in world coordinates)
 //               "thickness": 0.1,              optional (0.1), m, > 0: how far behind a triangle counts as inside
@@ -201,7 +213,9 @@
 // Errors: ModelError whose what() is one line "<source>: <path>: <problem>", the path in JSON
 // terms (e.g. "bodies[3].shape.radius", "joints[1].outboard", "colliders[2].triangles[5]",
 // "variants.thin.neck.mass"). A malformed file reports "<source>:<line>:<column>: malformed
-// JSON: <detail>".
+// JSON: <detail>", and arrays and objects nested deeper than kMaxJsonDepth (64) report
+// "<source>:<line>:<column>: arrays and objects nested deeper than 64" at the first too deep,
+// before anything is parsed.
 #pragma once
 
 #include <cstddef>
@@ -257,7 +271,8 @@ struct Scene {
   MethodSettings methods;
   /// What the loader dropped or approximated, one line each ("file:line: <element>: reason"):
   /// a model file's elements limber does not simulate (kernel/scene/mjcf_model.hpp,
-  /// kernel/scene/urdf.hpp). Empty for a JSON scene, which has no such fields.
+  /// kernel/scene/urdf.hpp); in a JSON scene, the triangles a mesh collider dropped
+  /// ("<source>: colliders[k].triangles: ...", the format above).
   std::vector<std::string> notes;
 };
 
@@ -266,16 +281,33 @@ struct Scene {
 /// an option the scene cannot honour (a variant it lacks, links without a "chain").
 Scene load_scene_text(std::string_view json_text, std::string_view source, const SceneOptions& options = {});
 
-/// Most bytes a scene file may have (64 MiB: the largest shipped scene is ~30 kB; a mesh of
+/// Most bytes a JSON scene file may have (64 MiB: the largest shipped scene is ~30 kB; a mesh of
 /// 10⁵ triangles is ~10 MB): a guard against reading a wrong file whole.
 inline constexpr std::size_t kMaxSceneFileBytes = std::size_t(64) << 20;
+
+/// Most bytes an MJCF or URDF model file may have, an MJCF file's includes counted with it
+/// (16 MiB: the largest shipped model, MuJoCo's 22_humanoids.xml, is 133 kB).
+inline constexpr std::size_t kMaxModelFileBytes = std::size_t(16) << 20;
+
+/// Deepest nesting of arrays and objects in a JSON scene (the format needs 6: a serial axis's
+/// drive's target_rotation). Deeper text is refused before it is parsed.
+inline constexpr int kMaxJsonDepth = 64;
+
+/// Deepest nesting of elements in an MJCF or URDF file, the root element at depth 1, and of
+/// MJCF includes in one another. In MJCF a chain of bodies nests: MuJoCo 2.2.2's XML parser
+/// (tinyxml2 9) stops at 99 elements, 96 bodies below <worldbody>; limber reads chains ten times
+/// deeper, without recursion, and refuses past this, at the first element too deep, by name.
+inline constexpr int kMaxXmlDepth = 1000;
 
 /// Reads and loads a scene file: JSON; MuJoCo's MJCF when its name ends in ".xml"
 /// (kernel/scene/mjcf_model.hpp); a URDF robot when it ends in ".urdf" (kernel/scene/urdf.hpp:
 /// welded to the world at its root link unless options.floating_base). Model files take no
-/// SceneOptions but the limits (and floating_base, URDF only). Throws ModelError
-/// (one line naming the file) when it cannot be read, is a directory, is empty, is larger than
-/// kMaxSceneFileBytes, or is invalid.
+/// SceneOptions but the limits (and floating_base, URDF only). Every file is read the same way
+/// (the scene, a model file, an MJCF include, the model file a scene wraps): only a regular
+/// file, never a directory, FIFO or device, which would hang or never end. Throws ModelError
+/// (one line naming the file) when it cannot be read, is not a regular file, is empty, is
+/// larger than kMaxSceneFileBytes (JSON) or kMaxModelFileBytes (a model file with its
+/// includes), nests deeper than kMaxJsonDepth or kMaxXmlDepth, or is invalid.
 Scene load_scene_file(const std::filesystem::path& path, const SceneOptions& options = {});
 
 /// The text of tools/scenes/humanoid.json, compiled into the library: the default scene.

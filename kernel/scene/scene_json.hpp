@@ -210,7 +210,9 @@ CollisionFilter read_collision_filter(const Object& object);
 
 /// The top-level "colliders": an array of static colliders, "stairs" generated into meshes; a mesh
 /// or stairs that would take the colliders past `max_triangles` in all is refused before its
-/// mesh is allocated (SceneOptions::max_triangles).
-std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles);
+/// mesh is allocated (SceneOptions::max_triangles). A mesh's degenerate and duplicate triangles
+/// are dropped, with a line in `notes` ("colliders[k].triangles: dropped ...").
+std::vector<StaticCollider> read_colliders(const Json& value, const std::string& path, std::size_t max_triangles,
+                                           std::vector<std::string>& notes);
 
 }  // namespace limber::scene_json

@@ -3,7 +3,6 @@
 #include "limber/kernel/scene/urdf.hpp"
 
 #include <algorithm>
-#include <fstream>
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
@@ -12,6 +11,8 @@
 
 #include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
+#include "limber/kernel/scene/input_file.hpp"
+#include "limber/kernel/scene/model_origins.hpp"
 #include "limber/kernel/scene/urdf_reader.hpp"
 
 namespace limber {
@@ -156,6 +157,9 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
     body.shape = collision.type == urdf::GeometryType::cylinder ? Shape{ShapeType::cylinder, collision.length, collision.radius}
                                                                   : Shape{ShapeType::capsule, 0, collision.radius};
   }
+  if (!frame.translation().allFinite()) {
+    refuse(link.at, link_tag(link), "its frame's position is not finite: the joints' <origin xyz> from the root overflow when added up");
+  }
   const Isometry world = frame * collision.origin;
   body.position = world.translation();
   body.axis = world.linear().col(along).normalized();
@@ -163,6 +167,10 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
   const urdf::Inertial& source = *link.inertial;
   body.mass = source.mass;
   body.inertial = inertial_in_body_frame(body, frame * source.origin.translation(), frame.linear() * source.origin.linear(), source.inertia);
+  if (!body.inertial->inertia.allFinite() || !body.inertial->centre_of_mass.allFinite()) {
+    refuse(source.at, "<inertial> of link '" + link.name + "'",
+           "its <inertia> or <origin> is not finite in the body's frame: the values overflow when turned into it");
+  }
   return body;
 }
 
@@ -243,7 +251,8 @@ int floating_link(const urdf::Robot& robot, const Tree& tree, bool floating_base
 }
 
 // Every link in tree order: its world frame, its body (or the body it folds into), its joint.
-void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, Model& model, std::vector<std::string>& notes) {
+void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, Model& model, std::vector<std::string>& notes,
+               ModelOrigins& origins) {
   const int floats = floating_link(robot, tree, floating_base);
   std::vector<Isometry> frame(robot.links.size(), Isometry::Identity());
   std::vector<int> body_of(robot.links.size(), kWorld);
@@ -267,6 +276,7 @@ void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, M
       continue;
     }
     model.bodies.push_back(link_body(link, frame[index]));
+    origins.bodies.push_back(urdf::where(link.at) + link_tag(link));
     if (link.collisions.front().type == urdf::GeometryType::box) {
       notes.push_back(urdf::where(link.collisions.front().shape_at) + "<box> of link '" + link.name +
                       "': collides as the capsule along its longest side, radius its shortest half-side (kernel/scene/capsule_proxy.hpp)");
@@ -282,8 +292,10 @@ void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, M
       urdf::Joint weld;
       weld.name = link.name + ".weld";
       model.joints.push_back(make_joint(weld, frame[index], model, kWorld, own, notes));
+      origins.joints.push_back(urdf::where(link.at) + link_tag(link));
     } else {
       model.joints.push_back(make_joint(*joint, frame[index], model, inboard, own, notes));
+      origins.joints.push_back(urdf::where(joint->at) + joint_tag(*joint));
     }
   }
 }
@@ -297,22 +309,15 @@ Model parse_urdf(std::string_view xml, const std::filesystem::path& file_name, s
   Model model;
   model.name = robot.name.empty() ? "urdf" : robot.name;
   model.settings.sleep.enabled = false;  // MuJoCo's convention: no body sleeps
-  add_links(robot, tree, floating_base, model, notes);
+  ModelOrigins origins;
+  add_links(robot, tree, floating_base, model, notes, origins);
   if (model.bodies.empty()) refuse(robot.at, "<robot>", "no link has mass and collision geometry: nothing to simulate");
-  try {
-    validate(model);
-  } catch (const ModelError& error) {
-    throw ModelError(file + ": " + error.what());
-  }
+  validate_model_from(model, origins, file);
   return model;
 }
 
 Model load_urdf(const std::filesystem::path& file, std::vector<std::string>& notes, bool floating_base) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw ModelError(file.string() + ": cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_urdf(text.str(), file, notes, floating_base);
+  return parse_urdf(scene_input::read_file(file, scene_input::FileKind::model), file, notes, floating_base);
 }
 
 }  // namespace limber

@@ -48,8 +48,11 @@
 
 namespace limber {
 
-/// Reads a URDF robot file. Throws ModelError "FILE:LINE: <element attr>: problem" (an
-/// unreadable file: "FILE: cannot read the file"). Appends to `notes` what it dropped, one line
+/// Reads a URDF robot file (a regular file of at most kMaxModelFileBytes, elements nested at
+/// most kMaxXmlDepth deep, attributes UTF-8: scene_file.hpp). Throws ModelError "FILE:LINE:
+/// <element attr>: problem" (an unreadable file: "FILE: cannot read file: reason"; what only the
+/// assembled Model shows, such as frames that overflow down the tree, names the link or joint
+/// it came from). Appends to `notes` what it dropped, one line
 /// each ("FILE:LINE: <element>: ignored: reason"). `floating_base`: the root link floats.
 Model load_urdf(const std::filesystem::path& file, std::vector<std::string>& notes, bool floating_base = false);
 

@@ -10,6 +10,7 @@
 #include <span>
 
 #include "limber/kernel/model/model.hpp"  // ModelError
+#include "limber/kernel/scene/scene_file.hpp"  // kMaxXmlDepth
 #include "limber/kernel/scene/xml_text.hpp"
 
 namespace limber::urdf {
@@ -53,6 +54,7 @@ class Reader {
     const pugi::xml_parse_result result = tree_.load_buffer(text_.data(), text_.size(), pugi::parse_default, pugi::encoding_utf8);
     if (!result) throw ModelError(file_ + ":" + std::to_string(xml::line_of(starts_, result.offset)) + ": XML error: " + result.description());
     if (!tree_.document_element()) throw ModelError(file_ + ": XML error: no root element");
+    if (auto problem = xml::check_tree(tree_, kMaxXmlDepth)) fail(problem->node, problem->what, problem->problem);
   }
   Node root() const { return tree_.document_element(); }
   Source source(Node element) const { return {file_, xml::line_of(starts_, element.offset_debug())}; }

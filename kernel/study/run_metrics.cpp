@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
+
+#include "limber/kernel/metrics/divergence.hpp"
 
 namespace limber::study {
 
@@ -16,13 +19,26 @@ double energy_scale(const Model& model) {
 
 ErrorMeter::ErrorMeter(const Observation& start, double energy_scale) : start_energy_(start.energy()) {
   errors_.energy_scale = energy_scale;
-  errors_.max_joint_gap = start.max_joint_gap;
   errors_.max_link_stretch = start.max_link_stretch;
+  add_worst(start);
+}
+
+// The worst joint gap, limit violation and penetration so far, and when.
+void ErrorMeter::add_worst(const Observation& observation) {
+  if (observation.max_joint_gap > errors_.max_joint_gap) {
+    errors_.max_joint_gap = observation.max_joint_gap, errors_.joint_gap_time = observation.time;
+  }
+  if (observation.joints.limit_violation > errors_.max_limit_violation) {
+    errors_.max_limit_violation = observation.joints.limit_violation, errors_.limit_time = observation.time;
+  }
+  if (observation.penetration.depth > errors_.deepest_penetration.depth) {
+    errors_.deepest_penetration = observation.penetration, errors_.penetration_time = observation.time;
+  }
 }
 
 void ErrorMeter::add(const Observation& observation) {
   ++errors_.steps;
-  errors_.max_joint_gap = std::max(errors_.max_joint_gap, observation.max_joint_gap);
+  add_worst(observation);
   errors_.max_link_stretch = std::max(errors_.max_link_stretch, observation.max_link_stretch);
   squared_rms_sum_ += observation.rms_joint_gap * observation.rms_joint_gap;
   errors_.rms_joint_gap = std::sqrt(squared_rms_sum_ / errors_.steps);
@@ -37,6 +53,86 @@ void ErrorMeter::add(const Observation& observation) {
 }
 
 RunErrors ErrorMeter::result() const { return errors_; }
+
+namespace {
+
+// printf into a std::string, for the verdict's sentence.
+template <typename... Values>
+std::string text(const char* pattern, Values... values) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, pattern, values...);
+  return buffer;
+}
+
+// A body or ball of Penetration's numbering, by name.
+std::string side_name(const Model& model, int side) {
+  const auto index = static_cast<std::size_t>(side);
+  return index < model.bodies.size() ? model.bodies[index].name : ball_name(model, index - model.bodies.size());
+}
+
+// "shin into the ground", "forearm into upper_arm", "ball into stairs".
+std::string penetration_place(const Model& model, const Penetration& penetration) {
+  if (penetration.first < 0) return "nothing";
+  const std::string other = penetration.second >= 0 ? side_name(model, penetration.second)
+                            : penetration.collider >= 0 ? model.colliders[static_cast<std::size_t>(penetration.collider)].name
+                                                        : std::string("the ground");
+  return side_name(model, penetration.first) + " into " + other;
+}
+
+// The unit of a limit violation: rad, m for a prismatic range, or both.
+const char* limit_unit(const Model& model) {
+  bool turns = false, slides = false;
+  for (const Joint& joint : model.joints) {
+    if (joint.limits.any()) (joint.type == JointType::prismatic ? slides : turns) = true;
+    for (const SerialAxis& axis : joint.serial_axes) {
+      if (axis.range) (axis.slide ? slides : turns) = true;
+    }
+  }
+  return slides && turns ? "rad (m for a slide)" : slides ? "m" : "rad";
+}
+
+}  // namespace
+
+VerdictBounds verdict_bounds(const Model& model, const Observation& start) {
+  const Tolerances& tolerances = model.settings.tolerances;
+  VerdictBounds bounds;
+  bounds.joint_gap = tolerances.joint_gap, bounds.limit = tolerances.limit;
+  double thinnest = std::numeric_limits<double>::infinity();
+  for (const Body& body : model.bodies) {
+    if (body.shape.radius > 0) thinnest = std::min(thinnest, body.shape.radius);
+  }
+  bounds.penetration = tolerances.penetration.value_or(std::isfinite(thinnest) ? thinnest : 0.01);
+  const bool driven = !model.actuators.empty() ||
+                      std::any_of(model.joints.begin(), model.joints.end(), [](const Joint& joint) { return joint.drive.has_value(); });
+  bounds.energy_gain = tolerances.energy_gain.value_or(driven ? 1.0 : kAccuracyEnergyGain);
+  bounds.energy_scale = divergence_bounds(model, start).energy_scale;
+  return bounds;
+}
+
+Verdict verdict(const RunErrors& errors, const Model& model, const VerdictBounds& bounds) {
+  if (errors.status != StepStatus::ok) return {name(errors.status), describe(errors.status)};
+  std::string flags;
+  const auto flag = [&](const std::string& what) { flags += (flags.empty() ? "" : "; ") + what; };
+  const double gap = std::max(errors.max_joint_gap, errors.max_link_stretch);
+  if (!(gap <= bounds.joint_gap)) {
+    flag(text("joints open (or links stretched) by %.3g of a link, at t = %.3f s (tolerance %g)", gap, errors.joint_gap_time,
+              bounds.joint_gap));
+  }
+  const Penetration& deepest = errors.deepest_penetration;
+  if (!(deepest.depth <= bounds.penetration)) {
+    flag(text("penetration %.3g m, %s at t = %.3f s (tolerance %g m)", deepest.depth, penetration_place(model, deepest).c_str(),
+              errors.penetration_time, bounds.penetration));
+  }
+  if (!(errors.max_limit_violation <= bounds.limit)) {
+    flag(text("a limit passed by %.3g %s, at t = %.3f s (tolerance %g)", errors.max_limit_violation, limit_unit(model),
+              errors.limit_time, bounds.limit));
+  }
+  const double gain = errors.energy_gain / bounds.energy_scale;
+  if (!(gain <= bounds.energy_gain)) {
+    flag(text("energy gained %.3g of the scene's energy scale (tolerance %g)", gain, bounds.energy_gain));
+  }
+  return flags.empty() ? Verdict{"ok", "ok"} : Verdict{"inaccurate", "inaccurate: " + flags};
+}
 
 namespace {
 

@@ -31,6 +31,12 @@ struct RunErrors {
   /// particle methods' kinetic energy uses v = (x − x*)/Δt, so it is only first-order accurate).
   double energy_drift = 0, energy_gain = 0;
   double energy_scale = 1;  ///< J, energy_scale(model)
+  /// The largest limit violation over the run (rad; m for a prismatic range; Observation::joints).
+  double max_limit_violation = 0;
+  /// The deepest penetration over the run (Observation::penetration, which World::observe()
+  /// measures) and when (s); the times of the largest joint gap and limit violation.
+  Penetration deepest_penetration;
+  double joint_gap_time = 0, penetration_time = 0, limit_time = 0;
   /// Pointwise trajectory error against a reference, m: the largest over common sample times of
   /// the RMS distance between the two runs' limb points (trajectory_error()). NaN: not measured.
   double trajectory_error = std::numeric_limits<double>::quiet_NaN();
@@ -50,9 +56,33 @@ class ErrorMeter {
   RunErrors result() const;
 
  private:
+  void add_worst(const Observation& observation);
+
   RunErrors errors_;
   double start_energy_ = 0, squared_rms_sum_ = 0;
 };
+
+/// What a run's verdict measures against: Settings::tolerances with the absent bounds derived
+/// (model.hpp says how), and the World's energy scale (divergence_bounds: M·|g|·extent plus the
+/// start's kinetic energy), J.
+struct VerdictBounds {
+  double joint_gap = 0, penetration = 0, limit = 0, energy_gain = 0;
+  double energy_scale = 1;
+};
+/// The bounds for a run of `model` from the observation `start`.
+VerdictBounds verdict_bounds(const Model& model, const Observation& start);
+
+/// A run's verdict, the one the command line's summary, Python's World.run and a sweep give:
+/// `status` is "ok", "inaccurate" (it held together but some measure passed its bound at some
+/// step), or the stopping step's status (name(StepStatus): "diverged_speed", …); `text` says it
+/// in a line — "ok", "inaccurate: penetration 0.52 m (…); …" or the divergence's description.
+struct Verdict {
+  std::string status;
+  std::string text;
+};
+/// The verdict of `errors` (an ErrorMeter's, over every step with World::observe()'s
+/// penetration), naming `model`'s bodies.
+Verdict verdict(const RunErrors& errors, const Model& model, const VerdictBounds& bounds);
 
 /// Limb points (Simulation::limb_points) sampled every `sample_interval` seconds from t = 0.
 struct Trajectory {

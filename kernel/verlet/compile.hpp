@@ -50,7 +50,8 @@ VerletState<Scalar> compile(const Model& model, const VerletOptions& options = {
 
 /// A particle's name for outputs: "<body>.head", "<body>.tail", "<body>.centre", "<joint>.pin"
 /// or a ball's (ball_name, model.hpp).
-/// `model` is the one the state was compiled from.
+/// `model` is the one the state's indices count: for a Model with serial joints, its expansion
+/// (expand_serial_joints, serial_links.hpp), whose virtual links follow the Model's bodies.
 std::string particle_name(const Model& model, const ParticleOrigin& origin);
 
 extern template VerletState<float> compile<float>(const Model&, const VerletOptions&);

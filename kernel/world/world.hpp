@@ -109,6 +109,10 @@ class World {
   double time() const;
   const Model& model() const { return model_; }
   Method method() const { return options_.method; }
+  /// What the state is now, measured alike for every method (kernel/metrics/observation.hpp):
+  /// time, joint gaps, stretch, energy, momentum, limits, sleeping, and the deepest penetration,
+  /// which costs a narrow phase over the limbs (the first call after a compile builds its pairs).
+  /// Not to be called from two threads at once: the penetration's buffers are the World's.
   Observation observe() const;
   /// Each Model body's limb as collision sees it now (head, tail, radius; LimbSegment), then each
   /// ball's (head = tail = its centre), into `out`: what a debug drawer or a query of one's own
@@ -277,6 +281,8 @@ class World {
   std::optional<JointDrive> current_drive(std::size_t joint) const;
   void release_drives();
   static constexpr std::uint32_t kNewJoint = ~0u;
+  // observe() but the penetration: what the divergence check reads after every step.
+  Observation observe_state() const;
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   [[noreturn]] void refuse_joint_space(std::string_view call) const;  ///< a method without joint coordinates
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;

@@ -48,6 +48,15 @@ struct WorldInternals {
 
   /// The actuators' controls (Model::actuators order), as set_controls left them: 0 at first.
   std::vector<double> controls;
+
+  /// World::observe()'s penetration measure: a LimbCollisions of the Model of its own (so that
+  /// observing never changes the method's kept pairs or counters) and its segments, built at the
+  /// first observe() after a compile.
+  struct PenetrationGauge {
+    LimbCollisions collisions;
+    std::vector<LimbSegment> segments;
+  };
+  std::optional<PenetrationGauge> penetration_gauge;
 };
 
 

@@ -127,7 +127,7 @@ TEST(LimbCollisions, LimbsOverlappingInTheModelNeverCollide) {
                   capsule_limb({3, 0, 1.5}, {3, 0, 0.5}, 0.2)};
   LimbCollisions collisions(model);
   EXPECT_TRUE(find_all(collisions, segments_of(model)).empty());
-  EXPECT_EQ(collisions.deepest_penetration(segments_of(model)), 0.0);
+  EXPECT_EQ(collisions.deepest_overlap(segments_of(model)).separation, 0.0);
   // The third limb moved into the arm does collide with it (and with the torso).
   std::vector<LimbSegment> limbs = segments_of(model);
   limbs[2] = {{0.3, 0, 1.5}, {0.3, 0, 0.5}, 0.2};
@@ -237,7 +237,7 @@ TEST(LimbCollisions, CapsuleLyingOnABoxFaceTouchesWithBothEnds) {
     EXPECT_EQ(c.friction, 0.7);
     EXPECT_EQ(c.restitution, 0.2);
   }
-  EXPECT_NEAR(collisions.deepest_penetration(limbs), 0.01, 1e-12);
+  EXPECT_NEAR(-collisions.deepest_overlap(limbs).separation, 0.01, 1e-12);
 }
 
 TEST(LimbCollisions, CapsuleAcrossANarrowBoxTouchesItInTheMiddle) {
@@ -433,7 +433,7 @@ TEST(LimbCollisions, TwoHundredLimbsAgreeWithBruteForceOverEveryPair) {
   collisions.find(scene.limbs, std::vector<std::uint8_t>(scene.limbs.size(), 1), 0, all);
   for (const LimbContact& c : all) deepest = std::max(deepest, -c.separation);
   EXPECT_GT(deepest, 0);
-  EXPECT_EQ(collisions.deepest_penetration(scene.limbs), deepest);
+  EXPECT_EQ(-collisions.deepest_overlap(scene.limbs).separation, deepest);
 }
 
 // Whether two contact lists are the same, field by field and bit for bit.
@@ -569,11 +569,11 @@ TEST(LimbCollisions, FindAllocatesNothingOnceWarm) {
   for (LimbSegment& limb : moved) limb.head.x() += 0.01, limb.tail.x() -= 0.01;
   collisions.find(first, awake, 0.02, contacts);
   collisions.find(moved, awake, 0.02, contacts);
-  collisions.deepest_penetration(first);
+  collisions.deepest_overlap(first);
   const long before = testing::allocation_count();
   collisions.find(first, awake, 0.02, contacts);
   collisions.find(moved, awake, 0.02, contacts);
-  collisions.deepest_penetration(moved);
+  collisions.deepest_overlap(moved);
   EXPECT_EQ(testing::allocation_count(), before);
   EXPECT_FALSE(contacts.empty());
 }

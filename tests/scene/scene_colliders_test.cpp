@@ -3,7 +3,9 @@
 // "copies", and the scenes that use them (ragdoll_pile.json, rope_over_obstacle.json). Each
 // field is read into the Model; each bad value is one line naming the file and the field.
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -239,10 +241,11 @@ TEST(SceneColliders, BadMeshesAndStairsAreNamedByTheirField) {
   const std::string square = "[[0, 0, 0], [1, 0, 0], [1, 1, 0]]";
   EXPECT_EQ(load_error(mesh(square, "[[0, 1, 2], [0, 2, 7]]")),
             "test.json: colliders[0].triangles[1]: vertex index 7 names no vertex (there are 3)");
+  const std::string none = "test.json: colliders[0].triangles: mesh \"floor\" has no useful triangle: of ";
+  const std::string counts = " degenerate (no area: repeated or collinear vertices) and ";
   EXPECT_EQ(load_error(mesh("[[0, 0, 0], [1, 0, 0], [2, 0, 0]]", "[[0, 1, 2]]")),
-            "test.json: colliders[0].triangles[0]: is degenerate (area 0 m^2): its vertices are repeated or in a line");
-  EXPECT_EQ(load_error(mesh(square, "[[0, 1, 1]]")),
-            "test.json: colliders[0].triangles[0]: is degenerate (area 0 m^2): its vertices are repeated or in a line");
+            none + "1, 1" + counts + "0 duplicate (the same corners as an earlier triangle)");
+  EXPECT_EQ(load_error(mesh(square, "[[0, 1, 1], [0, 1, 1]]")), none + "2, 2" + counts + "0 duplicate (the same corners as an earlier triangle)");
   EXPECT_EQ(load_error(mesh(square, "[[0, 1]]")), "test.json: colliders[0].triangles[0]: must be an array of 3 vertex indices, got an array of 2");
   EXPECT_EQ(load_error(mesh(square, "[[0, -1, 2]]")), "test.json: colliders[0].triangles[0][1]: must be >= 0, got -1");
   EXPECT_EQ(load_error(mesh(square, "[]")), "test.json: colliders[0].triangles: must list at least one triangle");
@@ -279,6 +282,38 @@ constexpr std::string_view kCopies = R"({
 })";
 
 std::string copies(std::string_view value) { return replaced(std::string(kCopies), "COPIES", value); }
+
+// A mesh collider "floor" of `vertices` and `triangles` (JSON arrays) as a scene.
+std::string floor_mesh(std::string_view vertices, std::string_view triangles) {
+  return scene(R"({"name": "floor", "type": "mesh", "vertices": )" + std::string(vertices) + R"(, "triangles": )" + std::string(triangles) + "}");
+}
+
+TEST(SceneColliders, DuplicateTrianglesAreDroppedWithANote) {
+  // A square of two triangles, the first listed 10⁴ times more, from another corner and through
+  // vertex 4 at vertex 0's point; the first turned over faces down, so it stays.
+  const std::string vertices = "[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 0]]";
+  std::string triangles = "[[0, 1, 2], [0, 2, 3]";
+  for (int k = 0; k < 10'000; ++k) triangles += ", [0, 1, 2]";
+  triangles += ", [1, 2, 0], [4, 1, 2], [0, 2, 1]]";
+  const Scene loaded = load_scene_text(floor_mesh(vertices, triangles), "test.json");
+  using Triangle = std::array<std::uint32_t, 3>;
+  EXPECT_EQ(loaded.model.colliders[0].mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}, {0, 2, 1}}));
+  EXPECT_EQ(loaded.notes, std::vector<std::string>{"test.json: colliders[0].triangles: dropped 10002 of 10005 triangles of mesh \"floor\", "
+                                                   "0 degenerate (no area: repeated or collinear vertices) and 10002 duplicate (the same corners "
+                                                   "as an earlier triangle): they add no surface, only cost"});
+}
+
+TEST(SceneColliders, DegenerateTrianglesAreDroppedWithANote) {
+  // The square, a triangle with a repeated vertex and one whose corners are in a line.
+  const std::string vertices = "[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0]]";
+  const Scene loaded = load_scene_text(floor_mesh(vertices, "[[0, 1, 1], [0, 1, 2], [0, 1, 4], [0, 2, 3]]"), "test.json");
+  using Triangle = std::array<std::uint32_t, 3>;
+  EXPECT_EQ(loaded.model.colliders[0].mesh.triangles, (std::vector<Triangle>{{0, 1, 2}, {0, 2, 3}}));
+  ASSERT_EQ(loaded.notes.size(), 1u);
+  EXPECT_THAT(loaded.notes[0], StartsWith("test.json: colliders[0].triangles: dropped 2 of 4 triangles of mesh \"floor\", 2 degenerate"));
+  // A clean mesh adds no note.
+  EXPECT_TRUE(load_scene_text(floor_mesh(vertices, "[[0, 1, 2], [0, 2, 3]]"), "test.json").notes.empty());
+}
 
 TEST(SceneCopies, LayersStackTheLatticesAndKeepOneSetOfColliders) {
   const Model model = load(copies(R"({"count": 7, "spacing": 1, "layers": 2, "layer_height": 0.5})"));

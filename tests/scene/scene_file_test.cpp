@@ -672,6 +672,24 @@ TEST(SceneLoading, ProjectionRuleAndSubstepsAreReadAndCheckedByName) {
   EXPECT_EQ(load_error(with_relaxation(R"("substeps": 1.5)")), "test.json: settings.relaxation.substeps: must be an integer, got 1.5");
 }
 
+TEST(SceneLoading, TolerancesAreReadAndCheckedByName) {
+  const Tolerances defaults = load_scene_text(kPendulum, "test.json").model.settings.tolerances;
+  EXPECT_FALSE(defaults.penetration.has_value());  // derived from the Model by the verdict
+  EXPECT_FALSE(defaults.energy_gain.has_value());
+  const auto with_tolerances = [](std::string_view fields) {
+    return with(kPendulum, R"("duration": 1)", R"("duration": 1, "tolerances": {)" + std::string(fields) + "}");
+  };
+  const Tolerances read =
+      load_scene_text(with_tolerances(R"("joint_gap": 0.05, "penetration": 0.002, "limit": 0.2, "energy_gain": 3)"), "test.json")
+          .model.settings.tolerances;
+  EXPECT_EQ(read.joint_gap, 0.05);
+  EXPECT_EQ(read.penetration, 0.002);
+  EXPECT_EQ(read.limit, 0.2);
+  EXPECT_EQ(read.energy_gain, 3);
+  EXPECT_EQ(load_error(with_tolerances(R"("penetration": -1)")), "test.json: settings.tolerances.penetration: must be >= 0, got -1");
+  EXPECT_EQ(load_error(with_tolerances(R"("gap": 1)")), "test.json: settings.tolerances: unknown field \"gap\"");
+}
+
 // ---- The spring method's settings
 
 TEST(SceneSprings, StiffnessAndDampingAreReadPerSceneAndPerJoint) {

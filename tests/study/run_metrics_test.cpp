@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "limber/kernel/scene/generators.hpp"
@@ -115,6 +116,50 @@ TEST(StudyMetrics, ErrorMeterAveragesGapsOverStepsAndCarriesNonFiniteEnergy) {
   meter.add(b);
   EXPECT_EQ(meter.result().energy_gain, std::numeric_limits<double>::infinity());
   EXPECT_EQ(classify(meter.result()), Stability::non_finite);
+}
+
+// The verdict flags each measure past its bound, says where and when, and nothing within; a
+// stopped run is its stopping step's status. The bounds the scene does not give come from the
+// Model: its thinnest limb's radius, and an energy gain of 1% (1 scale with a motor).
+TEST(StudyMetrics, TheVerdictFlagsEachMeasurePastItsToleranceAndNothingWithin) {
+  Model model = hanging_chain();
+  model.ground = Ground{};
+  Observation start;
+  const VerdictBounds bounds = verdict_bounds(model, start);
+  double thinnest = 1e9;
+  for (const Body& body : model.bodies) thinnest = std::min(thinnest, body.shape.radius);
+  EXPECT_EQ(bounds.penetration, thinnest);
+  EXPECT_EQ(bounds.energy_gain, 0.01);
+  EXPECT_EQ(bounds.joint_gap, model.settings.tolerances.joint_gap);
+
+  RunErrors within;
+  within.max_joint_gap = 0.99 * bounds.joint_gap, within.max_limit_violation = 0.99 * bounds.limit;
+  within.deepest_penetration = {0.99 * bounds.penetration, 2, -1, -1};
+  within.energy_gain = 0.99 * bounds.energy_gain * bounds.energy_scale;
+  EXPECT_EQ(verdict(within, model, bounds).status, "ok");
+  EXPECT_EQ(verdict(within, model, bounds).text, "ok");
+
+  RunErrors deep = within;
+  deep.deepest_penetration.depth = 2 * bounds.penetration, deep.penetration_time = 0.5;
+  const Verdict sunk = verdict(deep, model, bounds);
+  EXPECT_EQ(sunk.status, "inaccurate");
+  EXPECT_THAT(sunk.text, ::testing::HasSubstr(model.bodies[2].name + " into the ground at t = 0.500 s"));
+  RunErrors others = within;
+  others.max_link_stretch = 2 * bounds.joint_gap, others.max_limit_violation = 2 * bounds.limit;
+  others.energy_gain = 2 * bounds.energy_gain * bounds.energy_scale;
+  const Verdict three = verdict(others, model, bounds);
+  EXPECT_THAT(three.text, ::testing::StartsWith("inaccurate: joints open (or links stretched) by "));
+  EXPECT_THAT(three.text, ::testing::HasSubstr("; a limit passed by "));
+  EXPECT_THAT(three.text, ::testing::HasSubstr("; energy gained "));
+  RunErrors stopped = others;
+  stopped.status = StepStatus::diverged_speed;
+  EXPECT_EQ(verdict(stopped, model, bounds).status, "diverged_speed");
+
+  model.actuators.push_back(Actuator{});
+  EXPECT_EQ(verdict_bounds(model, start).energy_gain, 1.0);
+  model.settings.tolerances.energy_gain = 0.5, model.settings.tolerances.penetration = 0.001;
+  EXPECT_EQ(verdict_bounds(model, start).energy_gain, 0.5);
+  EXPECT_EQ(verdict_bounds(model, start).penetration, 0.001);
 }
 
 // The double pendulum of uniform rods, released horizontally, compared over 0.5 s with

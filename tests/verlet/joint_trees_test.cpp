@@ -261,7 +261,7 @@ template <typename Scalar>
 double deepest_penetration(VerletState<Scalar>& state, const Model& model) {
   std::vector<LimbSegment> segments;
   limb_segments(state, segments);
-  return std::max(state.collisions.deepest_penetration(segments), ground_penetration(model, segments));
+  return deepest_penetration(model, state.collisions, segments).depth;
 }
 
 // The trees push each contact of their limbs with the mobility the whole tree gives it

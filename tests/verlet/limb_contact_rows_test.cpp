@@ -61,7 +61,7 @@ double deepest(VerletState<Scalar>& state) {
     segments.push_back({state.particles.position(state.limbs.head[limb]).template cast<double>(),
                         state.particles.position(state.limbs.tail[limb]).template cast<double>(), state.limbs.radius[limb]});
   }
-  return state.collisions.deepest_penetration(segments);
+  return -state.collisions.deepest_overlap(segments).separation;
 }
 
 TEST(LimbContacts, ACapsuleDroppedAcrossAnotherRestsOnTopOfIt) {

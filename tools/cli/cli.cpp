@@ -24,6 +24,7 @@
 #include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/kernel/methods/method.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
 #include "limber/kernel/world/world.hpp"
 #include "limber/kernel/world/world_internals.hpp"
 #include "limber/layouts/graph/constraint_colouring.hpp"
@@ -40,17 +41,6 @@ const char* stop_name(RelaxationStop stop) {
     case RelaxationStop::tolerance: return "tolerance";
     case RelaxationStop::budget: return "time budget";
     case RelaxationStop::idle: return "idle (all asleep)";
-  }
-  return "?";
-}
-const char* status_name(StepStatus status) {
-  switch (status) {
-    case StepStatus::ok: return "ok";
-    case StepStatus::diverged_non_finite: return "DIVERGED (a non-finite number in the state)";
-    case StepStatus::diverged_speed: return "DIVERGED (speed above settings.divergence_speed)";
-    case StepStatus::diverged_energy: return "DIVERGED (energy gained past 100 energy scales of the scene)";
-    case StepStatus::diverged_joint_gap: return "DIVERGED (a joint gap or a link's stretch past a whole link)";
-    case StepStatus::invalid_time_step: return "invalid time step";
   }
   return "?";
 }
@@ -116,8 +106,8 @@ std::string solver_line(const RunFlags& flags, const VerletState<Scalar>& state)
 // What a run measured, for the summary.
 struct RunRecord {
   Observation start, end;
-  double largest_gap = 0, largest_stretch = 0, wall_seconds = 0;
-  double largest_limit_violation = 0;  ///< over the joints with limits, rad (m for a prismatic range)
+  study::RunErrors errors;  ///< over every step: the verdict's measures (World::observe(), study::ErrorMeter)
+  double wall_seconds = 0;
   double drives_released_at = -1;      ///< s: when settings.release_drives_on_impact made the drives limp; −1 never
   long steps_done = 0;
   std::array<long, 4> relaxation_stops{};
@@ -125,29 +115,16 @@ struct RunRecord {
   std::vector<std::string> sleep_events;
   StepStatus status = StepStatus::ok;
   int contacts = 0, most_contacts = 0;  ///< StepReport::contacts at the end, and the most in a step
-  double deepest_penetration = 0;      ///< m, over the run: limbs into limbs, colliders, the ground
   StepProfile profile;                 ///< summed over the run's steps (zeros without --profile)
 };
-
-// The deepest overlap of the world's limbs now, measured alike for every method (observers.hpp).
-double penetration_now(const World& world, const Model& model, LimbCollisions& collisions, std::vector<LimbSegment>& segments) {
-  world.segments(segments);
-  const double between = collisions.active() ? collisions.deepest_penetration(segments) : 0.0;
-  return std::max(between, ground_penetration(model, segments));
-}
 
 // Steps `world` `steps` times through World::step, the one step path (stopping at its
 // divergence verdict), observing after every step. `state` is the world's state, read only.
 template <typename State>
 RunRecord run_steps(World& world, const State& state, long steps, std::ostream* csv, KnockMeter& knock) {
-  const Model& model = world.model();
   RunRecord record;
-  LimbCollisions collisions(model);
-  std::vector<LimbSegment> segments;
-  record.deepest_penetration = penetration_now(world, model, collisions, segments);
-  record.start = record.end = observe(state);
-  record.largest_gap = record.start.max_joint_gap, record.largest_stretch = record.start.max_link_stretch;
-  record.largest_limit_violation = record.start.joints.limit_violation;
+  record.start = record.end = world.observe();
+  study::ErrorMeter meter(record.start, study::energy_scale(world.model()));
   bool body_sleeping = record.start.body_sleeping;
   for (; record.steps_done < steps;) {
     const auto before = std::chrono::steady_clock::now();
@@ -159,14 +136,11 @@ RunRecord run_steps(World& world, const State& state, long steps, std::ostream* 
     if (world.drives_released() && record.drives_released_at < 0) record.drives_released_at = state.time;
     ++record.relaxation_stops[static_cast<int>(report.stop)];
     record.fallbacks += report.fallbacks;
-    record.end = observe(state);
+    record.end = world.observe();
+    meter.add(record.end);
     record.contacts = report.contacts;
     record.most_contacts = std::max(record.most_contacts, report.contacts);
-    record.deepest_penetration = std::max(record.deepest_penetration, penetration_now(world, model, collisions, segments));
     knock.update(record.end.time, ball_touching(state), record.end.body_centre_of_mass);
-    record.largest_gap = std::max(record.largest_gap, record.end.max_joint_gap);
-    record.largest_stretch = std::max(record.largest_stretch, record.end.max_link_stretch);
-    record.largest_limit_violation = std::max(record.largest_limit_violation, record.end.joints.limit_violation);
     if (record.end.body_sleeping != body_sleeping && record.sleep_events.size() < 8) {
       record.sleep_events.push_back(format("%s at t = %.3f s", record.end.body_sleeping ? "asleep" : "woke", record.end.time));
     }
@@ -174,6 +148,8 @@ RunRecord run_steps(World& world, const State& state, long steps, std::ostream* 
     if (csv) write_trajectory_row(*csv, world.internals().state);
     if (record.status != StepStatus::ok) break;
   }
+  record.errors = meter.result();
+  record.errors.status = record.status;
   return record;
 }
 
@@ -290,7 +266,7 @@ std::string limits_line(const Model& model, const RunRecord& record) {
   std::string line;
   if (end.limited_joints > 0) {
     line = format("%d limited joint%s: largest violation %.3g %s in run, %.3g at end", end.limited_joints,
-                  end.limited_joints == 1 ? "" : "s", record.largest_limit_violation, unit(limited_rotation, limited_slide),
+                  end.limited_joints == 1 ? "" : "s", record.errors.max_limit_violation, unit(limited_rotation, limited_slide),
                   end.limit_violation);
   }
   if (end.driven_joints > 0) {
@@ -299,21 +275,6 @@ std::string limits_line(const Model& model, const RunRecord& record) {
     if (record.drives_released_at >= 0) line += format(" (limp since the ball hit, t = %.3f s)", record.drives_released_at);
   }
   return "limits      " + (line.empty() ? std::string("none") : line) + "\n";
-}
-
-// What makes an "ok" run poor (divergence.hpp's accuracy tolerances): ", but inaccurate: ..." or "".
-std::string accuracy_flags(const RunRecord& record, double energy_gain) {
-  if (record.status != StepStatus::ok) return "";
-  std::string flags;
-  const double gap = std::max(record.end.max_joint_gap, record.end.max_link_stretch);  // the end's: an impact's passing gap is no fault
-  if (gap > kAccuracyJointGap) {
-    flags += format("joints open (or links stretched) by %.3g of a link at the end (flagged past %g)", gap, kAccuracyJointGap);
-  }
-  if (energy_gain > kAccuracyEnergyGain) {
-    flags += format("%senergy gained %.3g%% of the scene's energy scale (flagged past %g%%)", flags.empty() ? "" : "; ",
-                    100 * energy_gain, 100 * kAccuracyEnergyGain);
-  }
-  return flags.empty() ? "" : ", but inaccurate: " + flags;
 }
 
 // --profile's lines: per stage, in the order the stages run, its total over the run, its share
@@ -376,7 +337,7 @@ int simulate(World& world, const State& state, const RunFlags& flags, const std:
     csv->require_space(double(steps) * double(first_row.view().size()));
     csv->stream() << first_row.view();
   }
-  const Observation start = observe(state);
+  const Observation start = world.observe();
   KnockMeter knock(model.balls.empty() ? Eigen::Vector3d::UnitX() : model.balls.front().velocity, start.body_centre_of_mass);
   const RunRecord record = run_steps(world, state, steps, csv ? &csv->stream() : nullptr, knock);
   const Observation& end = record.end;
@@ -385,16 +346,16 @@ int simulate(World& world, const State& state, const RunFlags& flags, const std:
   method_lines(out, model, flags, state, record);
   if (has_joint_gaps(state)) {
     out << format("joint gap   final max %.3g, rms %.3g; largest in run %.3g (relative to link length)\n",
-                  end.max_joint_gap, end.rms_joint_gap, record.largest_gap);
+                  end.max_joint_gap, end.rms_joint_gap, record.errors.max_joint_gap);
   } else {
     out << "joint gap   none (shared-particle joints or no joints)\n";
   }
   out << limits_line(model, record);
   out << format("contacts    %d at end, at most %d in a step; penetration %.3g m deepest in run (limbs, colliders, ground)\n",
-                record.contacts, record.most_contacts, record.deepest_penetration);
+                record.contacts, record.most_contacts, record.errors.deepest_penetration.depth);
   if (!flags.rigid()) {
     out << format("stretch     final max %.3g; largest in run %.3g (relative to link length)\n", end.max_link_stretch,
-                  record.largest_stretch);
+                  record.errors.max_link_stretch);
   }
   const Eigen::Vector3d travel = end.body_centre_of_mass - start.body_centre_of_mass;
   out << format("body        centre of mass %s -> %s m; travelled %.4g m horizontally\n",
@@ -414,7 +375,7 @@ int simulate(World& world, const State& state, const RunFlags& flags, const std:
   out << "sleeping    body " << (start.body_sleeping ? "asleep" : "awake") << " at start";
   for (const std::string& event : record.sleep_events) out << "; " << event;
   out << "; " << (end.body_sleeping ? "asleep" : "awake") << " at end\n";
-  out << "status      " << status_name(record.status) << accuracy_flags(record, drift / bounds.energy_scale) << "\n";
+  out << "status      " << study::verdict(record.errors, model, study::verdict_bounds(model, start)).text << "\n";
   if (flags.profile) out << profile_lines(record, flags.rigid());
   if (csv) csv->commit();  // a diverged run's trajectory is a result too: kept up to the divergence
   return record.status == StepStatus::ok ? kSuccess : kDiverged;

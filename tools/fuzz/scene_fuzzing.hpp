@@ -50,7 +50,7 @@ void load_and_step(std::string_view bytes, std::optional<std::size_t> only = std
 /// target's. An MJCF input is named as a file in a fresh temporary directory (its includes
 /// resolve there), which holds one file, "part.xml", for <include> to splice; an input with an
 /// <include file> that is more than a plain name (absolute, or with a directory part: it could
-/// reach any file, /dev/zero too) is not loaded at all, so a fuzzed include reads nothing else.
+/// reach any file of the machine) is not loaded at all, so a fuzzed include reads nothing else.
 /// A URDF input floats its base or not by a hash of its bytes.
 void load_and_step(Target target, std::string_view bytes, std::optional<std::size_t> only = std::nullopt);
 

@@ -32,9 +32,6 @@ class OptionError : public std::invalid_argument {
 /// `bytes` as Python text: UTF-8, any byte that is not shown escaped ("caf\xe9").
 py::str text(std::string_view bytes);
 
-/// StepStatus as Python reads it: "ok", "diverged_non_finite", ...
-const char* status_name(StepStatus status);
-
 inline void put(double* row, const Eigen::Vector3d& v) { row[0] = v.x(), row[1] = v.y(), row[2] = v.z(); }
 
 /// An (rows × columns) float64 array filled by `fill(row, pointer to its first value)`.

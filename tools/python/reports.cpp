@@ -33,7 +33,7 @@ py::dict profile_dict(const StepProfile& p) {
 
 py::dict report_dict(const StepReport& r) {
   py::dict out;
-  out["status"] = status_name(r.status), out["contacts"] = r.contacts;
+  out["status"] = name(r.status), out["contacts"] = r.contacts;
   out["stop"] = stop_name(r.stop), out["iterations"] = r.iterations, out["largest_correction"] = r.largest_correction;
   out["substeps"] = r.substeps, out["fallbacks"] = r.fallbacks;
   out["linear_solver_iterations"] = r.linear_solver_iterations, out["linear_solver_error"] = r.linear_solver_error;

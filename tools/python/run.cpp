@@ -29,6 +29,7 @@ struct MeteredRun {
   const char* stopped = "steps";  // "steps" (all taken), "status" (one was not ok) or "wall_limit"
   double step_seconds = 0;
   study::RunErrors errors;
+  study::VerdictBounds bounds;
   std::vector<double> samples;  // K × bodies × 3, m
   std::size_t sample_count = 0;
 };
@@ -36,8 +37,8 @@ struct MeteredRun {
 // Runs with the GIL released (taken back only to look for signals); a signal's Python error (a
 // KeyboardInterrupt) is thrown as py::error_already_set after the step it came during.
 MeteredRun metered_run(World& world, long steps, long sample_every, bool observe, std::optional<double> wall_limit) {
-  const Clock::time_point start = Clock::now();
-  Clock::time_point next_signal_check = start + kSignalCheck;
+  const Clock::time_point run_start = Clock::now();
+  Clock::time_point next_signal_check = run_start + kSignalCheck;
   MeteredRun run;
   std::vector<Pose> poses(world.bodies().size());
   const auto sample = [&] {
@@ -47,7 +48,11 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
   };
   if (sample_every > 0) run.samples.reserve(static_cast<std::size_t>(steps / sample_every + 1) * poses.size() * 3);
   std::optional<study::ErrorMeter> meter;
-  if (observe) meter.emplace(world.observe(), study::energy_scale(world.model()));
+  if (observe) {
+    const Observation start = world.observe();
+    meter.emplace(start, study::energy_scale(world.model()));
+    run.bounds = study::verdict_bounds(world.model(), start);
+  }
   if (sample_every > 0) sample();
   while (run.steps < steps) {
     const Clock::time_point before = Clock::now();
@@ -66,26 +71,31 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
       const py::gil_scoped_acquire gil;
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();
     }
-    if (wall_limit && std::chrono::duration<double>(after - start).count() >= *wall_limit) {
+    if (wall_limit && std::chrono::duration<double>(after - run_start).count() >= *wall_limit) {
       run.stopped = "wall_limit";
       break;
     }
   }
   if (run.steps == steps) run.stopped = "steps";
   if (meter) run.errors = meter->result();
+  run.errors.status = run.status;
   return run;
 }
 
-py::dict as_dict(MeteredRun&& run, bool observe) {
+py::dict as_dict(MeteredRun&& run, const Model& model, bool observe) {
   py::dict out;
   out["steps"] = run.steps;
-  out["status"] = status_name(run.status);
   out["stopped"] = run.stopped;
   out["step_seconds"] = run.step_seconds;
-  if (observe) {
+  if (observe) {  // the command line's verdict, over every step
+    const study::Verdict verdict = study::verdict(run.errors, model, run.bounds);
+    out["status"] = verdict.status, out["verdict"] = verdict.text;
     const study::RunErrors& e = run.errors;
     out["max_joint_gap"] = e.max_joint_gap, out["rms_joint_gap"] = e.rms_joint_gap, out["max_link_stretch"] = e.max_link_stretch;
     out["energy_drift"] = e.energy_drift, out["energy_gain"] = e.energy_gain, out["energy_scale"] = e.energy_scale;
+    out["deepest_penetration"] = e.deepest_penetration.depth, out["max_limit_violation"] = e.max_limit_violation;
+  } else {
+    out["status"] = name(run.status);
   }
   const std::size_t bodies = run.sample_count ? run.samples.size() / (3 * run.sample_count) : 0;
   Array samples({static_cast<py::ssize_t>(run.sample_count), static_cast<py::ssize_t>(bodies), py::ssize_t{3}});
@@ -95,18 +105,6 @@ py::dict as_dict(MeteredRun&& run, bool observe) {
 }
 
 }  // namespace
-
-const char* status_name(StepStatus status) {
-  switch (status) {
-    case StepStatus::ok: return "ok";
-    case StepStatus::diverged_non_finite: return "diverged_non_finite";
-    case StepStatus::diverged_speed: return "diverged_speed";
-    case StepStatus::diverged_energy: return "diverged_energy";
-    case StepStatus::diverged_joint_gap: return "diverged_joint_gap";
-    case StepStatus::invalid_time_step: return "invalid_time_step";
-  }
-  return "unknown";
-}
 
 void bind_running(WorldMethods& world) {
   world
@@ -120,7 +118,7 @@ void bind_running(WorldMethods& world) {
               status = dt ? w.step(*dt) : w.step();
             }
             if (arrays) fill_poses(w, *arrays);
-            return status_name(status);
+            return name(status);
           },
           py::arg("dt") = py::none(), py::kw_only(), py::arg("poses") = py::none(),
           "One step of dt s (the scene's time step by default). Returns the status: 'ok' or why not. poses=(positions N×3, "
@@ -138,17 +136,21 @@ void bind_running(WorldMethods& world) {
               py::gil_scoped_release release;
               run = metered_run(w, steps, sample_every, observe, wall_limit);
             }
-            return as_dict(std::move(run), observe);
+            return as_dict(std::move(run), w.model(), observe);
           },
           py::arg("steps"), py::kw_only(), py::arg("sample_every") = 0, py::arg("observe") = true, py::arg("wall_limit") = py::none(),
           "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', or after the step that ends "
-          "past wall_limit s of wall time (None: no limit), as a dict: steps (taken), status (the stopping step's, or 'ok'), "
-          "stopped ('steps': all taken, 'status': a step was not ok, 'wall_limit'), step_seconds (wall time inside the steps "
-          "alone, s); with observe, the run's errors over every step (kernel/study/run_metrics.hpp): max_joint_gap, "
-          "rms_joint_gap, max_link_stretch (relative to link length), energy_drift = max |E − E0| and energy_gain = max (E − E0) "
-          "(J), energy_scale = m·|g|·ΣL (J); samples: the body positions (K × N × 3 m) before the first step and after every "
-          "sample_every steps (K = 0 when sample_every is 0). Ctrl-C (a signal whose handler raises, looked for every 50 ms) "
-          "stops it between two steps with that exception (KeyboardInterrupt); World.time then says how far it went.");
+          "past wall_limit s of wall time (None: no limit), as a dict: steps (taken), stopped ('steps': all taken, 'status': a "
+          "step was not ok, 'wall_limit'), step_seconds (wall time inside the steps alone, s); status: with observe, the run's "
+          "verdict over every step, the command line's ('ok', 'inaccurate' when a joint gap, penetration, limit violation or "
+          "energy gain passed the scene's settings.tolerances at some step, or the stopping step's status, e.g. "
+          "'diverged_speed'), and verdict, the summary's sentence; without, the stopping step's status or 'ok'. With observe, "
+          "the run's errors over every step (kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch "
+          "(relative to link length), energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL "
+          "(J), deepest_penetration (m), max_limit_violation (rad; m for a slide); samples: the body positions (K × N × 3 m) "
+          "before the first step and after every sample_every steps (K = 0 when sample_every is 0). Ctrl-C (a signal whose "
+          "handler raises, looked for every 50 ms) stops it between two steps with that exception (KeyboardInterrupt); "
+          "World.time then says how far it went.");
 }
 
 }  // namespace limber::python

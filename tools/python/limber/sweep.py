@@ -8,7 +8,7 @@
 
 A grid (a dict, or a JSON file of one):
 
-    {"duration": 2, "sample_interval": 0.05,
+    {"duration": 2, "sample_interval": 0.05, "timeout": 600,
      "scenes": [{"scene": "chain.json", "name": "chain-5"}, {"scene": "tree.json", "links": 63}],
      "methods": [{"method": "weighted", "iterations": [5, 20]}, {"method": "featherstone"}],
      "settings": {"dt": [0.004166666666666667, 0.001]},
@@ -21,61 +21,113 @@ is a string "1,0,0"). The configurations are every scene
 × every method entry's expansion × every setting's expansion, in that order. Each runs for
 `duration` s of simulated time (rounded to whole steps of its dt) and gives one row:
 
-    index, scene, method, <one column per option the grid names>, steps (taken),
-    steps_per_second (steps over the wall time inside World::step: measured, so it varies between
-    runs; every other column is the same bits whoever runs the sweep), trajectory_error (m: the
-    largest over samples every sample_interval s of the RMS distance between the bodies' origins
-    and the reference run's; inf when the run stopped early; NaN without a reference),
-    max_joint_gap, rms_joint_gap, max_link_stretch (relative to link length), energy_drift and
-    energy_gain (max |E − E0| and max (E − E0) over the run, relative to m·|g|·ΣL), status ('ok',
-    why a step diverged, or 'error'), error (the message of an 'error' row).
+    index, scene, method, <one column per option the grid names>, steps (taken; 0 in a row without
+    a run's result), steps_per_second (steps over the wall time inside World::step: measured, so it
+    varies between runs; every other column is the same bits whoever runs the sweep),
+    trajectory_error (m: the largest over samples every sample_interval s of the RMS distance
+    between the bodies' origins and the reference run's; inf when the run stopped early; NaN
+    without a reference), max_joint_gap, rms_joint_gap, max_link_stretch (relative to link
+    length), energy_drift and energy_gain (max |E − E0| and max (E − E0) over the run, relative
+    to m·|g|·ΣL), deepest_penetration (m) and max_limit_violation (rad; m for a slide) over the
+    run, status (World.run's verdict: 'ok', 'inaccurate', 'diverged_...'; or the sweep's own:
+    'error', 'timeout', 'worker_died'), verdict (the verdict in `limber run`'s words), error (why,
+    for the sweep's own; "reference: ..." when the scene's reference run failed).
 
-A configuration that raises is an 'error' row, never a lost sweep. With an output file the rows
-are appended as they finish, and a sweep over an existing file runs only the configurations it
-lacks (resume). The reference is one run per scene with the grid's "reference" options.
+A configuration is a row whatever happens to it, never a lost sweep:
+- 'error': it raised (a bad option, a scene that does not load). Deterministic: kept on resume.
+- 'timeout': it ran past the grid's "timeout" (s, optional; the reference runs too). World.run
+  stops by itself at that wall time where it takes wall_limit; a local worker process still busy
+  timeout + 2 s + timeout/2 after it was handed the configuration (or timeout, where World.run has
+  no wall_limit) is killed. On a Dask cluster only World.run's wall_limit stops a run.
+- 'worker_died': the process running it died (a signal, the OOM killer, a crash in the scene
+  loader) 1 + RETRIES times; each death is a note and the configuration runs again in a new process.
+  On Dask the scheduler decides (distributed.scheduler.allowed-failures, 3 by default).
+Configurations run in worker processes, never in the sweep's own (workers=1 is one such process),
+so a crash loses at most the configuration it happens in.
+
+With an output file the rows are appended as they finish, each one write of a whole line, and a
+sweep over an existing file runs only the configurations it lacks (resume), and those whose row is
+'timeout' or 'worker_died'; lines a killed sweep or a full disk cut short are set aside in
+OUT.damaged and run again. OUT.sweep beside it names the grid (a hash of it, its "timeout" aside)
+and is locked while a sweep writes: another grid's table, or a second sweep on one file, is
+refused by name (limber/_sweep_file.py). The reference is one run per scene with the grid's
+"reference" options. Ctrl-C or SIGTERM on the command stops the workers at once; the rows written
+are kept, and running the command again resumes.
 
 Local processes are spawned, so a script that sweeps without a client needs the
-`if __name__ == "__main__":` guard, as multiprocessing and Dask's LocalCluster do. A cluster's
-workers import limber themselves: install it on their machines (`cmake --install`), or start
-them with it on PYTHONPATH; the scene files' paths must be valid where the workers run.
+`if __name__ == "__main__":` guard, as multiprocessing and Dask's LocalCluster do. They die with the
+sweep's process, even a SIGKILLed one (limber/_sweep_workers.py). A cluster's workers import limber
+themselves: install it on their machines (`cmake --install`), or start them with it on PYTHONPATH;
+the scene files' paths must be valid where the workers run.
 """
 import argparse
-import concurrent.futures
+import contextlib
 import dataclasses
 import functools
+import hashlib
+import io
 import itertools
 import json
 import math
-import multiprocessing
 import os
 import pathlib
+import signal
 import sys
 import time
+import warnings
 
 import numpy as np
 
 import limber  # pandas is imported where tables are made: the workers that run configurations never need it
 
-GRID_KEYS = {"duration", "sample_interval", "scenes", "methods", "settings", "reference"}
+from . import _sweep_file, _sweep_workers
+from ._sweep_file import OutputError
+from ._sweep_workers import Failure, WorkerStartError
+
+GRID_KEYS = {"duration", "sample_interval", "timeout", "scenes", "methods", "settings", "reference"}
 SCENE_KEYS = {"scene", "name", "body", "links", "copies", "floating_base"}
 METRICS = ["steps", "steps_per_second", "trajectory_error", "max_joint_gap", "rms_joint_gap", "max_link_stretch",
-           "energy_drift", "energy_gain", "status", "error"]
+           "energy_drift", "energy_gain", "deepest_penetration", "max_limit_violation", "status", "verdict", "error"]
+NUMERIC = METRICS[:-3]
+# World.run's verdicts of a run that went all the way (the others name the step that stopped it).
+COMPLETE = {"ok", "inaccurate"}
 MEASURED = ["steps_per_second"]  # wall-time measurements: the only columns that differ between runs
+RETRIES = 2  # times a configuration whose worker process died runs again before it is a 'worker_died' row
+RERUN = ("timeout", "worker_died")  # statuses a resumed sweep runs again: the next try may end otherwise
+GRID_BYTES = 16 << 20  # a grid file larger than this is refused
+WALL_LIMIT = "wall_limit" in (limber.World.run.__doc__ or "")  # World.run stops itself at a wall time
 
 
 class GridError(ValueError):
     """A bad grid: the message names the file (or 'grid'), the field and the problem."""
 
 
+class SweepWarning(UserWarning):
+    """Something a sweep survived: a worker process that died, a damaged line of its output file."""
+
+
 @dataclasses.dataclass(frozen=True)
 class Grid:
-    """A checked grid: scene entries (paths resolved), the methods' and settings' expansions."""
+    """A checked grid: scene entries (paths resolved), the methods' and settings' expansions, the
+    timeout (s, or None); `source`: the grid as it decides the rows (scene files as the grid names
+    them, no timeout), whose hash names its tables."""
     duration: float
     sample_interval: float
     scenes: list
     methods: list
     settings: list
     reference: dict = None
+    timeout: float = None
+    source: dict = dataclasses.field(default=None, compare=False, repr=False)
+
+
+def grid_identity(grid):
+    """(the SHA-256 of the grid's canonical JSON, that JSON as a dict): what its output file is checked against."""
+    source = grid.source
+    if source is None:
+        source = {k: getattr(grid, k) for k in ("duration", "sample_interval", "scenes", "methods", "settings", "reference")}
+    canonical = json.dumps(source, separators=(",", ":"), default=str)  # key order kept: it orders the columns and rows
+    return hashlib.sha256(canonical.encode()).hexdigest(), json.loads(canonical)
 
 
 def _expand(options, where):
@@ -92,10 +144,10 @@ def _expand(options, where):
 
 def load_grid(path):
     """A grid from a JSON file, its scenes' paths made relative to the file's folder."""
-    try:
-        grid = json.loads(pathlib.Path(path).read_text())
-    except OSError as error:
-        raise GridError(f"{path}: cannot read: {error.strerror}") from None
+    try:  # a FIFO or a device is refused, never read (it could block or never end)
+        grid = json.loads(_sweep_file.read_regular(path, GRID_BYTES, GridError).decode())
+    except UnicodeDecodeError as error:
+        raise GridError(f"{path}: not UTF-8 (byte {error.start})") from None
     except json.JSONDecodeError as error:
         raise GridError(f"{path}:{error.lineno}: not JSON: {error.msg}") from None
     return check_grid(grid, str(path), base=pathlib.Path(path).parent)
@@ -114,10 +166,13 @@ def check_grid(grid, source="grid", base=None):
             raise GridError(f"{source}: {key}: required, a non-empty list")
     duration = grid.get("duration", 1.0)
     interval = grid.get("sample_interval", 0.05)
-    for key, value in (("duration", duration), ("sample_interval", interval)):
+    timeout = grid.get("timeout")
+    for key, value in (("duration", duration), ("sample_interval", interval), ("timeout", timeout)):
+        if key == "timeout" and value is None:
+            continue
         if not isinstance(value, (int, float)) or isinstance(value, bool) or not value > 0 or not math.isfinite(value):
             raise GridError(f"{source}: {key}: must be a number > 0, got {value!r}")
-    scenes = []
+    scenes, written = [], []
     for k, scene in enumerate(grid["scenes"]):
         where = f"{source}: scenes[{k}]"
         if not isinstance(scene, dict) or "scene" not in scene:
@@ -129,6 +184,7 @@ def check_grid(grid, source="grid", base=None):
         scene.setdefault("name", pathlib.Path(scene["scene"]).stem)
         if any(other["name"] == scene["name"] for other in scenes):
             raise GridError(f"{where}.name: '{scene['name']}' names an earlier scene too; give each scene its own name")
+        written.append(dict(scene))
         if base is not None:
             scene["scene"] = str(pathlib.Path(base) / scene["scene"])
         scenes.append(scene)
@@ -141,7 +197,10 @@ def check_grid(grid, source="grid", base=None):
     reference = grid.get("reference")
     if reference is not None and (not isinstance(reference, dict) or "method" not in reference):
         raise GridError(f"{source}: reference: expected an object with a 'method'")
-    return Grid(float(duration), float(interval), scenes, methods, settings, reference)
+    as_written = {"duration": float(duration), "sample_interval": float(interval), "scenes": written, "methods": grid["methods"],
+                  "settings": grid.get("settings", {}), "reference": reference}
+    return Grid(float(duration), float(interval), scenes, methods, settings, reference,
+                None if timeout is None else float(timeout), as_written)
 
 
 def configurations(grid):
@@ -168,22 +227,33 @@ def _world(scene, options):
     return world, options.get("dt", loaded.time_step)
 
 
-def _run(scene, options, duration, interval):
-    """One run of `duration` s (whole steps): World.run's dict, sampled every `interval` s."""
+def _run(scene, options, duration, interval, limit=None):
+    """One run of `duration` s (whole steps): World.run's dict, sampled every `interval` s, stopped
+    after `limit` s of wall time (None: no limit) where World.run takes wall_limit."""
     world, dt = _world(scene, options)
     every = interval / dt
     if abs(every - round(every)) > 1e-6 * every or round(every) < 1:
         raise limber.OptionError(f"sample_interval {interval:g} s is not a whole number of steps of dt {dt:g} s")
-    return world.run(max(1, round(duration / dt)), sample_every=round(every))
+    limits = {"wall_limit": limit} if limit is not None and WALL_LIMIT else {}
+    return world.run(max(1, round(duration / dt)), sample_every=round(every), **limits)
 
 
-def reference_samples(scene, reference, duration, sample_interval):
+def _stopped(run, limit):
+    """Why a run stopped at its wall limit, or None."""
+    if run.get("stopped") == "wall_limit":
+        return f"stopped after {run['steps']} steps at the grid's timeout of {limit:g} s"
+    return None
+
+
+def reference_samples(scene, reference, duration, sample_interval, limit=None):
     """The run of `reference` (World options, or None) on `scene`: its samples (K × N × 3 m), or None."""
     if reference is None:
         return None
-    run = _run(scene, reference, duration, sample_interval)
-    if run["status"] != "ok":
-        raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['status']}")
+    run = _run(scene, reference, duration, sample_interval, limit)
+    if _stopped(run, limit):
+        raise Failure("timeout", _stopped(run, limit))
+    if run["status"] not in COMPLETE:
+        raise RuntimeError(f"the reference run stopped after {run['steps']} steps: {run['verdict']}")
     return run["samples"]
 
 
@@ -197,24 +267,29 @@ def trajectory_error(samples, reference):
     return float(np.sqrt(squared.max()))
 
 
-def _error_row(configuration, message):
-    return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": "error", "error": message}
+def _error_row(configuration, message, status="error"):
+    """A row without a run's result: its metrics NaN, steps 0; the message on one line, as the file holds it."""
+    return {**configuration, **{metric: math.nan for metric in METRICS}, "steps": 0, "status": status, "verdict": "",
+            "error": _sweep_file.text(message)}
 
 
-def run_configuration(configuration, scene, duration, sample_interval):
+def run_configuration(configuration, scene, duration, sample_interval, limit=None):
     """One run: (`configuration`'s row but its trajectory_error, its samples), or (an 'error' row
     with the message, None). The samples meet the reference's in the sweep's process, so no run
-    waits for its scene's reference."""
+    waits for its scene's reference. limit: the grid's timeout, s, or None."""
     options = {k: v for k, v in configuration.items() if k not in ("index", "scene")}
     try:
-        run = _run(scene, options, duration, sample_interval)
+        run = _run(scene, options, duration, sample_interval, limit)
     except Exception as error:  # a failed configuration is a row, never a lost sweep
         return _error_row(configuration, f"{type(error).__name__}: {error}"), None
     scale, seconds = run["energy_scale"], run["step_seconds"]
+    stopped = _stopped(run, limit)
     row = {**configuration, "steps": run["steps"], "steps_per_second": run["steps"] / seconds if seconds > 0 else math.nan,
            "trajectory_error": math.nan, "max_joint_gap": run["max_joint_gap"], "rms_joint_gap": run["rms_joint_gap"],
            "max_link_stretch": run["max_link_stretch"], "energy_drift": run["energy_drift"] / scale,
-           "energy_gain": run["energy_gain"] / scale, "status": run["status"], "error": ""}
+           "energy_gain": run["energy_gain"] / scale, "deepest_penetration": run["deepest_penetration"],
+           "max_limit_violation": run["max_limit_violation"], "status": "timeout" if stopped else run["status"],
+           "verdict": _sweep_file.text(run["verdict"]), "error": stopped or ""}
     return row, run["samples"]
 
 
@@ -234,7 +309,9 @@ class _Rows:
 
     def deliver(self, task, result):
         kind, item = task
-        if isinstance(result, Exception) and kind == "run":  # the process running it died
+        if isinstance(result, Failure) and kind == "run":  # its worker died, or ran out of time
+            result = (_error_row(item, str(result), result.status), None)
+        elif isinstance(result, Exception) and kind == "run":  # the cluster could not run it
             result = (_error_row(item, f"worker: {type(result).__name__}: {result}"), None)
         if kind == "reference":
             self.references[item] = result
@@ -248,19 +325,21 @@ class _Rows:
     def _complete(self, row, samples):
         reference = self.references[row["scene"]]
         if samples is not None and isinstance(reference, Exception):
-            row = {**row, "error": f"reference: {reference}"}
+            kind = reference.status if isinstance(reference, Failure) else type(reference).__name__
+            row = {**row, "error": _sweep_file.text(f"reference: {kind}: {reference}")}
         elif samples is not None:
             row = {**row, "trajectory_error": trajectory_error(samples, reference)}
         self.finish(row)
 
 
-def _read_finished(out):
-    """The rows an output file already holds (a resumed sweep keeps them), or None."""
-    if out is None or not pathlib.Path(out).exists() or pathlib.Path(out).stat().st_size == 0:
-        return None
+def _note(message):
+    warnings.warn(message, SweepWarning, stacklevel=2)
+
+
+def _read_csv(text):
     import pandas as pd
 
-    return pd.read_csv(out, float_precision="round_trip", keep_default_na=False, na_values=["nan", "NaN"])
+    return pd.read_csv(io.StringIO(text), float_precision="round_trip", keep_default_na=False, na_values=["nan", "NaN"])
 
 
 def sweep(grid, client=None, *, workers=None, out=None, progress=None):
@@ -269,9 +348,12 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
     docstring).
 
     client: a dask.distributed Client: one task per configuration (and per scene's reference) on
-    its cluster. Without one, `workers` local processes (default: one per core; 1: this process).
+    its cluster. Without one, `workers` local processes (default: one per core).
     out: a CSV file the rows are appended to as they finish; the configurations it holds already
-    are not run again. progress: called with (rows done, rows in all) as rows finish.
+    are not run again. progress: called with (rows done, rows in all) as rows finish. Notes (a
+    worker that died, a damaged line set aside) are SweepWarnings. Raises GridError, OutputError
+    (the output file: not this grid's, locked by another sweep, not a regular file, a full disk),
+    WorkerStartError; KeyboardInterrupt stops the workers, keeping the rows written.
     """
     import pandas as pd
 
@@ -282,58 +364,80 @@ def sweep(grid, client=None, *, workers=None, out=None, progress=None):
     every = configurations(grid)
     option_columns = list(dict.fromkeys(k for c in every for k in c if k not in ("index", "scene")))
     columns = ["index", "scene", *option_columns, *METRICS]
-    finished = _read_finished(out)
-    if finished is not None and list(finished.columns) != columns:
-        raise GridError(f"{out}: holds another grid's table (its columns: {', '.join(finished.columns)}); it is not resumed or written over")
-    done = set(finished["index"]) if finished is not None else set()
-    remaining = [c for c in every if c["index"] not in done]
-    rows = []
+    table = None
+    if out is not None:
+        table = _sweep_file.open_table(out, columns, every, NUMERIC, *grid_identity(grid), rerun=RERUN, note=_note)
+    try:
+        finished = _read_csv(table.finished) if table is not None and table.rows else None
+        done = set(finished["index"]) if finished is not None else set()
+        rows = []
 
-    def finish(row):
-        rows.append(row)
-        if out is not None:
-            new = not pathlib.Path(out).exists() or pathlib.Path(out).stat().st_size == 0
-            pd.DataFrame([row], columns=columns).to_csv(out, mode="a", header=new, index=False, na_rep="nan")
-        if progress:
-            progress(len(done) + len(rows), len(every))
+        def finish(row):
+            rows.append(row)
+            if table is not None:
+                table.append(row)
+            if progress:
+                progress(len(done) + len(rows), len(every))
 
+        remaining = [c for c in every if c["index"] not in done]
+        collector = _Rows(finish)
+        with _runner(client, workers, grid.timeout) as run:
+            for task, result in run(_tasks(grid, remaining)):
+                collector.deliver(task, result)
+    finally:
+        if table is not None:
+            table.close()
+    parts = [finished.reindex(columns=columns)] if finished is not None else []
+    if rows or not parts:  # (an empty frame would make every column's type object)
+        parts.append(pd.DataFrame(rows, columns=columns))
+    return pd.concat(parts, ignore_index=True).sort_values("index", kind="stable").reset_index(drop=True)
+
+
+def _tasks(grid, remaining):
+    """(key, label, function, arguments) of the references of the scenes `remaining` uses, then of `remaining`."""
     scenes = {scene["name"]: scene for scene in grid.scenes if any(c["scene"] == scene["name"] for c in remaining)}
     # The references first: they are the longest runs, and each scene's rows wait for its own.
-    length = (grid.duration, grid.sample_interval)
-    tasks = [(("reference", name), _reference_or_error, (scene, grid.reference, *length)) for name, scene in scenes.items()]
-    tasks += [(("run", c), run_configuration, (c, scenes[c["scene"]], *length)) for c in remaining]
-    collector = _Rows(finish)
+    length = (grid.duration, grid.sample_interval, grid.timeout)
+    tasks = [(("reference", name), f"the reference run of {name}", _reference_or_error, (scene, grid.reference, *length))
+             for name, scene in scenes.items()]
+    tasks += [(("run", c), f"configuration {c['index']} ({c['scene']}, {c['method']})", run_configuration,
+               (c, scenes[c["scene"]], *length)) for c in remaining]
+    return tasks
+
+
+def _runner(client, workers, limit):
+    """A context manager giving run(tasks) -> (key, result) pairs as tasks finish, on `client`'s
+    cluster or on local worker processes; leaving it stops what still runs."""
     if client is not None:
-        results = _on_dask(client, tasks)
-    elif (workers or os.cpu_count() or 1) == 1:
-        results = ((task, function(*arguments)) for task, function, arguments in tasks)
-    else:
-        results = _on_processes(workers or os.cpu_count(), tasks)
-    for task, result in results:
-        collector.deliver(task, result)
-    table = pd.DataFrame(rows, columns=columns)
-    if finished is not None:
-        table = pd.concat([finished.reindex(columns=columns), table], ignore_index=True)
-    return table.sort_values("index", kind="stable").reset_index(drop=True)
+        return _on_dask(client)
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers: must be ≥ 1, got {workers}")
+    deadline = None if limit is None else (limit + 2 + limit / 2 if WALL_LIMIT else limit)  # World.run stops first
+    return _sweep_workers.Workers(workers or os.cpu_count() or 1, deadline=deadline, retries=RETRIES, note=_note)
 
 
-def _on_processes(workers, tasks):
-    """(task, result) pairs as local processes finish them; a process that died gives its exception."""
-    # spawn, not fork: the parent's kernel may hold worker threads a forked child would lack.
-    with concurrent.futures.ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(function, *arguments): task for task, function, arguments in tasks}
-        for future in concurrent.futures.as_completed(futures):
-            yield futures[future], future.exception() or future.result()
-
-
-def _on_dask(client, tasks):
+@contextlib.contextmanager
+def _on_dask(client):
     """(task, result) pairs as the cluster finishes them; a worker that died gives its exception."""
     import distributed
 
-    futures = {client.submit(function, *arguments, pure=False): task for task, function, arguments in tasks}
-    # with_results: results come in batches, not one round trip each; an error comes as (type, value, traceback).
-    for future, result in distributed.as_completed(futures, with_results=True, raise_errors=False):
-        yield futures[future], result[1] if future.status == "error" else result
+    futures = {}
+
+    def run(tasks):
+        futures.update({client.submit(function, *arguments, pure=False): key for key, _, function, arguments in tasks})
+        # with_results: results come in batches, not one round trip each; an error comes as (type, value, traceback).
+        for future, result in distributed.as_completed(futures, with_results=True, raise_errors=False):
+            if future.status != "error":
+                yield futures[future], result
+            elif isinstance(result[1], distributed.KilledWorker):  # the scheduler's allowed-failures used up
+                yield futures[future], Failure("worker_died", f"its Dask workers died running it ({result[1]})")
+            else:
+                yield futures[future], result[1]
+
+    try:
+        yield run
+    finally:
+        client.cancel(list(futures))
 
 
 def main(argv=None):
@@ -344,29 +448,83 @@ def main(argv=None):
     where.add_argument("--scheduler", help="a dask.distributed scheduler's address, tcp://HOST:PORT")
     where.add_argument("--workers", type=int, help="local processes (default: one per core)")
     arguments = parser.parse_args(argv)
+    if arguments.workers is not None and arguments.workers < 1:
+        parser.exit(2, f"limber.sweep: --workers: must be ≥ 1, got {arguments.workers}\n")
     if pathlib.Path(arguments.out).resolve() == pathlib.Path(arguments.grid).resolve():
         parser.exit(2, f"limber.sweep: --out {arguments.out}: is the grid itself; it would be written over\n")
-    if not pathlib.Path(arguments.out).resolve().parent.is_dir():
-        parser.exit(2, f"limber.sweep: --out {arguments.out}: its folder does not exist\n")
     try:
         grid = load_grid(arguments.grid)
     except GridError as error:
         parser.exit(2, f"limber.sweep: {error}\n")
-    client = None
-    if arguments.scheduler:
-        import distributed
+    status = _Status()
+    with warnings.catch_warnings(), _signals_interrupt(status):
+        warnings.simplefilter("always", SweepWarning)
+        warnings.showwarning = lambda message, *_: status.say(f"limber.sweep: {message}")
+        client = None
+        try:
+            if arguments.scheduler:
+                import distributed
 
-        client = distributed.Client(arguments.scheduler)
-    start = time.perf_counter()
-    try:
-        table = sweep(arguments.grid, client, workers=arguments.workers, out=arguments.out,
-                      progress=lambda k, n: print(f"\r{k}/{n} configurations", end="", file=sys.stderr))
-    finally:
-        if client is not None:
-            client.close()
-    errors = int((table["status"] == "error").sum())
-    print(f"\n{len(table)} configurations in {time.perf_counter() - start:.1f} s ({errors} errors): {arguments.out}", file=sys.stderr)
+                client = distributed.Client(arguments.scheduler)
+            table = sweep(grid, client, workers=arguments.workers, out=arguments.out, progress=status.progress)
+        except (GridError, OutputError, WorkerStartError) as error:
+            status.say(f"limber.sweep: {error}")
+            return 2
+        except KeyboardInterrupt:
+            written = f"{status.done} of {status.total} configurations are" if status.total else "no row is"
+            status.say(f"limber.sweep: stopped by {status.signal.name}: {written} in {arguments.out}; the same command resumes")
+            return 128 + status.signal
+        finally:
+            if client is not None:
+                client.close()
+    status.say(f"{len(table)} configurations in {status.seconds():.1f} s ({summary(table)}): {arguments.out}")
     return 0
+
+
+def summary(table):
+    """The count of each status in a table, and of its rows without their reference, with the first one's error."""
+    counts = table["status"].value_counts(sort=False)
+    text = ", ".join(f"{n} {status}" for status, n in counts.items())
+    without = table[table["error"].astype(str).str.startswith("reference: ")]
+    if len(without):
+        text += f"; {len(without)} reference errors, the first: {without['error'].iloc[0]}"
+    else:
+        text += "; 0 reference errors"
+    return text
+
+
+class _Status:
+    """The command's lines on stderr: a progress line rewritten in place, and whole lines below it."""
+
+    def __init__(self):
+        self.start, self.done, self.total, self.open = time.perf_counter(), 0, 0, False
+        self.signal = signal.SIGINT
+
+    def progress(self, done, total):
+        self.done, self.total, self.open = done, total, True
+        print(f"\r{done}/{total} configurations", end="", file=sys.stderr, flush=True)
+
+    def say(self, line):
+        print(("\n" if self.open else "") + line, file=sys.stderr, flush=True)
+        self.open = False
+
+    def seconds(self):
+        return time.perf_counter() - self.start
+
+
+@contextlib.contextmanager
+def _signals_interrupt(status):
+    """SIGTERM interrupts as Ctrl-C does (KeyboardInterrupt), so both stop the workers and keep the rows;
+    `status.signal` says which came."""
+    def interrupt(number, frame):
+        status.signal = signal.Signals(number)
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":
