@@ -4,8 +4,8 @@
 // limber.ModelError, limber.WorldError and limber.OptionError (ValueError), carrying the C++
 // message whole (a bad scene field names the file and the field). World.step and World.run
 // release the GIL, so Worlds on two Python threads step at once; one World takes one call at a
-// time, whatever the thread (locked_world.hpp). Text reaches Python as UTF-8: a scene whose names
-// are not is refused at load_scene, and a message quoting bytes that are not shows them escaped.
+// time, whatever the thread (locked_world.hpp). Text reaches Python as UTF-8: the scene readers
+// refuse a name that is not, and a message or note quoting such bytes shows them escaped.
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -22,7 +22,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
 #include "tools/cli/cli.hpp"
@@ -175,36 +174,6 @@ py::dict observation(const Observation& o) {
   return out;
 }
 
-// Whether `bytes` are UTF-8 text (Python's own decoder decides; ASCII, the usual name, at once).
-bool utf8(std::string_view bytes) {
-  if (std::all_of(bytes.begin(), bytes.end(), [](char c) { return (static_cast<unsigned char>(c) & 0x80) == 0; })) return true;
-  PyObject* decoded = PyUnicode_DecodeUTF8(bytes.data(), static_cast<Py_ssize_t>(bytes.size()), "strict");
-  if (decoded == nullptr) {
-    PyErr_Clear();
-    return false;
-  }
-  Py_DECREF(decoded);
-  return true;
-}
-
-// A loaded scene whose every name (the model's, its bodies', joints' and their axes', gears',
-// actuators', colliders') is UTF-8 text, as Python's str needs; ModelError "<source>: <what> ...:
-// its name is not UTF-8 text" naming the first that is not (a model file in Latin-1).
-void require_utf8_names(const Scene& scene, const std::string& source) {
-  const auto check = [&](const std::string& name, const std::string& path) {
-    if (utf8(name)) return;
-    throw ModelError(source + ": " + path + ": is not UTF-8 text (limber's names are), got '" + name + "' (its bytes shown escaped)");
-  };
-  const Model& model = scene.model;
-  check(model.name, "name");
-  const auto each = [&](const auto& things, const char* what) {
-    for (std::size_t k = 0; k < things.size(); ++k) check(things[k].name, checks::indexed(what, k) + ".name");
-  };
-  each(model.bodies, "bodies"), each(model.joints, "joints"), each(model.gears, "gears"), each(model.actuators, "actuators");
-  each(model.colliders, "colliders");
-  for (std::size_t k = 0; k < model.joints.size(); ++k) each(model.joints[k].serial_axes, checks::indexed("joints", k).append(".serial_axes").c_str());
-}
-
 void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", "A loaded scene: its Model (bodies, joints, settings) and the methods' settings.")
       .def_property_readonly("name", [](const Scene& s) { return s.model.name; })
@@ -231,15 +200,13 @@ void bind_scene(py::module_& m) {
       [](const std::string& path, std::optional<std::string> body, std::optional<long> links, std::optional<long> copies, bool floating_base) {
         SceneOptions options;
         options.variant = std::move(body), options.links = links, options.copies = copies, options.floating_base = floating_base;
-        Scene scene = load_scene_file(path, options);
-        require_utf8_names(scene, path);
-        return scene;
+        return load_scene_file(path, options);
       },
       py::arg("path"), py::kw_only(), py::arg("body") = py::none(), py::arg("links") = py::none(), py::arg("copies") = py::none(),
       py::arg("floating_base") = false,
       "Loads a scene file: limber's JSON, MuJoCo's MJCF (.xml) or a URDF robot (.urdf), with `limber run`'s scene flags: body (a "
       "variant: the humanoid's thin, medium, wide), links (a chain or tree generator's), copies (side by side), floating_base (a "
-      "URDF robot's root floats). Raises ModelError naming the file and field, or a name that is not UTF-8 text.");
+      "URDF robot's root floats). Raises ModelError naming the file and field (a name that is not UTF-8 text too).");
 }
 
 // Construction and what identifies the World (limber.World, in limber/__init__.py, wraps the
