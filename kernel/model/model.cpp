@@ -141,6 +141,42 @@ void validate_inertial(const Body& body, const Path& path) {
   }
 }
 
+// What the methods derive from a body must be finite too, or they fail or step to NaN: its
+// inverse mass 1/m, the squares of its extent (a particle limb's constraint, the rigid bodies'
+// inertia m·extent²) and its kinetic energy (m·|v|², I·|ω|²). Refused at the field that makes
+// one of them overflow, e.g. a capsule 1e300 m long, or a spin of 1e300 rad/s.
+template <typename Path>
+void require_finite_derived(const Body& body, const Path& path) {
+  if (!std::isfinite(1 / body.mass)) {
+    fail(path("mass"), "must be large enough that 1/mass is a finite number, got " + format_number(body.mass));
+  }
+  const auto overflows = [](double value) { return !std::isfinite(value); };
+  const double shape_extent = body.shape.length + 2 * body.shape.radius;
+  if (overflows(shape_extent * shape_extent) || overflows(body.mass * shape_extent * shape_extent)) {
+    fail(path("shape"), "length " + format_number(body.shape.length) + " m and radius " + format_number(body.shape.radius) + " m with mass " +
+                            format_number(body.mass) + " kg: the body's extent squared, or its inertia (mass × extent²), is not a finite number");
+  }
+  double extent = shape_extent;  // from the centre of mass outwards, twice over: a bound on the inertia's lever arm
+  for (std::size_t k = 0; k < body.point_masses.size(); ++k) {
+    const PointMass& lump = body.point_masses[k];
+    const double reach = 2 * (lump.position.norm() + lump.radius);
+    if (overflows(reach * reach) || overflows(body.mass * reach * reach)) {
+      fail([&] { return indexed(path("point_masses")(), k); },
+           "position " + format_vector(lump.position) + " m and radius " + format_number(lump.radius) +
+               " m: the body's inertia (mass × distance²) is not a finite number");
+    }
+    extent = std::max(extent, reach);
+  }
+  const double inertia = body.mass * extent * extent + (body.inertial ? body.inertial->inertia.trace() : 0.0);
+  if (overflows(body.mass * body.linear_velocity.squaredNorm())) {
+    fail(path("linear_velocity"), "with mass " + format_number(body.mass) + " kg, its kinetic energy (m·|v|²/2) is not a finite number");
+  }
+  if (overflows(inertia * body.angular_velocity.squaredNorm())) {
+    fail(path("angular_velocity"), "its rotational kinetic energy (about I·|ω|²/2, I ≈ " + format_number(inertia) +
+                                       " kg·m²) is not a finite number");
+  }
+}
+
 void validate_body(const Body& body, std::size_t index) {
   const auto path = field_path("bodies", index);
   require_name(body.name, path("name"), /*is_body=*/true);
@@ -172,6 +208,7 @@ void validate_body(const Body& body, std::size_t index) {
   require_unit(body.axis, path("axis"));
   require_finite(body.linear_velocity, path("linear_velocity"));
   require_finite(body.angular_velocity, path("angular_velocity"));
+  require_finite_derived(body, path);
 }
 
 template <typename Path>

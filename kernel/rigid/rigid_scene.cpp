@@ -3,8 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+#include <string>
 
 #include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/model/checks.hpp"
 
 namespace limber {
 namespace {
@@ -20,6 +23,27 @@ struct PrincipalFrame {
 PrincipalFrame principal_frame(const Eigen::Matrix3d& inertia) {
   const PrincipalAxes principal = principal_axes(inertia);
   return {Eigen::Quaterniond(principal.axes).normalized(), principal.moments.cwiseMax(1e-6 * principal.moments.maxCoeff())};
+}
+
+// Limb `b`'s mass properties as a rigid body: body_mass_properties, with what it cannot compute
+// (a capsule whose volume under- or overflows: radius 1e-200 or 1e200 m) or what leaves the body
+// no rotational inertia to invert (its mass at one point: one lump of radius 0, or a length and
+// radius too small) refused as a ModelError naming the body and the field that gives them.
+MassProperties limb_mass_properties(const Body& body, std::size_t b) {
+  const std::string field = "bodies[" + std::to_string(b) + "] ('" + body.name + "')." +
+                            (body.inertial ? "inertial" : body.point_masses.empty() ? "shape" : "point_masses");
+  MassProperties mass;
+  try {
+    mass = body_mass_properties(body);
+  } catch (const std::invalid_argument& error) {
+    throw ModelError(field + ": the rigid-body methods cannot spread the mass over it (" + error.what() + ")");
+  }
+  const double largest = mass.inertia.diagonal().maxCoeff();
+  if (!std::isfinite(1 / (1e-6 * largest)) || !mass.inertia.allFinite()) {
+    throw ModelError(field + ": gives the rigid-body methods no rotational inertia to invert (largest moment " +
+                     checks::format_number(largest) + " kg·m²: the mass at one point, or a mass or sizes too small)");
+  }
+  return mass;
 }
 
 }  // namespace
@@ -52,7 +76,7 @@ RigidScene compile_rigid_scene(const Model& model) {
   };
   for (std::size_t b = 0; b < limb_count; ++b) {
     const Body& body = model.bodies[b];
-    const MassProperties mass = body_mass_properties(body);
+    const MassProperties mass = limb_mass_properties(body, b);
     set_body(b, mass, body.orientation(), body.to_world(mass.centre_of_mass), body.velocity_at(mass.centre_of_mass),
              body.angular_velocity);
     shapes.shape[b] = body.shape.type, shapes.length[b] = body.shape.length, shapes.radius[b] = body.shape.radius;

@@ -105,7 +105,9 @@ struct RigidScene {
 ///   scene asks (Settings::sleep.start_asleep) and they are at rest; each ball is its own;
 /// - the ground and the bounds' walls become planes;
 /// - limb pairs and static colliders go to `collisions` (LimbCollisions of the Model).
-/// Throws ModelError when the model is invalid.
+/// Throws ModelError when the model is invalid, or a limb's mass properties cannot be computed
+/// (a capsule whose volume under- or overflows) or give no rotational inertia (its mass at one
+/// point), naming the limb and the field.
 RigidScene compile_rigid_scene(const Model& model);
 
 /// The anchors of `model`'s joints on `scene`'s bodies.

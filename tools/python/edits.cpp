@@ -61,7 +61,7 @@ void bind_handle(py::module_& m, const char* name, const char* doc) {
       });
 }
 
-void bind_bodies_and_joints(WorldClass& world) {
+void bind_bodies_and_joints(WorldMethods& world) {
   world
       .def(
           "add_body", [](World& w, const py::dict& description) {
@@ -72,7 +72,8 @@ void bind_bodies_and_joints(WorldClass& world) {
           "Adds a body described as a scene file's \"bodies\" entry (a dict: name, shape, mass or density or point_masses, position "
           "m, axis, ...; kernel/scene/scene_file.hpp), at that pose and velocity; every other body keeps its state (under "
           "settings.sleep.start_asleep a body added at rest starts asleep: wake() it). Returns its name. "
-          "Raises ModelError naming the field (\"add_body: bodies[0].mass: must be > 0, got -1\"), nothing changed.")
+          "Raises ModelError naming the field (\"add_body: bodies[0].mass: must be > 0, got -1\"), nothing changed; also for a "
+          "description nesting dicts and lists deeper than 64 levels or containing itself (as add_joint, add_collider, add_ball).")
       .def(
           "add_joint", [](World& w, const py::dict& description) {
             const Joint joint = joint_from(w, description);
@@ -104,7 +105,7 @@ void bind_bodies_and_joints(WorldClass& world) {
       });
 }
 
-void bind_colliders_and_balls(WorldClass& world) {
+void bind_colliders_and_balls(WorldMethods& world) {
   world
       .def(
           "add_collider", [](World& w, const py::dict& description) {
@@ -139,7 +140,7 @@ void bind_colliders_and_balls(WorldClass& world) {
           py::arg("ball"), "(position 3 m, velocity 3 m/s) of the ball's centre, world");
 }
 
-void bind_holds(WorldClass& world) {
+void bind_holds(WorldMethods& world) {
   world
       .def(
           "pin", [](World& w, const std::string& body, const Array& local_point) {
@@ -158,7 +159,7 @@ void bind_holds(WorldClass& world) {
            "Where the held point's world anchor is (3, m)");
 }
 
-void bind_teleports_and_sleep(WorldClass& world) {
+void bind_teleports_and_sleep(WorldMethods& world) {
   world
       .def(
           "teleport", [](World& w, const std::string& body, const Array& position, const Array& orientation, const std::optional<Array>& linear,
@@ -183,7 +184,7 @@ void bind_teleports_and_sleep(WorldClass& world) {
 }  // namespace
 
 Eigen::Quaterniond quaternion(const Array& in, const char* what) {
-  if (in.ndim() != 1 || in.shape(0) != 4) throw py::value_error(std::string(what) + ": expected 4 numbers (w, x, y, z)");
+  if (in.ndim() != 1 || in.shape(0) != 4) throw WorldError(std::string(what) + ": expected 4 numbers (w, x, y, z)");
   return {in.at(0), in.at(1), in.at(2), in.at(3)};
 }
 
@@ -192,7 +193,7 @@ void bind_handles(py::module_& m) {
   bind_handle<PinId>(m, "Pin", "A held point of a World (World.pin): a handle, refused once unpinned");
 }
 
-void bind_edits(WorldClass& world) {
+void bind_edits(WorldMethods& world) {
   bind_bodies_and_joints(world);
   bind_colliders_and_balls(world);
   bind_holds(world);

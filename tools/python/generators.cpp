@@ -35,6 +35,12 @@ std::size_t link_count(long long value, const std::string& path) {
   return links;
 }
 
+// An optional 3-vector parameter, or `otherwise` when None: ModelError "<path>: expected 3 numbers".
+Eigen::Vector3d vector3_field(const std::optional<Array>& in, const Eigen::Vector3d& otherwise, const std::string& path) {
+  if (in && (in->ndim() != 1 || in->shape(0) != 3)) checks::fail(path, "expected 3 numbers");
+  return vector3_or(in, otherwise, path.c_str());
+}
+
 Scene scene(Model model) { return Scene{std::move(model), {}, {}}; }
 
 // The generators of linked links: chain, tree, grid.
@@ -45,8 +51,8 @@ void bind_links(py::module_& m) {
         ChainSpec spec;
         spec.links = link_count(links, "chain.links");
         spec.link_length = link_length, spec.link_mass = link_mass, spec.end_mass_ratio = end_mass_ratio, spec.pinned = pinned;
-        spec.anchor = vector3_or(anchor, spec.anchor, "chain.anchor");
-        spec.direction = vector3_or(direction, spec.direction, "chain.direction");
+        spec.anchor = vector3_field(anchor, spec.anchor, "chain.anchor");
+        spec.direction = vector3_field(direction, spec.direction, "chain.direction");
         return scene(make_chain_model(spec));
       },
       py::kw_only(), py::arg("links"), py::arg("link_length") = 0.1, py::arg("link_mass") = 1.0, py::arg("end_mass_ratio") = 1.0,

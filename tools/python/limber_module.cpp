@@ -1,17 +1,22 @@
 // limber's Python module, _limber (the package tools/python/limber re-exports it): scenes, and
 // the World with its bulk state as NumPy arrays. Units are SI (m, kg, s, N, N·m, rad); arrays are
-// float64, one row per body in Model order. ModelError and WorldError reach Python as
-// limber.ModelError and limber.WorldError (ValueError), carrying the C++ message whole (a bad
-// scene field names the file and the field). World.step releases the GIL, so Worlds on two
-// Python threads step at once; one World is not to be used from two threads at a time.
+// float64, one row per body in Model order. ModelError, WorldError and OptionError reach Python as
+// limber.ModelError, limber.WorldError and limber.OptionError (ValueError), carrying the C++
+// message whole (a bad scene field names the file and the field). World.step and World.run
+// release the GIL, so Worlds on two Python threads step at once; one World takes one call at a
+// time, whatever the thread (locked_world.hpp). Text reaches Python as UTF-8: the scene readers
+// refuse a name that is not, and a message or note quoting such bytes shows them escaped.
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -20,6 +25,7 @@
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
 #include "tools/cli/cli.hpp"
+#include "tools/cli/run_flags.hpp"
 #include "tools/python/module.hpp"
 
 using namespace limber;
@@ -28,12 +34,18 @@ using namespace limber::python;
 namespace limber::python {
 
 Eigen::Vector3d vector3(const Array& in, const char* what) {
-  if (in.ndim() != 1 || in.shape(0) != 3) throw py::value_error(std::string(what) + ": expected 3 numbers");
+  if (in.ndim() != 1 || in.shape(0) != 3) throw WorldError(std::string(what) + ": expected 3 numbers");
   return {in.at(0), in.at(1), in.at(2)};
 }
 
+py::str text(std::string_view bytes) {
+  PyObject* decoded = PyUnicode_DecodeUTF8(bytes.data(), static_cast<Py_ssize_t>(bytes.size()), "backslashreplace");
+  if (decoded == nullptr) throw py::error_already_set();
+  return py::reinterpret_steal<py::str>(decoded);
+}
+
 Eigen::VectorXd vector(const Array& in, const char* what) {
-  if (in.ndim() != 1) throw py::value_error(std::string(what) + ": expected a one-dimensional array");
+  if (in.ndim() != 1) throw WorldError(std::string(what) + ": expected a one-dimensional array");
   return Eigen::Map<const Eigen::VectorXd>(in.data(), in.shape(0));
 }
 
@@ -48,42 +60,105 @@ std::string flag_name(const std::string& keyword) {
   return flag;
 }
 
-// World options (Python keywords) as `limber run`'s arguments: True is a bare flag, False none, a
-// sequence is comma-joined, anything else its str() (a float's shortest exact spelling).
+// A Python option value's text for the command line (str() of it: a float's shortest exact
+// spelling), or OptionError naming `flag` when it is not one value CLI11 can read.
+std::string option_text(py::handle value, const std::string& flag, const CLI::Option& option) {
+  const auto refuse = [&](const std::string& got) {
+    throw OptionError("World: " + flag + ": expects " + option.get_type_name() + (option.get_expected_max() > 1 ? " values" : "") +
+                      ", got " + got);
+  };
+  if (py::isinstance<py::bool_>(value)) refuse(py::repr(value).cast<std::string>());
+  if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value) || py::isinstance<py::dict>(value) ||
+      py::isinstance<py::set>(value) || py::isinstance<py::array>(value)) {
+    refuse("a " + py::str(value.get_type().attr("__name__")).cast<std::string>());
+  }
+  const py::str text = py::str(value);
+  Py_ssize_t size = 0;
+  const char* data = PyUnicode_AsUTF8AndSize(text.ptr(), &size);
+  if (data == nullptr) {
+    PyErr_Clear();
+    refuse("text UTF-8 cannot hold");
+  }
+  return std::string(data, static_cast<std::size_t>(size));
+}
+
+// `flag=value` refused, naming the flag and the type it expects, when CLI11 cannot convert the
+// value (CLI11's own message names neither plainly: "Could not convert: --iterations = --dt");
+// every other problem is left to the whole parse, which names it.
+void require_convertible(const std::string& flag, const std::string& value, const CLI::Option& option) {
+  CLI::App app;
+  cli::RunFlags flags;
+  cli::add_run_flags(app, flags);
+  const std::string argument = flag + "=" + value;
+  const std::array<const char*, 2> argv{"limber run", argument.c_str()};
+  try {
+    app.parse(int(argv.size()), argv.data());
+  } catch (const CLI::ConversionError&) {
+    throw OptionError("World: " + flag + ": expects " + option.get_type_name() + (option.get_expected_max() > 1 ? " values" : "") +
+                      ", got '" + value + "'");
+  } catch (const CLI::Error&) {
+  }
+}
+
+// World options (Python keywords) as `limber run`'s arguments, `--flag=value` so that no value is
+// read as a flag: a switch's True is the bare flag, False none; a sequence is comma-joined, its
+// items single values; anything else its str(). Refused with OptionError naming the keyword: a
+// name that is not a run flag's (or is --help, which CLI11 would answer with its help text), a
+// switch given anything but a bool, a value that is not one (True, a nested list, a dict) or that
+// CLI11 cannot convert to the flag's type.
 std::vector<std::string> run_arguments(const std::string& method, const py::dict& options) {
-  std::vector<std::string> arguments{"--method", method};
+  CLI::App app;  // the run flags, to tell switches from values and name their types
+  cli::RunFlags flags;
+  cli::add_run_flags(app, flags);
+  std::vector<std::string> arguments{"--method=" + method};
   for (const auto& [key, value] : options) {
-    const std::string flag = flag_name(py::str(key));
-    if (py::isinstance<py::bool_>(value)) {
+    const std::string keyword = py::str(key);
+    const bool name = !keyword.empty() && std::isalpha(static_cast<unsigned char>(keyword[0])) &&
+                      std::all_of(keyword.begin(), keyword.end(), [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; });
+    if (!name) throw OptionError("World: '" + keyword + "' is not an option name (limber run's flags with '_' for '-', e.g. newton_iterations)");
+    const std::string flag = flag_name(keyword);
+    const CLI::Option* option = app.get_option_no_throw(flag);
+    if (option == nullptr || option == app.get_help_ptr()) {
+      throw OptionError("World: " + flag + ": is not an option of a World (limber run --help lists limber run's flags)");
+    }
+    if (option->get_expected_max() == 0) {  // a switch
+      if (!py::isinstance<py::bool_>(value)) {
+        throw OptionError("World: " + flag + ": is a switch (True or False), got " + py::repr(value).cast<std::string>());
+      }
       if (value.cast<bool>()) arguments.push_back(flag);
       continue;
     }
-    arguments.push_back(flag);
+    std::string text;
     if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value)) {
-      std::string joined;
-      for (const py::handle item : value) {
-        if (!joined.empty()) joined += ',';
-        joined += std::string(py::str(item));
+      const py::sequence items = py::reinterpret_borrow<py::sequence>(value);
+      for (std::size_t k = 0; k < items.size(); ++k) {
+        if (k > 0) text += ',';
+        text += option_text(items[k], flag, *option);
       }
-      arguments.push_back(joined);
     } else {
-      arguments.push_back(py::str(value));
+      text = option_text(value, flag, *option);
     }
+    require_convertible(flag, text, *option);
+    arguments.push_back(flag + "=" + text);
   }
   return arguments;
 }
 
-// World(scene, method, options): the scene's copy with `limber run`'s flags applied.
-World world_with_options(Scene scene, const std::string& method, const py::dict& options) {
-  WorldOptions world_options;
+// World(scene, method, options): the scene's copy with `limber run`'s flags applied. Options
+// that do not go together (the World's std::invalid_argument) are OptionErrors too.
+std::unique_ptr<LockedWorld> world_with_options(Scene scene, const std::string& method, const py::dict& options) {
   try {
-    world_options = cli::options_for_scene(scene, run_arguments(method, options));
+    const WorldOptions world_options = cli::options_for_scene(scene, run_arguments(method, options));
+    return std::make_unique<LockedWorld>(World(std::move(scene.model), world_options), method);
   } catch (const ModelError&) {
+    throw;
+  } catch (const OptionError&) {
+    throw;
+  } catch (const std::bad_alloc&) {
     throw;
   } catch (const std::exception& error) {
     throw OptionError(std::string("World: ") + error.what());
   }
-  return World(std::move(scene.model), world_options);
 }
 
 py::dict observation(const Observation& o) {
@@ -113,7 +188,13 @@ void bind_scene(py::module_& m) {
         return names;
       })
       .def_property_readonly("time_step", [](const Scene& s) { return s.model.settings.time_step; }, "s")
-      .def_property_readonly("notes", [](const Scene& s) { return s.notes; }, "what a model file's loader dropped or approximated");
+      .def_property_readonly(
+          "notes", [](const Scene& s) {
+            py::list notes;  // a file's text, quoted: bytes that are not UTF-8 shown escaped
+            for (const std::string& note : s.notes) notes.append(text(note));
+            return notes;
+          },
+          "what a model file's loader dropped or approximated");
   m.def(
       "load_scene",
       [](const std::string& path, std::optional<std::string> body, std::optional<long> links, std::optional<long> copies, bool floating_base) {
@@ -125,21 +206,22 @@ void bind_scene(py::module_& m) {
       py::arg("floating_base") = false,
       "Loads a scene file: limber's JSON, MuJoCo's MJCF (.xml) or a URDF robot (.urdf), with `limber run`'s scene flags: body (a "
       "variant: the humanoid's thin, medium, wide), links (a chain or tree generator's), copies (side by side), floating_base (a "
-      "URDF robot's root floats). Raises ModelError naming the file and field.");
+      "URDF robot's root floats). Raises ModelError naming the file and field (a name that is not UTF-8 text too).");
 }
 
 // Construction and what identifies the World (limber.World, in limber/__init__.py, wraps the
-// constructor with keyword options and keeps the method's name).
-void bind_identity(WorldClass& world) {
-  world
-      .def(py::init(&world_with_options), py::arg("scene"), py::arg("method"), py::arg("options"),
-           "A World of a copy of `scene` under `method` (limber run's --method) with `options`, a dict of limber run's flags")
-      .def_property_readonly("time", &World::time, "s")
+// constructor with keyword options).
+void bind_identity(py::class_<LockedWorld>& bound, WorldMethods& world) {
+  bound.def(py::init(&world_with_options), py::arg("scene"), py::arg("method"), py::arg("options"),
+            "A World of a copy of `scene` under `method` (limber run's --method) with `options`, a dict of limber run's flags");
+  world.def_property_readonly("time", &World::time, "s")
       .def_property_readonly("body_names", [](const World& w) {
         std::vector<std::string> names;
         for (const BodyId id : w.bodies()) names.push_back(w.body_description(id).name);
         return names;
       });
+  // The name it was made with: set once, so no call can make it disagree with the World.
+  bound.def_property_readonly("method", &LockedWorld::method, "limber run's --method: 'weighted', 'springs-implicit', ...");
 }
 
 // The arrays a bulk read-out fills: `out`'s pair, each a writeable C-contiguous float64 array of
@@ -149,13 +231,13 @@ std::array<py::array, 2> out_arrays(const py::object& out, const char* call, con
   const auto shape = [&](std::size_t k) { return "(" + std::to_string(rows) + ", " + std::to_string(columns[k]) + ")"; };
   if (out.is_none()) return {Array({static_cast<py::ssize_t>(rows), columns[0]}), Array({static_cast<py::ssize_t>(rows), columns[1]})};
   if (!py::isinstance<py::tuple>(out) || py::len(out) != 2) {
-    throw py::value_error(std::string(call) + ": out must be a tuple (" + names[0] + " " + shape(0) + ", " + names[1] + " " + shape(1) +
+    throw WorldError(std::string(call) + ": out must be a tuple (" + names[0] + " " + shape(0) + ", " + names[1] + " " + shape(1) +
                           ") of float64 arrays");
   }
   const auto take = [&](std::size_t k) {
     const py::handle given = out.cast<py::tuple>()[k];
     const auto refuse = [&](const std::string& got) {
-      throw py::value_error(std::string(call) + ": out[" + std::to_string(k) + "] (" + names[k] +
+      throw WorldError(std::string(call) + ": out[" + std::to_string(k) + "] (" + names[k] +
                             ") must be a writeable C-contiguous float64 array of shape " + shape(k) + ", got " + got);
     };
     if (!py::isinstance<py::array>(given)) refuse(py::str(given.get_type().attr("__name__")));
@@ -204,7 +286,7 @@ py::object read_poses(const World& w, const py::object& out) {
 namespace {
 
 // The bodies' state as arrays, and the observers.
-void bind_read_outs(WorldClass& world) {
+void bind_read_outs(WorldMethods& world) {
   world.def(
           "poses", &read_poses,
           py::arg("out") = py::none(),
@@ -229,7 +311,7 @@ void bind_read_outs(WorldClass& world) {
 }
 
 // Loads over the next step, and the actuators' controls.
-void bind_loads(WorldClass& world) {
+void bind_loads(WorldMethods& world) {
   world.def(
           "apply_force", [](World& w, const std::string& body, const Array& force, const Array& point) {
             w.apply_force(w.body(body), vector3(force, "force"), vector3(point, "point"));
@@ -258,7 +340,7 @@ void bind_loads(WorldClass& world) {
 }
 
 // Joint space (Featherstone; the other methods raise WorldError naming the call).
-void bind_joint_space(WorldClass& world) {
+void bind_joint_space(WorldMethods& world) {
   world.def("joint_space_names", &World::joint_space_names)
       .def("joint_positions", &World::joint_positions, "q, nq (featherstone; the others raise WorldError)")
       .def("joint_velocities", &World::joint_velocities, "v, nv")
@@ -286,17 +368,37 @@ void bind_joint_space(WorldClass& world) {
 
 }  // namespace
 
+namespace {
+
+// Registers limber.<name>, a ValueError, raised for a C++ E with its what() (register_exception's
+// translation, but a message quoting bytes that are not UTF-8, a name from a file, is decoded with
+// them escaped instead of turning into a UnicodeDecodeError).
+template <typename E>
+void register_error(py::module_& m, const char* name) {
+  static py::exception<E> type(m, name, PyExc_ValueError);  // one module, one class: as register_exception keeps it
+  py::register_exception_translator([](std::exception_ptr thrown) {
+    try {
+      if (thrown) std::rethrow_exception(thrown);
+    } catch (const E& error) {
+      PyErr_SetObject(type.ptr(), text(error.what()).ptr());
+    }
+  });
+}
+
+}  // namespace
+
 PYBIND11_MODULE(_limber, m) {
   m.doc() = "limber: articulated bodies with distributed mass (https://github.com/…/limber; README.md)";
-  py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError);
-  py::register_exception<WorldError>(m, "WorldError", PyExc_ValueError);
-  py::register_exception<OptionError>(m, "OptionError", PyExc_ValueError);
+  register_error<ModelError>(m, "ModelError");
+  register_error<WorldError>(m, "WorldError");
+  register_error<OptionError>(m, "OptionError");
   m.attr("methods") = std::vector<std::string>{"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   bind_scene(m);
   bind_generators(m);
   bind_handles(m);
-  WorldClass world(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
-  bind_identity(world);
+  py::class_<LockedWorld> bound(m, "World", "One scene under one method, stepped and read (kernel/world/world.hpp).");
+  WorldMethods world(bound);
+  bind_identity(bound, world);
   bind_running(world);
   bind_read_outs(world);
   bind_loads(world);

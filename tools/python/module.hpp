@@ -16,12 +16,12 @@
 #include <pybind11/stl.h>
 
 #include "limber/kernel/world/world.hpp"
+#include "tools/python/locked_world.hpp"
 
 namespace limber::python {
 
 namespace py = pybind11;
 using Array = py::array_t<double, py::array::c_style>;
-using WorldClass = py::class_<World>;
 
 /// A bad World option (a `limber run` flag's name or value): limber.OptionError, a ValueError.
 class OptionError : public std::invalid_argument {
@@ -29,6 +29,8 @@ class OptionError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// `bytes` as Python text: UTF-8, any byte that is not shown escaped ("caf\xe9").
+py::str text(std::string_view bytes);
 
 inline void put(double* row, const Eigen::Vector3d& v) { row[0] = v.x(), row[1] = v.y(), row[2] = v.z(); }
 
@@ -62,7 +64,9 @@ inline Array numbers(const Eigen::Vector3d& v) { return numbers({v.x(), v.y(), v
 
 /// The scene that `sections` (top-level scene-file entries, e.g. {"bodies": [description]}) make
 /// over a minimal valid scene, read by the kernel's scene reader (scene_elements.cpp): a Python
-/// element checked as a scene file's is. Throws ModelError "<call>: <path>: <problem>".
+/// element checked as a scene file's is. Throws ModelError "<call>: <path>: <problem>", also for
+/// what JSON cannot hold: a dict or list containing itself or nested deeper than 64 levels (the
+/// description itself is level 1), a non-finite number, text with a lone surrogate.
 Scene scene_of(std::string_view call, const py::dict& sections);
 /// A body's Model entry as a scene file's "bodies" entry: what scene_of reads back to it.
 py::dict body_dict(const Body& body);
@@ -76,13 +80,13 @@ std::array<py::array, 2> pose_arrays(const World& world, const py::object& out);
 void fill_poses(const World& world, std::array<py::array, 2>& arrays);
 
 /// World's stepping and metered runs (run.cpp): step, run.
-void bind_running(WorldClass& world);
+void bind_running(WorldMethods& world);
 /// limber.Ball and limber.Pin, the handles of balls and held points (edits.cpp); before the World.
 void bind_handles(py::module_& m);
 /// World's structural edits, held points, teleports and sleep (edits.cpp).
-void bind_edits(WorldClass& world);
+void bind_edits(WorldMethods& world);
 /// World's step report, segments, one body's pose, motion and description, drives (reports.cpp).
-void bind_report_calls(WorldClass& world);
+void bind_report_calls(WorldMethods& world);
 /// The model generators returning a limber.Scene: chain, tree, grid, humanoid_pile, copies (generators.cpp).
 void bind_generators(py::module_& m);
 

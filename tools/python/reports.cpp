@@ -49,7 +49,7 @@ py::dict drive_dict(const JointDrive& d) {
   return out;
 }
 
-void bind_reports(WorldClass& world) {
+void bind_reports(WorldMethods& world) {
   world
       .def("last_report", [](const World& w) { return report_dict(w.last_report()); },
            "The last step's report as a dict, whatever the method (a field another method fills stays 0): status (step()'s), "
@@ -87,7 +87,7 @@ void bind_reports(WorldClass& world) {
            "takes");
 }
 
-void bind_drives(WorldClass& world) {
+void bind_drives(WorldMethods& world) {
   world
       .def(
           "set_joint_drive", [](World& w, const std::string& joint, py::none) { w.set_joint_drive(w.joint(joint), std::nullopt); },
@@ -118,7 +118,7 @@ void bind_drives(WorldClass& world) {
 
 }  // namespace
 
-void bind_report_calls(WorldClass& world) {
+void bind_report_calls(WorldMethods& world) {
   bind_reports(world);
   bind_drives(world);
 }

@@ -1,19 +1,32 @@
 // World.step and World.run: stepping with the GIL released, one step or many metered in C++ —
-// the run a sweep measures (tools/python/limber/sweep.py).
+// the run a sweep measures (tools/python/limber/sweep.py). A run looks for signals (Ctrl-C) every
+// kSignalCheck of wall time, taking the GIL for that moment only: a KeyboardInterrupt stops it
+// between two steps, the World consistent and its time saying how far it went.
 #include <chrono>
+#include <cmath>
+#include <exception>
+#include <optional>
 #include <vector>
 
+#include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/study/run_metrics.hpp"
 #include "tools/python/module.hpp"
 
 namespace limber::python {
 namespace {
 
+using Clock = std::chrono::steady_clock;
+
+// How often a run looks for signals: 50 ms is prompt for a person at a keyboard, and a GIL round
+// trip (a few µs) each 50 ms costs nothing measurable.
+constexpr Clock::duration kSignalCheck = std::chrono::milliseconds(50);
+
 // What World.run returns: the RunErrors of the steps taken (kernel/study/run_metrics.hpp),
-// the wall time spent in World::step alone, and the sampled body positions.
+// the wall time spent in World::step alone, the sampled body positions, and why it stopped.
 struct MeteredRun {
   long steps = 0;
   StepStatus status = StepStatus::ok;
+  const char* stopped = "steps";  // "steps" (all taken), "status" (one was not ok) or "wall_limit"
   double step_seconds = 0;
   study::RunErrors errors;
   study::VerdictBounds bounds;
@@ -21,7 +34,11 @@ struct MeteredRun {
   std::size_t sample_count = 0;
 };
 
-MeteredRun metered_run(World& world, long steps, long sample_every, bool observe) {
+// Runs with the GIL released (taken back only to look for signals); a signal's Python error (a
+// KeyboardInterrupt) is thrown as py::error_already_set after the step it came during.
+MeteredRun metered_run(World& world, long steps, long sample_every, bool observe, std::optional<double> wall_limit) {
+  const Clock::time_point run_start = Clock::now();
+  Clock::time_point next_signal_check = run_start + kSignalCheck;
   MeteredRun run;
   std::vector<Pose> poses(world.bodies().size());
   const auto sample = [&] {
@@ -37,16 +54,29 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
     run.bounds = study::verdict_bounds(world.model(), start);
   }
   if (sample_every > 0) sample();
-  using Clock = std::chrono::steady_clock;
   while (run.steps < steps) {
-    const Clock::time_point start = Clock::now();
+    const Clock::time_point before = Clock::now();
     run.status = world.step();
-    run.step_seconds += std::chrono::duration<double>(Clock::now() - start).count();
-    if (run.status != StepStatus::ok) break;
+    const Clock::time_point after = Clock::now();
+    run.step_seconds += std::chrono::duration<double>(after - before).count();
+    if (run.status != StepStatus::ok) {
+      run.stopped = "status";
+      break;
+    }
     ++run.steps;
     if (meter) meter->add(world.observe());
     if (sample_every > 0 && run.steps % sample_every == 0) sample();
+    if (after >= next_signal_check) {
+      next_signal_check = after + kSignalCheck;
+      const py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
+    if (wall_limit && std::chrono::duration<double>(after - run_start).count() >= *wall_limit) {
+      run.stopped = "wall_limit";
+      break;
+    }
   }
+  if (run.steps == steps) run.stopped = "steps";
   if (meter) run.errors = meter->result();
   run.errors.status = run.status;
   return run;
@@ -55,6 +85,7 @@ MeteredRun metered_run(World& world, long steps, long sample_every, bool observe
 py::dict as_dict(MeteredRun&& run, const Model& model, bool observe) {
   py::dict out;
   out["steps"] = run.steps;
+  out["stopped"] = run.stopped;
   out["step_seconds"] = run.step_seconds;
   if (observe) {  // the command line's verdict, over every step
     const study::Verdict verdict = study::verdict(run.errors, model, run.bounds);
@@ -75,7 +106,7 @@ py::dict as_dict(MeteredRun&& run, const Model& model, bool observe) {
 
 }  // namespace
 
-void bind_running(WorldClass& world) {
+void bind_running(WorldMethods& world) {
   world
       .def(
           "step", [](World& w, std::optional<double> dt, const py::object& poses) {
@@ -94,26 +125,32 @@ void bind_running(WorldClass& world) {
           "orientations N×4): arrays as poses(out=) takes, filled after the step — a loop that reads every pose each step makes "
           "one call a step, not two.")
       .def(
-          "run", [](World& w, long steps, long sample_every, bool observe) {
-            if (steps < 0) throw py::value_error("run: steps must be ≥ 0, got " + std::to_string(steps));
-            if (sample_every < 0) throw py::value_error("run: sample_every must be ≥ 0, got " + std::to_string(sample_every));
+          "run", [](World& w, long steps, long sample_every, bool observe, std::optional<double> wall_limit) {
+            if (steps < 0) throw WorldError("run: steps must be ≥ 0, got " + std::to_string(steps));
+            if (sample_every < 0) throw WorldError("run: sample_every must be ≥ 0, got " + std::to_string(sample_every));
+            if (wall_limit && !(*wall_limit > 0)) {
+              throw WorldError("run: wall_limit must be > 0 s (or None: no limit), got " + checks::format_number(*wall_limit));
+            }
             MeteredRun run;
             {
               py::gil_scoped_release release;
-              run = metered_run(w, steps, sample_every, observe);
+              run = metered_run(w, steps, sample_every, observe, wall_limit);
             }
             return as_dict(std::move(run), w.model(), observe);
           },
-          py::arg("steps"), py::kw_only(), py::arg("sample_every") = 0, py::arg("observe") = true,
-          "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', as a dict: steps (taken), "
-          "step_seconds (wall time inside the steps alone, s); status: with observe, the run's verdict over every step, the "
-          "command line's ('ok', 'inaccurate' when a joint gap, penetration, limit violation or energy gain passed the scene's "
-          "settings.tolerances at some step, or the stopping step's status, e.g. 'diverged_speed'), and verdict, the summary's "
-          "sentence; without, the stopping step's status or 'ok'. With observe, the run's errors over every step "
-          "(kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch (relative to link length), "
-          "energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL (J), deepest_penetration (m), "
-          "max_limit_violation (rad; m for a slide); samples: the body positions (K × N × 3 m) before the first step and after "
-          "every sample_every steps (K = 0 when sample_every is 0).");
+          py::arg("steps"), py::kw_only(), py::arg("sample_every") = 0, py::arg("observe") = true, py::arg("wall_limit") = py::none(),
+          "`steps` steps of the scene's time step in C++, stopping at the first that is not 'ok', or after the step that ends "
+          "past wall_limit s of wall time (None: no limit), as a dict: steps (taken), stopped ('steps': all taken, 'status': a "
+          "step was not ok, 'wall_limit'), step_seconds (wall time inside the steps alone, s); status: with observe, the run's "
+          "verdict over every step, the command line's ('ok', 'inaccurate' when a joint gap, penetration, limit violation or "
+          "energy gain passed the scene's settings.tolerances at some step, or the stopping step's status, e.g. "
+          "'diverged_speed'), and verdict, the summary's sentence; without, the stopping step's status or 'ok'. With observe, "
+          "the run's errors over every step (kernel/study/run_metrics.hpp): max_joint_gap, rms_joint_gap, max_link_stretch "
+          "(relative to link length), energy_drift = max |E − E0| and energy_gain = max (E − E0) (J), energy_scale = m·|g|·ΣL "
+          "(J), deepest_penetration (m), max_limit_violation (rad; m for a slide); samples: the body positions (K × N × 3 m) "
+          "before the first step and after every sample_every steps (K = 0 when sample_every is 0). Ctrl-C (a signal whose "
+          "handler raises, looked for every 50 ms) stops it between two steps with that exception (KeyboardInterrupt); "
+          "World.time then says how far it went.");
 }
 
 }  // namespace limber::python

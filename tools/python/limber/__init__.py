@@ -14,10 +14,16 @@ limber.Pin and add_ball a limber.Ball (handles; bodies, joints and colliders go 
 
 Units are SI. A World's options are `limber run`'s flags, spelled with underscores
 (World(scene, "weighted", iterations=20, substeps=4, dt=1/240)); limber.sweep runs grids of them.
-Errors are limber.ModelError (a bad scene: the message names the file and the field),
-limber.OptionError (a bad option) and limber.WorldError (a bad call), all ValueErrors.
-World.step and World.run release the GIL. The C++ reference is kernel/world/world.hpp;
-tools/python/README.md maps each C++ call to its Python counterpart.
+Errors are limber.ModelError (a bad scene or description: the message names the file or call,
+and the field), limber.OptionError (a bad option) and limber.WorldError (a bad call), all
+ValueErrors; besides them only TypeError (an argument of the wrong type, or an object made by
+__new__ without __init__) and KeyboardInterrupt (Ctrl-C stops World.run between two steps).
+
+Threads: World.step and World.run release the GIL, so Worlds on several threads step at once.
+One World takes one call at a time: calls on it from several threads wait their turn (with the
+GIL released), so two threads stepping one World make the steps one thread would, bit for bit,
+and an edit on one thread lands between two steps of another. The C++ reference is
+kernel/world/world.hpp; tools/python/README.md maps each C++ call to its Python counterpart.
 """
 from . import _limber
 from ._limber import (Ball, ModelError, OptionError, Pin, Scene, WorldError, chain, copies, grid, humanoid_pile, load_scene,
@@ -33,12 +39,14 @@ class World(_limber.World):
     threads, ...; `limber run --help` lists them): True is a bare flag, a sequence is
     comma-joined. The flags that load a scene (body, links, copies, floating_base) belong to
     load_scene. The World steps a copy of `scene` with the options' changes (dt, friction, ball_*).
-    Raises OptionError with limber run's message for a bad option.
+    Raises OptionError with limber run's message for a bad option. `method` (read-only) is the
+    method's name as given. One call at a time (the module's docstring, "Threads").
     """
 
     def __init__(self, scene, method="weighted", **options):
+        if "options" in self.__dict__:  # pybind11 would ignore a second construction, leaving `options` to lie
+            raise WorldError("World.__init__: this World is made already; make another with limber.World(scene, method)")
         super().__init__(scene, method, options)
-        self.method = method
         self.options = dict(options)
 
     def __repr__(self):
