@@ -86,8 +86,6 @@ def test_configurations_past_the_timeout_are_timeout_rows_and_the_others_finish(
 
 def test_a_dask_cluster_stops_configurations_at_the_timeout(tmp_path):
     distributed = pytest.importorskip("distributed")
-    if not limber.sweep.WALL_LIMIT:
-        pytest.skip("World.run has no wall_limit yet: on Dask only World.run can stop a configuration at its timeout")
     grid = small_grid([str(tmp_path / scene(tmp_path, "chain.json"))], timeout=1.5, methods=TIMED)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None) as cluster:
         with distributed.Client(cluster) as client:

@@ -36,9 +36,9 @@ is a string "1,0,0"). The configurations are every scene
 A configuration is a row whatever happens to it, never a lost sweep:
 - 'error': it raised (a bad option, a scene that does not load). Deterministic: kept on resume.
 - 'timeout': it ran past the grid's "timeout" (s, optional; the reference runs too). World.run
-  stops by itself at that wall time where it takes wall_limit; a local worker process still busy
-  timeout + 2 s + timeout/2 after it was handed the configuration (or timeout, where World.run has
-  no wall_limit) is killed. On a Dask cluster only World.run's wall_limit stops a run.
+  stops by itself at that wall time (its wall_limit); a local worker process still busy
+  timeout + 2 s + timeout/2 after it was handed the configuration (stuck outside World.run) is
+  killed. On a Dask cluster only World.run's wall_limit stops a run.
 - 'worker_died': the process running it died (a signal, the OOM killer, a crash in the scene
   loader) 1 + RETRIES times; each death is a note and the configuration runs again in a new process.
   On Dask the scheduler decides (distributed.scheduler.allowed-failures, 3 by default).
@@ -95,7 +95,6 @@ MEASURED = ["steps_per_second"]  # wall-time measurements: the only columns that
 RETRIES = 2  # times a configuration whose worker process died runs again before it is a 'worker_died' row
 RERUN = ("timeout", "worker_died")  # statuses a resumed sweep runs again: the next try may end otherwise
 GRID_BYTES = 16 << 20  # a grid file larger than this is refused
-WALL_LIMIT = "wall_limit" in (limber.World.run.__doc__ or "")  # World.run stops itself at a wall time
 
 
 class GridError(ValueError):
@@ -229,13 +228,12 @@ def _world(scene, options):
 
 def _run(scene, options, duration, interval, limit=None):
     """One run of `duration` s (whole steps): World.run's dict, sampled every `interval` s, stopped
-    after `limit` s of wall time (None: no limit) where World.run takes wall_limit."""
+    after `limit` s of wall time (None: no limit)."""
     world, dt = _world(scene, options)
     every = interval / dt
     if abs(every - round(every)) > 1e-6 * every or round(every) < 1:
         raise limber.OptionError(f"sample_interval {interval:g} s is not a whole number of steps of dt {dt:g} s")
-    limits = {"wall_limit": limit} if limit is not None and WALL_LIMIT else {}
-    return world.run(max(1, round(duration / dt)), sample_every=round(every), **limits)
+    return world.run(max(1, round(duration / dt)), sample_every=round(every), wall_limit=limit)
 
 
 def _stopped(run, limit):
@@ -412,7 +410,7 @@ def _runner(client, workers, limit):
         return _on_dask(client)
     if workers is not None and workers < 1:
         raise ValueError(f"workers: must be ≥ 1, got {workers}")
-    deadline = None if limit is None else (limit + 2 + limit / 2 if WALL_LIMIT else limit)  # World.run stops first
+    deadline = None if limit is None else limit + 2 + limit / 2  # World.run stops first
     return _sweep_workers.Workers(workers or os.cpu_count() or 1, deadline=deadline, retries=RETRIES, note=_note)
 
 
