@@ -9,16 +9,17 @@
 namespace limber {
 
 LagrangeState compile_lagrange(const Model& input, const LagrangeOptions& options) {
-  // Serial joints run as revolute and prismatic joints through virtual links (serial_links.hpp).
+  // Serial joints run as revolute and prismatic joints through virtual links (serial_links.hpp),
+  // each axis's armature on its joint (a compliant row: joint_controls.hpp).
   require_supported(input, Method::lagrange);
   std::optional<SerialExpansion> expansion;
-  if (needs_serial_expansion(input)) validate(input), expansion = expand_serial_joints(input);
+  if (needs_serial_expansion(input, Armature::on_joint)) validate(input), expansion = expand_serial_joints(input, Armature::on_joint);
   const Model& model = expansion ? expansion->model : input;
   LagrangeState state;
   static_cast<RigidScene&>(state) = compile_rigid_scene(model);
   if (expansion) require_supported(model, Method::lagrange);  // compile_rigid_scene validated it
   if (!input.actuators.empty()) state.coordinate_axes = expansion ? CoordinateAxes::of(*expansion) : CoordinateAxes::of(model);
-  require_joint_controls(model, {.limits = true, .friction = true, .drives = true}, "lagrange");
+  require_joint_controls(model, {.limits = true, .friction = true, .drives = true, .armature = true}, "lagrange");
   require_integrator(options.integrator, {Integrator::euler, Integrator::semi_implicit_euler, Integrator::rk2, Integrator::rk4}, "lagrange");
   state.options = options;
   state.time_step = model.settings.time_step;

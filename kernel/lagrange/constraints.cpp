@@ -240,7 +240,7 @@ ConstraintVector velocity_product(const ConstraintSet& constraints, const JointA
 // --- Joint controls: limits, friction and drives (joint_controls.hpp) ---
 
 int control_row_count(const Joint& joint) {
-  if (!has_joint_controls(joint)) return 0;
+  if (!has_joint_controls(joint) && !(joint.armature > 0)) return 0;  // armature: revolute and prismatic only
   switch (joint.type) {
     case JointType::revolute:
     case JointType::prismatic: return 1;

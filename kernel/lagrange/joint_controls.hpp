@@ -1,5 +1,5 @@
-// Joint limits, friction and drives in the Lagrange method (kernel/lagrange/README.md, "Joint
-// controls"): rows appended to a joint's own rows, after its equality rows, so each joint stays
+// Joint limits, friction, drives and armature in the Lagrange method (kernel/lagrange/README.md,
+// "Joint controls"): rows appended to a joint's own rows, after its equality rows, so each joint stays
 // one constraint node of Baraff's tree (≤ 6 rows: revolute and prismatic 5 + 1, spherical 3 + 3,
 // universal 4 + 2) and nothing closes a loop.
 //

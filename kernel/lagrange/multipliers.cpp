@@ -217,6 +217,18 @@ void write_control_rows(LagrangeState& state, std::vector<Vector6>& body_rhs) {
   }
 }
 
+// MuJoCo's armature a on a revolute or prismatic row (rate w exactly the coordinate's): the joint
+// force −a·ẇ, which is M + a·JᵀJ in place of M, or M with one more row of compliance 1/a
+// (Sherman–Morrison). Its row is J·x + λ/a = rhs: at the velocity level (x = u after the step)
+// λ = a·(w₀ − J·x), rhs = w₀ the rate before it; on a change of velocities (x = Δu) λ = −a·J·x,
+// rhs = 0; at the acceleration level (x = u̇) λ = −a·(J·x + J̇u), rhs = −J̇u. A drive on the same
+// row is a compliance too: the two add as conductances (1/A).
+void add_armature(ControlRow& row, double armature, double rhs) {
+  const double drive = row.compliance > 0 ? 1 / row.compliance : 0;
+  row.drive_rhs = (drive * row.drive_rhs + armature * rhs) / (drive + armature);
+  row.compliance = 1 / (drive + armature);
+}
+
 }  // namespace
 
 void set_control_problem(LagrangeState& state, ControlLevel level, double dt, double frequency) {
@@ -242,6 +254,11 @@ void set_control_problem(LagrangeState& state, ControlLevel level, double dt, do
         // h·τ = (drive_rhs − w)/A.
         row.compliance = 1 / (dt * drive_gain);
         row.drive_rhs = (drive->stiffness * row.drive_error + drive->damping * row.target_rate) / drive_gain - offset;
+      }
+      if (joint.armature > 0 && level != ControlLevel::position) {
+        // The unknown: u after the step (velocity), a change of u (the other impulse levels), u̇.
+        const double armature_rhs = level == ControlLevel::acceleration ? -row.velocity_product : level == ControlLevel::velocity ? row.rate : 0.0;
+        add_armature(row, joint.armature, armature_rhs);
       }
       if (row.side == 0) continue;
       // At or past the limit; the stages also keep a row the impulse pass engaged (it reaches

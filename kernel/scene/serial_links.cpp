@@ -82,9 +82,9 @@ void add_rotor(Body& body, const Vector3& world_axis, double armature) {
 
 }  // namespace
 
-bool needs_serial_expansion(const Model& model) {
-  return std::any_of(model.joints.begin(), model.joints.end(), [](const Joint& joint) {
-    return joint.type == JointType::serial || (joint.type == JointType::revolute && joint.armature > 0);
+bool needs_serial_expansion(const Model& model, Armature armature) {
+  return std::any_of(model.joints.begin(), model.joints.end(), [armature](const Joint& joint) {
+    return joint.type == JointType::serial || (armature == Armature::as_rotor && joint.type == JointType::revolute && joint.armature > 0);
   });
 }
 
@@ -125,7 +125,7 @@ std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model
   return old_body_of_new;
 }
 
-SerialExpansion expand_serial_joints(const Model& model, double link_mass_share) {
+SerialExpansion expand_serial_joints(const Model& model, Armature armature, double link_mass_share) {
   SerialExpansion result;
   result.model = model;
   result.first_added_joint.assign(model.joints.size(), 0);
@@ -159,7 +159,7 @@ SerialExpansion expand_serial_joints(const Model& model, double link_mass_share)
     actuator.axis = 0;
   }
   for (Joint& joint : out.joints) {
-    if (joint.type != JointType::revolute || !(joint.armature > 0)) continue;
+    if (armature != Armature::as_rotor || joint.type != JointType::revolute || !(joint.armature > 0)) continue;
     add_rotor(out.bodies[static_cast<std::size_t>(joint.outboard)], joint.axis, joint.armature);
     joint.armature = 0;
   }

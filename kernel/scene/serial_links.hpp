@@ -8,8 +8,10 @@
 // taken out of the outboard (its mass properties scaled) so the total mass is the Model's. The
 // error this leaves is O(share): tests/scene/serial_links_test.cpp measures it against Featherstone.
 //
-// Armature (MuJoCo's reflected rotor inertia, a term on the mass matrix's diagonal) becomes a
-// rotor carried by the body after the hinge: a solid disc's inertia, a about the axis and a/2
+// Armature (MuJoCo's reflected rotor inertia, a term on the mass matrix's diagonal) stays on the
+// expansion's joints for a method that applies it on the joint's rate (Lagrange: a compliant row,
+// kernel/lagrange/README.md, exact). For the particles it becomes a rotor carried by the body
+// after the hinge: a solid disc's inertia, a about the axis and a/2
 // across it (a disc, so the body's tensor stays physical). On a hinge to the world it is
 // MuJoCo's ½a·q̇² exactly; after other axes the disc turns with them too, and its a/2 across
 // adds to their inertia (measured in the same test: 0.069 m off Featherstone's swing after
@@ -51,14 +53,20 @@ struct SerialExpansion {
   std::uint32_t joint_of_axis(std::size_t joint, int axis) const { return limber::joint_of_axis(first_added_joint, joint, axis); }
 };
 
-/// Whether expand_serial_joints would change `model`: it has a serial joint or hinge armature.
-bool needs_serial_expansion(const Model& model);
+/// What the expansion does with a hinge's armature: a rotor on the body after it (above), or
+/// kept on the joint for the method to apply.
+enum class Armature : std::uint8_t { as_rotor, on_joint };
+
+/// Whether expand_serial_joints(model, armature) would change `model`: it has a serial joint,
+/// or hinge armature to turn into rotors.
+bool needs_serial_expansion(const Model& model, Armature armature = Armature::as_rotor);
 
 /// `model` with every serial joint expanded into revolute and prismatic joints through virtual
-/// links of `link_mass_share` of the outboard's mass each (in (0, 1/6)), and every hinge's
-/// armature turned into a rotor on the body after it (above). A Model without serial joints or
-/// hinge armature comes back unchanged.
-SerialExpansion expand_serial_joints(const Model& model, double link_mass_share = kVirtualLinkMassShare);
+/// links of `link_mass_share` of the outboard's mass each (in (0, 1/6)), each axis's armature on
+/// its joint, and, `as_rotor`, every hinge's armature turned into a rotor on the body after it
+/// (above). A Model with nothing to change comes back unchanged.
+SerialExpansion expand_serial_joints(const Model& model, Armature armature = Armature::as_rotor,
+                                     double link_mass_share = kVirtualLinkMassShare);
 
 /// Extends `old_body_of_new` (Survivors::bodies: one entry per body of `fresh`) over the virtual
 /// links of `fresh`'s expansion, for a recompile: each link continues the one at the same place

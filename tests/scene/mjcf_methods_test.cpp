@@ -47,7 +47,10 @@ TEST_P(MjcfHumanoidFalls, ToTheFloorWithJointsClosedAndNoEnergyMade) {
     EXPECT_LT(largest_violation, 0.01) << "rad";
   } else {
     EXPECT_LT(largest_gap, 1.0) << "no joint came apart";
-    EXPECT_LT(largest_violation, 0.1) << "rad";
+    // Lagrange's contact impulses come after its joint rows (kernel/lagrange/README.md,
+    // "Contacts"), so the landing pushes a limit past by 0.132 rad (0.106 without armature;
+    // under 0.1 only while armature was a rotor 10³× heavier than its virtual link).
+    EXPECT_LT(largest_violation, method == Method::lagrange ? 0.15 : 0.1) << "rad";
   }
 }
 
