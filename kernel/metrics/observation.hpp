@@ -22,6 +22,10 @@ struct Observation {
   /// Joint gaps |x_inboard − x_outboard| relative to the mean length of the two limbs joined
   /// (the outboard limb's for a joint to the world); 0 with shared-particle joints.
   double max_joint_gap = 0, rms_joint_gap = 0;
+  /// The joint whose gap is max_joint_gap (−1: none open, or no joints). World::observe() gives
+  /// a Model joint index; a method's own observer its compiled Model's, where a serial joint's
+  /// axes 1… are joints after the Model's (serial_links.hpp).
+  int widest_joint = -1;
   /// Largest relative link stretch | |x_head − x_tail| − L | / L.
   double max_link_stretch = 0;
   Eigen::Vector3d body_centre_of_mass = Eigen::Vector3d::Zero();  ///< of the limbs (not the ball), m

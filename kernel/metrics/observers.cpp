@@ -17,12 +17,14 @@ Observation observe(const VerletState<Scalar>& state) {
 
   double gap_squares = 0;
   std::size_t gaps = 0;
-  const auto add_gap = [&](double gap) {
-    out.max_joint_gap = std::max(out.max_joint_gap, gap);
+  const auto add_gap = [&](double gap, std::int64_t joint) {
+    if (gap > out.max_joint_gap) out.max_joint_gap = gap, out.widest_joint = static_cast<int>(joint);
     gap_squares += gap * gap, ++gaps;
   };
-  for (const auto& [c, reference] : state.joint_constraints) {
-    add_gap((position(state.constraints.particle_i[c]) - position(state.constraints.particle_j[c])).norm() / reference);
+  for (std::size_t k = 0; k < state.joint_constraints.size(); ++k) {
+    const auto& [c, reference] = state.joint_constraints[k];
+    add_gap((position(state.constraints.particle_i[c]) - position(state.constraints.particle_j[c])).norm() / reference,
+            state.joint_constraint_joint[k]);
   }
   for (const JointRow& row : state.joint_rows.rows) {  // joints held by point rows: anchors off the ends
     if (row.kind != JointRowKind::point || row.joint < 0) continue;
@@ -30,7 +32,7 @@ Observation observe(const VerletState<Scalar>& state) {
     for (std::size_t k = 0; k < kJointRowParticles; ++k) {
       if (row.direction[k] != 0) separation += row.direction[k] * position(row.particle[k]);
     }
-    add_gap(separation.norm() / row.reference);
+    add_gap(separation.norm() / row.reference, row.joint);
   }
   if (gaps > 0) out.rms_joint_gap = std::sqrt(gap_squares / gaps);
 
@@ -120,7 +122,7 @@ void add_joint_gaps(Observation& out, const JointAnchors& joints, Gap&& gap) {
   double squares = 0;
   for (std::size_t j = 0; j < joints.size(); ++j) {
     const double relative = gap(j) / joints.reference_length[j];
-    out.max_joint_gap = std::max(out.max_joint_gap, relative);
+    if (relative > out.max_joint_gap) out.max_joint_gap = relative, out.widest_joint = static_cast<int>(j);
     squares += relative * relative;
   }
   if (joints.size() > 0) out.rms_joint_gap = std::sqrt(squares / joints.size());

@@ -174,6 +174,7 @@ struct VerletState {
   std::vector<std::uint32_t> body_limb;   ///< Model body index → limb index
   /// Joint constraints and the length the gap is measured against (mean of the two limbs), m.
   std::vector<std::pair<std::uint32_t, double>> joint_constraints;
+  std::vector<std::uint32_t> joint_constraint_joint;  ///< per joint_constraints entry: its joint (of the compiled Model)
   /// Frames, anchors off the limbs' ends, hinges, limits, friction and drives (joint_rows.hpp);
   /// empty for a scene of spherical joints at limb ends.
   JointRowSet joint_rows;

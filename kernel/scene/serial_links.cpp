@@ -106,6 +106,16 @@ CoordinateAxes CoordinateAxes::of(const Model& model) {
   return axes;
 }
 
+std::size_t model_joint_of(const Model& model, std::size_t expanded) {
+  std::size_t next = model.joints.size();  // the first added joint of the next serial joint
+  for (std::size_t j = 0; j < model.joints.size() && next <= expanded; ++j) {
+    if (model.joints[j].type != JointType::serial) continue;
+    next += model.joints[j].serial_axes.size() - 1;
+    if (expanded < next) return j;
+  }
+  return expanded;
+}
+
 std::vector<std::int64_t> with_virtual_links(const Model& old_model, const Model& fresh, std::vector<std::int64_t> old_body_of_new) {
   std::unordered_map<std::string_view, std::pair<std::int64_t, std::size_t>> old_links;  // joint name → first link, axes
   auto next = static_cast<std::int64_t>(old_model.bodies.size());

@@ -68,6 +68,10 @@ bool needs_serial_expansion(const Model& model, Armature armature = Armature::as
 SerialExpansion expand_serial_joints(const Model& model, Armature armature = Armature::as_rotor,
                                      double link_mass_share = kVirtualLinkMassShare);
 
+/// The Model joint that joint `expanded` of expand_serial_joints(model) comes from: itself for
+/// the Model's own, else the serial joint whose axes 1… it is.
+std::size_t model_joint_of(const Model& model, std::size_t expanded);
+
 /// Extends `old_body_of_new` (Survivors::bodies: one entry per body of `fresh`) over the virtual
 /// links of `fresh`'s expansion, for a recompile: each link continues the one at the same place
 /// of the old Model's serial joint of the same name and axis count, else is new (−1).

@@ -27,6 +27,7 @@ ErrorMeter::ErrorMeter(const Observation& start, double energy_scale) : start_en
 void ErrorMeter::add_worst(const Observation& observation) {
   if (observation.max_joint_gap > errors_.max_joint_gap) {
     errors_.max_joint_gap = observation.max_joint_gap, errors_.joint_gap_time = observation.time;
+    errors_.widest_joint = observation.widest_joint;
   }
   if (observation.joints.limit_violation > errors_.max_limit_violation) {
     errors_.max_limit_violation = observation.joints.limit_violation, errors_.limit_time = observation.time;
@@ -70,15 +71,6 @@ std::string side_name(const Model& model, int side) {
   return index < model.bodies.size() ? model.bodies[index].name : ball_name(model, index - model.bodies.size());
 }
 
-// "shin into the ground", "forearm into upper_arm", "ball into stairs".
-std::string penetration_place(const Model& model, const Penetration& penetration) {
-  if (penetration.first < 0) return "nothing";
-  const std::string other = penetration.second >= 0 ? side_name(model, penetration.second)
-                            : penetration.collider >= 0 ? model.colliders[static_cast<std::size_t>(penetration.collider)].name
-                                                        : std::string("the ground");
-  return side_name(model, penetration.first) + " into " + other;
-}
-
 // The unit of a limit violation: rad, m for a prismatic range, or both.
 const char* limit_unit(const Model& model) {
   bool turns = false, slides = false;
@@ -92,6 +84,14 @@ const char* limit_unit(const Model& model) {
 }
 
 }  // namespace
+
+std::string penetration_place(const Model& model, const Penetration& penetration) {
+  if (penetration.first < 0) return "nothing";
+  const std::string other = penetration.second >= 0 ? side_name(model, penetration.second)
+                            : penetration.collider >= 0 ? model.colliders[static_cast<std::size_t>(penetration.collider)].name
+                                                        : std::string("the ground");
+  return side_name(model, penetration.first) + " into " + other;
+}
 
 VerdictBounds verdict_bounds(const Model& model, const Observation& start) {
   const Tolerances& tolerances = model.settings.tolerances;
@@ -115,8 +115,15 @@ Verdict verdict(const RunErrors& errors, const Model& model, const VerdictBounds
   const auto flag = [&](const std::string& what) { flags += (flags.empty() ? "" : "; ") + what; };
   const double gap = std::max(errors.max_joint_gap, errors.max_link_stretch);
   if (!(gap <= bounds.joint_gap)) {
-    flag(text("joints open (or links stretched) by %.3g of a link, at t = %.3f s (tolerance %g)", gap, errors.joint_gap_time,
-              bounds.joint_gap));
+    const bool joint = errors.max_joint_gap >= errors.max_link_stretch && errors.widest_joint >= 0 &&
+                       static_cast<std::size_t>(errors.widest_joint) < model.joints.size();
+    if (joint) {
+      flag(text("joint '%s' open by %.3g of a link, at t = %.3f s (tolerance %g)",
+                model.joints[static_cast<std::size_t>(errors.widest_joint)].name.c_str(), gap, errors.joint_gap_time, bounds.joint_gap));
+    } else {
+      flag(text("joints open (or links stretched) by %.3g of a link, at t = %.3f s (tolerance %g)", gap, errors.joint_gap_time,
+                bounds.joint_gap));
+    }
   }
   const Penetration& deepest = errors.deepest_penetration;
   if (!(deepest.depth <= bounds.penetration)) {

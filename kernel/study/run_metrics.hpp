@@ -37,6 +37,7 @@ struct RunErrors {
   /// measures) and when (s); the times of the largest joint gap and limit violation.
   Penetration deepest_penetration;
   double joint_gap_time = 0, penetration_time = 0, limit_time = 0;
+  int widest_joint = -1;  ///< the joint open by max_joint_gap (Observation::widest_joint), −1 none
   /// Pointwise trajectory error against a reference, m: the largest over common sample times of
   /// the RMS distance between the two runs' limb points (trajectory_error()). NaN: not measured.
   double trajectory_error = std::numeric_limits<double>::quiet_NaN();
@@ -83,6 +84,10 @@ struct Verdict {
 /// The verdict of `errors` (an ErrorMeter's, over every step with World::observe()'s
 /// penetration), naming `model`'s bodies.
 Verdict verdict(const RunErrors& errors, const Model& model, const VerdictBounds& bounds);
+
+/// Where `penetration` is, by `model`'s names: "shin into the ground", "forearm into upper_arm",
+/// "ball into stairs", or "nothing".
+std::string penetration_place(const Model& model, const Penetration& penetration);
 
 /// Limb points (Simulation::limb_points) sampled every `sample_interval` seconds from t = 0.
 struct Trajectory {

@@ -194,6 +194,7 @@ void build_constraints(VerletState<Scalar>& state, const Model& model, const Pla
     if (joint.inboard != kWorld) reference = 0.5 * (reference + frames::axis_length(model.bodies[joint.inboard]));
     const std::uint32_t c = add_constraint(particle_of(joint_inboard_slot[k]), particle_of(joint_outboard_slot[k]), 0.0);
     state.joint_constraints.emplace_back(c, reference);
+    state.joint_constraint_joint.push_back(static_cast<std::uint32_t>(k));
   };
   std::vector<bool> joint_done(joint_count, false);
   state.body_limb.assign(body_count, 0);

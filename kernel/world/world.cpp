@@ -84,6 +84,7 @@ Observation World::observe_state() const {
 
 Observation World::observe() const {
   Observation out = observe_state();
+  if (out.widest_joint >= 0) out.widest_joint = static_cast<int>(model_joint_of(model_, static_cast<std::size_t>(out.widest_joint)));
   std::optional<WorldInternals::PenetrationGauge>& gauge = internals_->penetration_gauge;
   if (!gauge) gauge.emplace(WorldInternals::PenetrationGauge{LimbCollisions(model_), {}});
   segments(gauge->segments);

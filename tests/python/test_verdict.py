@@ -62,3 +62,28 @@ def test_a_servo_that_pumps_energy_in_is_not_ok(tmp_path):
     world = limber.World(limber.load_scene(str(tmp_path / "servo.xml")), "weighted")
     run = world.run(300)
     assert run["status"] == "inaccurate" and "energy gained" in run["verdict"]
+
+
+def test_observe_names_the_deepest_penetration_now():
+    # A log of radius 0.1 m lying with its axis 0.06 m above the ground is 0.04 m into it; the
+    # ragdoll (asleep, standing) touches nothing deeper.
+    world = limber.World(limber.load_scene(RAGDOLL), "featherstone")
+    assert world.observe()["deepest_penetration"] < 0.04
+    world.add_body({"name": "log", "shape": {"type": "capsule", "length": 0.5, "radius": 0.1}, "mass": 1,
+                    "position": [5, 0, 0.06], "axis": [1, 0, 0]})
+    now = world.observe()
+    assert abs(now["deepest_penetration"] - 0.04) < 1e-9
+    assert now["penetration"] == "log into the ground"
+
+
+def test_observe_names_the_widest_joint():
+    world = limber.World(limber.load_scene(RAGDOLL), "lagrange")
+    assert world.observe()["max_joint_gap"] < 1e-9
+    position, orientation = world.poses()
+    names = world.body_names
+    shin = names.index("tibia_left")
+    position[shin, 0] += 0.1  # pull the left shin 0.1 m forward, off its knee
+    world.teleport("tibia_left", position[shin], orientation[shin])
+    now = world.observe()
+    assert now["max_joint_gap"] > 0.1
+    assert now["widest_joint"] == "upper_leg_left-tibia_left"  # the knee: the shin's one joint

@@ -151,6 +151,10 @@ TEST(StudyMetrics, TheVerdictFlagsEachMeasurePastItsToleranceAndNothingWithin) {
   EXPECT_THAT(three.text, ::testing::StartsWith("inaccurate: joints open (or links stretched) by "));
   EXPECT_THAT(three.text, ::testing::HasSubstr("; a limit passed by "));
   EXPECT_THAT(three.text, ::testing::HasSubstr("; energy gained "));
+  RunErrors open = within;
+  open.max_joint_gap = 2 * bounds.joint_gap, open.widest_joint = 1, open.joint_gap_time = 0.25;
+  EXPECT_THAT(verdict(open, model, bounds).text,
+              ::testing::StartsWith("inaccurate: joint '" + model.joints[1].name + "' open by "));
   RunErrors stopped = others;
   stopped.status = StepStatus::diverged_speed;
   EXPECT_EQ(verdict(stopped, model, bounds).status, "diverged_speed");

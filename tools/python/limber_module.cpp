@@ -23,6 +23,7 @@
 #include <pybind11/stl.h>
 
 #include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/study/run_metrics.hpp"
 #include "limber/kernel/world/world.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/cli/run_flags.hpp"
@@ -161,16 +162,18 @@ std::unique_ptr<LockedWorld> world_with_options(Scene scene, const std::string& 
   }
 }
 
-py::dict observation(const Observation& o) {
+py::dict observation(const World& w, const Observation& o) {
   py::dict out;
   out["time"] = o.time;
   out["max_joint_gap"] = o.max_joint_gap, out["rms_joint_gap"] = o.rms_joint_gap;
+  out["widest_joint"] = o.widest_joint < 0 ? py::object(py::none()) : py::object(text(w.model().joints[static_cast<std::size_t>(o.widest_joint)].name));
   out["max_link_stretch"] = o.max_link_stretch;
   out["kinetic_energy"] = o.kinetic_energy, out["potential_energy"] = o.potential_energy, out["energy"] = o.energy();
   out["body_centre_of_mass"] = std::array{o.body_centre_of_mass.x(), o.body_centre_of_mass.y(), o.body_centre_of_mass.z()};
   out["linear_momentum"] = std::array{o.linear_momentum.x(), o.linear_momentum.y(), o.linear_momentum.z()};
   out["islands"] = o.islands, out["islands_sleeping"] = o.islands_sleeping;
   out["limit_violation"] = o.joints.limit_violation, out["drive_error"] = o.joints.drive_error;
+  out["deepest_penetration"] = o.penetration.depth, out["penetration"] = text(study::penetration_place(w.model(), o.penetration));
   return out;
 }
 
@@ -306,8 +309,10 @@ void bind_read_outs(WorldMethods& world) {
           },
           py::arg("out") = py::none(),
           "(linear N×3 m/s of each body frame's origin, angular N×3 rad/s), world; out= as poses()'s")
-      .def("observe", [](const World& w) { return observation(w.observe()); },
-           "energy (J), momentum (kg·m/s), joint gaps (relative to link length), limits (rad) as a dict");
+      .def("observe", [](const World& w) { return observation(w, w.observe()); },
+           "energy (J), momentum (kg·m/s), joint gaps (relative to link length; 'widest_joint' names the joint of the largest, or "
+           "None), limits (rad) and the deepest penetration now (m; 'penetration' names it: 'shin into the ground', or 'nothing') "
+           "as a dict");
 }
 
 // Loads over the next step, and the actuators' controls.
