@@ -10,13 +10,15 @@
 //
 // Armature (MuJoCo's reflected rotor inertia, a term on the mass matrix's diagonal) stays on the
 // expansion's joints for a method that applies it on the joint's rate (Lagrange: a compliant row,
-// kernel/lagrange/README.md, exact). For the particles it becomes a rotor carried by the body
-// after the hinge: a solid disc's inertia, a about the axis and a/2
-// across it (a disc, so the body's tensor stays physical). On a hinge to the world it is
-// MuJoCo's ½a·q̇² exactly; after other axes the disc turns with them too, and its a/2 across
-// adds to their inertia (measured in the same test: 0.069 m off Featherstone's swing after
-// 0.5 s, against 0.157 m with no armature at all). A slide's armature has no such form and
-// stays on the joint, for the method to refuse.
+// kernel/lagrange/README.md, exact: 0.43 mm off Featherstone's swing on two skew hinges after
+// 0.5 s, within the virtual link's own 1.04 mm). For the particles it becomes a rotor carried by
+// the body after the hinge: a solid disc's inertia, a about the axis and a/2 across it (a disc,
+// so the body's tensor stays physical). On a hinge to the world it is MuJoCo's ½a·q̇² exactly;
+// after other axes the disc turns with them too, and its a/2 across adds to their inertia (as a
+// rotor under Lagrange the same swing was 0.069 m off, 0.157 m with no armature at all), and on
+// a virtual link of 1 % of its body's mass it is 10³× the link's own inertia: the particles move
+// MuJoCo's humanoid under its motors wrongly (bench/models.md). A slide's armature has no such
+// form and stays on the joint, for the method to refuse.
 #pragma once
 
 #include <cstdint>
