@@ -11,9 +11,10 @@
 namespace limber {
 namespace {
 
-// Adds a position, a velocity, or both (a 1-DOF coordinate: an angle or a slide and its rate).
+// Adds a position, a velocity, or both (a 1-DOF coordinate: an angle or a slide and its rate),
+// named `name`.
 void add(JointSpaceLayout& layout, int position, int velocity, double sign, const std::string& name) {
-  if (position >= 0) layout.position.push_back(position), layout.position_sign.push_back(sign);
+  if (position >= 0) layout.position.push_back(position), layout.position_sign.push_back(sign), layout.position_names.push_back(name);
   if (velocity < 0) return;
   layout.velocity.push_back(velocity), layout.velocity_sign.push_back(sign), layout.names.push_back(name);
   layout.angle_or_slide.push_back(position >= 0 ? static_cast<int>(layout.position.size()) - 1 : -1);
@@ -22,7 +23,8 @@ void add(JointSpaceLayout& layout, int position, int velocity, double sign, cons
 // A floating tree body's 7 positions and 6 velocities, as the tree holds them.
 void add_floating(JointSpaceLayout& layout, const ArticulatedTree& tree, int i, const std::string& name) {
   const int p = tree.position_offset(i), v = tree.velocity_offset(i);
-  for (int k = 0; k < 7; ++k) add(layout, p + k, -1, 1, "");
+  static constexpr const char* kPositions[] = {".x", ".y", ".z", ".qw", ".qx", ".qy", ".qz"};
+  for (int k = 0; k < 7; ++k) add(layout, p + k, -1, 1, name + kPositions[k]);
   static constexpr const char* kVelocities[] = {".wx", ".wy", ".wz", ".vx", ".vy", ".vz"};
   for (int k = 0; k < 6; ++k) add(layout, -1, v + k, 1, name + kVelocities[k]);
 }
@@ -43,7 +45,8 @@ void add_joint(JointSpaceLayout& layout, const FeatherstoneState& state, const J
                          "joint space is not available (list the island's root side as inboard)");
       }
       const int p = tree.position_offset(held.body);
-      for (int k = 0; k < 4; ++k) add(layout, p + k, -1, 1, "");
+      static constexpr const char* kQuaternion[] = {".qw", ".qx", ".qy", ".qz"};
+      for (int k = 0; k < 4; ++k) add(layout, p + k, -1, 1, joint.name + kQuaternion[k]);
       for (int k = 0; k < 3; ++k) add(layout, -1, held.offset + k, 1, joint.name + (k == 0 ? ".wx" : k == 1 ? ".wy" : ".wz"));
       return;
     }

@@ -33,6 +33,7 @@ struct JointSpaceLayout {
   /// Per coordinate: −1 where the tree turned a revolute or prismatic joint round, else 1.
   std::vector<double> position_sign, velocity_sign;
   std::vector<std::string> names;       ///< per velocity: "<body or joint>.<coordinate>"
+  std::vector<std::string> position_names;  ///< per position: "torso.x", "torso.qw", "knee"
   std::vector<int> angle_or_slide;      ///< per velocity: a 1-DOF coordinate's position in the layout, else −1
   std::vector<int> joint_velocity;      ///< per Model joint: its first velocity in the layout (−1: none)
 };

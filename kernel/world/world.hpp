@@ -172,6 +172,8 @@ class World {
   // reduced coordinates have them: the other methods refuse each call by name (WorldError).
   /// Per velocity coordinate: its name ("torso.wx", "knee", "hip_y").
   std::vector<std::string> joint_space_names() const;
+  /// Per position coordinate: its name ("torso.x", "torso.qw", "knee", "shoulder.qx").
+  std::vector<std::string> joint_position_names() const;
   Eigen::VectorXd joint_positions() const;   ///< nq
   Eigen::VectorXd joint_velocities() const;  ///< nv
   /// Sets every coordinate and rate (sizes nq, nv; quaternions normalized); the bodies follow and

@@ -40,6 +40,12 @@ std::vector<std::string> World::joint_space_names() const {
       internals_->state, model_, [](auto&, const JointSpaceLayout& layout) { return layout.names; }, [this] { refuse_joint_space("joint_space_names"); });
 }
 
+std::vector<std::string> World::joint_position_names() const {
+  return with_joint_space<std::vector<std::string>>(
+      internals_->state, model_, [](auto&, const JointSpaceLayout& layout) { return layout.position_names; },
+      [this] { refuse_joint_space("joint_position_names"); });
+}
+
 Eigen::VectorXd World::joint_positions() const {
   return with_joint_space<Eigen::VectorXd>(
       internals_->state, model_, [](auto& s, const JointSpaceLayout& layout) { return limber::joint_positions(s, layout); },

@@ -77,6 +77,7 @@ def test_joint_space_reads_back_and_its_dynamics_close():
     world = ragdoll("featherstone")
     q, v = world.joint_positions(), world.joint_velocities()
     assert len(world.joint_space_names()) == v.shape[0]
+    assert len(world.joint_position_names()) == q.shape[0] and all(world.joint_position_names())
     v = np.linspace(-1, 1, v.shape[0])
     world.set_joint_state(q, v)
     np.testing.assert_array_equal(world.joint_velocities(), v)

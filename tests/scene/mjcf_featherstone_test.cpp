@@ -324,6 +324,14 @@ TEST(MjcfHumanoid, TheWorldsJointSpaceIsInMujocosOrder) {
   for (int j = 1; j < both.mj()->njnt; ++j) {  // joint 0 is the free joint: the torso's six rates
     EXPECT_EQ(names[static_cast<std::size_t>(both.mj()->jnt_dofadr[j])], mj_id2name(both.mj(), mjOBJ_JOINT, j));
   }
+  // Every position named too, in MuJoCo's qpos order: the root's 3 + 4, then each hinge's angle.
+  const std::vector<std::string> positions = world.joint_position_names();
+  ASSERT_EQ(static_cast<int>(positions.size()), both.mj()->nq);
+  EXPECT_EQ(positions[0], "torso.x");
+  EXPECT_EQ(positions[3], "torso.qw");
+  for (int j = 1; j < both.mj()->njnt; ++j) {
+    EXPECT_EQ(positions[static_cast<std::size_t>(both.mj()->jnt_qposadr[j])], mj_id2name(both.mj(), mjOBJ_JOINT, j));
+  }
   // At the file's pose the hinges' block of M is MuJoCo's, entry for entry.
   mj_forward(both.mj(), both.data());
   std::vector<mjtNum> dense(static_cast<std::size_t>(both.mj()->nv * both.mj()->nv));

@@ -346,7 +346,8 @@ void bind_loads(WorldMethods& world) {
 
 // Joint space (Featherstone; the other methods raise WorldError naming the call).
 void bind_joint_space(WorldMethods& world) {
-  world.def("joint_space_names", &World::joint_space_names)
+  world.def("joint_space_names", &World::joint_space_names, "per velocity coordinate (nv): 'torso.wx', 'knee', ...")
+      .def("joint_position_names", &World::joint_position_names, "per position coordinate (nq): 'torso.x', 'torso.qw', 'knee', ...")
       .def("joint_positions", &World::joint_positions, "q, nq (featherstone; the others raise WorldError)")
       .def("joint_velocities", &World::joint_velocities, "v, nv")
       .def(
