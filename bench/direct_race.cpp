@@ -1,7 +1,7 @@
 // The equal-error race: the Verlet family's solvers and Bullet's btMultiBody on the
 // heavy-end chain, time per step against the largest joint error over the run.
 //
-// Workload (../shared/reference/PEERS.md, "heavy-end chain"): N links of 0.1 m and 1 kg, the last
+// Workload (bench/chains.md, "The heavy-end chain"): N links of 0.1 m and 1 kg, the last
 // 2 kg; link 0's head pinned at the origin; released at rest, straight along +x; gravity 9.81 m/s²
 // along −z; no contacts, no damping, no sleeping; Δt = 1/60 s; 2 s simulated; one thread.
 // limber's chain is the generators' (shared-particle joints: consecutive links share a particle),

@@ -2,7 +2,7 @@
 // found at build time (Bullet 3.24, ODE 0.16, MuJoCo 2.2.2; bench/peers/peers.cmake) on the same
 // heavy-end chains, time per step and joint error measured in the same run.
 //
-// Workload (../shared/reference/PEERS.md, "heavy-end chain"): N links of 0.1 m and 1 kg, the last
+// Workload (bench/chains.md, "The heavy-end chain"): N links of 0.1 m and 1 kg, the last
 // 2 kg; link 0's inboard end pinned at the origin by a ball joint; released at rest, straight
 // along +x; gravity 9.81 m/s² along −z; no contacts, no damping, no sleeping; Δt = 1/60 s; 2 s
 // (120 steps); one thread. limber's chain is make_chain_model's (kernel/scene/generators.hpp:

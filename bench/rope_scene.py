@@ -5,7 +5,7 @@
 
 N particles 0.1 m apart along +x at rest, 1 kg each and the last 2 kg, the first pinned at the
 origin; distance constraints between neighbours (no joints to relax separately, no collisions):
-the rope of ../shared/reference/PEERS.md, as Jolt's XPBD soft body sees it. In limber's scene
+the rope of bench/chains.md ("The heavy-end chain"), as Jolt's XPBD soft body sees it. In limber's scene
 format: N - 1 massless capsules whose point masses (0.5 kg at each end, 2 kg at the last tail)
 lump into shared particles (settings.verlet: shared-particle joints, lumped limb masses).
 """

@@ -1,5 +1,5 @@
 // Other engines (Bullet 3.24, ODE 0.16, MuJoCo 2.2.2) on the "heavy-end chain" that limber is
-// compared with them on (../shared/reference/PEERS.md):
+// compared with them on (bench/chains.md, "The heavy-end chain"):
 //   N links 0.1 m long, radius 0.01 m, 1 kg each except the last (2 kg); link 0 pinned to the
 //   world at the origin by a ball joint, consecutive links joined end to end by ball joints;
 //   released at rest, straight along +x; gravity 9.81 m/s² along −z; no contacts, no damping,
