@@ -35,10 +35,12 @@ std::size_t link_count(long long value, const std::string& path) {
   return links;
 }
 
-// An optional 3-vector parameter, or `otherwise` when None: ModelError "<path>: expected 3 numbers".
+// An optional 3-vector parameter of a generator, or `otherwise` when None: a Model's field, so
+// ModelError "<path>: expected 3 numbers" (vector3_or's WorldError is a World call's).
 Eigen::Vector3d vector3_field(const std::optional<Array>& in, const Eigen::Vector3d& otherwise, const std::string& path) {
-  if (in && (in->ndim() != 1 || in->shape(0) != 3)) checks::fail(path, "expected 3 numbers");
-  return vector3_or(in, otherwise, path.c_str());
+  if (!in) return otherwise;
+  if (in->ndim() != 1 || in->shape(0) != 3) checks::fail(path, "expected 3 numbers");
+  return {in->at(0), in->at(1), in->at(2)};
 }
 
 Scene scene(Model model) { return Scene{std::move(model), {}, {}}; }

@@ -61,13 +61,16 @@ std::string flag_name(const std::string& keyword) {
   return flag;
 }
 
+// OptionError "World: --flag: expects INT, got <got>": a value `option` cannot take.
+[[noreturn]] void refuse_value(const std::string& flag, const CLI::Option& option, const std::string& got) {
+  throw OptionError("World: " + flag + ": expects " + option.get_type_name() + (option.get_expected_max() > 1 ? " values" : "") +
+                    ", got " + got);
+}
+
 // A Python option value's text for the command line (str() of it: a float's shortest exact
 // spelling), or OptionError naming `flag` when it is not one value CLI11 can read.
 std::string option_text(py::handle value, const std::string& flag, const CLI::Option& option) {
-  const auto refuse = [&](const std::string& got) {
-    throw OptionError("World: " + flag + ": expects " + option.get_type_name() + (option.get_expected_max() > 1 ? " values" : "") +
-                      ", got " + got);
-  };
+  const auto refuse = [&](const std::string& got) { refuse_value(flag, option, got); };
   if (py::isinstance<py::bool_>(value)) refuse(py::repr(value).cast<std::string>());
   if (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value) || py::isinstance<py::dict>(value) ||
       py::isinstance<py::set>(value) || py::isinstance<py::array>(value)) {
@@ -95,8 +98,7 @@ void require_convertible(const std::string& flag, const std::string& value, cons
   try {
     app.parse(int(argv.size()), argv.data());
   } catch (const CLI::ConversionError&) {
-    throw OptionError("World: " + flag + ": expects " + option.get_type_name() + (option.get_expected_max() > 1 ? " values" : "") +
-                      ", got '" + value + "'");
+    refuse_value(flag, option, "'" + value + "'");
   } catch (const CLI::Error&) {
   }
 }

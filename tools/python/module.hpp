@@ -43,15 +43,15 @@ Array rows(std::size_t count, py::ssize_t columns, Fill fill) {
   return out;
 }
 
-/// Three numbers (a 3-vector argument named `what`), or ValueError naming it.
+/// Three numbers (a 3-vector argument named `what`), or WorldError naming it.
 Eigen::Vector3d vector3(const Array& in, const char* what);
 /// An optional 3-vector argument: vector3(*in, what), or `otherwise` when it is None.
 inline Eigen::Vector3d vector3_or(const std::optional<Array>& in, const Eigen::Vector3d& otherwise, const char* what) {
   return in ? vector3(*in, what) : otherwise;
 }
-/// A one-dimensional array as a vector, or ValueError naming `what`.
+/// A one-dimensional array as a vector, or WorldError naming `what`.
 Eigen::VectorXd vector(const Array& in, const char* what);
-/// Four numbers w, x, y, z (a quaternion argument named `what`), or ValueError naming it.
+/// Four numbers w, x, y, z (a quaternion argument named `what`), or WorldError naming it.
 Eigen::Quaterniond quaternion(const Array& in, const char* what);
 
 /// A one-dimensional float64 array of `values` (a 3-vector, a quaternion w x y z).
