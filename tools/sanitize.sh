@@ -32,6 +32,8 @@
 #     (Mesa's DRI driver, by every sign) leaves ~5 kB in ~257 allocations that LeakSanitizer cannot
 #     name (an unknown module: no suppression can match it); ASan and UBSan still check them.
 #   - label `stress` is run (it is the point of a sanitizer run); pass -LE stress to shorten.
+#   - the 14 tests that take over 30 s each under ASan (the list below; LIMBER_SANITIZE_ALL=1
+#     runs them): ThreadSanitizer still runs the threaded ones among them.
 # Installs the test suite's packages and clang (tools/install_packages.sh). Environment:
 # LIMBER_SANITIZE_BUILD_DIR overrides build-asan / build-tsan; LIMBER_SKIP_INSTALL=1 skips apt-get.
 set -euo pipefail
@@ -74,7 +76,19 @@ if [ "$mode" = address ]; then
   export ASAN_OPTIONS=halt_on_error=1:abort_on_error=0:detect_leaks=1:check_initialization_order=1:strict_init_order=1:alloc_dealloc_mismatch=1:new_delete_type_mismatch=1:detect_odr_violation=2
   export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
   rendering='^(viewer_renders_headless|program_view_writes_a_screenshot)$'
-  ctest --test-dir "$build_dir" --output-on-failure -j2 -E "^package_installs_and_a_client_builds\$|$rendering" "$@"
+  # Left to the uninstrumented suite: the tests that take over 30 s each under ASan (14 of them,
+  # 835 of its 1400 s), long runs of kernels that faster tests put under it (the same trees,
+  # sweeps, layouts and integrators on smaller scenes). LIMBER_SANITIZE_ALL=1 runs them too.
+  slow='JointTrees.EverySubstepsBySweepsSettingHoldsFourRagdollsOfThePile|Cli.TheRainsFirstThirtyRagdollsRunAndLand'
+  slow+='|JointTrees.TheTreesHoldTheirContactsAtFewSweepsWhateverTheMassRatio|Allocation.JointRowsAllocateNothing'
+  slow+='|ColouredRelaxation.JacobiAndGaussSeidelSettleOnTheSameHangingChain<float>'
+  slow+='|ColouredRelaxation.ScalarSimdLayoutsAndThreadsGiveTheSameBits<(float|double)>'
+  slow+='|featherstone.Integration.QuaternionsStayUnitOverAHundredThousandSteps|RagdollScene.TheActiveRagdollHoldsItsPoseUntilTheBallHitsThenGoesLimp'
+  slow+='|VerletMethod.HeavyEndChainKeepsJointsClosedWith100Iterations<float>|RagdollScene.TheBallKnocksItOverUnderEveryMethodThatTakesItAndNoHingeBendsTheWrongWay'
+  slow+='|LagrangeThinRods.RungeKuttaWithProjectionConvergesAtItsOrder|Cli.ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes'
+  slow+='|SerialLinks.ParticlesFollowFeatherstone'
+  [ "${LIMBER_SANITIZE_ALL:-0}" = 1 ] && slow='^$'
+  ctest --test-dir "$build_dir" --output-on-failure -j2 -E "^package_installs_and_a_client_builds\$|$rendering|^($slow)\$" "$@"
   ASAN_OPTIONS=$ASAN_OPTIONS:detect_leaks=0 ctest --test-dir "$build_dir" --output-on-failure -R "$rendering" "$@"
 else
   # The tests that start threads, by program (grep the tests for threads =, Threading::,
