@@ -18,9 +18,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> configurations(argv + std::min(argc, 2), argv + argc);
   if (configurations.empty()) configurations = {"weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"};
   const Scene scene = lifted_scene(kHumanoid);
-  // A configuration that refuses the file is said once, and left out of the tables.
+  // A configuration that refuses the file or its motors is said once, and left out of the tables.
   for (auto c = configurations.begin(); c != configurations.end();) {
-    const MotorRun first = run_limber(scene, *c, 0.001, std::vector<double>(scene.model.actuators.size(), 0.0), 0.001);
+    const MotorRun first = run_limber(scene, *c, 0.001, all_motor_controls(scene.model.actuators.size()), 0.001);
     if (first.failure.rfind("refused: ", 0) != 0) {
       ++c;
       continue;

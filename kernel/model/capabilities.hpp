@@ -22,15 +22,21 @@ struct MethodCapabilities {
   bool gears;             ///< Model::gears (velocity constraints between joints)
   bool holds;             ///< points held to the world and moved while stepping (World::pin, move_pin)
   bool spheres;           ///< bodies shaped as spheres (capsules of length 0: MuJoCo's sphere geoms)
+  /// Actuators on the axes of a serial joint of two or more axes (MuJoCo's bodies of several
+  /// hinges, such as a hip). The particles' virtual links move such a body wrongly under a joint
+  /// force (MuJoCo's humanoid.xml: −41 to +230 times MuJoCo's response on some axes, or
+  /// diverging), so they refuse a servo there at compile and a motor's non-zero control
+  /// (require_actuator_supported).
+  bool serial_actuators;
 };
 
 /// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
-    //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres
-    {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true},
-    {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false},
-    {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true},
-    {Method::featherstone, {true, true, true, false, true, true},               false, false,  false, false, true},
+    //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres serial_actuators
+    {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true,   false},
+    {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false,  false},
+    {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true,   true},
+    {Method::featherstone, {true, true, true, false, true, true},               false, false,  false, false, true,   true},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
                   kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&
@@ -47,5 +53,12 @@ constexpr bool supports(Method method, JointType type) { return capabilities(met
 /// joints (it supports spherical, revolute; lagrange does)". Each method's
 /// compile calls it first.
 void require_supported(const Model& model, Method method);
+
+/// Throws ModelError when `method` lacks serial_actuators and actuator `index` of `model` acts on
+/// an axis of a serial joint of two or more axes with `control` (a servo acts at any control, a
+/// motor at a non-zero one): "actuators[0] 'abdomen_y': the particles method does not drive an
+/// axis of serial joint 'abdomen_z+abdomen_y' (2 axes in one body: …); lagrange, featherstone do".
+/// require_supported calls it with control 0; World::set_controls with each new control.
+void require_actuator_supported(const Model& model, Method method, std::size_t index, double control);
 
 }  // namespace limber

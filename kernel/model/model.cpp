@@ -544,6 +544,21 @@ void require_supported(const Model& model, Method method) {
   if (!row.gears && !model.gears.empty()) {
     throw ModelError("gears[0] '" + model.gears[0].name + "': the " + name + " method does not support gears (velocity constraints); lagrange does");
   }
+  for (std::size_t a = 0; a < model.actuators.size(); ++a) require_actuator_supported(model, method, a, 0);
+}
+
+void require_actuator_supported(const Model& model, Method method, std::size_t index, double control) {
+  const Actuator& actuator = model.actuators.at(index);
+  const Joint& joint = model.joints.at(static_cast<std::size_t>(actuator.joint));
+  if (capabilities(method).serial_actuators || joint.type != JointType::serial || joint.serial_axes.size() < 2) return;
+  if (actuator.kind == ActuatorKind::motor && control == 0) return;  // no force
+  std::string others;
+  for (const MethodCapabilities& other : kMethodCapabilities) {
+    if (other.serial_actuators) others += (others.empty() ? "" : ", ") + std::string(method_name(other.method));
+  }
+  throw ModelError("actuators[" + std::to_string(index) + "] '" + actuator.name + "': the " + std::string(method_name(method)) +
+                   " method does not drive an axis of serial joint '" + joint.name + "' (" + std::to_string(joint.serial_axes.size()) +
+                   " axes in one body: its virtual links move the body wrongly under a joint force); " + others + " do");
 }
 
 void validate_joint(const Model& model, std::size_t index) { check_joint(model.joints.at(index), model, index); }

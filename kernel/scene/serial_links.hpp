@@ -16,9 +16,10 @@
 // so the body's tensor stays physical). On a hinge to the world it is MuJoCo's ½a·q̇² exactly;
 // after other axes the disc turns with them too, and its a/2 across adds to their inertia (as a
 // rotor under Lagrange the same swing was 0.069 m off, 0.157 m with no armature at all), and on
-// a virtual link of 1 % of its body's mass it is 10³× the link's own inertia: the particles move
-// MuJoCo's humanoid under its motors wrongly (bench/models.md). A slide's armature has no such
-// form and stays on the joint, for the method to refuse.
+// a virtual link of 1 % of its body's mass it is 10³× the link's own inertia. The particles moved
+// MuJoCo's humanoid's bodies of several hinges wrongly under their motors (bench/models.md), so
+// they refuse an actuator on such an axis (MethodCapabilities::serial_actuators). A slide's
+// armature has no such form and stays on the joint, for the method to refuse.
 #pragma once
 
 #include <cstdint>

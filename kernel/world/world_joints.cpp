@@ -20,6 +20,11 @@ void World::set_controls(std::span<const double> controls) {
   }
   for (std::size_t a = 0; a < controls.size(); ++a) {
     if (!std::isfinite(controls[a])) throw WorldError("set_controls: control " + std::to_string(a) + " ('" + model_.actuators[a].name + "') must be finite");
+    try {
+      require_actuator_supported(model_, method(), a, controls[a]);
+    } catch (const ModelError& error) {
+      throw WorldError(std::string("set_controls: ") + error.what());
+    }
   }
   std::copy(controls.begin(), controls.end(), kept.begin());
   for (std::size_t a = 0; a < controls.size(); ++a) {

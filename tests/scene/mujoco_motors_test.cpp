@@ -1,8 +1,10 @@
 // MuJoCo's humanoid driven by its motors, in flight, under each of `limber run`'s configurations
 // against MuJoCo 2.2.2's RK4 at 10⁻⁴ s, body by body (tests/support/mujoco_motors.hpp says how).
-// A configuration either refuses the file by name or moves it as MuJoCo does: with all 21 motors
-// on for 0.2 s at 0.001 s every body within 5 mm of MuJoCo's, the error shrinking with the step,
-// and each motor alone moving the body MuJoCo moves most by 0.9–1.1 of MuJoCo's motion.
+// A configuration either refuses the file or its motors by name (the particles: a body of
+// several hinges takes no actuator, kernel/model/capabilities.hpp) or moves it as MuJoCo does:
+// with all 21 motors on for 0.2 s at 0.001 s every body within 5 mm of MuJoCo's, the error
+// shrinking with the step, and each motor alone moving the body MuJoCo moves most by 0.9–1.1 of
+// MuJoCo's motion.
 // Skipped, with a message, where the model file is missing (Debian's libmujoco-samples).
 #include <cmath>
 #include <map>
@@ -45,7 +47,7 @@ class MujocoMotors : public ::testing::TestWithParam<std::string> {
   void SetUp() override {
     if (!std::filesystem::exists(kHumanoid)) GTEST_SKIP() << kHumanoid << " is missing: install libmujoco-samples";
     const Comparison& comparison = Comparison::get();
-    const MotorRun first = run_limber(comparison.scene, GetParam(), kStep, comparison.none, kStep);
+    const MotorRun first = run_limber(comparison.scene, GetParam(), kStep, comparison.all, kStep);
     if (first.failure.rfind("refused: ", 0) == 0) GTEST_SKIP() << GetParam() << " " << first.failure;
   }
 };
@@ -88,17 +90,12 @@ TEST_P(MujocoMotors, EachMotorAloneMovesItsBodyAsMujocoDoes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Configurations, MujocoMotors,
-                         ::testing::Values("unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"),
+                         ::testing::Values("weighted", "unweighted", "springs-explicit", "springs-implicit", "lagrange", "featherstone"),
                          [](const ::testing::TestParamInfo<std::string>& info) {
                            std::string name = info.param;
                            for (char& c : name) c = c == '-' ? '_' : c;
                            return name;
                          });
-
-// The weighted particles run the file but move its bodies of two and three hinges wrongly: their
-// serial joints pass through virtual links of 1 % of the body's mass, each axis's armature a rotor
-// on such a link (kernel/scene/serial_links.hpp); bench/models.md has the figures.
-INSTANTIATE_TEST_SUITE_P(DISABLED_KnownFailures, MujocoMotors, ::testing::Values("weighted"));
 
 }  // namespace
 }  // namespace limber

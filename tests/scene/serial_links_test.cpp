@@ -127,7 +127,9 @@ TEST(SerialLinks, ParticlesFollowFeatherstone) {
 }
 
 // A motor on the second axis turns the rod about z: the same way, and about as far, as under
-// Featherstone (no gravity, so only the motor moves it).
+// Featherstone (no gravity, so only the motor moves it). The particles refuse the control
+// (MethodCapabilities::serial_actuators): on this rod they came within 5 % of Featherstone, on
+// MuJoCo's humanoid they moved its bodies of several hinges wrongly (bench/models.md).
 TEST(SerialLinks, AMotorActsOnTheAxisItNames) {
   Model model = rod_on_two_skew_hinges();
   model.settings.gravity.setZero();
@@ -135,10 +137,8 @@ TEST(SerialLinks, AMotorActsOnTheAxisItNames) {
   model.actuators.push_back({.name = "turn", .joint = 0, .axis = 1, .gear = 0.5, .control_range = {}});
   const Eigen::Vector3d exact = tip_after(model, Method::featherstone, 300, {1.0});
   ASSERT_GT(exact.y(), 0.01);  // turned about +z: the tip, at +x, moves to +y
-  for (Method method : {Method::lagrange, Method::particles}) {
-    const Eigen::Vector3d tip = tip_after(model, method, 300, {1.0});
-    EXPECT_LT((tip - exact).norm(), 0.05 * exact.y()) << method_name(method);
-  }
+  EXPECT_LT((tip_after(model, Method::lagrange, 300, {1.0}) - exact).norm(), 0.05 * exact.y());
+  EXPECT_THROW(tip_after(model, Method::particles, 300, {1.0}), WorldError);
 }
 
 // Each axis's range holds under every method: a rod jointed by the two hinges to a heavier free

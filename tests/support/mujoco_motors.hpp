@@ -151,7 +151,12 @@ inline MotorRun run_limber(Scene scene, const std::string& configuration, double
     out.failure = std::string("refused: ") + error.what();
     return out;
   }
-  world->set_controls(controls);
+  try {
+    world->set_controls(controls);
+  } catch (const WorldError& error) {  // a method that does not drive some axis
+    out.failure = std::string("refused: ") + error.what();
+    return out;
+  }
   const std::vector<BodyId> bodies = world->bodies();
   const auto centres = [&] {
     std::vector<Eigen::Vector3d> at;

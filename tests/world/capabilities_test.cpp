@@ -1,7 +1,8 @@
 // The capability table (kernel/model/capabilities.hpp) says what each method compiles, and
 // the README's status table says the same: each joint type compiles under a method exactly
-// when the table says so, and the README's row for the method names exactly those joint types
-// and, for precision, float exactly when the table allows it.
+// when the table says so, a serial joint's axis takes an actuator exactly where it says so, and
+// the README's row for the method names exactly those joint types and, for precision, float
+// exactly when the table allows it.
 #include <array>
 #include <fstream>
 #include <sstream>
@@ -15,6 +16,7 @@
 
 #include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/methods/method.hpp"
+#include "limber/kernel/world/world.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {
@@ -87,6 +89,29 @@ TEST(Capabilities, EachJointTypeCompilesExactlyWhereTheTableSaysSo) {
   }
 }
 
+// An actuator on the serial joint's second axis: a servo is refused at compile and a motor's
+// non-zero control by set_controls (nothing changes) exactly where the table has no
+// serial_actuators; a motor at control 0 loads everywhere the joint does.
+TEST(Capabilities, ASerialAxisTakesAnActuatorExactlyWhereTheTableSaysSo) {
+  for (const MethodCapabilities& entry : kMethodCapabilities) {
+    if (!supports(entry.method, JointType::serial)) continue;
+    const std::string name(method_name(entry.method));
+    Model motor = two_rods(JointType::serial), servo = motor;
+    motor.actuators.push_back({.name = "turn", .joint = 1, .axis = 1, .gear = 1, .control_range = {}});
+    servo.actuators.push_back({.name = "hold", .joint = 1, .axis = 1, .kind = ActuatorKind::position, .gear = 1, .gain = 5, .control_range = {}});
+    World world(motor, WorldOptions{.method = entry.method});
+    const double on[] = {0.5};
+    if (entry.serial_actuators) {
+      EXPECT_NO_THROW(world.set_controls(on)) << name;
+      EXPECT_NO_THROW(World(servo, WorldOptions{.method = entry.method})) << name;
+    } else {
+      EXPECT_THROW(world.set_controls(on), WorldError) << name;
+      EXPECT_EQ(world.controls()[0], 0.0) << name << ": nothing changed";
+      EXPECT_THROW(World(servo, WorldOptions{.method = entry.method}), ModelError) << name;
+    }
+  }
+}
+
 TEST(Capabilities, TheReadmeStatusTableSaysWhatTheTableSays) {
   const std::pair<Method, std::string_view> rows[] = {
       {Method::particles, "particles"}, {Method::springs, "springs"}, {Method::lagrange, "lagrange"}, {Method::featherstone, "featherstone"}};
@@ -98,6 +123,8 @@ TEST(Capabilities, TheReadmeStatusTableSaysWhatTheTableSays) {
       const bool named = joints.find(joint_type_name(type)) != std::string::npos;
       EXPECT_EQ(named, supports(method, type)) << name << "'s joints cell, " << joint_type_name(type) << ": " << joints;
     }
+    const bool serial_without_actuators = supports(method, JointType::serial) && !capabilities(method).serial_actuators;
+    EXPECT_EQ(joints.find("take no actuator") != std::string::npos, serial_without_actuators) << name << "'s joints cell: " << joints;
     EXPECT_EQ(cells[4].find("float") != std::string::npos, capabilities(method).single_precision) << name << "'s precision: " << cells[4];
     EXPECT_EQ(cells[5].find("1–n") != std::string::npos, capabilities(method).threads) << name << "'s threads: " << cells[5];
   }
