@@ -2,6 +2,7 @@
 
 #include <optional>
 
+#include "limber/kernel/lagrange/contacts.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
 #include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/scene/serial_links.hpp"
@@ -40,6 +41,7 @@ LagrangeState compile_lagrange(const Model& input, const LagrangeOptions& option
   state.stage_change = state.body_rhs;
   state.geometry.resize(constraints);
   state.world_inertia.assign(body_count, Eigen::Matrix3d::Zero());
+  prepare_contacts_with_joints(state);
   return state;
 }
 

@@ -26,6 +26,32 @@
 namespace limber {
 
 
+/// Scratch of resolve_contacts_with_joints (contacts.hpp), kept so a step allocates nothing
+/// once it has seen its largest contact set.
+struct JointContactScratch {
+  /// A unilateral row G·x ≥ target with impulse λ ≥ 0 (a contact's normal, a limit's side), or a
+  /// friction row (a contact's two tangents follow its normal, |λ_t| ≤ μ·λ_n).
+  enum class Kind : std::uint8_t { normal, tangent, limit };
+  struct Row {
+    Kind kind = Kind::normal;
+    std::uint32_t contact = 0;     ///< index into RigidScene::contacts (normal, tangent)
+    std::int32_t a = 0, b = -1;    ///< its bodies (b −1: the world)
+    Eigen::Matrix<double, 6, 1> jacobian_a = Eigen::Matrix<double, 6, 1>::Zero(), jacobian_b = Eigen::Matrix<double, 6, 1>::Zero();
+    double gap = 0;                ///< a limit's distance inside its bound (rad or m, < 0 past it)
+    std::uint32_t batch = 0;       ///< the solve that measured its response
+    double mobility = 0;           ///< W_rr: its rate per unit impulse through the joints
+    double target = 0;             ///< the rate (or displacement) it is solved to reach
+    double impulse = 0;            ///< λ_r
+  };
+  std::vector<Row> rows;
+  std::vector<std::uint32_t> component;        ///< per body: its jointed component
+  std::vector<std::uint32_t> component_start;  ///< per component + 1: CSR into component_bodies
+  std::vector<std::uint32_t> component_bodies;
+  std::vector<std::uint32_t> next_batch;       ///< per component: the first batch it has not used
+  std::vector<Eigen::Matrix<double, 6, 1>> responses;  ///< per batch, per body (batch·bodies + body): Δu
+  std::vector<Eigen::Matrix<double, 6, 1>> velocity, displacement;  ///< per body: (v, ω), (Δx, Δθ)
+};
+
 struct LagrangeState : RigidScene {
   JointAnchors joints;        ///< the Model's joints' anchors
   ConstraintSet constraints;  ///< the joints' rows, then the gears'
@@ -61,6 +87,7 @@ struct LagrangeState : RigidScene {
   /// the constraints' levers and Jacobian blocks and each body's world inertia tensor.
   ConstraintGeometry geometry;
   std::vector<Eigen::Matrix3d> world_inertia;
+  JointContactScratch contact_scratch;
   StepReport last_report;
 };
 

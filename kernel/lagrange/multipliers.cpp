@@ -28,8 +28,8 @@ using SmallMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 
 
 // --- Baraff's tree path ---
 
-void solve_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, const std::vector<ConstraintVector>& constraint_rhs,
-                std::vector<Vector6>& accelerations) {
+// Loads M, the constraints' −A and J into the tree and factors it (the work vectors are not read).
+void factor_tree(LagrangeState& state) {
   TreeElimination<double, 6>& tree = state.tree;
   const std::size_t body_count = state.bodies.size();
   const ConstraintSet& constraints = state.constraints;
@@ -38,13 +38,8 @@ void solve_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, cons
     block.setZero();
     block.topLeftCorner<3, 3>().diagonal().setConstant(state.bodies.mass[b]);
     block.bottomRightCorner<3, 3>() = state.world_inertia[b];
-    tree.work(b) = body_rhs[b];
   }
-  for (std::size_t c = 0; c < constraints.size(); ++c) {
-    tree.diagonal(body_count + c).setZero();  // rigid: no compliance
-    tree.work(body_count + c).setZero();
-    tree.work(body_count + c).head(constraint_rhs[c].size()) = constraint_rhs[c];
-  }
+  for (std::size_t c = 0; c < constraints.size(); ++c) tree.diagonal(body_count + c).setZero();  // rigid: no compliance
   for (const ControlledJoint& controlled : state.controls.joints) {  // −A on the control rows
     for (int r = controlled.row_offset; r < controlled.row_offset + controlled.count; ++r) {
       tree.diagonal(body_count + controlled.joint)(r, r) = -state.compliance[controlled.joint](r);
@@ -53,7 +48,21 @@ void solve_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, cons
   const auto edge = [&](std::size_t c, std::int32_t body) -> const ConstraintBlock& {
     return constraints.inboard[c] == body ? state.geometry.inboard_jacobian[c] : state.geometry.outboard_jacobian[c];
   };
-  tree.eliminate(0, static_cast<std::uint32_t>(tree.ordering().order.size()), edge);
+  tree.factor(0, static_cast<std::uint32_t>(tree.ordering().order.size()), edge);
+}
+
+// Solves the factored tree for one right-hand side.
+void substitute_tree(LagrangeState& state, const std::vector<Vector6>& body_rhs, const std::vector<ConstraintVector>& constraint_rhs,
+                     std::vector<Vector6>& accelerations) {
+  TreeElimination<double, 6>& tree = state.tree;
+  const std::size_t body_count = state.bodies.size();
+  const ConstraintSet& constraints = state.constraints;
+  for (std::size_t b = 0; b < body_count; ++b) tree.work(b) = body_rhs[b];
+  for (std::size_t c = 0; c < constraints.size(); ++c) {
+    tree.work(body_count + c).setZero();
+    tree.work(body_count + c).head(constraint_rhs[c].size()) = constraint_rhs[c];
+  }
+  tree.solve(0, static_cast<std::uint32_t>(tree.ordering().order.size()));
   for (std::size_t b = 0; b < body_count; ++b) accelerations[b] = tree.work(b);
   for (std::size_t c = 0; c < constraints.size(); ++c) {
     state.multipliers[c] = -tree.work(body_count + c).head(tree.rows(c));
@@ -354,7 +363,17 @@ void solve_with_controls(LagrangeState& state, const RigidBodyState& y, const st
 
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
                        const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
-  if (state.uses_tree) solve_tree(state, body_rhs, constraint_rhs, accelerations);
+  if (state.uses_tree) factor_constrained(state);
+  solve_factored(state, y, body_rhs, constraint_rhs, accelerations);
+}
+
+void factor_constrained(LagrangeState& state) {
+  if (state.uses_tree) factor_tree(state);
+}
+
+void solve_factored(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
+                    const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
+  if (state.uses_tree) substitute_tree(state, body_rhs, constraint_rhs, accelerations);
   else solve_sparse(state, y, body_rhs, constraint_rhs, accelerations);
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (asleep(state, static_cast<std::int32_t>(b))) accelerations[b].setZero();

@@ -83,6 +83,13 @@ inline constexpr int kMaxControlIterations = 10;
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Eigen::Matrix<double, 6, 1>>& body_rhs,
                        const std::vector<ConstraintVector>& constraint_rhs, std::vector<Eigen::Matrix<double, 6, 1>>& accelerations);
 
+/// Factors the augmented system at state.geometry (update_geometry) for solve_factored: Baraff's
+/// tree factor, kept in state.tree until the next solve (the sparse path keeps nothing).
+void factor_constrained(LagrangeState& state);
+/// solve_constrained against factor_constrained's factor: the same result, without factoring
+/// again on the tree path (a substitution, O(bodies)); the sparse path solves in full.
+void solve_factored(LagrangeState& state, const RigidBodyState& y, const std::vector<Eigen::Matrix<double, 6, 1>>& body_rhs,
+                    const std::vector<ConstraintVector>& constraint_rhs, std::vector<Eigen::Matrix<double, 6, 1>>& accelerations);
 /// ω_b of Baumgarte stabilization for a step of dt (0 under projection), 1/s.
 double baumgarte_frequency(const LagrangeState& state, double dt);
 

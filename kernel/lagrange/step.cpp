@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "limber/kernel/collision/rigid_contacts.hpp"
+#include "limber/kernel/lagrange/contacts.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
 #include "limber/kernel/model/guarded_step.hpp"
 
@@ -163,8 +164,9 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   report.profile.integrate = clock.lap();
   detect_rigid_contacts(state);
   report.profile.detect = clock.lap();
-  resolve_rigid_contacts(state, dt);
   const bool constrained = state.constraints.size() > 0;
+  if (constrained) resolve_contacts_with_joints(state, dt);
+  else resolve_rigid_contacts(state, dt);
   if (projection && constrained) project_positions(state);
   if ((projection || !state.contacts.empty()) && constrained) project_velocities(state, dt);
   std::swap(state.multipliers, state.projection_multipliers);

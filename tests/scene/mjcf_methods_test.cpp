@@ -24,34 +24,30 @@ class MjcfHumanoidFalls : public ::testing::TestWithParam<Method> {};
 
 // 2 s of the fall at the file's 5 ms step. MuJoCo's joints are closed by construction: the
 // issue's bar for a maximal-coordinate method is 10⁻⁴ of a link (the particles' trees close
-// them to rounding; Lagrange's Baumgarte rows only to a few per cent of its short virtual links).
+// them to rounding); Lagrange's Baumgarte rows close them to the verdict's 10⁻² of a link, its
+// contacts and limits solved through the joints (kernel/lagrange/contacts.hpp). No method sinks a
+// limb deeper than MuJoCo's soft contacts do on this fall, 14 mm.
 TEST_P(MjcfHumanoidFalls, ToTheFloorWithJointsClosedAndNoEnergyMade) {
   SKIP_WITHOUT_HUMANOID();
   const Method method = GetParam();
   const Scene scene = load_scene_file(kHumanoid);
   World world(scene.model, world_options(method, scene.methods));
   const Observation start = world.observe();
-  double largest_gap = 0, highest_energy = start.energy(), largest_violation = 0;
+  double largest_gap = 0, highest_energy = start.energy(), largest_violation = 0, deepest = 0;
   for (int n = 0; n < 400; ++n) {
     ASSERT_EQ(world.step(), StepStatus::ok) << "step " << n;
     const Observation now = world.observe();
     largest_gap = std::max(largest_gap, now.max_joint_gap);
     largest_violation = std::max(largest_violation, now.joints.limit_violation);
     highest_energy = std::max(highest_energy, now.energy());
+    deepest = std::max(deepest, now.penetration.depth);
   }
   const Observation end = world.observe();
   EXPECT_LT(end.body_centre_of_mass.z(), 0.4) << "it lies on the floor (its centre of mass started at 1.07 m)";
   EXPECT_LE(highest_energy, start.energy() + 1e-6 * std::abs(start.energy()));
-  if (method == Method::particles) {
-    EXPECT_LT(largest_gap, 1e-4);
-    EXPECT_LT(largest_violation, 0.01) << "rad";
-  } else {
-    EXPECT_LT(largest_gap, 1.0) << "no joint came apart";
-    // Lagrange's contact impulses come after its joint rows (kernel/lagrange/README.md,
-    // "Contacts"), so the landing pushes a limit past by 0.132 rad (0.106 without armature;
-    // under 0.1 only while armature was a rotor 10³× heavier than its virtual link).
-    EXPECT_LT(largest_violation, method == Method::lagrange ? 0.15 : 0.1) << "rad";
-  }
+  EXPECT_LT(largest_gap, method == Method::lagrange ? 1e-2 : 1e-4) << "of a link";
+  EXPECT_LT(largest_violation, method == Method::particles ? 0.01 : 0.1) << "rad";
+  EXPECT_LT(deepest, 0.014) << "m";
 }
 
 INSTANTIATE_TEST_SUITE_P(Methods, MjcfHumanoidFalls, ::testing::Values(Method::particles, Method::lagrange, Method::featherstone),

@@ -1,0 +1,39 @@
+// Contacts and limits of the Lagrange method solved through its joints: what a contact pushes
+// moves the whole jointed body and opens no joint, and a push that would turn a joint past its
+// limit is held by it.
+//
+// A row r — a contact's normal n or one of its tangents t at point p between bodies a and b, or a
+// limit's nearer side — has a Jacobian G_r: [d; (p − c_a) × d] on a and its negative on b for a
+// contact, the joint control row's (joint_controls.hpp), signed to point inside, for a limit. Its
+// response, the velocity change of every body when a unit impulse acts along it with the joints'
+// equality rows held (J·Δu = 0), is one substitution against the factor of [M Jᵀ; J 0]:
+// Δu_r = (M⁻¹ − M⁻¹Jᵀ(JM⁻¹Jᵀ)⁻¹JM⁻¹) G_rᵀ, the Schur complement of the joint rows. The rows'
+// Delassus matrix is W = G·[Δu_r], and projected Gauss-Seidel on it gives the impulses: λ ≥ 0 on
+// a normal reaching its contact's bounce (restitution above the resting speed, else 0) and on a
+// limit reaching at most its bound within the step (a limit past it stops), friction in
+// Coulomb's disc |λ_t| ≤ μ·λ_n. The push-out solves the same rows for position changes: each
+// normal out by its depth less the separation it may keep (the rule of every method,
+// geometry.hpp), each limit past its bound back onto it, none pushed past. Rows of bodies in
+// different jointed components share a substitution (their responses do not overlap), so a step
+// costs a factor and about three substitutions per contact and one per limit of its most touched
+// component, not per row of the scene. Drives and joint friction stay in the step's own solves.
+// MuJoCo forms A = J M⁻¹ Jᵀ through its factor and solves contacts and limits on it alike
+// (engine_solver.c); Featherstone's method here measures each contact's response with
+// articulated-body passes instead (kernel/featherstone/README.md).
+#pragma once
+
+#include "limber/kernel/lagrange/lagrange_state.hpp"
+
+namespace limber {
+
+/// Sizes state.contact_scratch for the scene at compile: each body's jointed component, and
+/// room for the rows and responses of every contact the scene reserved.
+void prepare_contacts_with_joints(LagrangeState& state);
+
+/// Answers state.contacts (detect_rigid_contacts) and the joints' limits for a step of dt through
+/// the joints: velocity impulses, then the push-out (positions). Does nothing without contacts
+/// (the step's own solves hold the limits then). Needs constraints (state.constraints.size() >
+/// 0); without them resolve_rigid_contacts answers the same contacts body by body.
+void resolve_contacts_with_joints(LagrangeState& state, double dt);
+
+}  // namespace limber
