@@ -95,25 +95,27 @@ else
   # std::thread, --threads); a new threaded test is added here. Only these run: the rest of a
   # program is single-threaded, so ThreadSanitizer has nothing to see in it, and whole programs
   # under it took most of CI's time (verlet_tests alone over 7 min).
-  declare -A threaded=(
-    [threading_tests]='BlockRunner.*'
-    [relaxation_tests]='*ScalarSimdLayoutsAndThreadsGiveTheSameBits*:*AnEnginesTaskSystemOrTbbArenaGivesTheSameBits*:*HumanoidWithContactsIsTheSameInEveryLayout*'
-    [verlet_tests]='*JointRowsGiveTheSameBitsForOneOrTwoThreads*:*ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads*:*WorkInBothJointModesEveryOrderingAndLayout*'
-    [limb_contact_tests]='*ContactsGiveTheSameBitsForOneOrTwoThreads*'
-    [collision_tests]='*TheNarrowphaseOnThreadsFindsTheSerialContactsBitForBit*'
-    [allocation_tests]='Allocation.JointRowsAllocateNothing:Allocation.EveryRelaxationPathAllocatesNothing:Allocation.TheRattleRuleAllocatesNothing'
-    [world_tests]='World.ADefaultWorldStartsNoThread:World.OnAnEnginesTaskSystemStepsTheSerialBits'
-    [cli_tests]='Cli.EverySolverPathGivesTheSameSummaryOfAChain:Cli.ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes'
+  threaded=(
+    'threading_tests BlockRunner.*'
+    'relaxation_tests *ScalarSimdLayoutsAndThreadsGiveTheSameBits*:*AnEnginesTaskSystemOrTbbArenaGivesTheSameBits*:*HumanoidWithContactsIsTheSameInEveryLayout*'
+    'verlet_tests *JointRowsGiveTheSameBitsForOneOrTwoThreads*:*ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads*:*WorkInBothJointModesEveryOrderingAndLayout*'
+    'limb_contact_tests *ContactsGiveTheSameBitsForOneOrTwoThreads*'
+    'collision_tests *TheNarrowphaseOnThreadsFindsTheSerialContactsBitForBit*'
+    'allocation_tests Allocation.JointRowsAllocateNothing:Allocation.EveryRelaxationPathAllocatesNothing:Allocation.TheRattleRuleAllocatesNothing'
+    'world_tests World.ADefaultWorldStartsNoThread:World.OnAnEnginesTaskSystemStepsTheSerialBits'
+    'cli_tests Cli.EverySolverPathGivesTheSameSummaryOfAChain:Cli.ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes'
   )
-  programs=(threading_tests relaxation_tests verlet_tests limb_contact_tests collision_tests allocation_tests world_tests cli_tests)
+  programs=()
+  for entry in "${threaded[@]}"; do programs+=("${entry%% *}"); done
   stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 6 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${programs[@]}"
   stage "sanitizer run (thread): the tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tools/sanitize/tsan.supp"
   failed=()
-  for program in "${programs[@]}"; do
+  for entry in "${threaded[@]}"; do
+    program=${entry%% *}
     echo "== $program"
-    if ! (cd "$build_dir/tests" && "./$program" --gtest_brief=1 "--gtest_filter=${threaded[$program]}" "$@"); then
+    if ! (cd "$build_dir/tests" && "./$program" --gtest_brief=1 "--gtest_filter=${entry#* }" "$@"); then
       failed+=("$program")
     fi
   done

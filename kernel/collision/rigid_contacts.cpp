@@ -205,13 +205,10 @@ bool detect_rigid_contacts(RigidScene& state) {
 
 void resolve_rigid_contacts(RigidScene& state, double dt) {
   if (state.contacts.empty()) return;
-  const double resting_speed = 2 * state.settings.gravity.norm() * dt;
   // Approach speeds before any impulse: they decide bouncing and bound the position correction.
   for (RigidContact& contact : state.contacts) {
     const ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
-    const double approach = -(velocity_at(a, contact.point) - velocity_at(b, contact.point)).dot(contact.normal);
-    if (approach < resting_speed) contact.restitution = 0;
-    contact.approach_speed = std::max(approach, 0.0);
+    record_approach(contact, -(velocity_at(a, contact.point) - velocity_at(b, contact.point)).dot(contact.normal), state.settings, dt);
   }
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     for (const RigidContact& contact : state.contacts) {
@@ -227,9 +224,7 @@ void resolve_rigid_contacts(RigidScene& state, double dt) {
   // Push out what still overlaps, through the effective mass along the normal.
   RigidBodyState& y = state.bodies.state;
   for (const RigidContact& contact : state.contacts) {
-    // allowed_separation with the separation at the step's start, −depth + approach·Δt.
-    const double correction =
-        contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, state.settings.contact_recovery_speed * dt);
+    const double correction = push_out_distance(contact, state.settings, dt);
     if (correction <= 0) continue;
     const ImpulseBody a = impulse_body(state, contact.a), b = impulse_body(state, contact.b);
     const double effective_inverse_mass = contact.normal.dot(collision_matrix(a, b, contact.point) * contact.normal);

@@ -18,16 +18,13 @@ using namespace joint_space;
 // contacts. Needs the articulated inertias at the current q.
 void prepare_contacts(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  const double resting_speed = 2 * state.settings.gravity.norm() * dt;
   s.contact_matrix.resize(state.contacts.size());
   for (std::size_t c = 0; c < state.contacts.size(); ++c) {
     RigidContact& contact = state.contacts[c];
     Eigen::Matrix3d& k = s.contact_matrix[c];
     for (int axis = 0; axis < 3; ++axis) k.col(axis) = respond(state, contact, Eigen::Vector3d::Unit(axis), nullptr);
     k = 0.5 * (k + k.transpose()).eval();  // symmetric in exact arithmetic
-    const double approach = -relative_motion(state, contact, state.kinematics.velocity).dot(contact.normal);
-    if (approach < resting_speed) contact.restitution = 0;
-    contact.approach_speed = std::max(approach, 0.0);
+    record_approach(contact, -relative_motion(state, contact, state.kinematics.velocity).dot(contact.normal), state.settings, dt);
   }
 }
 
@@ -77,9 +74,7 @@ void push_out(FeatherstoneState& state, double dt) {
     bool pushed = false;
     for (std::size_t c = 0; c < state.contacts.size(); ++c) {
       const RigidContact& contact = state.contacts[c];
-      // allowed_separation with the separation at the step's start, −depth + approach·Δt.
-      const double target =
-          contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, state.settings.contact_recovery_speed * dt);
+      const double target = push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
       const double done = relative_motion(state, contact, s.body_displacement).dot(contact.normal);

@@ -78,7 +78,6 @@ void build_rows(LagrangeState& state, JointContactScratch& s, double dt) {
   s.rows.clear();
   std::fill(s.next_batch.begin(), s.next_batch.end(), 0u);
   const RigidBodyState& y = state.bodies.state;
-  const double resting_speed = 2 * state.settings.gravity.norm() * dt;
   for (std::size_t k = 0; k < state.contacts.size(); ++k) {
     RigidContact& contact = state.contacts[k];
     const Eigen::Vector3d& n = contact.normal;
@@ -99,9 +98,7 @@ void build_rows(LagrangeState& state, JointContactScratch& s, double dt) {
       add_row(s, row);
     }
     // The approach before any impulse decides bouncing and bounds the push-out.
-    const double approach = -row_rate(s.rows[first], s.velocity);
-    if (approach < resting_speed) contact.restitution = 0;
-    contact.approach_speed = std::max(approach, 0.0);
+    record_approach(contact, -row_rate(s.rows[first], s.velocity), state.settings, dt);
   }
   for (const ControlledJoint& joint : state.controls.joints) {
     const std::int32_t inboard = state.constraints.inboard[joint.joint], outboard = state.constraints.outboard[joint.joint];
@@ -126,19 +123,22 @@ void measure_responses(LagrangeState& state, JointContactScratch& s) {
   const std::size_t n = state.bodies.size();
   std::uint32_t batches = 0;
   for (const Row& row : s.rows) batches = std::max(batches, row.batch + 1);
-  s.responses.resize(batches * n);  // within what compile reserved, unless the contacts grew past it
+  // Each batch's right-hand side (its rows' G_rᵀ) first, in one pass over the rows; each solve
+  // then replaces its batch's with the responses.
+  s.responses.assign(batches * n, Vector6::Zero());  // within what compile reserved, unless the contacts grew past it
+  for (const Row& row : s.rows) {
+    Vector6* rhs = s.responses.data() + row.batch * n;
+    rhs[row.a] += row.jacobian_a;
+    if (row.b >= 0) rhs[row.b] += row.jacobian_b;
+  }
   for (auto& rhs : state.constraint_rhs) rhs.setZero();
   const RigidBodyState& y = state.bodies.state;
   factor_constrained(state);
   for (std::uint32_t batch = 0; batch < batches; ++batch) {
-    for (auto& rhs : state.body_rhs) rhs.setZero();
-    for (const Row& row : s.rows) {
-      if (row.batch != batch) continue;
-      state.body_rhs[row.a] += row.jacobian_a;
-      if (row.b >= 0) state.body_rhs[row.b] += row.jacobian_b;
-    }
+    const auto first = s.responses.begin() + static_cast<std::ptrdiff_t>(batch * n);
+    std::copy(first, first + static_cast<std::ptrdiff_t>(n), state.body_rhs.begin());
     solve_factored(state, y, state.body_rhs, state.constraint_rhs, state.accelerations);
-    std::copy(state.accelerations.begin(), state.accelerations.end(), s.responses.begin() + static_cast<std::ptrdiff_t>(batch * n));
+    std::copy(state.accelerations.begin(), state.accelerations.end(), first);
   }
   for (Row& row : s.rows) row.mobility = row_rate(row, response_of(s, row, n));  // W_rr
 }
@@ -230,12 +230,9 @@ void resolve_contacts_with_joints(LagrangeState& state, double dt) {
 
   // Positions: each normal moves out by its depth, less the separation it may keep; a limit is
   // not pushed past its bound, and one past it is moved back onto it.
-  const double recovery = state.settings.contact_recovery_speed * dt;
   for (Row& row : s.rows) {
     const RigidContact& contact = state.contacts[row.contact];
-    row.target = row.kind == Kind::limit    ? -row.gap
-                 : row.kind == Kind::normal ? contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, recovery)
-                                            : 0;
+    row.target = row.kind == Kind::limit ? -row.gap : row.kind == Kind::normal ? push_out_distance(contact, state.settings, dt) : 0;
   }
   s.displacement.assign(n, Vector6::Zero());
   project_rows(state, s, s.displacement, /*with_friction=*/false);

@@ -363,7 +363,7 @@ void solve_with_controls(LagrangeState& state, const RigidBodyState& y, const st
 
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
                        const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
-  if (state.uses_tree) factor_constrained(state);
+  factor_constrained(state);
   solve_factored(state, y, body_rhs, constraint_rhs, accelerations);
 }
 

@@ -473,6 +473,16 @@ void validate_settings(const Settings& settings) {
   if (tolerances.energy_gain) require_non_negative(*tolerances.energy_gain, "settings.tolerances.energy_gain");
 }
 
+// The names of the methods whose capability row passes `has`, "a, b".
+template <typename Has>
+std::string methods_where(Has has) {
+  std::string names;
+  for (const MethodCapabilities& row : kMethodCapabilities) {
+    if (has(row)) names += (names.empty() ? "" : ", ") + std::string(method_name(row.method));
+  }
+  return names;
+}
+
 }  // namespace
 
 void validate(const Model& model) {
@@ -527,10 +537,7 @@ void require_supported(const Model& model, Method method) {
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     const Joint& joint = model.joints[j];
     if (row.joints[static_cast<std::size_t>(joint.type)]) continue;
-    std::string others;  // the methods that do
-    for (const MethodCapabilities& other : kMethodCapabilities) {
-      if (other.joints[static_cast<std::size_t>(joint.type)]) others += (others.empty() ? "" : ", ") + std::string(method_name(other.method));
-    }
+    const std::string others = methods_where([&](const MethodCapabilities& other) { return other.joints[static_cast<std::size_t>(joint.type)]; });
     throw ModelError("joints[" + std::to_string(j) + "] '" + joint.name + "': the " + name + " method does not support " +
                      std::string(joint_type_name(joint.type)) + " joints (it supports " + names + "; " + others + " " +
                      (others.find(',') == std::string::npos ? "does" : "do") + ")");
@@ -552,10 +559,7 @@ void require_actuator_supported(const Model& model, Method method, std::size_t i
   const Joint& joint = model.joints.at(static_cast<std::size_t>(actuator.joint));
   if (capabilities(method).serial_actuators || joint.type != JointType::serial || joint.serial_axes.size() < 2) return;
   if (actuator.kind == ActuatorKind::motor && control == 0) return;  // no force
-  std::string others;
-  for (const MethodCapabilities& other : kMethodCapabilities) {
-    if (other.serial_actuators) others += (others.empty() ? "" : ", ") + std::string(method_name(other.method));
-  }
+  const std::string others = methods_where([](const MethodCapabilities& other) { return other.serial_actuators; });
   throw ModelError("actuators[" + std::to_string(index) + "] '" + actuator.name + "': the " + std::string(method_name(method)) +
                    " method does not drive an axis of serial joint '" + joint.name + "' (" + std::to_string(joint.serial_axes.size()) +
                    " axes in one body: its virtual links move the body wrongly under a joint force); " + others + " do");

@@ -4,6 +4,7 @@
 // joints' representation.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -46,6 +47,21 @@ struct RigidContact {
   double restitution = 0, friction = 0;
   double approach_speed = 0;  ///< normal speed towards each other before the impulses, m/s, ≥ 0
 };
+
+/// Records a contact's approach (m/s, the normal speed towards each other before any impulse)
+/// in approach_speed; below 2|g|Δt it bounces with e = 0, so resting contacts stay at rest. Every
+/// rigid method's contacts.
+inline void record_approach(RigidContact& contact, double approach, const Settings& settings, double dt) {
+  if (approach < 2 * settings.gravity.norm() * dt) contact.restitution = 0;
+  contact.approach_speed = std::max(approach, 0.0);
+}
+
+/// How far the push-out moves a contact's bodies apart along its normal, m: its depth less the
+/// separation it may keep (allowed_separation, with the separation at the step's start taken as
+/// −depth + approach·Δt). ≤ 0: nothing to push.
+inline double push_out_distance(const RigidContact& contact, const Settings& settings, double dt) {
+  return contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, settings.contact_recovery_speed * dt);
+}
 
 /// The Model's joints as anchor pairs on the rigid bodies, one per joint, one array per field:
 /// a joint's separation is d = p_inboard − p_outboard (m). A world anchor has body −1 and its
