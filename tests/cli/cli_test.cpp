@@ -14,6 +14,7 @@
 #include "tools/cli/cli.hpp"
 #include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber::cli {
 namespace {
@@ -113,7 +114,7 @@ TEST(Cli, CopiesLayScenesSideBySide) {
 }
 
 TEST(Cli, OutWritesOneCsvRowPerStepPlusTheStart) {
-  const std::string path = ::testing::TempDir() + "limber_cli_trajectory.csv";
+  const std::string path = (limber::testing::test_directory() / "cli_trajectory.csv").string();
   const Result r = run({"run", scene("stick_in_box.json"), "--steps", "25", "--out", path});
   ASSERT_EQ(r.code, kSuccess) << r.err;
   std::ifstream csv(path);
@@ -151,7 +152,7 @@ TEST(Cli, TheRainsFirstThirtyRagdollsRunAndLand) {
 TEST(Cli, ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes) {
   // 32 self-colliding ragdolls: by step 120 hundreds of contact rows are coloured and swept.
   const auto trajectory = [](const std::vector<std::string>& variant, const std::string& name) {
-    const std::string csv = ::testing::TempDir() + "/limber_pile_" + name + ".csv";
+    const std::string csv = (limber::testing::test_directory() / ("pile_" + name + ".csv")).string();
     std::vector<std::string> arguments{"run", scene("ragdoll_pile.json"), "--steps", "120", "--out", csv};
     arguments.insert(arguments.end(), variant.begin(), variant.end());
     const Result r = run(arguments);
@@ -182,7 +183,7 @@ TEST(Cli, SceneRelaxationSettingsRunAsStatedAndKeepTheCsvColumns) {
                  "relaxation": {"projection": "rattle", "substeps": 64, "iterations": 4}},
     "chain": {"links": 5, "shape": "capsule", "link_length": 0.1, "link_radius": 0.005, "link_mass": 1, "end_mass": 2,
               "anchor": [0, 0, 1], "direction": [1, 0, 0], "pinned": true}})";
-  const std::string path = ::testing::TempDir() + "/limber_rattle_chain.json", csv_path = ::testing::TempDir() + "/limber_rattle.csv";
+  const std::string path = (limber::testing::test_directory() / "rattle_chain.json").string(), csv_path = (limber::testing::test_directory() / "rattle.csv").string();
   std::ofstream(path) << text;
   const Result r = run({"run", path, "--steps", "30", "--out", csv_path});
   ASSERT_EQ(r.code, kSuccess) << r.err;
@@ -227,8 +228,7 @@ TEST(Cli, RejectsBadProjectionAndSubsteps) {
 // A model file: MJCF runs under the method that can represent it, its loader's notes on stderr;
 // a bad one is one line naming the file, the line and the element.
 TEST(Cli, RunsAnMjcfModelAndPrintsWhatItsLoaderDropped) {
-  const std::filesystem::path directory = std::filesystem::temp_directory_path() / "limber_cli_mjcf";
-  std::filesystem::create_directories(directory);
+  const std::filesystem::path directory = limber::testing::test_directory();
   const std::string good = (directory / "pendulum.xml").string(), bad = (directory / "bad.xml").string();
   std::ofstream(good) << "<mujoco model=\"pendulum\">\n<worldbody>\n<light pos=\"0 0 3\"/>\n<body pos=\"0 0 1\">\n"
                          "<joint name=\"pivot\" axis=\"0 1 0\"/>\n<geom type=\"capsule\" fromto=\"0 0 0 0.3 0 0\" size=\"0.02\"/>\n"
@@ -259,7 +259,7 @@ TEST(Cli, TheVerdictSeesEveryStepOfTheRun) {
   const std::size_t settings = loose.find("\"settings\": {");
   ASSERT_NE(settings, std::string::npos);
   loose.insert(settings + 13, R"("tolerances": {"penetration": 10, "limit": 10, "joint_gap": 10, "energy_gain": 10}, )");
-  const std::string path = ::testing::TempDir() + "/limber_loose_tolerances.json";
+  const std::string path = (limber::testing::test_directory() / "loose_tolerances.json").string();
   std::ofstream(path) << loose;
   const Result forgiven = run({"run", path, "--method", "featherstone", "--dt", "0.0333"});
   ASSERT_EQ(forgiven.code, kSuccess) << forgiven.err;
@@ -289,7 +289,7 @@ TEST(Cli, SpringMethodsRunEveryShippedScene) {
 }
 
 TEST(Cli, SpringsWriteHeadAndTailColumns) {
-  const std::string path = ::testing::TempDir() + "/limber_springs.csv";
+  const std::string path = (limber::testing::test_directory() / "springs.csv").string();
   const Result r = run({"run", scene("chain.json"), "--method", "springs-implicit", "--steps", "5", "--out", path});
   ASSERT_EQ(r.code, kSuccess) << r.err;
   std::ifstream csv(path);
@@ -416,16 +416,16 @@ TEST(Cli, AJointComeApartIsADivergenceAndExitsOne) {
 
 // A scene path that is no scene file: one line naming it, whatever it is.
 TEST(Cli, WhatIsNoSceneFileGetsOneLineNamingIt) {
-  const std::string directory = ::testing::TempDir() + "/limber_cli_directory";
+  const std::string directory = (limber::testing::test_directory() / "cli_directory").string();
   std::filesystem::create_directories(directory);
   expect_rejected({"run", directory}, directory);
-  const std::string empty = ::testing::TempDir() + "/limber_cli_empty.json";
+  const std::string empty = (limber::testing::test_directory() / "cli_empty.json").string();
   std::ofstream(empty).flush();
   expect_rejected({"run", empty}, "empty file");
-  const std::string garbage = ::testing::TempDir() + "/limber_cli_garbage.json";
+  const std::string garbage = (limber::testing::test_directory() / "cli_garbage.json").string();
   std::ofstream(garbage, std::ios::binary) << std::string("\x00\xff\x13{[\"", 6);
   expect_rejected({"run", garbage}, garbage);
-  const std::string huge = ::testing::TempDir() + "/limber_cli_huge.json";
+  const std::string huge = (limber::testing::test_directory() / "cli_huge.json").string();
   std::ofstream(huge).flush();
   std::filesystem::resize_file(huge, std::uintmax_t(65) << 20);  // sparse: 65 MiB of zeros
   expect_rejected({"run", huge}, "MiB");
@@ -434,7 +434,7 @@ TEST(Cli, WhatIsNoSceneFileGetsOneLineNamingIt) {
 
 // --out never writes over the scene, however the path is spelled, and leaves it as it was.
 TEST(Cli, OutNeverWritesOverTheSceneFile) {
-  const std::string copy = ::testing::TempDir() + "/limber_cli_scene_copy.json";
+  const std::string copy = (limber::testing::test_directory() / "cli_scene_copy.json").string();
   std::filesystem::copy_file(scene("chain.json"), copy, std::filesystem::copy_options::overwrite_existing);
   const auto bytes = [](const std::string& path) {
     std::ostringstream text;
@@ -445,7 +445,7 @@ TEST(Cli, OutNeverWritesOverTheSceneFile) {
   const std::string respelled = std::filesystem::path(copy).parent_path().string() + "/./" + std::filesystem::path(copy).filename().string();
   expect_rejected({"run", copy, "--steps", "2", "--out", respelled}, "--out");
   EXPECT_EQ(bytes(copy), before);
-  expect_rejected({"run", copy, "--steps", "2", "--out", ::testing::TempDir()}, "directory");
+  expect_rejected({"run", copy, "--steps", "2", "--out", limber::testing::test_directory().string()}, "directory");
 }
 
 // --out replaces only a regular file: a device, a pipe or a socket at its path is refused
@@ -453,9 +453,7 @@ TEST(Cli, OutNeverWritesOverTheSceneFile) {
 // would replace the device node itself). Whatever is at NAME.part is no concern of the run's:
 // it writes a temporary file of its own.
 TEST(Cli, OutRefusesToReplaceAnythingButARegularFile) {
-  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "limber_cli_not_regular";
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::string pipe = (folder / "pipe").string();
   ASSERT_EQ(mkfifo(pipe.c_str(), 0600), 0);
   for (const std::string& path : {std::string("/dev/null"), std::string("/dev/full"), pipe}) {
@@ -478,9 +476,7 @@ TEST(Cli, OutRefusesToReplaceAnythingButARegularFile) {
 // A symbolic link at --out is followed: the file it names gets the trajectory and the link
 // stays a link; a link to a device or to nothing is refused.
 TEST(Cli, OutWritesThroughASymbolicLinkAndKeepsIt) {
-  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / "limber_cli_links";
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::filesystem::path target = folder / "results.csv", link = folder / "latest.csv";
   std::ofstream(target) << "an older result\n";
   std::filesystem::create_symlink(target, link);
@@ -501,7 +497,7 @@ TEST(Cli, OutWritesThroughASymbolicLinkAndKeepsIt) {
 // A trajectory that could not fit on the disk (10⁹ rows of 10⁴ links: petabytes) is refused
 // before the run, and leaves no file.
 TEST(Cli, OutRefusesATrajectoryLargerThanTheFreeSpace) {
-  const std::filesystem::path folder = test::fresh_folder("limber_cli_huge");
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::string path = (folder / "huge.csv").string();
   expect_rejected({"run", scene("chain.json"), "--links", "10000", "--steps", "1000000000", "--out", path}, "free in");
   EXPECT_FALSE(std::filesystem::exists(path));
@@ -534,7 +530,7 @@ TEST(Cli, RefusesBodiesThatNeedMoreMemoryThanIsAvailable) {
 // An output file appears under its name only once complete: an abandoned one leaves nothing,
 // not even over an older file of that name.
 TEST(Cli, AnOutputFileAppearsOnlyWhenComplete) {
-  const std::string path = ::testing::TempDir() + "/limber_cli_output.csv";
+  const std::string path = (limber::testing::test_directory() / "cli_output.csv").string();
   std::ofstream(path) << "an older result\n";
   std::filesystem::path partial;
   {
@@ -584,7 +580,7 @@ TEST(Cli, TheReadmesErrorExamplePrintsWhatTheReadmeShows) {
 }
 
 TEST(Cli, RejectsABadSceneFileNamingFileAndField) {
-  const std::string path = ::testing::TempDir() + "limber_cli_bad_scene.json";
+  const std::string path = (limber::testing::test_directory() / "cli_bad_scene.json").string();
   std::ifstream in(scene("chain.json"));
   std::stringstream text;
   text << in.rdbuf();

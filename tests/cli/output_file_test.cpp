@@ -79,7 +79,7 @@ int wait_for(pid_t pid) {
 // Two runs writing one --out at once, of different trajectories (other time steps, other step
 // counts): each exits 0, and the file is one run's trajectory, byte for byte, never a mix.
 TEST(OutputFile, TwoRunsWritingOneNameAtOnceLeaveOneWholeTrajectory) {
-  const std::filesystem::path folder = test::fresh_folder("limber_out_at_once");
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::string out = (folder / "trajectory.csv").string();
   const std::vector<std::vector<std::string>> runs{
       {"run", scene("chain.json"), "--dt", "0.004", "--steps", "6000"},
@@ -115,7 +115,7 @@ TEST(OutputFile, TwoRunsWritingOneNameAtOnceLeaveOneWholeTrajectory) {
 // A file already at NAME.part, here a hard link to another file, is no run's: the run writes a
 // temporary file of its own, and the other file keeps its content.
 TEST(OutputFile, AFileAlreadyAtNamePartIsNeverWrittenThrough) {
-  const std::filesystem::path folder = test::fresh_folder("limber_out_hard_link");
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::filesystem::path out = folder / "trajectory.csv", other = folder / "other.csv";
   std::ofstream(other) << "another file's content\n";
   std::filesystem::create_hard_link(other, out.string() + ".part");
@@ -130,7 +130,7 @@ TEST(OutputFile, AFileAlreadyAtNamePartIsNeverWrittenThrough) {
 // An --out that cannot be created is one line naming it, before the run: an empty name, a
 // folder that does not exist.
 TEST(OutputFile, AnOutThatCannotBeCreatedIsRefusedBeforeTheRun) {
-  const std::filesystem::path folder = test::fresh_folder("limber_out_cannot");
+  const std::filesystem::path folder = limber::testing::test_directory();
   for (const std::string& out : {std::string(), (folder / "nowhere" / "trajectory.csv").string()}) {
     const Result r = run({"run", scene("chain.json"), "--steps", "2", "--out", out});
     EXPECT_EQ(r.code, kBadInput) << out;
@@ -146,7 +146,7 @@ TEST(OutputFile, AnOutThatCannotBeCreatedIsRefusedBeforeTheRun) {
 // SIGINT or SIGTERM in the middle of a run: the process ends by that signal, its temporary file
 // is gone, and the older file under the name is as it was.
 void expect_a_signal_leaves_no_temporary_file(int signal) {
-  const std::filesystem::path folder = test::fresh_folder("limber_out_signal_" + std::to_string(signal));
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::filesystem::path out = folder / "trajectory.csv", log = folder / "log";
   std::ofstream(out) << "an older result\n";
   const pid_t pid = start_program({"run", scene("stick_in_box.json"), "--steps", "10000000", "--out", out.string()}, log);

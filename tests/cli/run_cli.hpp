@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 
 namespace limber::cli::test {
@@ -37,14 +38,6 @@ inline std::vector<std::filesystem::path> partial_files(const std::filesystem::p
     if (entry.path().filename().string().ends_with(".part")) found.push_back(entry.path());
   }
   return found;
-}
-
-/// An empty folder of the test's own under the test temporary folder: `name`, emptied if it was there.
-inline std::filesystem::path fresh_folder(const std::string& name) {
-  const std::filesystem::path folder = std::filesystem::path(::testing::TempDir()) / name;
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
-  return folder;
 }
 
 }  // namespace limber::cli::test

@@ -112,7 +112,7 @@ std::vector<std::string> run_under_every_method(const std::string& file, const s
 }
 
 TEST(Trajectory, EveryShippedSceneUnderEveryMethodNamesEveryColumn) {
-  const std::filesystem::path folder = test::fresh_folder("limber_trajectory_scenes");
+  const std::filesystem::path folder = limber::testing::test_directory();
   int loaded = 0;
   for (const auto& entry : std::filesystem::directory_iterator(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes")) {
     if (entry.path().extension() != ".json") continue;
@@ -128,7 +128,7 @@ TEST(Trajectory, EveryShippedSceneUnderEveryMethodNamesEveryColumn) {
 TEST(Trajectory, EveryMujocoModelUnderEveryMethodNamesEveryColumn) {
   const std::filesystem::path models = "/usr/share/mujoco/model";
   if (!std::filesystem::is_directory(models)) GTEST_SKIP() << models << " is not installed (libmujoco-samples)";
-  const std::filesystem::path folder = test::fresh_folder("limber_trajectory_mjcf");
+  const std::filesystem::path folder = limber::testing::test_directory();
   int files = 0, loaded = 0;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(models)) {
     if (entry.path().extension() != ".xml") continue;
@@ -143,7 +143,7 @@ TEST(Trajectory, EveryMujocoModelUnderEveryMethodNamesEveryColumn) {
 // The smallest case: one body on two hinges runs them through a virtual link under the particle
 // method and Lagrange, whose columns are named as the link it is; Featherstone has none.
 TEST(Trajectory, ABodyOnTwoHingesNamesItsVirtualLinksColumns) {
-  const std::filesystem::path folder = test::fresh_folder("limber_trajectory_two_hinges");
+  const std::filesystem::path folder = limber::testing::test_directory();
   const std::string model = (folder / "two_hinges.xml").string();
   std::ofstream(model) << "<mujoco model=\"two hinges\">\n<worldbody>\n<body name=\"arm\" pos=\"0 0 1\">\n"
                           "<joint name=\"pitch\" axis=\"0 1 0\"/>\n<joint name=\"roll\" axis=\"1 0 0\"/>\n"

@@ -16,6 +16,7 @@
 
 #include "limber/kernel/scene/scene_file.hpp"
 #include "tests/support/in_child.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -23,18 +24,10 @@ namespace {
 using ::testing::HasSubstr;
 using ::testing::StartsWith;
 using testing::in_child;
+using testing::test_directory;
 namespace fs = std::filesystem;
 
 constexpr const char* kFifo = "cannot read file: not a regular file but a FIFO";
-
-// A fresh directory for this test's files.
-fs::path test_directory() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / "limber_input_tests" / info->name();
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
 
 fs::path write(const fs::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "limber/kernel/scene/mjcf_document.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace {
 
@@ -21,16 +22,8 @@ using limber::mjcf::Document;
 using limber::mjcf::load_mjcf;
 using limber::mjcf::parse_mjcf;
 using ::testing::HasSubstr;
+using limber::testing::test_directory;
 using std::numbers::pi;
-
-// A fresh directory for this test's files.
-std::filesystem::path test_directory() {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  auto dir = std::filesystem::temp_directory_path() / "limber_mjcf_tests" / info->name();
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir;
-}
 
 std::filesystem::path write(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;

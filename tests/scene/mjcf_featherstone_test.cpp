@@ -35,6 +35,7 @@
 #include "limber/kernel/scene/mjcf_model.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -373,7 +374,7 @@ TEST(MjcfActuators, PositionVelocityAndMotorForcesAreMujocos) {
     <motor joint="h3" gear="3"/>
   </actuator>
 </mujoco>)";
-  const auto file = std::filesystem::temp_directory_path() / "limber_mjcf_actuators.xml";
+  const auto file = limber::testing::test_directory() / "actuators.xml";
   std::ofstream(file) << xml;
   char error[1000] = "";
   mjModel* mj = mj_loadXML(file.c_str(), nullptr, error, sizeof error);

@@ -10,6 +10,7 @@
 
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -66,7 +67,7 @@ TEST_P(MjcfBoxAndEllipsoidSettle, OnTheirLargestFacesAtTheirHalfHeights) {
     <body name="egg" pos="1 0 0.3" euler="-2 3 70"><freejoint/><geom type="ellipsoid" size="0.15 0.1 0.07"/></body>
   </worldbody>
 </mujoco>)";
-  const auto file = std::filesystem::temp_directory_path() / "limber_mjcf_box_and_ellipsoid.xml";
+  const auto file = limber::testing::test_directory() / "box_and_ellipsoid.xml";
   std::ofstream(file) << xml;
   const Scene scene = load_scene_file(file);
   World world(scene.model, world_options(GetParam(), scene.methods));

@@ -13,6 +13,7 @@
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -353,7 +354,7 @@ TEST(MjcfModel, TheSameModelFromMjcfAndFromItsJson) {
 // A JSON scene that wraps kLeg: the model file's bodies, joints and actuators, the wrapper's name
 // and settings over the file's (the rest kept), and its errors named by field.
 TEST(MjcfModel, ASceneFileWrapsAModelFileWithLimbersSettings) {
-  const auto dir = std::filesystem::temp_directory_path() / "limber_scene_wrapper";
+  const auto dir = limber::testing::test_directory();
   std::filesystem::create_directories(dir / "models");
   std::ofstream(dir / "models" / "leg.xml") << kLeg;
   const auto write = [&](const std::string& text) {

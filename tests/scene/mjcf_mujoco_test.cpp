@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "limber/kernel/scene/mjcf_document.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace {
 
@@ -36,8 +37,7 @@ MjModelPtr mujoco_load(const std::filesystem::path& file) {
 }
 
 std::filesystem::path write_temp(const std::string& name, const std::string& xml) {
-  const auto dir = std::filesystem::temp_directory_path() / "limber_mjcf_mujoco_tests";
-  std::filesystem::create_directories(dir);
+  const auto dir = limber::testing::test_directory();
   std::ofstream(dir / name) << xml;
   return dir / name;
 }

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "limber/kernel/scene/scene_file.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -21,9 +22,7 @@ namespace fs = std::filesystem;
 
 // `text` as a file of this test's directory named `name`.
 fs::path write(const std::string& name, const std::string& text) {
-  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const fs::path dir = fs::temp_directory_path() / "limber_model_values_tests" / info->name();
-  fs::create_directories(dir);
+  const fs::path dir = limber::testing::test_directory();
   std::ofstream(dir / name, std::ios::binary) << text;
   return dir / name;
 }

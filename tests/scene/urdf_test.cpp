@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>  // getpid
 
 #include <gtest/gtest.h>
 
@@ -20,6 +19,7 @@
 #include "limber/kernel/scene/scene_file.hpp"
 #include "limber/kernel/scene/urdf.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber {
 namespace {
@@ -428,7 +428,7 @@ TEST(UrdfJoints, FloatingJointFromTheRootFrameMakesAFreeBody) {
 }
 
 TEST(UrdfSceneFile, LoadSceneFileReadsUrdfWithItsNotesAndFloatingBase) {
-  const std::filesystem::path file = std::filesystem::temp_directory_path() / ("limber_urdf_test_" + std::to_string(::getpid()) + ".urdf");
+  const std::filesystem::path file = limber::testing::test_directory() / "arm.urdf";
   std::ofstream(file) << kArm;
   const Scene welded = load_scene_file(file);
   EXPECT_EQ(welded.model.bodies.size(), 3u);

@@ -19,6 +19,7 @@
 #include "tools/viewer/scene_drawing.hpp"
 #include "tools/viewer/view_app.hpp"
 #include "tools/viewer/view_state.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber::viewer {
 namespace {
@@ -42,7 +43,7 @@ int view(const std::vector<std::string>& arguments, std::string* err_text = null
 }
 
 TEST(HeadlessView, TheSameFrameRendersToTheSameNonBlankPng) {
-  const std::string first = ::testing::TempDir() + "/limber_view_first.png", second = ::testing::TempDir() + "/limber_view_second.png";
+  const std::string first = (limber::testing::test_directory() / "view_first.png").string(), second = (limber::testing::test_directory() / "view_second.png").string();
   std::string err;
   for (const std::string& path : {first, second}) {
     ASSERT_EQ(view({kHumanoid, "--frames", "40", "--width", std::to_string(kWidth), "--height", std::to_string(kHeight),

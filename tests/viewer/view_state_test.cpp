@@ -14,6 +14,7 @@
 
 #include "tools/cli/cli.hpp"
 #include "tools/viewer/scene_drawing.hpp"
+#include "tests/support/test_directory.hpp"
 
 namespace limber::viewer {
 namespace {
@@ -44,8 +45,8 @@ class ViewerFrames : public ::testing::TestWithParam<const char*> {};
 // trajectory to the last bit of every point of every step (the CSV is lossless).
 TEST_P(ViewerFrames, TakeTheStepsOfLimberRunBitForBit) {
   const std::string method = GetParam();
-  const std::string viewed = ::testing::TempDir() + "/limber_view_" + method + ".csv";
-  const std::string ran = ::testing::TempDir() + "/limber_run_" + method + ".csv";
+  const std::string viewed = (limber::testing::test_directory() / ("view_" + method + ".csv")).string();
+  const std::string ran = (limber::testing::test_directory() / ("run_" + method + ".csv")).string();
   std::filesystem::remove(viewed);
   {
     ViewState view({kHumanoid, "--method", method, "--out", viewed});
