@@ -130,6 +130,23 @@ struct TreeContact {
   std::array<Eigen::Vector3d, 2> wanted_slide{};  ///< the tangential motion of the side's point asked for, m
 };
 
+/// What the joint trees did since the substep began (StepProfile's tree counts), per component
+/// or summed: position solves (project_joint_trees calls), their Newton steps, the solves that
+/// stopped at the cap with a move still ≥ 1e-5 m; and the elimination's work, positions and
+/// velocities alike: fresh factors, inverse diagonals (the contacts' mobilities), whole
+/// back-substitutions, and path solves (a loop's mobility, along two paths to the root).
+struct JointTreeCounts {
+  int solves = 0, newton_steps = 0, capped = 0;
+  int factors = 0, inverse_diagonals = 0, substitutions = 0, path_solves = 0;
+
+  JointTreeCounts& operator+=(const JointTreeCounts& part) {
+    solves += part.solves, newton_steps += part.newton_steps, capped += part.capped;
+    factors += part.factors, inverse_diagonals += part.inverse_diagonals;
+    substitutions += part.substitutions, path_solves += part.path_solves;
+    return *this;
+  }
+};
+
 /// The exact joint-tree solve's structure (kernel/relaxation/joint_trees.hpp), built at compile;
 /// its per-solve arrays are scratch sized there, so nothing is allocated while stepping.
 struct JointTrees {
@@ -185,9 +202,8 @@ struct JointTrees {
   /// next Newton step (bit 2k: at the upper bound, 2k + 1: at the lower; hold_pushing_limits).
   std::vector<std::uint8_t> limit_upper, limit_held;
   /// Counts since the substep began (begin_joint_trees), per component, for the step's profile
-  /// (each written by its island's task only): position solves (project_joint_trees calls),
-  /// their Newton steps, and the solves that stopped at the cap with a move still ≥ 1e-5 m.
-  std::vector<std::uint32_t> solves, newton_steps, capped;
+  /// (each written by its island's task only).
+  std::vector<JointTreeCounts> counts;
   /// Contacts solved with the trees (tree_contacts.hpp; the pbd rule only): per particle, the
   /// tree limb it belongs to (−1: none); per limb its component (−1: none); per component its
   /// island. Per substep: the contacts, and by component the ones it has a side in.

@@ -238,12 +238,14 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
       trees.elimination.set_rows(j, trees.rows[j]);
       trees.factored_limits[j] = trees.active_limits[j];
     }
+    ++trees.counts[index].factors;
     trees.elimination.factor(component.begin, component.end, [&](std::size_t j, std::int32_t limb) -> const Matrix6& {
       return trees.joints[j].limb_a == limb ? trees.block_a[j] : trees.block_b[j];
     });
     trees.mobility_current[index] = 0;
   }
   trees.factored[index] = velocities ? 0 : 1;  // the velocity stage's factor is not the positions'
+  ++trees.counts[index].substitutions;
   trees.elimination.solve(component.begin, component.end);
   if (!velocities) hold_pushing_limits(trees, component);
 }
@@ -301,16 +303,14 @@ void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   JointTrees& trees = state.plan.joint_trees;
   std::fill(trees.factored.begin(), trees.factored.end(), std::uint8_t{0});
   gather_tree_contacts(state, dt);
-  for (auto* counts : {&trees.solves, &trees.newton_steps, &trees.capped}) std::fill(counts->begin(), counts->end(), 0u);
+  std::fill(trees.counts.begin(), trees.counts.end(), JointTreeCounts{});
 }
 
 template <typename Scalar>
 JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
   const JointTrees& trees = state.plan.joint_trees;
   JointTreeCounts counts;
-  for (std::size_t k = 0; k < trees.solves.size(); ++k) {
-    counts.solves += trees.solves[k], counts.newton_steps += trees.newton_steps[k], counts.capped += trees.capped[k];
-  }
+  for (const JointTreeCounts& component : trees.counts) counts += component;
   return counts;
 }
 
@@ -334,12 +334,12 @@ double newton_steps(VerletState<Scalar>& state, std::uint32_t index, int first, 
   for (int newton = first; newton < kNewtonSteps; ++newton) {
     if (newton > 0) trees.factored[index] = 0;
     solve_component(state, trees, index, false);
-    ++trees.newton_steps[index];
+    ++trees.counts[index].newton_steps;
     const double moved = move_component(state, index);
     largest = std::max(largest, moved);
     if (moved < kNewtonMove) return largest;
   }
-  ++trees.capped[index];
+  ++trees.counts[index].capped;
   return largest;
 }
 
@@ -355,7 +355,7 @@ void release_limits(JointTrees& trees, std::uint32_t index) {
 // One component's tree on the positions, without contacts; returns the largest move, m.
 template <typename Scalar>
 double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
-  ++state.plan.joint_trees.solves[index];
+  ++state.plan.joint_trees.counts[index].solves;
   release_limits(state.plan.joint_trees, index);
   return newton_steps(state, index, 0, 0.0);
 }
@@ -369,12 +369,15 @@ double contact_round_joints(VerletState<Scalar>& state, std::uint32_t index, int
   JointTrees& trees = state.plan.joint_trees;
   if (trees.component_contacts.row(index).empty()) return round == 0 ? solve_positions(state, index) : 0.0;
   if (trees.settled[index]) return 0;
-  if (round == 0) ++trees.solves[index], release_limits(trees, index);
+  if (round == 0) ++trees.counts[index].solves, release_limits(trees, index);
   if (round > 0) trees.factored[index] = 0;
   solve_component(state, trees, index, false);
-  ++trees.newton_steps[index];
+  ++trees.counts[index].newton_steps;
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-  if (!trees.mobility_current[index]) trees.elimination.inverse_diagonal(component.begin, component.end);
+  if (!trees.mobility_current[index]) {
+    trees.elimination.inverse_diagonal(component.begin, component.end);
+    ++trees.counts[index].inverse_diagonals;
+  }
   trees.mobility_current[index] = 1;
   for_each_limb(trees, component, [&](std::size_t limb) {
     trees.joint_motion[limb] = trees.elimination.work(limb);
@@ -394,6 +397,7 @@ double contact_iteration_loads(VerletState<Scalar>& state, std::uint32_t index) 
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
   if (!add_tree_contact_loads(trees, index)) return 0;
+  ++trees.counts[index].substitutions;
   trees.elimination.solve(component.begin, component.end);
   const double scale = tree_contact_overshoot(trees, index);
   trees.load_scale[index] = scale;
@@ -411,7 +415,7 @@ double contact_round_move(VerletState<Scalar>& state, std::uint32_t index, int r
   for_each_limb(trees, component, [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
   const double moved = move_component(state, index);
   trees.settled[index] = moved < kContactRoundMove ? 1 : 0;
-  if (!trees.settled[index] && round == kNewtonSteps - 1) ++trees.capped[index];
+  if (!trees.settled[index] && round == kNewtonSteps - 1) ++trees.counts[index].capped;
   return moved;
 }
 
@@ -423,7 +427,7 @@ double close_joints(VerletState<Scalar>& state, std::uint32_t index) {
   if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
   trees.factored[index] = 0;
   solve_component(state, trees, index, false);
-  ++trees.newton_steps[index];
+  ++trees.counts[index].newton_steps;
   return move_component(state, index);
 }
 

@@ -206,9 +206,7 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.factored_limits.assign(trees.joints.size(), 0);
   trees.rows.assign(trees.joints.size(), 0);
   trees.factored.assign(trees.elimination.ordering().components.size(), 0);
-  trees.solves.assign(trees.factored.size(), 0);
-  trees.newton_steps.assign(trees.factored.size(), 0);
-  trees.capped.assign(trees.factored.size(), 0);
+  trees.counts.assign(trees.factored.size(), {});
   trees.mobility_current.assign(trees.factored.size(), 0);
   trees.load_scale.assign(trees.factored.size(), 1.0);
   trees.settled.assign(trees.factored.size(), 0);

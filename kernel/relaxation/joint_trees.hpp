@@ -60,11 +60,7 @@ bool joint_trees_on_threads(const RelaxationPlan<Scalar>& plan) {
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state, double dt);
 
-/// What the trees did since the substep began, over every component (StepProfile's tree
-/// counts): position solves, their Newton steps, and the solves capped unconverged.
-struct JointTreeCounts {
-  int solves = 0, newton_steps = 0, capped = 0;
-};
+/// What the trees did since the substep began, summed over every component.
 template <typename Scalar>
 JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state);
 

@@ -235,6 +235,7 @@ void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component) {
     for (const std::int32_t node : path) trees.elimination.work(static_cast<std::size_t>(node)).setZero();
     for (std::size_t s = 0; s < 2; ++s) trees.elimination.work(static_cast<std::size_t>(contact.limb[s])) += contact.normal_jacobian[s];
     trees.elimination.solve_nodes(path);
+    ++trees.counts[component].path_solves;
     for (std::size_t s = 0; s < 2; ++s) {
       contact.loop_mobility[s] = contact.normal_jacobian[s].dot(trees.elimination.work(static_cast<std::size_t>(contact.limb[s])));
     }

@@ -89,8 +89,9 @@ TEST(JointTrees, TwoSolvesCloseARagdollsJointsAndLimitsToRoundingWhateverItsMass
 
 // The profile's tree counts (joint_tree_counts): a shaken ragdoll's first solve takes Newton
 // steps until one moves less than 1e-5 m or the cap of 4 is reached (a shake of 1 cm needs at
-// least two), the next call one; a substep starts them from zero, and a profiled step counts
-// one solve a sweep.
+// least two), each a fresh factor and one back-substitution; the next call one step, on the
+// kept factor unless a limit joined or left; a substep starts them from zero, and a profiled
+// step counts one solve a sweep. In the air there is no contact: no inverse diagonal or path solve.
 TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
   VerletState<double> state = compile<double>(ragdoll(100), tree_options());
   state.awake_islands = {0};
@@ -105,10 +106,15 @@ TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
   if (first.capped == 1) {
     EXPECT_EQ(first.newton_steps, 4);  // only a solve at the cap is capped
   }
+  EXPECT_EQ(first.factors, first.newton_steps);
+  EXPECT_EQ(first.substitutions, first.newton_steps);
+  EXPECT_EQ(first.inverse_diagonals + first.path_solves, 0);
   project_joint_trees(state);
   const JointTreeCounts second = joint_tree_counts(state);
   EXPECT_EQ(second.solves, 2);
   EXPECT_EQ(second.newton_steps, first.newton_steps + 1);
+  EXPECT_LE(second.factors, first.factors + 1);
+  EXPECT_EQ(second.substitutions, second.newton_steps);
   begin_joint_trees(state, 1.0 / 240);
   EXPECT_EQ(joint_tree_counts(state).newton_steps, 0);
 
@@ -119,6 +125,9 @@ TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
   const StepReport report = step(stepped);
   EXPECT_EQ(report.profile.tree_solves, 2 * options.relaxation.iterations);
   EXPECT_GE(report.profile.tree_newton_steps, report.profile.tree_solves);
+  EXPECT_GE(report.profile.tree_factors, 1);
+  EXPECT_LE(report.profile.tree_factors, report.profile.tree_newton_steps);
+  EXPECT_GE(report.profile.tree_substitutions, report.profile.tree_newton_steps);
 }
 
 TEST(JointTrees, APositionSolveKeepsTheCentreOfMass) {

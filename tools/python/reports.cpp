@@ -28,6 +28,8 @@ py::dict profile_dict(const StepProfile& p) {
   out["contact_rows"] = p.contact_rows, out["contact_colours"] = p.contact_colours, out["candidate_pairs"] = p.candidate_pairs;
   out["limb_searches"] = p.limb_searches, out["contacts"] = p.contacts, out["tree_solves"] = p.tree_solves;
   out["tree_newton_steps"] = p.tree_newton_steps, out["tree_capped"] = p.tree_capped;
+  out["tree_factors"] = p.tree_factors, out["tree_inverse_diagonals"] = p.tree_inverse_diagonals;
+  out["tree_substitutions"] = p.tree_substitutions, out["tree_path_solves"] = p.tree_path_solves;
   return out;
 }
 
