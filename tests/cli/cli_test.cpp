@@ -11,10 +11,10 @@
 #include <gtest/gtest.h>
 
 #include "tests/cli/run_cli.hpp"
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/cli/output_file.hpp"
 #include "tools/cli/run_flags.hpp"
-#include "tests/support/test_directory.hpp"
 
 namespace limber::cli {
 namespace {

@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/cli/run_cli.hpp"
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 
 extern char** environ;

@@ -8,7 +8,6 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 
 namespace limber::cli::test {

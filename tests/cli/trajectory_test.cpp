@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "tests/cli/run_cli.hpp"
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 
 namespace limber::cli {

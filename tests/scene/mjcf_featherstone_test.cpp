@@ -27,10 +27,10 @@
 
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
-#include "limber/kernel/rigid/bodies.hpp"
-#include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/featherstone/joint_space.hpp"
+#include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/mass/mass_properties.hpp"
+#include "limber/kernel/rigid/bodies.hpp"
 #include "limber/kernel/scene/mjcf_document.hpp"
 #include "limber/kernel/scene/mjcf_model.hpp"
 #include "limber/kernel/scene/scene_file.hpp"

@@ -14,12 +14,12 @@
 #include <gtest/gtest.h>
 #include <stb_image.h>
 
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/viewer/renderer.hpp"
 #include "tools/viewer/scene_drawing.hpp"
 #include "tools/viewer/view_app.hpp"
 #include "tools/viewer/view_state.hpp"
-#include "tests/support/test_directory.hpp"
 
 namespace limber::viewer {
 namespace {

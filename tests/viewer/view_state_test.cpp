@@ -12,9 +12,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "tests/support/test_directory.hpp"
 #include "tools/cli/cli.hpp"
 #include "tools/viewer/scene_drawing.hpp"
-#include "tests/support/test_directory.hpp"
 
 namespace limber::viewer {
 namespace {
