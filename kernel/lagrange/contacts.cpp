@@ -6,7 +6,6 @@
 
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
-#include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
 namespace {
@@ -23,35 +22,6 @@ using Kind = JointContactScratch::Kind;
 // is the step's, whatever the count.
 constexpr int kSweeps = 24;
 
-// Each body's jointed component (bodies joined by constraints; a body without any is its own),
-// as a dense index, and the bodies of each component (CSR). Once per state: the joints are fixed
-// at compile.
-void find_components(const LagrangeState& state, JointContactScratch& s) {
-  const std::size_t n = state.bodies.size();
-  DisjointSets sets(n);
-  for (std::size_t c = 0; c < state.constraints.size(); ++c) {
-    const std::int32_t i = state.constraints.inboard[c], o = state.constraints.outboard[c];
-    if (i >= 0 && o >= 0) sets.unite(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(o));
-  }
-  s.component.assign(n, 0);
-  s.component_start.assign(n + 1, 0);
-  std::uint32_t count = 0;
-  for (std::size_t b = 0; b < n; ++b) {
-    const std::uint32_t root = sets.find(static_cast<std::uint32_t>(b));
-    s.component[b] = root == b ? count++ : s.component[root];  // a root is its set's lowest body
-  }
-  s.component_start.resize(count + 1);
-  for (std::size_t b = 0; b < n; ++b) ++s.component_start[s.component[b] + 1];
-  for (std::uint32_t c = 0; c < count; ++c) s.component_start[c + 1] += s.component_start[c];
-  s.component_bodies.resize(n);
-  std::vector<std::uint32_t> filled(count, 0);
-  for (std::size_t b = 0; b < n; ++b) {
-    const std::uint32_t c = s.component[b];
-    s.component_bodies[s.component_start[c] + filled[c]++] = static_cast<std::uint32_t>(b);
-  }
-  s.next_batch.resize(count);
-}
-
 // G_r·x over the row's two bodies (x: one 6-vector per body).
 double row_rate(const Row& row, const Vector6* x) {
   double rate = row.jacobian_a.dot(x[row.a]);
@@ -63,9 +33,9 @@ double row_rate(const Row& row, const std::vector<Vector6>& x) { return row_rate
 // The response of the row's batch, per body (of n).
 const Vector6* response_of(const JointContactScratch& s, const Row& row, std::size_t n) { return s.responses.data() + row.batch * n; }
 
-// Puts the row in the first batch whose solve none of its components has used yet.
-void add_row(JointContactScratch& s, Row row) {
-  const std::uint32_t ca = s.component[row.a], cb = row.b >= 0 ? s.component[row.b] : ca;
+// Puts the row in the first batch whose solve none of its islands has used yet.
+void add_row(const LagrangeState& state, JointContactScratch& s, Row row) {
+  const std::uint32_t ca = state.island_of_body[row.a], cb = row.b >= 0 ? state.island_of_body[row.b] : ca;
   row.batch = std::max(s.next_batch[ca], s.next_batch[cb]);
   s.next_batch[ca] = s.next_batch[cb] = row.batch + 1;
   s.rows.push_back(row);
@@ -95,7 +65,7 @@ void build_rows(LagrangeState& state, JointContactScratch& s, double dt) {
         row.jacobian_b.head<3>() = -direction;
         row.jacobian_b.tail<3>() = (y.position[row.b] - contact.point).cross(direction);
       }
-      add_row(s, row);
+      add_row(state, s, row);
     }
     // The approach before any impulse decides bouncing and bounds the push-out.
     record_approach(contact, -row_rate(s.rows[first], s.velocity), state.settings, dt);
@@ -112,13 +82,13 @@ void build_rows(LagrangeState& state, JointContactScratch& s, double dt) {
       row.jacobian_a = side * control.outboard_jacobian.transpose();
       if (inboard >= 0) row.jacobian_b = side * control.inboard_jacobian.transpose();
       row.gap = control.gap;
-      add_row(s, row);
+      add_row(state, s, row);
     }
   }
 }
 
 // One solve against the joints' factor per batch: the responses of its rows, each on its own
-// components' bodies.
+// islands' bodies.
 void measure_responses(LagrangeState& state, JointContactScratch& s) {
   const std::size_t n = state.bodies.size();
   std::uint32_t batches = 0;
@@ -143,15 +113,12 @@ void measure_responses(LagrangeState& state, JointContactScratch& s) {
   for (Row& row : s.rows) row.mobility = row_rate(row, response_of(s, row, n));  // W_rr
 }
 
-// Adds amount × the row's response to x, on the bodies of the row's components.
-void add_response(const JointContactScratch& s, const Row& row, double amount, std::vector<Vector6>& x) {
+// Adds amount × the row's response to x, on the bodies of the row's islands.
+void add_response(const LagrangeState& state, const JointContactScratch& s, const Row& row, double amount, std::vector<Vector6>& x) {
   const Vector6* response = response_of(s, row, x.size());
-  const std::uint32_t ca = s.component[row.a], cb = row.b >= 0 ? s.component[row.b] : ca;
+  const std::uint32_t ca = state.island_of_body[row.a], cb = row.b >= 0 ? state.island_of_body[row.b] : ca;
   for (const std::uint32_t c : {ca, cb}) {
-    for (std::uint32_t i = s.component_start[c]; i < s.component_start[c + 1]; ++i) {
-      const std::uint32_t b = s.component_bodies[i];
-      x[b] += amount * response[b];
-    }
+    for (const std::uint32_t b : state.islands[c].bodies) x[b] += amount * response[b];
     if (cb == ca) break;
   }
 }
@@ -168,7 +135,7 @@ void project_rows(const LagrangeState& state, JointContactScratch& s, std::vecto
       if (!(row.mobility > 0)) continue;
       if (row.kind != Kind::tangent) {
         const double wanted = std::max(row.impulse + (row.target - row_rate(row, x)) / row.mobility, 0.0);
-        add_response(s, row, wanted - row.impulse, x);
+        add_response(state, s, row, wanted - row.impulse, x);
         row.impulse = wanted;
         continue;
       }
@@ -179,8 +146,8 @@ void project_rows(const LagrangeState& state, JointContactScratch& s, std::vecto
       double second = other.mobility > 0 ? other.impulse - row_rate(other, x) / other.mobility : 0;
       const double size = std::hypot(first, second);
       if (size > bound) first *= bound / size, second *= bound / size;
-      add_response(s, row, first - row.impulse, x);
-      add_response(s, other, second - other.impulse, x);
+      add_response(state, s, row, first - row.impulse, x);
+      add_response(state, s, other, second - other.impulse, x);
       row.impulse = first, other.impulse = second;
     }
   }
@@ -190,15 +157,16 @@ void project_rows(const LagrangeState& state, JointContactScratch& s, std::vecto
 
 void prepare_contacts_with_joints(LagrangeState& state) {
   JointContactScratch& s = state.contact_scratch;
-  find_components(state, s);
-  std::vector<std::uint32_t> size(s.component_start.size() - 1), control_rows(size.size(), 0);
-  for (std::size_t c = 0; c < size.size(); ++c) size[c] = s.component_start[c + 1] - s.component_start[c];
-  for (const ControlledJoint& joint : state.controls.joints) control_rows[s.component[state.constraints.outboard[joint.joint]]] += joint.count;
+  s.next_batch.assign(state.islands.size(), 0);
+  std::vector<std::uint32_t> control_rows(state.islands.size(), 0);
+  for (const ControlledJoint& joint : state.controls.joints) control_rows[state.island_of_body[state.constraints.outboard[joint.joint]]] += joint.count;
   // Room for every contact the scene reserved (RigidScene::contacts) and every limit, and for
-  // the batches of the largest component with each limb end on each plane: a step that stays
+  // the batches of the largest island with each limb end on each plane: a step that stays
   // within them allocates nothing.
   std::size_t batches = 0;
-  for (std::size_t c = 0; c < size.size(); ++c) batches = std::max<std::size_t>(batches, 3 * 2 * size[c] * std::max<std::size_t>(state.planes.size(), 1) + control_rows[c]);
+  for (std::size_t c = 0; c < state.islands.size(); ++c) {
+    batches = std::max<std::size_t>(batches, 3 * 2 * state.islands[c].bodies.size() * std::max<std::size_t>(state.planes.size(), 1) + control_rows[c]);
+  }
   s.rows.reserve(3 * state.contacts.capacity() + state.controls.rows.size());
   s.responses.reserve(batches * state.bodies.size());
   s.velocity.reserve(state.bodies.size()), s.displacement.reserve(state.bodies.size());

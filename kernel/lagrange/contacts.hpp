@@ -14,9 +14,9 @@
 // Coulomb's disc |λ_t| ≤ μ·λ_n. The push-out solves the same rows for position changes: each
 // normal out by its depth less the separation it may keep (the rule of every method,
 // geometry.hpp), each limit past its bound back onto it, none pushed past. Rows of bodies in
-// different jointed components share a substitution (their responses do not overlap), so a step
-// costs a factor and about three substitutions per contact and one per limit of its most touched
-// component, not per row of the scene. Drives and joint friction stay in the step's own solves.
+// different islands (the bodies joints and gears join) share a substitution (their responses do
+// not overlap), so a step costs a factor and about three substitutions per contact and one per
+// limit of its most touched island, not per row of the scene. Drives and joint friction stay in the step's own solves.
 // MuJoCo forms A = J M⁻¹ Jᵀ through its factor and solves contacts and limits on it alike
 // (engine_solver.c); Featherstone's method here measures each contact's response with
 // articulated-body passes instead (kernel/featherstone/README.md).
@@ -26,8 +26,8 @@
 
 namespace limber {
 
-/// Sizes state.contact_scratch for the scene at compile: each body's jointed component, and
-/// room for the rows and responses of every contact the scene reserved.
+/// Sizes state.contact_scratch for the scene at compile (after its islands): room for the rows
+/// and responses of every contact the scene reserved.
 void prepare_contacts_with_joints(LagrangeState& state);
 
 /// Answers state.contacts (detect_rigid_contacts) and the joints' limits for a step of dt through

@@ -44,10 +44,9 @@ struct JointContactScratch {
     double impulse = 0;            ///< λ_r
   };
   std::vector<Row> rows;
-  std::vector<std::uint32_t> component;        ///< per body: its jointed component
-  std::vector<std::uint32_t> component_start;  ///< per component + 1: CSR into component_bodies
-  std::vector<std::uint32_t> component_bodies;
-  std::vector<std::uint32_t> next_batch;       ///< per component: the first batch it has not used
+  /// Per island (RigidScene::islands: the bodies joints and gears join): the first batch it has
+  /// not used. Rows of different islands share a batch: their responses do not overlap.
+  std::vector<std::uint32_t> next_batch;
   std::vector<Eigen::Matrix<double, 6, 1>> responses;  ///< per batch, per body (batch·bodies + body): Δu
   std::vector<Eigen::Matrix<double, 6, 1>> velocity, displacement;  ///< per body: (v, ω), (Δx, Δθ)
 };

@@ -360,7 +360,6 @@ void solve_with_controls(LagrangeState& state, const RigidBodyState& y, const st
   }
 }
 
-
 void solve_constrained(LagrangeState& state, const RigidBodyState& y, const std::vector<Vector6>& body_rhs,
                        const std::vector<ConstraintVector>& constraint_rhs, std::vector<Vector6>& accelerations) {
   factor_constrained(state);
