@@ -10,10 +10,6 @@
 namespace limber {
 namespace {
 
-// A contact whose surfaces are this close after relaxation still touches (m): its normal
-// velocity is set by the restitution pass.
-constexpr double kTouchingSlop = 1e-4;
-
 template <typename Scalar>
 Eigen::Vector3d position_of(const ParticleBuffer<Scalar>& particles, std::uint32_t p, bool previous = false) {
   return (previous ? particles.previous(p) : particles.position(p)).template cast<double>();

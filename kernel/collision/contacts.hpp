@@ -35,6 +35,10 @@
 
 namespace limber {
 
+/// A contact whose surfaces are this close after relaxation still touches, m: its normal
+/// velocity is set by the restitution pass (balls and limbs alike).
+inline constexpr double kTouchingSlop = 1e-4;
+
 /// A particle's velocity as the contact passes see it, m/s: (x − x_previous)/dt under pbd, the
 /// state's v under rattle (during relaxation x − x_previous = v·dt there too).
 template <typename Scalar>

@@ -10,8 +10,6 @@
 namespace limber {
 namespace {
 
-// Surfaces this close after relaxation still touch, m (contacts.cpp's rule).
-constexpr double kTouchingSlop = 1e-4;
 // The speculative margin: every pair's floor, m, plus each segment's own reach — twice how far
 // its ends moved this substep (so it finds what it may meet before the next search), capped
 // (a reach past a limb's size finds nothing new).

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "limber/kernel/geometry/geometry.hpp"
+
 namespace limber {
 namespace {
 
@@ -25,13 +27,6 @@ constexpr double kPointLengthSquared = 1e-24;
 constexpr double kParallelSineSquared = 1e-12;
 // |n·axis| below this: the box's extent along `axis` is a tie, so its support feature spans it.
 constexpr double kSupportTie = 1e-9;
-
-// Any unit vector perpendicular to `u` (u need not be unit, only non-zero).
-Vector3d any_perpendicular(const Vector3d& u) {
-  const Vector3d n = u.normalized();
-  const Vector3d other = std::abs(n.x()) < 0.9 ? Vector3d::UnitX() : Vector3d::UnitY();
-  return n.cross(other).normalized();
-}
 
 // `normal` flipped, if need be, to point from `second_reference` towards `first_reference`.
 Vector3d oriented(const Vector3d& normal, const Vector3d& first_reference, const Vector3d& second_reference) {

@@ -4,15 +4,19 @@
 #include <cmath>
 
 namespace limber {
-namespace {
 
-// Any unit vector perpendicular to `u` (used when the closest points coincide).
 Eigen::Vector3d any_perpendicular(const Eigen::Vector3d& u) {
-  const Eigen::Vector3d other = std::abs(u.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  return u.cross(other).normalized();
+  const Eigen::Vector3d n = u.normalized();
+  const Eigen::Vector3d other = std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  return n.cross(other).normalized();
 }
 
-}  // namespace
+bool projects_inside(const std::array<Eigen::Vector3d, 3>& t, const Eigen::Vector3d& n, const Eigen::Vector3d& p) {
+  for (std::size_t k = 0; k < 3; ++k) {
+    if ((t[(k + 1) % 3] - t[k]).cross(p - t[k]).dot(n) < 0) return false;
+  }
+  return true;
+}
 
 SphereLimbContact sphere_limb_contact(const Eigen::Vector3d& centre, double sphere_radius,
                                       const Eigen::Vector3d& head, const Eigen::Vector3d& tail,

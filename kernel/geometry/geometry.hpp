@@ -2,6 +2,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -21,6 +22,13 @@ struct Plane {
 /// The ground and the six walls of the bounds as planes, ground first, each with its
 /// restitution and friction (what every method collides against).
 std::vector<Plane> scene_planes(const Model& model);
+
+/// Any unit vector perpendicular to `u` (u non-zero, not necessarily unit).
+Eigen::Vector3d any_perpendicular(const Eigen::Vector3d& u);
+
+/// Whether p, on or off the plane of the triangle t with normal n, projects inside it along n
+/// (edges included).
+bool projects_inside(const std::array<Eigen::Vector3d, 3>& t, const Eigen::Vector3d& n, const Eigen::Vector3d& p);
 
 /// A sphere against a limb: where they are closest, and how far apart.
 struct SphereLimbContact {

@@ -21,7 +21,7 @@ using Eigen::Vector3d;
 constexpr double kEndZone = 0.02;
 // Golden-section steps for the deepest point of a segment in a box: the bracket shrinks by
 // 0.618 per step, so 40 steps leave 4·10⁻⁹ of the segment's length.
-constexpr int kGoldenSteps = 40;
+constexpr int kDeepestPointSteps = 40;
 
 LimbSegment model_segment(const Body& body) { return {body.head(), body.tail(), body.shape.radius}; }
 
@@ -134,7 +134,7 @@ double deepest_axial(const StaticPrimitive& primitive, const LimbSegment& limb) 
   const auto depth_at = [&](double s) {
     return box_surface_point(primitive.box, limb.head + s * (limb.tail - limb.head)).distance;
   };
-  const GoldenBracket deepest = golden_section(depth_at, 0.0, 1.0, kGoldenSteps, [](double, double) { return false; });
+  const GoldenBracket deepest = golden_section(depth_at, 0.0, 1.0, kDeepestPointSteps, [](double, double) { return false; });
   return 0.5 * (deepest.low + deepest.high);
 }
 

@@ -3,20 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "limber/kernel/geometry/geometry.hpp"
+
 namespace limber {
 namespace {
 
 using Eigen::Vector3d;
-
-// Whether p, on or off the plane of the triangle, projects inside it (edges included).
-bool projects_inside(const std::array<Vector3d, 3>& t, const Vector3d& n, const Vector3d& p) {
-  for (int k = 0; k < 3; ++k) {
-    const Vector3d& a = t[static_cast<std::size_t>(k)];
-    const Vector3d& b = t[static_cast<std::size_t>((k + 1) % 3)];
-    if ((b - a).cross(p - a).dot(n) < 0) return false;
-  }
-  return true;
-}
 
 Aabb bounds_of(const Vector3d& a, const Vector3d& b) { return {a.cwiseMin(b), a.cwiseMax(b)}; }
 

@@ -75,14 +75,6 @@ double slab_entry(const Vector3d& o, const Vector3d& d, const Vector3d& half) {
   return enter;
 }
 
-// Whether p projects inside the triangle along its normal n (edges included).
-bool projects_inside(const std::array<Vector3d, 3>& t, const Vector3d& n, const Vector3d& p) {
-  for (std::size_t k = 0; k < 3; ++k) {
-    if ((t[(k + 1) % 3] - t[k]).cross(p - t[k]).dot(n) < 0) return false;
-  }
-  return true;
-}
-
 // The first t ∈ [t0, 1] at which separation(t) ≤ 0, for a separation that is convex in t and
 // changes by at most `speed` per unit t (a distance along a straight path), and t0 no later than
 // the touch: conservative advancement, then golden section for the minimum and bisection.

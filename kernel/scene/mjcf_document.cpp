@@ -11,8 +11,6 @@ namespace limber::mjcf {
 namespace detail {
 namespace {
 
-constexpr double mj_minval = 1e-15;  // MuJoCo's mjMINVAL: the least total mass of several geoms
-
 void read_compiler(Context& context, const Node& element) {
   Reader& reader = context.reader;
   reader.check_attributes(element,

@@ -13,7 +13,6 @@ namespace limber::mjcf::detail {
 
 namespace {
 
-constexpr double mj_eps = 1e-14;  // MuJoCo's mjEPS
 constexpr double degree = std::numbers::pi / 180;
 
 constexpr Ignored soft_joint[] = {

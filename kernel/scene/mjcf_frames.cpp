@@ -11,8 +11,6 @@ namespace limber::mjcf::detail {
 
 namespace {
 
-constexpr double mj_eps = 1e-14;  // MuJoCo's mjEPS: the "too small" threshold of axes
-
 Eigen::Quaterniond wxyz(double w, double x, double y, double z) { return Eigen::Quaterniond(w, x, y, z); }
 
 // MuJoCo's mjuu_frame2quat: the rotation whose columns are x, y, z (unit, orthogonal).

@@ -10,7 +10,6 @@ namespace limber::mjcf::detail {
 
 namespace {
 constexpr double pi = std::numbers::pi;
-constexpr double mj_minval = 1e-15;  // MuJoCo's mjMINVAL
 }  // namespace
 
 double geom_volume(GeomType type, const Eigen::Vector3d& size) {

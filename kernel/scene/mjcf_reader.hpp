@@ -25,6 +25,11 @@
 
 namespace limber::mjcf::detail {
 
+/// MuJoCo 2.2.2's mjMINVAL (include/mujoco/mjtnum.h: the least denominator, here the least total
+/// mass of several geoms) and mjEPS (src/user/user_util.h: the "too small" threshold of axes).
+inline constexpr double mj_minval = 1e-15;
+inline constexpr double mj_eps = 1e-14;
+
 /// One parsed file: its text (pugixml's offsets point into it), its tree and where its lines start.
 struct Buffer {
   std::string file;

@@ -8,7 +8,7 @@
 namespace limber {
 namespace {
 
-using Block = Eigen::Matrix<double, 6, 6>;
+using BodyBlock = Eigen::Matrix<double, 6, 6>;
 
 // Offsets, in the column-major value array, of the first stored entry of each of a block's six
 // columns: rows 6·row_body … (a diagonal block stores only its lower triangle, from the diagonal).
@@ -25,7 +25,7 @@ std::array<std::int64_t, 6> block_offsets(const Eigen::SparseMatrix<double>& mat
 }
 
 // Adds `block` (or its lower triangle, on the diagonal) at the precomputed offsets.
-void add_block(Eigen::SparseMatrix<double>& matrix, const std::array<std::int64_t, 6>& offsets, const Block& block, bool diagonal) {
+void add_block(Eigen::SparseMatrix<double>& matrix, const std::array<std::int64_t, 6>& offsets, const BodyBlock& block, bool diagonal) {
   double* values = matrix.valuePtr();
   for (int c = 0; c < 6; ++c) {
     for (int r = diagonal ? c : 0; r < 6; ++r) values[offsets[c] + (r - (diagonal ? c : 0))] += block(r, c);
@@ -84,7 +84,7 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
   std::vector<Eigen::Matrix3d>& world_inertia = state.scratch_world_inertia;
   for (std::size_t b = 0; b < n; ++b) {
     world_inertia[b] = bodies.world_inertia(y, b);
-    Block mass = Block::Zero();
+    BodyBlock mass = BodyBlock::Zero();
     mass.topLeftCorner<3, 3>().diagonal().setConstant(bodies.mass[b]);
     mass.bottomRightCorner<3, 3>() = world_inertia[b];
     add_block(system.matrix, system.diagonal_block[b], mass, true);
@@ -112,7 +112,7 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
       const AnchorJacobian g_i = anchor_jacobian(ends.inboard_lever);
       add_block(system.matrix, system.diagonal_block[i], weight * g_i.transpose() * g_i, true);
       system.right_hand_side.segment<6>(6 * i) += g_i.transpose() * implicit_force;
-      const Block coupling = i > j ? Block(-weight * g_i.transpose() * g_j) : Block(-weight * g_j.transpose() * g_i);
+      const BodyBlock coupling = i > j ? BodyBlock(-weight * g_i.transpose() * g_j) : BodyBlock(-weight * g_j.transpose() * g_i);
       add_block(system.matrix, system.spring_block[s], coupling, false);
     }
   }
@@ -137,14 +137,14 @@ void implicit_step(SpringState& state, double h, StepReport& report) {
       weight += (h * torques.limit_damping[l] + h * h * torques.limit_stiffness[l]) * d * d.transpose();
       implicit_torque -= h * h * torques.limit_stiffness[l] * d.dot(relative) * d;
     }
-    Block block = Block::Zero();
+    BodyBlock block = BodyBlock::Zero();
     block.bottomRightCorner<3, 3>() = weight;
     add_block(system.matrix, system.diagonal_block[j], block, true);
     system.right_hand_side.segment<3>(6 * j + 3) += implicit_torque;
     if (i < 0) continue;
     add_block(system.matrix, system.diagonal_block[i], block, true);
     system.right_hand_side.segment<3>(6 * i + 3) -= implicit_torque;
-    add_block(system.matrix, system.spring_block[s], Block(-block), false);
+    add_block(system.matrix, system.spring_block[s], BodyBlock(-block), false);
   }
 
   auto solve = [&](const Eigen::VectorXd& right_hand_side, Eigen::VectorXd& out, bool factorize) {

@@ -8,9 +8,12 @@
 #include <gtest/gtest.h>
 
 #include "limber/kernel/model/model.hpp"
+#include "tests/support/validation.hpp"
 
 namespace limber {
 namespace {
+
+using testing::validation_error;
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 
@@ -42,17 +45,6 @@ Model model_with_colliders() {
   floor.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
   model.colliders = {box, bar, floor};
   return model;
-}
-
-std::string validation_error(const Model& model) {
-  try {
-    validate(model);
-  } catch (const ModelError& error) {
-    const std::string message = error.what();
-    EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
-    return message;
-  }
-  return "";
 }
 
 /// The message for the model with `edit` applied.

@@ -10,12 +10,14 @@
 
 #include "limber/kernel/model/method_settings.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "tests/support/validation.hpp"
 
 namespace limber {
 namespace {
 
 using ::testing::HasSubstr;
 using ::testing::Not;
+using testing::validation_error;
 
 /// Two limbs hanging from the world, with ground, bounds and a ball: valid as built.
 Model good_model() {
@@ -49,16 +51,6 @@ Model good_model() {
   model.bounds = Bounds{{-5, -5, 0}, {5, 5, 5}, 0.5, 0.2};
   model.balls = {Ball{0.05, 2.27, 0.8, {0.8, 0, 0.25}, {-6, 0, 0}}};
   return model;
-}
-
-/// The message validate() throws for `model`, or "" when it accepts it.
-std::string validation_error(const Model& model) {
-  try {
-    validate(model);
-  } catch (const ModelError& error) {
-    return error.what();
-  }
-  return "";
 }
 
 /// Breaks one field of the good model and returns the message.

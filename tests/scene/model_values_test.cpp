@@ -21,7 +21,7 @@ using ::testing::StartsWith;
 namespace fs = std::filesystem;
 
 // `text` as a file of this test's directory named `name`.
-fs::path write(const std::string& name, const std::string& text) {
+fs::path write_named(const std::string& name, const std::string& text) {
   const fs::path dir = limber::testing::test_directory();
   std::ofstream(dir / name, std::ios::binary) << text;
   return dir / name;
@@ -49,26 +49,26 @@ std::string mjcf_body(const std::string& geoms, const std::string& name = "b") {
 // ---- MJCF: derived quantities that overflow
 
 TEST(ModelValues, AnMjcfGeomSizeThatOverflowsIsRefusedAtItsAttribute) {
-  const fs::path file = write("big.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e308\"/>\n"));
+  const fs::path file = write_named("big.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e308\"/>\n"));
   EXPECT_EQ(load_error(file), file.string() + ":5: <geom size>: gives a volume that is not finite: it overflows (no geom is that large)");
-  const fs::path moment = write("moment.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\"/>\n"));
+  const fs::path moment = write_named("moment.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\"/>\n"));
   EXPECT_EQ(load_error(moment),
             moment.string() + ":5: <geom size>: gives a moment of inertia (mass × size²) that is not finite: it overflows (no geom is that large)");
 }
 
 TEST(ModelValues, AnMjcfMassThatOverflowsTheInertiaIsRefusedAtItsAttribute) {
-  const fs::path file = write("mass.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\" mass=\"1e300\"/>\n"));
+  const fs::path file = write_named("mass.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\" mass=\"1e300\"/>\n"));
   EXPECT_EQ(load_error(file),
             file.string() + ":5: <geom mass>: gives a moment of inertia (mass × size²) that is not finite: it overflows (no geom is that large)");
 }
 
 TEST(ModelValues, AnMjcfFromtoThatOverflowsIsRefusedAtItsAttribute) {
-  const fs::path file = write("fromto.xml", mjcf_body("      <geom type=\"capsule\" size=\".1\" fromto=\"-1e308 0 0 1e308 0 0\"/>\n"));
+  const fs::path file = write_named("fromto.xml", mjcf_body("      <geom type=\"capsule\" size=\".1\" fromto=\"-1e308 0 0 1e308 0 0\"/>\n"));
   EXPECT_EQ(load_error(file), file.string() + ":5: <geom fromto>: gives a size that is not finite: it overflows (no geom is that large)");
 }
 
 TEST(ModelValues, AnMjcfDensityThatOverflowsTheMassIsRefusedAtItsAttribute) {
-  const fs::path file = write("density.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\" density=\"1e300\"/>\n"));
+  const fs::path file = write_named("density.xml", mjcf_body("      <geom type=\"sphere\" size=\"1e100\" density=\"1e300\"/>\n"));
   EXPECT_EQ(load_error(file),
             file.string() + ":5: <geom density>: density × volume, the geom's mass, is not finite: it overflows (no geom is that large)");
 }
@@ -76,12 +76,12 @@ TEST(ModelValues, AnMjcfDensityThatOverflowsTheMassIsRefusedAtItsAttribute) {
 TEST(ModelValues, GeomMassesThatOverflowWhenSummedAreRefusedAtTheirBody) {
   // Each box's mass and inertia are finite; their sum is not.
   const std::string box = "      <geom type=\"box\" size=\".1 .1 .1\" mass=\"1e308\"/>\n";
-  const fs::path file = write("sum.xml", mjcf_body(box + box));
+  const fs::path file = write_named("sum.xml", mjcf_body(box + box));
   EXPECT_THAT(load_error(file), StartsWith(file.string() + ":3: <body>: its geoms' total mass, centre of mass or inertia is not finite"));
 }
 
 TEST(ModelValues, PositionsThatOverflowDownTheTreeAreRefusedAtTheGeom) {
-  const fs::path file = write("far.xml", mjcf("    <body name=\"a\" pos=\"1e308 0 0\">\n      <geom size=\".1\"/>\n"
+  const fs::path file = write_named("far.xml", mjcf("    <body name=\"a\" pos=\"1e308 0 0\">\n      <geom size=\".1\"/>\n"
                                               "      <body name=\"b\" pos=\"1e308 0 0\">\n        <geom size=\".1\"/>\n"
                                               "      </body>\n    </body>\n"));
   EXPECT_EQ(load_error(file), file.string() + ":6: <geom type=sphere>: its world position is not finite: the pos of its body and "
@@ -91,7 +91,7 @@ TEST(ModelValues, PositionsThatOverflowDownTheTreeAreRefusedAtTheGeom) {
 TEST(ModelValues, WhatTheModelsChecksFindInAModelFileNamesTheElement) {
   // An <inertial> finite as written whose tensor overflows in the body frame (its symmetrizing
   // sum): only the assembled Model shows it, and the message still names the file and element.
-  const fs::path file = write("inertial.xml", mjcf("    <body name=\"b\">\n      <joint type=\"hinge\"/>\n"
+  const fs::path file = write_named("inertial.xml", mjcf("    <body name=\"b\">\n      <joint type=\"hinge\"/>\n"
                                                    "      <inertial pos=\"0 0 0\" mass=\"1\" diaginertia=\"1.7e308 1.7e308 1.7e308\"/>\n"
                                                    "      <geom type=\"sphere\" size=\".1\"/>\n    </body>\n"));
   EXPECT_EQ(load_error(file), file.string() + ":3: <body name='b'>: bodies[0].inertial.inertia: must be finite");
@@ -114,14 +114,14 @@ std::string urdf_link(const std::string& name, const std::string& parent, const 
 }
 
 TEST(ModelValues, AUrdfInertiaThatOverflowsInTheBodyFrameIsRefusedAtItsInertial) {
-  const fs::path file = write("inertia.urdf", urdf("ixx=\"1.7e308\" ixy=\"0\" ixz=\"0\" iyy=\"1.7e308\" iyz=\"0\" izz=\"1.7e308\""));
+  const fs::path file = write_named("inertia.urdf", urdf("ixx=\"1.7e308\" ixy=\"0\" ixz=\"0\" iyy=\"1.7e308\" iyz=\"0\" izz=\"1.7e308\""));
   EXPECT_EQ(load_error(file), file.string() + ":3: <inertial> of link 'a': its <inertia> or <origin> is not finite in the body's frame: "
                                               "the values overflow when turned into it");
 }
 
 TEST(ModelValues, UrdfOriginsThatOverflowDownTheTreeAreRefusedAtTheLink) {
   // Link c's frame is 2e308 m out: b (line 10) is the last that is finite; c is on line 18.
-  const fs::path file = write("far.urdf", urdf(kInertia, urdf_link("b", "a", "1e308 0 0") + urdf_link("c", "b", "1e308 0 0")));
+  const fs::path file = write_named("far.urdf", urdf(kInertia, urdf_link("b", "a", "1e308 0 0") + urdf_link("c", "b", "1e308 0 0")));
   EXPECT_EQ(load_error(file), file.string() + ":18: <link name='c'>: its frame's position is not finite: the joints' <origin xyz> "
                                               "from the root overflow when added up");
 }
@@ -130,22 +130,22 @@ TEST(ModelValues, UrdfOriginsThatOverflowDownTheTreeAreRefusedAtTheLink) {
 
 TEST(ModelValues, ALatin1NameIsRefusedAtLoad) {
   const std::string problem = "not valid UTF-8 (byte 0xE9 at byte 4 of the value): limber reads XML files as UTF-8; save the file as UTF-8";
-  const fs::path mjcf_file = write("latin1.xml", mjcf_body("      <geom type=\"sphere\" size=\".1\"/>\n", "caf\xE9"));
+  const fs::path mjcf_file = write_named("latin1.xml", mjcf_body("      <geom type=\"sphere\" size=\".1\"/>\n", "caf\xE9"));
   EXPECT_EQ(load_error(mjcf_file), mjcf_file.string() + ":3: <body name>: " + problem);
   std::string robot = urdf(kInertia);
   robot.replace(robot.find("name=\"a\""), 8, "name=\"caf\xE9\"");
-  const fs::path urdf_file = write("latin1.urdf", robot);
+  const fs::path urdf_file = write_named("latin1.urdf", robot);
   EXPECT_EQ(load_error(urdf_file), urdf_file.string() + ":2: <link name>: " + problem);
 }
 
 TEST(ModelValues, EveryMalformedUtf8FormIsRefusedAndUtf8Loads) {
   // Overlong '/', a surrogate, a sequence cut short by the value's end, a stray continuation byte.
   for (const std::string bad : {"\xC0\xAF", "\xED\xA0\x80", "\xE2\x82", "\x80"}) {
-    const fs::path file = write("bad.xml", mjcf_body("      <geom name=\"g" + bad + "\" type=\"sphere\" size=\".1\"/>\n"));
+    const fs::path file = write_named("bad.xml", mjcf_body("      <geom name=\"g" + bad + "\" type=\"sphere\" size=\".1\"/>\n"));
     EXPECT_THAT(load_error(file), StartsWith(file.string() + ":5: <geom name>: not valid UTF-8 (byte 0x")) << "bytes of " << bad.size();
   }
   // Two, three and four bytes; a Latin-1 comment is not read, so not refused.
-  const fs::path good = write("good.xml", "<!-- caf\xE9 -->\n" + mjcf_body("      <geom type=\"sphere\" size=\".1\"/>\n",
+  const fs::path good = write_named("good.xml", "<!-- caf\xE9 -->\n" + mjcf_body("      <geom type=\"sphere\" size=\".1\"/>\n",
                                                                           "caf\xC3\xA9-\xE2\x82\xAC-\xF0\x9D\x84\x9E"));
   const Scene scene = load_scene_file(good);
   ASSERT_EQ(scene.model.bodies.size(), 1u);
