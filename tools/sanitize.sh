@@ -19,10 +19,16 @@
 #                          engine's task system; the CLI's --threads). Extra arguments go to
 #                          every program (a --gtest_filter=... replaces the list below).
 #
-# Both build -O2 -g with NDEBUG (the release build's code paths, readable stacks; at -O1 xsimd's
-# batch operators stay calls and the SIMD tests run ~15× slower) and
+# Both build -O2 -gline-tables-only with NDEBUG (the release build's code paths; at -O1 xsimd's
+# batch operators stay calls and the SIMD tests run ~15× slower; line tables are all a report's
+# stack needs — full -g made each file 25-30 % slower to compile, measured on
+# kernel/model/model.cpp under both sanitizers) and
 # -march=native as tools/setup.sh does (LIMBER_NATIVE=ON); -fno-sanitize-recover=all makes an
-# undefined-behaviour report abort the test instead of printing and going on.
+# undefined-behaviour report abort the test instead of printing and going on. Both build in unity
+# batches (CMAKE_UNITY_BUILD: eight files of a target compiled as one), which compiles the Eigen
+# templates the files share once a batch instead of once a file; a file's names at namespace
+# scope, anonymous namespaces included, must therefore not collide with another file's of the
+# same target.
 # Not run under a sanitizer, with the reason:
 #   - package_installs_and_a_client_builds (label package): it installs the instrumented library
 #     and links a client built without the sanitizer's runtime, which cannot link; the code it
@@ -55,19 +61,19 @@ else
   sanitize="-fsanitize=thread"
   build_dir=${LIMBER_SANITIZE_BUILD_DIR:-build-tsan}
 fi
-flags="$sanitize -fno-omit-frame-pointer -g"
+flags="$sanitize -fno-omit-frame-pointer -gline-tables-only"
 
 . tools/progress.sh
 stage "sanitizer run ($mode): configuring $build_dir/ (clang 14)"
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g -DNDEBUG" -DCMAKE_CXX_FLAGS="$flags" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="$sanitize" -DCMAKE_SHARED_LINKER_FLAGS="$sanitize" \
-  -DLIMBER_NATIVE=ON -DLIMBER_BUILD_TESTS=ON -DLIMBER_BUILD_BENCHMARKS=OFF >/dev/null
+  -DLIMBER_NATIVE=ON -DLIMBER_BUILD_TESTS=ON -DLIMBER_BUILD_BENCHMARKS=OFF -DCMAKE_UNITY_BUILD=ON >/dev/null
 
 # The sanitizers' runtimes symbolize stacks with llvm-symbolizer, which Debian keeps in llvm-14's folder.
 export PATH=/usr/lib/llvm-14/bin:$PATH
 if [ "$mode" = address ]; then
-  stage "sanitizer run (address): building the suite in $build_dir/ (about 14 min from nothing on 2 cores)"
+  stage "sanitizer run (address): building the suite in $build_dir/ (about 25 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2
   stage "sanitizer run (address): the tests"
   # Every report is fatal and exits non-zero; leaks are checked at exit (LeakSanitizer works in
@@ -107,7 +113,7 @@ else
   )
   programs=()
   for entry in "${threaded[@]}"; do programs+=("${entry%% *}"); done
-  stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 6 min from nothing on 2 cores)"
+  stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 12 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${programs[@]}"
   stage "sanitizer run (thread): the tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tools/sanitize/tsan.supp"
