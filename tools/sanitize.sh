@@ -73,7 +73,7 @@ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER=clang++-14 -DCMAKE_BUIL
 # The sanitizers' runtimes symbolize stacks with llvm-symbolizer, which Debian keeps in llvm-14's folder.
 export PATH=/usr/lib/llvm-14/bin:$PATH
 if [ "$mode" = address ]; then
-  stage "sanitizer run (address): building the suite in $build_dir/ (about 25 min from nothing on 2 cores)"
+  stage "sanitizer run (address): building the suite in $build_dir/ (about 20 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2
   stage "sanitizer run (address): the tests"
   # Every report is fatal and exits non-zero; leaks are checked at exit (LeakSanitizer works in
@@ -113,7 +113,7 @@ else
   )
   programs=()
   for entry in "${threaded[@]}"; do programs+=("${entry%% *}"); done
-  stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 12 min from nothing on 2 cores)"
+  stage "sanitizer run (thread): building the threaded test programs in $build_dir/ (about 7 min from nothing on 2 cores)"
   quiet_build "$build_dir/build.log" cmake --build "$build_dir" -j2 --target "${programs[@]}"
   stage "sanitizer run (thread): the tests"
   export TSAN_OPTIONS="halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tools/sanitize/tsan.supp"
