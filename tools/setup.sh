@@ -20,9 +20,7 @@
 # What a build directory was once configured with (tests, benchmarks) it keeps, but a call
 # without --tests or --bench builds only the library and the program: `tools/run.sh` after
 # `tools/test.sh` neither drops nor rebuilds the tests. Environment: LIMBER_BUILD_DIR (default: build),
-# LIMBER_SKIP_INSTALL=1 to skip apt-get, LIMBER_UNITY_BUILD=ON to compile each target in unity
-# batches of eight files (CMAKE_UNITY_BUILD: a fifth to a third less time from nothing, much more
-# to rebuild after editing one file; the sanitizer builds always do).
+# LIMBER_SKIP_INSTALL=1 to skip apt-get.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -65,7 +63,6 @@ tools/install_packages.sh "${purposes[@]}"
 . tools/progress.sh
 mkdir -p "$build_dir"
 if ! cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="$build_type" -DLIMBER_NATIVE="$native" \
-  -DCMAKE_UNITY_BUILD="${LIMBER_UNITY_BUILD:-OFF}" \
   -DLIMBER_BUILD_TESTS="$tests" -DLIMBER_BUILD_BENCHMARKS="$bench" -DLIMBER_BUILD_PYTHON="$python" >"$build_dir/configure.log" 2>&1; then
   cat "$build_dir/configure.log" >&2
   stage "configuring $build_dir/ failed (above)"
