@@ -147,29 +147,6 @@ void BM_Eliminate(benchmark::State& run, const Shape& shape, bool inverse = fals
 // entry), eliminates, and unpacks every node's solution and, with `inverse`, every body's block
 // of the inverse (what the trees' contacts read) back to the instances: what laning costs
 // beside the elimination itself.
-template <typename Lanes, typename Number>
-void pack(Lanes& lanes, const std::vector<const Number*>& instances) {
-  using Value = xsimd::batch<double>;
-  alignas(64) double values[Value::size];
-  for (int i = 0; i < Number::RowsAtCompileTime; ++i) {
-    for (int j = 0; j < Number::ColsAtCompileTime; ++j) {
-      for (std::size_t lane = 0; lane < Value::size; ++lane) values[lane] = (*instances[lane])(i, j);
-      lanes(i, j) = Value::load_aligned(values);
-    }
-  }
-}
-template <typename Lanes, typename Number>
-void unpack(const Lanes& lanes, const std::vector<Number*>& instances) {
-  using Value = xsimd::batch<double>;
-  alignas(64) double values[Value::size];
-  for (int i = 0; i < Number::RowsAtCompileTime; ++i) {
-    for (int j = 0; j < Number::ColsAtCompileTime; ++j) {
-      lanes(i, j).store_aligned(values);
-      for (std::size_t lane = 0; lane < Value::size; ++lane) (*instances[lane])(i, j) = values[lane];
-    }
-  }
-}
-
 template <int B>
 void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse) {
   using Value = xsimd::batch<double>;
@@ -190,12 +167,12 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
         for (std::size_t lane = 0; lane < width; ++lane) {
           in_matrix[lane] = &instances[k * width + lane].diagonal[node], in_vector[lane] = &instances[k * width + lane].right[node];
         }
-        pack(elimination.diagonal(node), in_matrix), pack(elimination.work(node), in_vector);
+        pack_lanes(elimination.diagonal(node), in_matrix), pack_lanes(elimination.work(node), in_vector);
       }
       for (std::size_t c = 0; c < shape.inboard.size(); ++c) {
         for (std::size_t side = 0; side < 2; ++side) {
           for (std::size_t lane = 0; lane < width; ++lane) in_matrix[lane] = &instances[k * width + lane].edge[c][side];
-          pack(batch.edge[c][side], in_matrix);
+          pack_lanes(batch.edge[c][side], in_matrix);
         }
       }
       const TreeOrdering::Component& component = elimination.ordering().components[0];
@@ -206,10 +183,10 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
       if (inverse) elimination.inverse_diagonal(component.begin, component.end);
       for (std::size_t node = 0; node < elimination.node_count(); ++node) {
         for (std::size_t lane = 0; lane < width; ++lane) out_vector[lane] = &solution[k * width + lane][node];
-        unpack(elimination.work(node), out_vector);
+        unpack_lanes(elimination.work(node), out_vector);
         if (!inverse || node >= static_cast<std::size_t>(shape.bodies)) continue;
         for (std::size_t lane = 0; lane < width; ++lane) out_matrix[lane] = &mobility[k * width + lane][node];
-        unpack(elimination.mobility(node), out_matrix);
+        unpack_lanes(elimination.mobility(node), out_matrix);
       }
     }
     benchmark::DoNotOptimize(solution.front().front());

@@ -72,4 +72,29 @@ void set_lane(Value& value, std::size_t lane, Number number) {
   }
 }
 
+/// Loads lane k of `lanes` with the number block *instances[k], one per lane (a lane-major
+/// gather per entry): instances of one shape kept one at a time, solved side by side.
+template <typename Value, int Rows, int Cols, typename Instances>
+void pack_lanes(LaneBlock<Value, Rows, Cols>& lanes, const Instances& instances) {
+  alignas(64) typename Value::value_type values[Value::size];
+  for (int i = 0; i < Rows; ++i) {
+    for (int j = 0; j < Cols; ++j) {
+      for (std::size_t lane = 0; lane < Value::size; ++lane) values[lane] = (*instances[lane])(i, j);
+      lanes(i, j) = Value::load_aligned(values);
+    }
+  }
+}
+
+/// pack_lanes' inverse: lane k of `lanes` into *instances[k].
+template <typename Value, int Rows, int Cols, typename Instances>
+void unpack_lanes(const LaneBlock<Value, Rows, Cols>& lanes, const Instances& instances) {
+  alignas(64) typename Value::value_type values[Value::size];
+  for (int i = 0; i < Rows; ++i) {
+    for (int j = 0; j < Cols; ++j) {
+      lanes(i, j).store_aligned(values);
+      for (std::size_t lane = 0; lane < Value::size; ++lane) (*instances[lane])(i, j) = values[lane];
+    }
+  }
+}
+
 }  // namespace limber

@@ -147,6 +147,25 @@ struct JointTreeCounts {
   }
 };
 
+struct TreePacks;  // kernel/relaxation/tree_packs.hpp
+
+/// Owns the joint trees' SIMD packs; copying a state gives the copy its own (they are scratch
+/// a solve writes).
+class TreePacksHandle {
+ public:
+  TreePacksHandle();
+  ~TreePacksHandle();
+  TreePacksHandle(const TreePacksHandle& other);
+  TreePacksHandle& operator=(const TreePacksHandle& other);
+  TreePacksHandle(TreePacksHandle&&) noexcept;
+  TreePacksHandle& operator=(TreePacksHandle&&) noexcept;
+  TreePacks& operator*() const { return *packs_; }
+  TreePacks* operator->() const { return packs_.get(); }
+
+ private:
+  std::unique_ptr<TreePacks> packs_;
+};
+
 /// The exact joint-tree solve's structure (kernel/relaxation/joint_trees.hpp), built at compile;
 /// its per-solve arrays are scratch sized there, so nothing is allocated while stepping.
 struct JointTrees {
@@ -174,7 +193,24 @@ struct JointTrees {
     /// Its limits (swing, twist, hinge range): slots of `limits` (−1: none), rows of the active
     /// set only while reached.
     std::array<std::int32_t, 2> limit{-1, -1};
+    /// The point's and axis' rows.
     int rows() const { return (point ? 3 : 0) + (align_row >= 0 ? 2 : 0); }
+    /// The row of limit k (after rows() and the limits before it), or −1 when k has no slot or
+    /// no row is left for it (a joint has 6 at most).
+    int limit_row(std::size_t k) const {
+      if (limit[k] < 0) return -1;
+      const int row = rows() + (k == 1 && limit[0] >= 0 ? 1 : 0);
+      return row < 6 ? row : -1;
+    }
+    /// Every row the joint can hold: its point and axis rows and a row per limit, reached or
+    /// not. The row count is fixed so that a component's elimination has one shape whatever
+    /// its active set (an idle limit's row is decoupled: J = 0, −A = −1, right-hand side 0, so
+    /// its μ is 0), which lets components of one skeleton share SIMD lanes.
+    int fixed_rows() const {
+      int count = rows();
+      for (std::size_t k = 0; k < limit.size(); ++k) count += limit_row(k) >= 0 ? 1 : 0;
+      return count;
+    }
   };
   std::vector<Joint> joints;
   /// The tree joints' limit rows, one slot each (their directions and bounds, as the sweeps hold
@@ -188,21 +224,21 @@ struct JointTrees {
   CompressedRows<std::uint32_t> island_components;
   /// Scratch per solve. Per limb: its centre of mass (m), frame (v, w, u columns), mass (kg),
   /// inertia about the centre (kg·m²; a stick's regularized) and rigid velocity (v of the
-  /// centre, m/s; ω, rad/s). Per joint: its J blocks on A and B (rows × 6: [linear | angular]),
-  /// its active limits now and when its component was factored (bit k: limit k), and its rows
-  /// now. Per component: factored this substep (begin_joint_trees clears it).
+  /// centre, m/s; ω, rad/s) and mobility (its block of the constrained system's inverse,
+  /// TreeElimination::inverse_diagonal). Per joint: its J blocks on A and B (rows × 6: [linear |
+  /// angular]) and its active limits (bit k: limit k).
   std::vector<Eigen::Vector3d> centre;
   std::vector<Eigen::Matrix3d> frame;
   std::vector<double> mass;
   std::vector<Eigen::Matrix3d> inertia;
   std::vector<Eigen::Matrix<double, 6, 1>> rate;
-  std::vector<Eigen::Matrix<double, 6, 6>> block_a, block_b;
-  std::vector<std::uint8_t> active_limits, factored_limits, rows, factored;
+  std::vector<Eigen::Matrix<double, 6, 6>> mobility, block_a, block_b;
+  std::vector<std::uint8_t> active_limits;
   /// Per joint: its active limits at their upper bound (bit k), and those a call holds at its
   /// next Newton step (bit 2k: at the upper bound, 2k + 1: at the lower; hold_pushing_limits).
   std::vector<std::uint8_t> limit_upper, limit_held;
   /// Counts since the substep began (begin_joint_trees), per component, for the step's profile
-  /// (each written by its island's task only).
+  /// (each written by its pack's task only).
   std::vector<JointTreeCounts> counts;
   /// Contacts solved with the trees (tree_contacts.hpp; the pbd rule only): per particle, the
   /// tree limb it belongs to (−1: none); per limb its component (−1: none); per component its
@@ -215,14 +251,18 @@ struct JointTrees {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> contact_pairs;  ///< scratch for component_contacts
   double recovery = 0;  ///< the substep's push-out allowance for an overlap it began with, m
   /// Per limb: the joints' motion of a sweep's first Newton step (Δp, Δφ), before the contacts'
-  /// loads are added to it. Per component: its tree's inverse diagonal is the current factor's,
-  /// and the factor by which the contacts' motion was scaled down this sweep (≥ 1).
+  /// loads are added to it. Per component: settled this sweep (its round moved it little), and
+  /// the factor by which the contacts' motion was scaled down this sweep (≥ 1).
   std::vector<Eigen::Matrix<double, 6, 1>> joint_motion;
   std::vector<Eigen::Matrix<double, 6, 1>> load_motion;  ///< per limb: the contacts' motion so far this round
-  std::vector<std::uint8_t> mobility_current, settled;
+  std::vector<std::uint8_t> settled;
   /// Per elimination node (a component's slice its own): the paths a loop's response runs on.
   std::vector<std::int32_t> path_scratch;
   std::vector<double> load_scale;
+  /// The components grouped by shape into packs solved side by side in SIMD lanes
+  /// (tree_packs.hpp), and per component whether its island is awake (refreshed each call).
+  TreePacksHandle packs;
+  std::vector<std::uint8_t> component_awake;
   bool active() const { return !joints.empty(); }
 };
 

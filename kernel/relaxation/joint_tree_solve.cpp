@@ -8,6 +8,7 @@
 #include "limber/kernel/relaxation/joint_projection.hpp"
 #include "limber/kernel/relaxation/joint_tree_limbs.hpp"
 #include "limber/kernel/relaxation/tree_contacts.hpp"
+#include "limber/kernel/relaxation/tree_packs.hpp"
 
 // Solving the joint trees each sweep: the limbs loaded as rigid bodies, the joints assembled,
 // factored and solved by the tree elimination, the limbs moved; Newton steps, and rounds with
@@ -73,7 +74,7 @@ void load_limb(VerletState<Scalar>& state, JointTrees& trees, std::size_t limb, 
   trees.mass[limb] = total, trees.inertia[limb] = inertia;
 }
 
-// Writes joint j's J blocks into the scratch (read only if its component is factored afresh),
+// Writes joint j's J blocks into the scratch (block_a, block_b: the pack gathers them),
 // its active limits into trees.active_limits[j] (the limits reached: violated, or in the
 // velocity stage at their bound and turning past it; bit k for limit k) and returns its rows'
 // C (position level; a limit's C is its violation).
@@ -135,16 +136,15 @@ Vector6 assemble_joint(const VerletState<Scalar>& state, JointTrees& trees, std:
       const double rate = axis.dot(turn);
       active = (angle >= upper - kLimitReached && rate > 0) || (angle <= lower + kLimitReached && rate < 0);
     }
-    if (!active || row >= 6) continue;
+    const int limit_row = joint.limit_row(k);
+    if (!active || limit_row < 0) continue;  // an idle limit's row stays decoupled (JointTrees::Joint::fixed_rows)
     active_limits |= static_cast<std::uint8_t>(1u << k);
     if (at_upper) limit_upper |= static_cast<std::uint8_t>(1u << k);
-    c[row] = violation;
-    block_a.block<1, 3>(row, 3) = -axis.transpose(), block_b.block<1, 3>(row, 3) = axis.transpose();
-    ++row;
+    c[limit_row] = violation;
+    block_a.block<1, 3>(limit_row, 3) = -axis.transpose(), block_b.block<1, 3>(limit_row, 3) = axis.transpose();
   }
   trees.active_limits[j] = active_limits;
   trees.limit_upper[j] = limit_upper;
-  trees.rows[j] = static_cast<std::uint8_t>(row);
   return c;
 }
 
@@ -157,11 +157,10 @@ void hold_pushing_limits(JointTrees& trees, const TreeOrdering::Component& compo
     if (order[k] < limbs) continue;
     const auto j = static_cast<std::size_t>(order[k] - limbs);
     const JointTrees::Joint& joint = trees.joints[j];
-    int row = joint.rows();
     std::uint8_t held = 0;
     for (std::size_t l = 0; l < joint.limit.size(); ++l) {
       if (!(trees.active_limits[j] & (1u << l))) continue;
-      const double mu = trees.elimination.work(static_cast<std::size_t>(order[k]))(row++);
+      const double mu = trees.elimination.work(static_cast<std::size_t>(order[k]))(joint.limit_row(l));
       const bool upper = trees.limit_upper[j] & (1u << l);
       if (upper ? mu > 0 : mu < 0) held |= static_cast<std::uint8_t>(1u << (2 * l + (upper ? 0 : 1)));
     }
@@ -169,15 +168,14 @@ void hold_pushing_limits(JointTrees& trees, const TreeOrdering::Component& compo
   }
 }
 
-// Loads one component's limbs and joints at the current positions and solves it: work(limb) =
-// (Δp, Δφ) for the right-hand side −C (positions), or (Δv, Δω) for −J·(v, ω) with each limb's
-// rigid velocity (velocities: v of its centre, ω = I⁻¹ Σ m r × v, kept in trees.rate). The
-// factor is reused while the component's active set is the one it was factored with, within
-// a substep (a chord iteration: the limbs turn little between sweeps); the velocity stage
-// factors afresh. Every limb block is positive definite (positive masses; a stick's spin
-// regularized), so the factor cannot fail.
+// Stages one component's system in the scalar elimination's nodes (tree_packs.hpp), its limbs
+// and joints loaded at the current positions: each node's diagonal block (a limb's M = diag(m E,
+// I), a joint's −A: 0, or −1 on an idle limit's row), and work(limb) = 0 and work(joint) = −C
+// (positions), or −J·(v, ω) with each limb's rigid velocity (velocities: v of its centre,
+// ω = I⁻¹ Σ m r × v, kept in trees.rate, and the particles set to it). Every limb block is
+// positive definite (positive masses; a stick's spin regularized), so a factor cannot fail.
 template <typename Scalar>
-void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_t index, bool velocities) {
+void stage_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_t index, bool velocities) {
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
   const auto& order = trees.elimination.ordering().order;
   const std::int32_t limbs = trees.elimination.body_count();
@@ -205,7 +203,6 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
       state.particles.set_velocity(p, v.template cast<Scalar>());
     }
   }
-  bool refactor = velocities || !trees.factored[index];
   for (std::uint32_t k = component.begin; k < component.end; ++k) {
     const std::int32_t node = order[k];
     if (node < limbs) {
@@ -214,7 +211,6 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
     }
     const auto j = static_cast<std::size_t>(node - limbs);
     const Vector6 c = assemble_joint(state, trees, j, velocities);
-    refactor = refactor || trees.active_limits[j] != trees.factored_limits[j];
     Vector6& rhs = trees.elimination.work(static_cast<std::size_t>(node));
     if (!velocities) {
       rhs = -c;
@@ -224,30 +220,22 @@ void solve_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
     rhs = -(trees.block_b[j] * trees.rate[static_cast<std::size_t>(joint.limb_b)]);
     if (joint.limb_a >= 0) rhs -= trees.block_a[j] * trees.rate[static_cast<std::size_t>(joint.limb_a)];
   }
-  if (refactor) {
-    for (std::uint32_t k = component.begin; k < component.end; ++k) {
-      const std::int32_t node = order[k];
-      Matrix6& block = trees.elimination.diagonal(static_cast<std::size_t>(node));
-      block.setZero();
-      if (node < limbs) {
-        block.topLeftCorner<3, 3>() = trees.mass[node] * Eigen::Matrix3d::Identity();
-        block.bottomRightCorner<3, 3>() = trees.inertia[node];
-        continue;
-      }
-      const auto j = static_cast<std::size_t>(node - limbs);
-      trees.elimination.set_rows(j, trees.rows[j]);
-      trees.factored_limits[j] = trees.active_limits[j];
+  for (std::uint32_t k = component.begin; k < component.end; ++k) {
+    const std::int32_t node = order[k];
+    Matrix6& block = trees.elimination.diagonal(static_cast<std::size_t>(node));
+    block.setZero();
+    if (node < limbs) {
+      block.topLeftCorner<3, 3>() = trees.mass[node] * Eigen::Matrix3d::Identity();
+      block.bottomRightCorner<3, 3>() = trees.inertia[node];
+      continue;
     }
-    ++trees.counts[index].factors;
-    trees.elimination.factor(component.begin, component.end, [&](std::size_t j, std::int32_t limb) -> const Matrix6& {
-      return trees.joints[j].limb_a == limb ? trees.block_a[j] : trees.block_b[j];
-    });
-    trees.mobility_current[index] = 0;
+    const auto j = static_cast<std::size_t>(node - limbs);
+    const JointTrees::Joint& joint = trees.joints[j];
+    for (std::size_t l = 0; l < joint.limit.size(); ++l) {
+      const int row = joint.limit_row(l);
+      if (row >= 0 && !(trees.active_limits[j] & (1u << l))) block(row, row) = -1;  // idle: μ = 0
+    }
   }
-  trees.factored[index] = velocities ? 0 : 1;  // the velocity stage's factor is not the positions'
-  ++trees.counts[index].substitutions;
-  trees.elimination.solve(component.begin, component.end);
-  if (!velocities) hold_pushing_limits(trees, component);
 }
 
 // Calls visit(limb) for every limb of `component`.
@@ -283,7 +271,7 @@ double move_limb(VerletState<Scalar>& state, const JointTrees& trees, std::size_
 
 // Newton steps a tree takes in one call at most, and the largest move after which it takes
 // another, from a fresh factor: a Newton move δ on a lever r leaves about δ²/r (1e-5 m on
-// 0.1 m: 1e-9 m). The first step of a call reuses the substep's factor (a chord step).
+// 0.1 m: 1e-9 m). Every step factors afresh: in lanes a factor costs about what a solve does.
 constexpr int kNewtonSteps = 4;
 constexpr double kNewtonMove = 1e-5;
 // The same for a round with contacts (tree_contacts.hpp), whose Jacobi pushes converge linearly,
@@ -301,7 +289,6 @@ constexpr int kContactIterations = 4;
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   JointTrees& trees = state.plan.joint_trees;
-  std::fill(trees.factored.begin(), trees.factored.end(), std::uint8_t{0});
   gather_tree_contacts(state, dt);
   std::fill(trees.counts.begin(), trees.counts.end(), JointTreeCounts{});
 }
@@ -325,24 +312,6 @@ double move_component(VerletState<Scalar>& state, std::uint32_t index) {
   return moved;
 }
 
-// Newton steps `first`… of one component's tree on the positions, each solved and moved (the
-// first a chord step while the substep's factor serves); returns the largest move, m (`largest`
-// so far included).
-template <typename Scalar>
-double newton_steps(VerletState<Scalar>& state, std::uint32_t index, int first, double largest) {
-  JointTrees& trees = state.plan.joint_trees;
-  for (int newton = first; newton < kNewtonSteps; ++newton) {
-    if (newton > 0) trees.factored[index] = 0;
-    solve_component(state, trees, index, false);
-    ++trees.counts[index].newton_steps;
-    const double moved = move_component(state, index);
-    largest = std::max(largest, moved);
-    if (moved < kNewtonMove) return largest;
-  }
-  ++trees.counts[index].capped;
-  return largest;
-}
-
 // Forgets the limits held in component `index`'s last call (hold_pushing_limits).
 void release_limits(JointTrees& trees, std::uint32_t index) {
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
@@ -352,140 +321,215 @@ void release_limits(JointTrees& trees, std::uint32_t index) {
   }
 }
 
-// One component's tree on the positions, without contacts; returns the largest move, m.
-template <typename Scalar>
-double solve_positions(VerletState<Scalar>& state, std::uint32_t index) {
-  ++state.plan.joint_trees.counts[index].solves;
-  release_limits(state.plan.joint_trees, index);
-  return newton_steps(state, index, 0, 0.0);
-}
-
-// A round of a component with contacts (tree_contacts.hpp), stage 1: a Newton step of its joints
-// (the first round's a chord step while the substep's factor serves), solved but not applied
-// (JointTrees::joint_motion), and its tree's inverse diagonal. A component without contacts is
-// solved whole in the first round.
-template <typename Scalar>
-double contact_round_joints(VerletState<Scalar>& state, std::uint32_t index, int round) {
-  JointTrees& trees = state.plan.joint_trees;
-  if (trees.component_contacts.row(index).empty()) return round == 0 ? solve_positions(state, index) : 0.0;
-  if (trees.settled[index]) return 0;
-  if (round == 0) ++trees.counts[index].solves, release_limits(trees, index);
-  if (round > 0) trees.factored[index] = 0;
-  solve_component(state, trees, index, false);
-  ++trees.counts[index].newton_steps;
-  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-  if (!trees.mobility_current[index]) {
-    trees.elimination.inverse_diagonal(component.begin, component.end);
-    ++trees.counts[index].inverse_diagonals;
+// The lanes of `pack` whose components are awake and, with `contacts`, have contacts this
+// substep and are not settled, or, without, have none.
+LaneMask lanes_of(const JointTrees& trees, const TreePack& pack, bool contacts) {
+  LaneMask lanes{};
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    const std::int32_t c = pack.component[lane];
+    if (c < 0 || !trees.component_awake[static_cast<std::size_t>(c)]) continue;
+    const auto index = static_cast<std::uint32_t>(c);
+    const bool has_contacts = !trees.contacts.empty() && !trees.component_contacts.row(index).empty();
+    lanes[lane] = contacts ? has_contacts && !trees.settled[index] : !has_contacts;
   }
-  trees.mobility_current[index] = 1;
-  for_each_limb(trees, component, [&](std::size_t limb) {
-    trees.joint_motion[limb] = trees.elimination.work(limb);
-    trees.load_motion[limb].setZero();
-  });
-  take_loop_mobilities(state, index);
-  return 0;
+  return lanes;
 }
 
-// Stage 3 of a round's iteration: the component's contacts' loads solved with the same factor,
-// their motion scaled so that no contact overshoots and added to the round's (load_motion).
+bool any_lane(const LaneMask& lanes) { return std::find(lanes.begin(), lanes.end(), true) != lanes.end(); }
+
+// Calls visit(component) for the component of each lane where `lanes` holds.
+template <typename Visit>
+void for_each_lane(const TreePack& pack, const LaneMask& lanes, Visit&& visit) {
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    if (lanes[lane]) visit(static_cast<std::uint32_t>(pack.component[lane]));
+  }
+}
+
+// A Newton step of the joints of `pack`'s lanes where `lanes` holds: staged, factored and solved
+// side by side (with `mobility`, each limb's block of the inverse too), the limits that push held.
 template <typename Scalar>
-double contact_iteration_loads(VerletState<Scalar>& state, std::uint32_t index) {
+void newton_step(VerletState<Scalar>& state, TreePack& pack, const LaneMask& lanes, bool mobility) {
   JointTrees& trees = state.plan.joint_trees;
-  trees.load_scale[index] = 1;
-  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
-  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-  for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
-  if (!add_tree_contact_loads(trees, index)) return 0;
-  ++trees.counts[index].substitutions;
-  trees.elimination.solve(component.begin, component.end);
-  const double scale = tree_contact_overshoot(trees, index);
-  trees.load_scale[index] = scale;
-  for_each_limb(trees, component, [&](std::size_t limb) { trees.load_motion[limb] += trees.elimination.work(limb) / scale; });
+  for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, false); });
+  eliminate_pack(trees, pack, lanes, mobility);
+  for_each_lane(pack, lanes, [&](std::uint32_t c) {
+    JointTreeCounts& counts = trees.counts[c];
+    ++counts.factors, ++counts.substitutions, ++counts.newton_steps;
+    counts.inverse_diagonals += mobility ? 1 : 0;
+    hold_pushing_limits(trees, trees.elimination.ordering().components[c]);
+  });
+}
+
+// The components without contacts, on the positions: Newton steps until a step moves no particle
+// of that component by kNewtonMove (at most kNewtonSteps); a lane that has converged drops out
+// of the next. Returns the largest move, m.
+template <typename Scalar>
+double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
+  JointTrees& trees = state.plan.joint_trees;
+  LaneMask running = lanes_of(trees, pack, false);
+  for_each_lane(pack, running, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
+  double largest = 0;
+  for (int newton = 0; newton < kNewtonSteps && any_lane(running); ++newton) {
+    newton_step(state, pack, running, false);
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+      if (!running[lane]) continue;
+      const auto c = static_cast<std::uint32_t>(pack.component[lane]);
+      const double moved = move_component(state, c);
+      largest = std::max(largest, moved);
+      running[lane] = moved >= kNewtonMove;
+      if (running[lane] && newton == kNewtonSteps - 1) ++trees.counts[c].capped;
+    }
+  }
+  return largest;
+}
+
+// A round of the components with contacts (tree_contacts.hpp), stage 1: a Newton step of their
+// joints, solved but not applied (JointTrees::joint_motion), with each limb's mobility.
+template <typename Scalar>
+double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int round) {
+  JointTrees& trees = state.plan.joint_trees;
+  const LaneMask lanes = lanes_of(trees, pack, true);
+  if (!any_lane(lanes)) return 0;
+  if (round == 0) for_each_lane(pack, lanes, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
+  newton_step(state, pack, lanes, true);
+  for_each_lane(pack, lanes, [&](std::uint32_t c) {
+    for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) {
+      trees.joint_motion[limb] = trees.elimination.work(limb);
+      trees.load_motion[limb].setZero();
+    });
+    take_loop_mobilities(state, c);
+  });
   return 0;
 }
 
-// A round's end: the component moves by its joint step and its contacts' motion. It is settled
+// Stage 3 of a round's iteration: the contacts' loads solved with the round's factor, their
+// motion scaled so that no contact overshoots and added to the round's (load_motion).
+template <typename Scalar>
+double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
+  JointTrees& trees = state.plan.joint_trees;
+  LaneMask lanes = lanes_of(trees, pack, true);
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    const std::int32_t c = pack.component[lane];
+    if (c >= 0) trees.load_scale[static_cast<std::size_t>(c)] = 1;
+    if (!lanes[lane]) continue;
+    const auto index = static_cast<std::uint32_t>(c);
+    const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
+    for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
+    lanes[lane] = add_tree_contact_loads(trees, index);
+  }
+  if (!any_lane(lanes)) return 0;
+  solve_pack(trees, pack, lanes);
+  for_each_lane(pack, lanes, [&](std::uint32_t c) {
+    ++trees.counts[c].substitutions;
+    const double scale = tree_contact_overshoot(trees, c);
+    trees.load_scale[c] = scale;
+    for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) { trees.load_motion[limb] += trees.elimination.work(limb) / scale; });
+  });
+  return 0;
+}
+
+// A round's end: each component moves by its joint step and its contacts' motion. It is settled
 // when that moves no particle by kContactRoundMove.
 template <typename Scalar>
-double contact_round_move(VerletState<Scalar>& state, std::uint32_t index, int round) {
+double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
-  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
-  const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
-  for_each_limb(trees, component, [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
-  const double moved = move_component(state, index);
-  trees.settled[index] = moved < kContactRoundMove ? 1 : 0;
-  if (!trees.settled[index] && round == kNewtonSteps - 1) ++trees.counts[index].capped;
-  return moved;
-}
-
-// After the rounds, a component they left unsettled takes one more Newton step of its joints
-// alone, so that every sweep still ends with the joints closed (its contacts' next sweep's).
-template <typename Scalar>
-double close_joints(VerletState<Scalar>& state, std::uint32_t index) {
-  JointTrees& trees = state.plan.joint_trees;
-  if (trees.component_contacts.row(index).empty() || trees.settled[index]) return 0;
-  trees.factored[index] = 0;
-  solve_component(state, trees, index, false);
-  ++trees.counts[index].newton_steps;
-  return move_component(state, index);
-}
-
-// One component's tree on the velocities; returns the largest |Δv|, m/s.
-template <typename Scalar>
-double solve_velocities(VerletState<Scalar>& state, std::uint32_t index) {
-  JointTrees& trees = state.plan.joint_trees;
-  const std::uint32_t null_particle = state.particles.null_particle();
-  solve_component(state, trees, index, true);
   double largest = 0;
-  for_each_limb(trees, trees.elimination.ordering().components[index], [&](std::size_t limb) {
-    const Vector6& change = trees.elimination.work(limb);
-    for (const std::uint32_t p : trees.limb_particles[limb]) {
-      if (p == null_particle) break;
-      const Eigen::Vector3d r = state.particles.position(p).template cast<double>() - trees.centre[limb];
-      const Eigen::Vector3d dv = change.head<3>() + change.tail<3>().cross(r);
-      largest = std::max(largest, dv.norm());
-      state.particles.set_velocity(p, (state.particles.velocity(p).template cast<double>() + dv).template cast<Scalar>());
-    }
+  for_each_lane(pack, lanes_of(trees, pack, true), [&](std::uint32_t c) {
+    for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
+    const double moved = move_component(state, c);
+    largest = std::max(largest, moved);
+    trees.settled[c] = moved < kContactRoundMove ? 1 : 0;
+    if (!trees.settled[c] && round == kNewtonSteps - 1) ++trees.counts[c].capped;
   });
   return largest;
 }
 
-// The awake islands' trees as tasks, one an island, on the relaxation's threads: islands share
-// no limb, particle, joint or elimination node, so any split gives the same bits.
+// After the rounds, the components they left unsettled take one more Newton step of their joints
+// alone, so that every sweep still ends with the joints closed (its contacts' next sweep's).
+template <typename Scalar>
+double close_joints(VerletState<Scalar>& state, TreePack& pack) {
+  JointTrees& trees = state.plan.joint_trees;
+  const LaneMask lanes = lanes_of(trees, pack, true);
+  if (!any_lane(lanes)) return 0;
+  newton_step(state, pack, lanes, false);
+  double largest = 0;
+  for_each_lane(pack, lanes, [&](std::uint32_t c) { largest = std::max(largest, move_component(state, c)); });
+  return largest;
+}
+
+// The awake components on the velocities; returns the largest |Δv|, m/s.
+template <typename Scalar>
+double pack_velocities(VerletState<Scalar>& state, TreePack& pack) {
+  JointTrees& trees = state.plan.joint_trees;
+  const std::uint32_t null_particle = state.particles.null_particle();
+  LaneMask lanes{};
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    const std::int32_t c = pack.component[lane];
+    lanes[lane] = c >= 0 && trees.component_awake[static_cast<std::size_t>(c)];
+  }
+  if (!any_lane(lanes)) return 0;
+  for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, true); });
+  eliminate_pack(trees, pack, lanes);
+  double largest = 0;
+  for_each_lane(pack, lanes, [&](std::uint32_t c) {
+    ++trees.counts[c].factors, ++trees.counts[c].substitutions;
+    for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) {
+      const Vector6& change = trees.elimination.work(limb);
+      for (const std::uint32_t p : trees.limb_particles[limb]) {
+        if (p == null_particle) break;
+        const Eigen::Vector3d r = state.particles.position(p).template cast<double>() - trees.centre[limb];
+        const Eigen::Vector3d dv = change.head<3>() + change.tail<3>().cross(r);
+        largest = std::max(largest, dv.norm());
+        state.particles.set_velocity(p, (state.particles.velocity(p).template cast<double>() + dv).template cast<Scalar>());
+      }
+    });
+  });
+  return largest;
+}
+
+// The stages as tasks, one a pack, on the relaxation's threads: packs share no component (and
+// components no limb, particle, joint or node), so any split gives the same bits.
 enum class TreeStage { positions, contact_joints, contact_loads, contact_move, close_joints, velocities };
 
 template <typename Scalar>
-struct IslandStage {
+struct PackStage {
   VerletState<Scalar>* state;
   TreeStage kind;
   int round = 0;
   static double run(const void* context, std::size_t task) {
-    const auto& stage = *static_cast<const IslandStage*>(context);
+    const auto& stage = *static_cast<const PackStage*>(context);
     VerletState<Scalar>& state = *stage.state;
-    double largest = 0;
-    for (const std::uint32_t index : state.plan.joint_trees.island_components.row(state.awake_islands[task])) {
-      switch (stage.kind) {
-        case TreeStage::positions: largest = std::max(largest, solve_positions(state, index)); break;
-        case TreeStage::contact_joints: largest = std::max(largest, contact_round_joints(state, index, stage.round)); break;
-        case TreeStage::contact_loads: largest = std::max(largest, contact_iteration_loads(state, index)); break;
-        case TreeStage::contact_move: largest = std::max(largest, contact_round_move(state, index, stage.round)); break;
-        case TreeStage::close_joints: largest = std::max(largest, close_joints(state, index)); break;
-        case TreeStage::velocities: largest = std::max(largest, solve_velocities(state, index)); break;
-      }
+    TreePack& pack = state.plan.joint_trees.packs->packs[task];
+    switch (stage.kind) {
+      case TreeStage::positions: return pack_positions(state, pack);
+      case TreeStage::contact_joints: return contact_round_joints(state, pack, stage.round);
+      case TreeStage::contact_loads: return contact_iteration_loads(state, pack);
+      case TreeStage::contact_move: return contact_round_move(state, pack, stage.round);
+      case TreeStage::close_joints: return close_joints(state, pack);
+      case TreeStage::velocities: return pack_velocities(state, pack);
     }
-    return largest;
+    return 0;
   }
 };
 
 template <typename Scalar>
-double solve_awake_islands(VerletState<Scalar>& state, TreeStage kind, int round = 0) {
-  const IslandStage<Scalar> stage{&state, kind, round};
-  const std::size_t count = state.awake_islands.size();
-  if (joint_trees_on_threads(state.plan) && count > 1) return state.plan.runner->run(count, &IslandStage<Scalar>::run, &stage);
+double solve_packs(VerletState<Scalar>& state, TreeStage kind, int round = 0) {
+  const PackStage<Scalar> stage{&state, kind, round};
+  const std::size_t count = state.plan.joint_trees.packs->packs.size();
+  if (joint_trees_on_threads(state.plan) && count > 1) return state.plan.runner->run(count, &PackStage<Scalar>::run, &stage);
   double largest = 0;
-  for (std::size_t task = 0; task < count; ++task) largest = std::max(largest, IslandStage<Scalar>::run(&stage, task));
+  for (std::size_t task = 0; task < count; ++task) largest = std::max(largest, PackStage<Scalar>::run(&stage, task));
   return largest;
+}
+
+// Marks the components of the awake islands (JointTrees::component_awake).
+template <typename Scalar>
+void mark_awake_components(VerletState<Scalar>& state) {
+  JointTrees& trees = state.plan.joint_trees;
+  std::fill(trees.component_awake.begin(), trees.component_awake.end(), std::uint8_t{0});
+  for (const std::uint32_t island : state.awake_islands) {
+    for (const std::uint32_t index : trees.island_components.row(island)) trees.component_awake[index] = 1;
+  }
 }
 
 }  // namespace
@@ -494,18 +538,20 @@ template <typename Scalar>
 double project_joint_trees(VerletState<Scalar>& state) {
   JointTrees& trees = state.plan.joint_trees;
   if (!trees.active()) return 0.0;
-  if (trees.contacts.empty()) return solve_awake_islands(state, TreeStage::positions);
-  // Rounds of the stages of tree_contacts.hpp (contacts between islands read both sides' steps),
-  // each a Newton step of every component not yet settled, its contacts with it.
+  // The components without contacts first, in packs; then rounds of the stages of
+  // tree_contacts.hpp (contacts between islands read both sides' steps), each a Newton step of
+  // every component with contacts not yet settled, its contacts with it.
+  mark_awake_components(state);
+  double largest = solve_packs(state, TreeStage::positions);
+  if (trees.contacts.empty()) return largest;
   std::fill(trees.settled.begin(), trees.settled.end(), std::uint8_t{0});
-  double largest = 0;
   for (int round = 0; round < kNewtonSteps; ++round) {
-    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_joints, round));
+    largest = std::max(largest, solve_packs(state, TreeStage::contact_joints, round));
     for (int iteration = 0; iteration < kContactIterations; ++iteration) {
       tree_contact_impulses(state, iteration == 0);
-      solve_awake_islands(state, TreeStage::contact_loads, round);
+      solve_packs(state, TreeStage::contact_loads, round);
     }
-    largest = std::max(largest, solve_awake_islands(state, TreeStage::contact_move, round));
+    largest = std::max(largest, solve_packs(state, TreeStage::contact_move, round));
     end_tree_contact_round(trees);
     bool settled = true;
     for (const std::uint32_t island : state.awake_islands) {
@@ -515,12 +561,14 @@ double project_joint_trees(VerletState<Scalar>& state) {
     }
     if (settled) return largest;
   }
-  return std::max(largest, solve_awake_islands(state, TreeStage::close_joints));
+  return std::max(largest, solve_packs(state, TreeStage::close_joints));
 }
 
 template <typename Scalar>
 double project_joint_tree_velocities(VerletState<Scalar>& state) {
-  return state.plan.joint_trees.active() ? solve_awake_islands(state, TreeStage::velocities) : 0.0;
+  if (!state.plan.joint_trees.active()) return 0.0;
+  mark_awake_components(state);
+  return solve_packs(state, TreeStage::velocities);
 }
 
 #define LIMBER_INSTANTIATE(Scalar)                                               \

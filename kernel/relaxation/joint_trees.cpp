@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "limber/kernel/relaxation/joint_tree_limbs.hpp"
+#include "limber/kernel/relaxation/tree_packs.hpp"
 
 // Building the joint trees at compile: which limbs are rigid, which joints and limits the trees
 // hold, their elimination order, and the scratch the solve (joint_tree_solve.cpp) uses.
@@ -132,7 +133,7 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   std::vector<std::uint8_t> joint_rows(trees.joints.size());
   for (std::size_t j = 0; j < trees.joints.size(); ++j) {
     inboard[j] = trees.joints[j].limb_a, outboard[j] = trees.joints[j].limb_b;
-    joint_rows[j] = static_cast<std::uint8_t>(trees.joints[j].rows());  // limits join while reached
+    joint_rows[j] = static_cast<std::uint8_t>(trees.joints[j].fixed_rows());
   }
   TreeOrdering ordering = order_tree(limb_count, inboard, outboard);
   std::vector<bool> in_tree(trees.joints.size(), true);
@@ -195,6 +196,7 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.elimination.assign(std::move(ordering), limb_count, std::move(joint_rows));
   trees.centre.assign(limb_count, Eigen::Vector3d::Zero());
   trees.frame.assign(limb_count, Eigen::Matrix3d::Identity());
+  trees.mobility.assign(limb_count, Matrix6::Zero());
   trees.block_a.assign(trees.joints.size(), Matrix6::Zero());
   trees.block_b.assign(trees.joints.size(), Matrix6::Zero());
   trees.rate.assign(limb_count, Vector6::Zero());
@@ -203,14 +205,13 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.active_limits.assign(trees.joints.size(), 0);
   trees.limit_upper.assign(trees.joints.size(), 0);
   trees.limit_held.assign(trees.joints.size(), 0);
-  trees.factored_limits.assign(trees.joints.size(), 0);
-  trees.rows.assign(trees.joints.size(), 0);
-  trees.factored.assign(trees.elimination.ordering().components.size(), 0);
-  trees.counts.assign(trees.factored.size(), {});
-  trees.mobility_current.assign(trees.factored.size(), 0);
-  trees.load_scale.assign(trees.factored.size(), 1.0);
-  trees.settled.assign(trees.factored.size(), 0);
+  const std::size_t component_count = trees.elimination.ordering().components.size();
+  trees.counts.assign(component_count, {});
+  trees.load_scale.assign(component_count, 1.0);
+  trees.settled.assign(component_count, 0);
   trees.path_scratch.assign(trees.elimination.ordering().order.size(), -1);
+  trees.component_awake.assign(component_count, 0);
+  build_tree_packs(trees);
   trees.joint_motion.assign(limb_count, Vector6::Zero());
   trees.load_motion.assign(limb_count, Vector6::Zero());
 }

@@ -5,6 +5,7 @@
 
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/relaxation/joint_trees.hpp"
+#include "limber/kernel/relaxation/tree_packs.hpp"
 
 namespace limber {
 namespace {
@@ -101,7 +102,7 @@ void take_mobilities(const JointTrees& trees, TreeContact& contact) {
   for (std::size_t s = 0; s < 2; ++s) {
     contact.normal_mobility[s] = 0, contact.point_mobility[s].setZero();
     if (!contact.acting[s]) continue;
-    const Eigen::Matrix<double, 6, 6>& z = trees.elimination.mobility(static_cast<std::size_t>(contact.limb[s]));
+    const Eigen::Matrix<double, 6, 6>& z = trees.mobility[static_cast<std::size_t>(contact.limb[s])];
     contact.normal_mobility[s] = contact.loop ? contact.loop_mobility[s] : contact.normal_jacobian[s].dot(z * contact.normal_jacobian[s]);
     contact.point_mobility[s] = contact.point_jacobian[s] * z * contact.point_jacobian[s].transpose();
   }
@@ -223,22 +224,14 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
 template <typename Scalar>
 void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component) {
   JointTrees& trees = state.plan.joint_trees;
-  const TreeOrdering::Component& nodes = trees.elimination.ordering().components[component];
   for (const std::uint32_t c : trees.component_contacts.row(component)) {
     TreeContact& contact = trees.contacts[c];
     if (!contact.loop) continue;
     evaluate(state, contact);
-    // The paths from its two limbs to the root carry the response (solve_nodes): the component's
-    // slice of the scratch holds them.
-    const std::span<std::int32_t> room(trees.path_scratch.data() + nodes.begin, nodes.end - nodes.begin);
-    const std::span<const std::int32_t> path = room.first(trees.elimination.path_to_root(contact.limb, room));
-    for (const std::int32_t node : path) trees.elimination.work(static_cast<std::size_t>(node)).setZero();
-    for (std::size_t s = 0; s < 2; ++s) trees.elimination.work(static_cast<std::size_t>(contact.limb[s])) += contact.normal_jacobian[s];
-    trees.elimination.solve_nodes(path);
+    // The paths from its two limbs to the root carry the response.
+    const std::array<Eigen::Matrix<double, 6, 1>, 2> motion = solve_pack_path(trees, component, contact.limb, contact.normal_jacobian);
     ++trees.counts[component].path_solves;
-    for (std::size_t s = 0; s < 2; ++s) {
-      contact.loop_mobility[s] = contact.normal_jacobian[s].dot(trees.elimination.work(static_cast<std::size_t>(contact.limb[s])));
-    }
+    for (std::size_t s = 0; s < 2; ++s) contact.loop_mobility[s] = contact.normal_jacobian[s].dot(motion[s]);
   }
 }
 

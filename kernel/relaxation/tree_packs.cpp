@@ -1,0 +1,233 @@
+#include "limber/kernel/relaxation/tree_packs.hpp"
+
+#include <algorithm>
+#include <map>
+#include <span>
+#include <utility>
+
+namespace limber {
+
+TreePacksHandle::TreePacksHandle() : packs_(std::make_unique<TreePacks>()) {}
+TreePacksHandle::~TreePacksHandle() = default;
+TreePacksHandle::TreePacksHandle(const TreePacksHandle& other) : packs_(std::make_unique<TreePacks>(*other.packs_)) {}
+TreePacksHandle& TreePacksHandle::operator=(const TreePacksHandle& other) {
+  if (this != &other) packs_ = std::make_unique<TreePacks>(*other.packs_);
+  return *this;
+}
+TreePacksHandle::TreePacksHandle(TreePacksHandle&&) noexcept = default;
+TreePacksHandle& TreePacksHandle::operator=(TreePacksHandle&&) noexcept = default;
+
+namespace {
+
+using Matrix6 = Eigen::Matrix<double, 6, 6>;
+using Vector6 = Eigen::Matrix<double, 6, 1>;
+
+// A component's elimination shape, node by node in its slice of the order: whether a limb, its
+// parent's offset, and for a joint its rows and its limbs' offsets (−1: none, the world).
+std::vector<std::int32_t> shape_of(const JointTrees& trees, const TreeOrdering::Component& component, std::vector<std::int32_t>& offset) {
+  const TreeOrdering& ordering = trees.elimination.ordering();
+  const std::int32_t limbs = trees.elimination.body_count();
+  for (std::uint32_t k = component.begin; k < component.end; ++k) offset[static_cast<std::size_t>(ordering.order[k])] = static_cast<std::int32_t>(k - component.begin);
+  const auto offset_of = [&](std::int32_t node) { return node < 0 ? -1 : offset[static_cast<std::size_t>(node)]; };
+  std::vector<std::int32_t> shape;
+  shape.reserve(5 * (component.end - component.begin));
+  for (std::uint32_t k = component.begin; k < component.end; ++k) {
+    const std::int32_t node = ordering.order[k];
+    shape.push_back(node < limbs ? 1 : 0);
+    shape.push_back(offset_of(ordering.parent[static_cast<std::size_t>(node)]));
+    if (node < limbs) continue;
+    const auto j = static_cast<std::size_t>(node - limbs);
+    shape.push_back(trees.elimination.rows(j));
+    shape.push_back(offset_of(trees.joints[j].limb_a));
+    shape.push_back(offset_of(trees.joints[j].limb_b));
+  }
+  return shape;
+}
+
+// A pack's local nodes, ordering and storage, from its first component.
+TreePack make_pack(const JointTrees& trees, const std::vector<std::uint32_t>& components) {
+  const TreeOrdering& ordering = trees.elimination.ordering();
+  const std::int32_t limbs = trees.elimination.body_count();
+  const TreeOrdering::Component& first = ordering.components[components.front()];
+  const std::uint32_t count = first.end - first.begin;
+  TreePack pack;
+  pack.component.fill(-1);
+  for (std::size_t lane = 0; lane < components.size(); ++lane) pack.component[lane] = static_cast<std::int32_t>(components[lane]);
+  // Local indices: limbs first, then joints, each in the slice's order.
+  std::int32_t lane_limbs = 0;
+  for (std::uint32_t k = first.begin; k < first.end; ++k) lane_limbs += ordering.order[k] < limbs ? 1 : 0;
+  std::vector<std::int32_t> local_of(ordering.parent.size(), -1);  // per global node of the first component
+  std::int32_t next_limb = 0, next_joint = lane_limbs;
+  pack.position.assign(count, 0);
+  for (std::uint32_t k = first.begin; k < first.end; ++k) {
+    const std::int32_t node = ordering.order[k];
+    const std::int32_t local = node < limbs ? next_limb++ : next_joint++;
+    local_of[static_cast<std::size_t>(node)] = local;
+    pack.position[static_cast<std::size_t>(local)] = k - first.begin;
+  }
+  pack.local.assign(count, 0);
+  for (std::uint32_t local = 0; local < count; ++local) pack.local[pack.position[local]] = static_cast<std::int32_t>(local);
+  TreeOrdering local;
+  local.parent.assign(count, -1);
+  std::vector<std::uint8_t> rows(count - static_cast<std::uint32_t>(lane_limbs));
+  pack.inboard_limb.assign(rows.size(), -1);
+  for (std::uint32_t k = first.begin; k < first.end; ++k) {
+    const std::int32_t node = ordering.order[k], parent = ordering.parent[static_cast<std::size_t>(node)];
+    const auto here = static_cast<std::size_t>(local_of[static_cast<std::size_t>(node)]);
+    local.parent[here] = parent < 0 ? -1 : local_of[static_cast<std::size_t>(parent)];
+    local.order.push_back(static_cast<std::int32_t>(here));
+    if (node < limbs) continue;
+    const auto j = static_cast<std::size_t>(node - limbs);
+    rows[here - static_cast<std::size_t>(lane_limbs)] = static_cast<std::uint8_t>(trees.elimination.rows(j));
+    const std::int32_t inboard = trees.joints[j].limb_a;
+    pack.inboard_limb[here - static_cast<std::size_t>(lane_limbs)] = inboard < 0 ? -1 : local_of[static_cast<std::size_t>(inboard)];
+  }
+  local.components.push_back({0, count, 0});
+  pack.edge.assign(rows.size(), {Block<TreeLanes, 6, 6>::Zero(), Block<TreeLanes, 6, 6>::Zero()});
+  pack.elimination.assign(std::move(local), static_cast<std::size_t>(lane_limbs), std::move(rows));
+  return pack;
+}
+
+}  // namespace
+
+void build_tree_packs(JointTrees& trees, std::size_t lanes) {
+  lanes = std::clamp<std::size_t>(lanes, 1, kTreeLanes);
+  TreePacks& packs = *trees.packs;
+  packs.packs.clear();
+  const auto& components = trees.elimination.ordering().components;
+  // Components by shape, shapes in the order first met, so the packing is deterministic.
+  std::map<std::vector<std::int32_t>, std::size_t> shape_index;
+  std::vector<std::vector<std::uint32_t>> by_shape;
+  std::vector<std::int32_t> offset(trees.elimination.node_count(), -1);
+  for (std::uint32_t c = 0; c < components.size(); ++c) {
+    if (components[c].begin == components[c].end) continue;
+    const auto [found, fresh] = shape_index.try_emplace(shape_of(trees, components[c], offset), by_shape.size());
+    if (fresh) by_shape.emplace_back();
+    by_shape[found->second].push_back(c);
+  }
+  packs.pack_of.assign(components.size(), 0), packs.lane_of.assign(components.size(), 0);
+  for (const std::vector<std::uint32_t>& group : by_shape) {
+    for (std::size_t begin = 0; begin < group.size(); begin += lanes) {
+      const std::size_t end = std::min(group.size(), begin + lanes);
+      for (std::size_t k = begin; k < end; ++k) packs.pack_of[group[k]] = static_cast<std::uint32_t>(packs.packs.size()), packs.lane_of[group[k]] = static_cast<std::uint32_t>(k - begin);
+      packs.packs.push_back(make_pack(trees, std::vector<std::uint32_t>(group.begin() + static_cast<std::ptrdiff_t>(begin), group.begin() + static_cast<std::ptrdiff_t>(end))));
+    }
+  }
+  packs.offset.assign(trees.elimination.node_count(), 0);
+  for (const TreeOrdering::Component& component : components) {
+    for (std::uint32_t k = component.begin; k < component.end; ++k) packs.offset[static_cast<std::size_t>(trees.elimination.ordering().order[k])] = k - component.begin;
+  }
+}
+
+namespace {
+
+// The scalar elimination's node holding local node `local` of lane `lane` (a component's).
+struct LaneNodes {
+  const TreeOrdering& ordering;
+  const TreePack& pack;
+  std::array<std::uint32_t, kTreeLanes> begin{};
+  LaneNodes(const JointTrees& trees, const TreePack& pack, const LaneMask& lanes) : ordering(trees.elimination.ordering()), pack(pack) {
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+      if (lanes[lane]) begin[lane] = ordering.components[static_cast<std::size_t>(pack.component[lane])].begin;
+    }
+  }
+  std::size_t operator()(std::size_t lane, std::size_t local) const { return static_cast<std::size_t>(ordering.order[begin[lane] + pack.position[local]]); }
+};
+
+// Each lane's solution (the pack's work) into its nodes' work().
+void scatter_solutions(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
+  Vector6 sink;
+  std::array<Vector6*, kTreeLanes> solutions{};
+  for (std::size_t local = 0; local < pack.position.size(); ++local) {
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) solutions[lane] = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : &sink;
+    unpack_lanes(pack.elimination.work(local), solutions);
+  }
+}
+
+// The lanes' right-hand sides (their nodes' work(); zero in the other lanes) into the pack's.
+void gather_right_sides(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
+  static const Vector6 zero_vector = Vector6::Zero();
+  std::array<const Vector6*, kTreeLanes> vectors{};
+  for (std::size_t local = 0; local < pack.position.size(); ++local) {
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) vectors[lane] = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : &zero_vector;
+    pack_lanes(pack.elimination.work(local), vectors);
+  }
+}
+
+}  // namespace
+
+void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bool mobility) {
+  static const Matrix6 identity = Matrix6::Identity(), minus_identity = -Matrix6::Identity(), zero_matrix = Matrix6::Zero();
+  const std::int32_t limbs = trees.elimination.body_count();
+  const std::int32_t lane_limbs = pack.elimination.body_count();
+  const auto count = static_cast<std::uint32_t>(pack.position.size());
+  const LaneNodes node_of(trees, pack, lanes);
+  std::array<const Matrix6*, kTreeLanes> matrices{}, inboard{}, outboard{};
+  for (std::size_t local = 0; local < count; ++local) {
+    const bool limb = static_cast<std::int32_t>(local) < lane_limbs;
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+      if (!lanes[lane]) {  // an identity system: finite, and nothing is written back
+        matrices[lane] = limb ? &identity : &minus_identity;
+        inboard[lane] = outboard[lane] = &zero_matrix;
+        continue;
+      }
+      const std::size_t node = node_of(lane, local);
+      matrices[lane] = &trees.elimination.diagonal(node);
+      if (limb) continue;
+      const std::size_t j = node - static_cast<std::size_t>(limbs);
+      inboard[lane] = &trees.block_a[j], outboard[lane] = &trees.block_b[j];
+    }
+    pack_lanes(pack.elimination.diagonal(local), matrices);
+    if (limb) continue;
+    auto& edge = pack.edge[local - static_cast<std::size_t>(lane_limbs)];
+    pack_lanes(edge[0], inboard), pack_lanes(edge[1], outboard);
+  }
+  gather_right_sides(trees, pack, lanes, node_of);
+  pack.elimination.eliminate(0, count, [&](std::size_t joint, std::int32_t limb) -> const Block<TreeLanes, 6, 6>& {
+    return pack.edge[joint][pack.inboard_limb[joint] == limb ? 0 : 1];
+  });
+  scatter_solutions(trees, pack, lanes, node_of);
+  if (!mobility) return;
+  pack.elimination.inverse_diagonal(0, count);
+  Matrix6 sink;
+  std::array<Matrix6*, kTreeLanes> blocks{};
+  for (std::size_t local = 0; local < static_cast<std::size_t>(lane_limbs); ++local) {
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) blocks[lane] = lanes[lane] ? &trees.mobility[node_of(lane, local)] : &sink;
+    unpack_lanes(pack.elimination.mobility(local), blocks);
+  }
+}
+
+void solve_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes) {
+  const LaneNodes node_of(trees, pack, lanes);
+  gather_right_sides(trees, pack, lanes, node_of);
+  pack.elimination.solve(0, static_cast<std::uint32_t>(pack.position.size()));
+  scatter_solutions(trees, pack, lanes, node_of);
+}
+
+std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
+                                       const std::array<Vector6, 2>& loads) {
+  TreePacks& packs = *trees.packs;
+  TreePack& pack = packs.packs[packs.pack_of[component]];
+  const std::size_t lane = packs.lane_of[component];
+  std::array<std::int32_t, 2> local{};
+  for (std::size_t s = 0; s < 2; ++s) local[s] = pack.local[packs.offset[static_cast<std::size_t>(limbs[s])]];
+  // The component's slice of the scratch holds the paths.
+  const TreeOrdering::Component& nodes = trees.elimination.ordering().components[component];
+  const std::span<std::int32_t> room(trees.path_scratch.data() + nodes.begin, nodes.end - nodes.begin);
+  const std::span<const std::int32_t> path = room.first(pack.elimination.path_to_root(local, room));
+  // Every lane solves the paths (one lane's work costs what all of theirs do); only this lane's
+  // loads are non-zero, and only its answer is read.
+  for (const std::int32_t node : path) pack.elimination.work(static_cast<std::size_t>(node)) = Block<TreeLanes, 6, 1>::Zero();
+  for (std::size_t s = 0; s < 2; ++s) {
+    Block<TreeLanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
+    for (int i = 0; i < 6; ++i) set_lane(work(i, 0), lane, get_lane(work(i, 0), lane) + loads[s](i));
+  }
+  pack.elimination.solve_nodes(path);
+  std::array<Vector6, 2> motion;
+  for (std::size_t s = 0; s < 2; ++s) {
+    for (int i = 0; i < 6; ++i) motion[s](i) = get_lane(pack.elimination.work(static_cast<std::size_t>(local[s]))(i, 0), lane);
+  }
+  return motion;
+}
+
+}  // namespace limber

@@ -1,0 +1,80 @@
+// Components of one shape solved side by side in SIMD lanes (kernel/relaxation/README.md, "Lanes
+// across ragdolls").
+//
+// The joint trees' components (a ragdoll each, usually) are grouped by the shape of their
+// elimination: the same nodes in the same order relative to the component's first, the same
+// parents, the same rows per joint (fixed: an idle limit keeps a decoupled row,
+// JointTrees::Joint::fixed_rows) and the same sides. kTreeLanes components of one shape make a
+// pack, whose TreeElimination holds one component a lane; a shape met once is a pack of one
+// lane, through the same code. Each lane's bits are those its component gets alone
+// (lane_blocks.hpp), so a ragdoll steps to the same bits whatever its neighbours in the pack.
+//
+// The scalar elimination (JointTrees::elimination) stays the staging area: a solve writes each
+// node's inputs there (the limbs' mass blocks, the joints' −A and right-hand sides, their J
+// blocks in block_a, block_b) as before; eliminate_pack() gathers a pack's lanes from it,
+// factors and solves them side by side, and writes each lane's solution back into its nodes'
+// work().
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <xsimd/xsimd.hpp>
+
+#include "limber/kernel/numerics/lane_blocks.hpp"
+#include "limber/kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/particles/relaxation_plan.hpp"
+
+namespace limber {
+
+/// The lanes of a pack: xsimd's widest batch of doubles for this build (4 with AVX2, 8 with
+/// AVX-512).
+using TreeLanes = xsimd::batch<double>;
+inline constexpr std::size_t kTreeLanes = TreeLanes::size;
+/// Which lanes of a pack a stage works on.
+using LaneMask = std::array<bool, kTreeLanes>;
+
+/// Up to kTreeLanes components of one shape. A node's local index: the pack's limbs 0…L−1 and
+/// joints L…, each numbered in the order the components' slices of the elimination order list
+/// them.
+struct TreePack {
+  std::array<std::int32_t, kTreeLanes> component{};  ///< per lane (−1: an empty lane)
+  std::vector<std::uint32_t> position;              ///< per local node: its offset in a lane's slice
+  std::vector<std::int32_t> local;                  ///< per offset in a slice: its local node
+  std::vector<std::int32_t> inboard_limb;           ///< per local joint: its limb A's local index (−1: the world)
+  TreeElimination<TreeLanes, 6> elimination;        ///< over the local nodes, one component a lane
+  std::vector<std::array<Block<TreeLanes, 6, 6>, 2>> edge;  ///< per local joint: J on limb A, on limb B
+};
+
+struct TreePacks {
+  std::vector<TreePack> packs;
+  /// Per component: its pack and lane. Per node of the scalar elimination: its offset in its
+  /// component's slice of the order.
+  std::vector<std::uint32_t> pack_of, lane_of, offset;
+};
+
+/// Groups trees' components by shape into packs of up to `lanes` (1…kTreeLanes) components
+/// (prepare_joint_trees, after the elimination is assigned; fewer lanes: for tests and studies of
+/// lane occupancy). O(nodes).
+void build_tree_packs(JointTrees& trees, std::size_t lanes = kTreeLanes);
+
+/// Factors and solves the lanes of `pack` where `lanes` holds, each from its component's inputs
+/// in trees.elimination (diagonal() and work() of its nodes) and trees.block_a, block_b, and
+/// writes each one's solution into its nodes' work(); with `mobility`, each one's limbs' blocks
+/// of the inverse too (TreeElimination::inverse_diagonal) into trees.mobility. The other lanes
+/// solve an identity system and write nothing. The pack keeps the factor for solve_pack() and
+/// solve_pack_path() until its next eliminate_pack().
+void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bool mobility = false);
+
+/// Solves the lanes where `lanes` holds again with the pack's factor, for the right-hand sides
+/// in their components' work(), written back there.
+void solve_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes);
+
+/// The response of component `component` (its pack's factor) to the loads loads[s] (6-vectors:
+/// force, torque) at its limbs limbs[s] alone, solved on the paths from them to the root
+/// (TreeElimination::solve_nodes); returns each limb's motion. O(the paths' nodes).
+std::array<Eigen::Matrix<double, 6, 1>, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
+                                                           const std::array<Eigen::Matrix<double, 6, 1>, 2>& loads);
+
+}  // namespace limber
