@@ -99,10 +99,11 @@ struct StepProfile {
   int tree_solves = 0;       ///< exact joint trees (JointSolve::tree): one component's position solves
   int tree_newton_steps = 0; ///< their Newton steps (a fresh or reused factor and a solve each)
   int tree_capped = 0;       ///< solves that stopped at the cap of Newton steps unconverged
-  /// The trees' elimination work, position and velocity stages: fresh factors (a Newton step
-  /// reusing the substep's factor takes none), inverse diagonals (the contacts' mobilities),
-  /// whole back-substitutions, and path solves (a loop contact's mobility).
-  int tree_factors = 0, tree_inverse_diagonals = 0, tree_substitutions = 0, tree_path_solves = 0;
+  /// The trees' elimination work, position and velocity stages: factors (one a component and
+  /// Newton step), inverse diagonals (the contacts' mobilities), whole back-substitutions, and
+  /// path solves (a loop contact's mobility); and the SIMD lanes the factors ran in (the packs'
+  /// factors × lanes per pack: tree_factors / tree_lane_slots is the lanes' occupancy).
+  int tree_factors = 0, tree_inverse_diagonals = 0, tree_substitutions = 0, tree_path_solves = 0, tree_lane_slots = 0;
 
   /// Adds `part` (a substep's) field by field.
   StepProfile& operator+=(const StepProfile& part) {
@@ -114,6 +115,7 @@ struct StepProfile {
     tree_solves += part.tree_solves, tree_newton_steps += part.tree_newton_steps, tree_capped += part.tree_capped;
     tree_factors += part.tree_factors, tree_inverse_diagonals += part.tree_inverse_diagonals;
     tree_substitutions += part.tree_substitutions, tree_path_solves += part.tree_path_solves;
+    tree_lane_slots += part.tree_lane_slots;
     return *this;
   }
 };

@@ -73,26 +73,31 @@ void set_lane(Value& value, std::size_t lane, Number number) {
 }
 
 /// Loads lane k of `lanes` with the number block *instances[k], one per lane (a lane-major
-/// gather per entry): instances of one shape kept one at a time, solved side by side.
+/// gather per entry): instances of one shape kept one at a time, solved side by side. Every
+/// entry is stored before any lane value is loaded: a load right after its lanes' stores waits
+/// for them (store-to-load forwarding cannot join four stores into one load), and that wait,
+/// per entry, cost as much as the elimination (tree_elimination_bench, BM_RagdollLanesPacked).
 template <typename Value, int Rows, int Cols, typename Instances>
 void pack_lanes(LaneBlock<Value, Rows, Cols>& lanes, const Instances& instances) {
-  alignas(64) typename Value::value_type values[Value::size];
-  for (int i = 0; i < Rows; ++i) {
-    for (int j = 0; j < Cols; ++j) {
-      for (std::size_t lane = 0; lane < Value::size; ++lane) values[lane] = (*instances[lane])(i, j);
-      lanes(i, j) = Value::load_aligned(values);
+  alignas(64) typename Value::value_type values[Rows * Cols][Value::size];
+  for (std::size_t lane = 0; lane < Value::size; ++lane) {
+    const auto& instance = *instances[lane];
+    for (int i = 0; i < Rows; ++i) {
+      for (int j = 0; j < Cols; ++j) values[i * Cols + j][lane] = instance(i, j);
     }
   }
+  for (int e = 0; e < Rows * Cols; ++e) lanes.entries[static_cast<std::size_t>(e)] = Value::load_aligned(values[e]);
 }
 
 /// pack_lanes' inverse: lane k of `lanes` into *instances[k].
 template <typename Value, int Rows, int Cols, typename Instances>
 void unpack_lanes(const LaneBlock<Value, Rows, Cols>& lanes, const Instances& instances) {
-  alignas(64) typename Value::value_type values[Value::size];
-  for (int i = 0; i < Rows; ++i) {
-    for (int j = 0; j < Cols; ++j) {
-      lanes(i, j).store_aligned(values);
-      for (std::size_t lane = 0; lane < Value::size; ++lane) (*instances[lane])(i, j) = values[lane];
+  alignas(64) typename Value::value_type values[Rows * Cols][Value::size];
+  for (int e = 0; e < Rows * Cols; ++e) lanes.entries[static_cast<std::size_t>(e)].store_aligned(values[e]);
+  for (std::size_t lane = 0; lane < Value::size; ++lane) {
+    auto& instance = *instances[lane];
+    for (int i = 0; i < Rows; ++i) {
+      for (int j = 0; j < Cols; ++j) instance(i, j) = values[i * Cols + j][lane];
     }
   }
 }

@@ -133,16 +133,17 @@ struct TreeContact {
 /// What the joint trees did since the substep began (StepProfile's tree counts), per component
 /// or summed: position solves (project_joint_trees calls), their Newton steps, the solves that
 /// stopped at the cap with a move still ≥ 1e-5 m; and the elimination's work, positions and
-/// velocities alike: fresh factors, inverse diagonals (the contacts' mobilities), whole
-/// back-substitutions, and path solves (a loop's mobility, along two paths to the root).
+/// velocities alike: factors, inverse diagonals (the contacts' mobilities), whole
+/// back-substitutions, and path solves (a loop's mobility, along two paths to the root); summed
+/// only, the lanes the factors ran in (a pack's factor counts all its lanes, used or not).
 struct JointTreeCounts {
   int solves = 0, newton_steps = 0, capped = 0;
-  int factors = 0, inverse_diagonals = 0, substitutions = 0, path_solves = 0;
+  int factors = 0, inverse_diagonals = 0, substitutions = 0, path_solves = 0, lane_slots = 0;
 
   JointTreeCounts& operator+=(const JointTreeCounts& part) {
     solves += part.solves, newton_steps += part.newton_steps, capped += part.capped;
     factors += part.factors, inverse_diagonals += part.inverse_diagonals;
-    substitutions += part.substitutions, path_solves += part.path_solves;
+    substitutions += part.substitutions, path_solves += part.path_solves, lane_slots += part.lane_slots;
     return *this;
   }
 };

@@ -168,12 +168,12 @@ void hold_pushing_limits(JointTrees& trees, const TreeOrdering::Component& compo
   }
 }
 
-// Stages one component's system in the scalar elimination's nodes (tree_packs.hpp), its limbs
-// and joints loaded at the current positions: each node's diagonal block (a limb's M = diag(m E,
-// I), a joint's −A: 0, or −1 on an idle limit's row), and work(limb) = 0 and work(joint) = −C
-// (positions), or −J·(v, ω) with each limb's rigid velocity (velocities: v of its centre,
-// ω = I⁻¹ Σ m r × v, kept in trees.rate, and the particles set to it). Every limb block is
-// positive definite (positive masses; a stick's spin regularized), so a factor cannot fail.
+// Stages one component's system (tree_packs.hpp gathers it), its limbs and joints loaded at the
+// current positions: each limb's mass and inertia, each joint's J blocks and active limits, and
+// work(limb) = 0 and work(joint) = −C (positions), or −J·(v, ω) with each limb's rigid velocity
+// (velocities: v of its centre, ω = I⁻¹ Σ m r × v, kept in trees.rate, and the particles set to
+// it). Every limb block is positive definite (positive masses; a stick's spin regularized), so a
+// factor cannot fail.
 template <typename Scalar>
 void stage_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_t index, bool velocities) {
   const TreeOrdering::Component& component = trees.elimination.ordering().components[index];
@@ -219,22 +219,6 @@ void stage_component(VerletState<Scalar>& state, JointTrees& trees, std::uint32_
     const JointTrees::Joint& joint = trees.joints[j];
     rhs = -(trees.block_b[j] * trees.rate[static_cast<std::size_t>(joint.limb_b)]);
     if (joint.limb_a >= 0) rhs -= trees.block_a[j] * trees.rate[static_cast<std::size_t>(joint.limb_a)];
-  }
-  for (std::uint32_t k = component.begin; k < component.end; ++k) {
-    const std::int32_t node = order[k];
-    Matrix6& block = trees.elimination.diagonal(static_cast<std::size_t>(node));
-    block.setZero();
-    if (node < limbs) {
-      block.topLeftCorner<3, 3>() = trees.mass[node] * Eigen::Matrix3d::Identity();
-      block.bottomRightCorner<3, 3>() = trees.inertia[node];
-      continue;
-    }
-    const auto j = static_cast<std::size_t>(node - limbs);
-    const JointTrees::Joint& joint = trees.joints[j];
-    for (std::size_t l = 0; l < joint.limit.size(); ++l) {
-      const int row = joint.limit_row(l);
-      if (row >= 0 && !(trees.active_limits[j] & (1u << l))) block(row, row) = -1;  // idle: μ = 0
-    }
   }
 }
 
@@ -291,6 +275,7 @@ void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   JointTrees& trees = state.plan.joint_trees;
   gather_tree_contacts(state, dt);
   std::fill(trees.counts.begin(), trees.counts.end(), JointTreeCounts{});
+  for (TreePack& pack : trees.packs->packs) pack.factors = 0;
 }
 
 template <typename Scalar>
@@ -298,6 +283,7 @@ JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
   const JointTrees& trees = state.plan.joint_trees;
   JointTreeCounts counts;
   for (const JointTreeCounts& component : trees.counts) counts += component;
+  for (const TreePack& pack : trees.packs->packs) counts.lane_slots += pack.factors * static_cast<int>(kTreeLanes);
   return counts;
 }
 

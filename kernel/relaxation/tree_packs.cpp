@@ -134,55 +134,127 @@ struct LaneNodes {
   std::size_t operator()(std::size_t lane, std::size_t local) const { return static_cast<std::size_t>(ordering.order[begin[lane] + pack.position[local]]); }
 };
 
-// Each lane's solution (the pack's work) into its nodes' work().
+// Up to 36 entries of a block, lane by lane: every lane's numbers are stored before any entry's
+// lanes are loaded (a load right after its lanes' stores waits for them: store-to-load
+// forwarding cannot join them into one load).
+struct LaneEntries {
+  alignas(64) double value[36][kTreeLanes];
+  // entries[k] ← lanes of value[k], k < count.
+  template <typename Entry>
+  void load(int count, Entry&& entry) const {
+    for (int k = 0; k < count; ++k) entry(k) = TreeLanes::load_aligned(value[k]);
+  }
+};
+
+// The rows of local node `local`'s block (6 for a limb, its rows for a joint).
+int node_rows(const TreePack& pack, std::size_t local) {
+  const std::int32_t lane_limbs = pack.elimination.body_count();
+  return static_cast<std::int32_t>(local) < lane_limbs ? 6 : pack.elimination.rows(local - static_cast<std::size_t>(lane_limbs));
+}
+
+// Each lane's solution (the pack's work, each node's top rows) into its nodes' work().
 void scatter_solutions(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
-  Vector6 sink;
-  std::array<Vector6*, kTreeLanes> solutions{};
+  LaneEntries entries;
   for (std::size_t local = 0; local < pack.position.size(); ++local) {
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) solutions[lane] = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : &sink;
-    unpack_lanes(pack.elimination.work(local), solutions);
+    const int rows = node_rows(pack, local);
+    Block<TreeLanes, 6, 1>& work = pack.elimination.work(local);
+    for (int i = 0; i < rows; ++i) work(i, 0).store_aligned(entries.value[i]);
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+      if (!lanes[lane]) continue;
+      Vector6& out = trees.elimination.work(node_of(lane, local));
+      for (int i = 0; i < rows; ++i) out(i) = entries.value[i][lane];
+    }
   }
 }
 
-// The lanes' right-hand sides (their nodes' work(); zero in the other lanes) into the pack's.
+// The lanes' right-hand sides (their nodes' work(), top rows; zero in the other lanes) into the pack's.
 void gather_right_sides(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
-  static const Vector6 zero_vector = Vector6::Zero();
-  std::array<const Vector6*, kTreeLanes> vectors{};
+  LaneEntries entries;
   for (std::size_t local = 0; local < pack.position.size(); ++local) {
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) vectors[lane] = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : &zero_vector;
-    pack_lanes(pack.elimination.work(local), vectors);
+    const int rows = node_rows(pack, local);
+    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+      const Vector6* in = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : nullptr;
+      for (int i = 0; i < rows; ++i) entries.value[i][lane] = in ? (*in)(i) : 0.0;
+    }
+    Block<TreeLanes, 6, 1>& work = pack.elimination.work(local);
+    entries.load(rows, [&](int i) -> TreeLanes& { return work(i, 0); });
   }
+}
+
+// A limb's block M = diag(m E, I) (an empty lane's: the identity).
+void gather_limb_block(const JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of, std::size_t local) {
+  LaneEntries entries;
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    double* column[7];
+    for (int k = 0; k < 7; ++k) column[k] = &entries.value[k][lane];
+    if (!lanes[lane]) {
+      *column[0] = 1, *column[1] = 1, *column[2] = 0, *column[3] = 1, *column[4] = 0, *column[5] = 0, *column[6] = 1;
+      continue;
+    }
+    const std::size_t limb = node_of(lane, local);
+    const Eigen::Matrix3d& inertia = trees.inertia[limb];
+    *column[0] = trees.mass[limb];
+    *column[1] = inertia(0, 0), *column[2] = inertia(1, 0), *column[3] = inertia(1, 1);
+    *column[4] = inertia(2, 0), *column[5] = inertia(2, 1), *column[6] = inertia(2, 2);
+  }
+  Block<TreeLanes, 6, 6>& block = pack.elimination.diagonal(local);
+  block = Block<TreeLanes, 6, 6>::Zero();
+  entries.load(7, [&](int k) -> TreeLanes& {
+    static constexpr int kRow[7] = {0, 3, 4, 4, 5, 5, 5}, kColumn[7] = {0, 3, 3, 4, 3, 4, 5};
+    return block(kRow[k], kColumn[k]);  // the lower triangle, which is what the factor reads
+  });
+  block(1, 1) = block(2, 2) = block(0, 0);
+}
+
+// A joint's −A (−1 on an idle limit's rows and on every row of an empty lane, else 0) and its
+// J blocks' top rows on limb A and limb B.
+void gather_joint_blocks(const JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of, std::size_t local) {
+  const std::int32_t limbs = trees.elimination.body_count();
+  const std::size_t joint = local - static_cast<std::size_t>(pack.elimination.body_count());
+  const int rows = pack.elimination.rows(joint);
+  LaneEntries diagonal, inboard, outboard;
+  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    if (!lanes[lane]) {
+      for (int i = 0; i < rows; ++i) {
+        diagonal.value[i][lane] = -1;
+        for (int c = 0; c < 6; ++c) inboard.value[i * 6 + c][lane] = outboard.value[i * 6 + c][lane] = 0;
+      }
+      continue;
+    }
+    const std::size_t j = node_of(lane, local) - static_cast<std::size_t>(limbs);
+    for (int i = 0; i < rows; ++i) diagonal.value[i][lane] = 0;
+    const JointTrees::Joint& tree_joint = trees.joints[j];
+    for (std::size_t l = 0; l < tree_joint.limit.size(); ++l) {
+      const int row = tree_joint.limit_row(l);
+      if (row >= 0 && !(trees.active_limits[j] & (1u << l))) diagonal.value[row][lane] = -1;  // idle: μ = 0
+    }
+    for (int i = 0; i < rows; ++i) {
+      for (int c = 0; c < 6; ++c) inboard.value[i * 6 + c][lane] = trees.block_a[j](i, c), outboard.value[i * 6 + c][lane] = trees.block_b[j](i, c);
+    }
+  }
+  Block<TreeLanes, 6, 6>& block = pack.elimination.diagonal(local);
+  block = Block<TreeLanes, 6, 6>::Zero();
+  diagonal.load(rows, [&](int i) -> TreeLanes& { return block(i, i); });
+  auto& edge = pack.edge[joint];
+  inboard.load(rows * 6, [&](int k) -> TreeLanes& { return edge[0](k / 6, k % 6); });
+  outboard.load(rows * 6, [&](int k) -> TreeLanes& { return edge[1](k / 6, k % 6); });
 }
 
 }  // namespace
 
 void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bool mobility) {
-  static const Matrix6 identity = Matrix6::Identity(), minus_identity = -Matrix6::Identity(), zero_matrix = Matrix6::Zero();
-  const std::int32_t limbs = trees.elimination.body_count();
   const std::int32_t lane_limbs = pack.elimination.body_count();
   const auto count = static_cast<std::uint32_t>(pack.position.size());
   const LaneNodes node_of(trees, pack, lanes);
-  std::array<const Matrix6*, kTreeLanes> matrices{}, inboard{}, outboard{};
   for (std::size_t local = 0; local < count; ++local) {
-    const bool limb = static_cast<std::int32_t>(local) < lane_limbs;
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
-      if (!lanes[lane]) {  // an identity system: finite, and nothing is written back
-        matrices[lane] = limb ? &identity : &minus_identity;
-        inboard[lane] = outboard[lane] = &zero_matrix;
-        continue;
-      }
-      const std::size_t node = node_of(lane, local);
-      matrices[lane] = &trees.elimination.diagonal(node);
-      if (limb) continue;
-      const std::size_t j = node - static_cast<std::size_t>(limbs);
-      inboard[lane] = &trees.block_a[j], outboard[lane] = &trees.block_b[j];
+    if (static_cast<std::int32_t>(local) < lane_limbs) {
+      gather_limb_block(trees, pack, lanes, node_of, local);
+    } else {
+      gather_joint_blocks(trees, pack, lanes, node_of, local);
     }
-    pack_lanes(pack.elimination.diagonal(local), matrices);
-    if (limb) continue;
-    auto& edge = pack.edge[local - static_cast<std::size_t>(lane_limbs)];
-    pack_lanes(edge[0], inboard), pack_lanes(edge[1], outboard);
   }
   gather_right_sides(trees, pack, lanes, node_of);
+  ++pack.factors;
   pack.elimination.eliminate(0, count, [&](std::size_t joint, std::int32_t limb) -> const Block<TreeLanes, 6, 6>& {
     return pack.edge[joint][pack.inboard_limb[joint] == limb ? 0 : 1];
   });

@@ -45,6 +45,7 @@ struct TreePack {
   std::vector<std::int32_t> inboard_limb;           ///< per local joint: its limb A's local index (−1: the world)
   TreeElimination<TreeLanes, 6> elimination;        ///< over the local nodes, one component a lane
   std::vector<std::array<Block<TreeLanes, 6, 6>, 2>> edge;  ///< per local joint: J on limb A, on limb B
+  int factors = 0;  ///< since the substep began (begin_joint_trees)
 };
 
 struct TreePacks {

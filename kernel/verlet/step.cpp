@@ -456,6 +456,7 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     profile.tree_solves = trees.solves, profile.tree_newton_steps = trees.newton_steps, profile.tree_capped = trees.capped;
     profile.tree_factors = trees.factors, profile.tree_inverse_diagonals = trees.inverse_diagonals;
     profile.tree_substitutions = trees.substitutions, profile.tree_path_solves = trees.path_solves;
+    profile.tree_lane_slots = trees.lane_slots;
   }
   return report;
 }

@@ -302,9 +302,9 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
     if (p.tree_solves > 0) {
       relax += format(", %.4g tree solves of %.3g Newton steps (%.3g%% capped)", per_step(p.tree_solves),
                       static_cast<double>(p.tree_newton_steps) / p.tree_solves, 100.0 * p.tree_capped / p.tree_solves);
-      relax += format("; %.4g factors, %.4g inverse diagonals, %.4g back-substitutions, %.4g path solves",
-                      per_step(p.tree_factors), per_step(p.tree_inverse_diagonals), per_step(p.tree_substitutions),
-                      per_step(p.tree_path_solves));
+      relax += format("; %.4g factors (in SIMD lanes %.3g%% full), %.4g inverse diagonals, %.4g back-substitutions, %.4g path solves",
+                      per_step(p.tree_factors), p.tree_lane_slots > 0 ? 100.0 * p.tree_factors / p.tree_lane_slots : 0.0,
+                      per_step(p.tree_inverse_diagonals), per_step(p.tree_substitutions), per_step(p.tree_path_solves));
     }
     stages.push_back({"relax", p.relax, relax});
     stages.push_back({"velocity", p.velocity, format("%.4g velocity sweeps", per_step(p.velocity_sweeps))});

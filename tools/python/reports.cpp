@@ -30,6 +30,7 @@ py::dict profile_dict(const StepProfile& p) {
   out["tree_newton_steps"] = p.tree_newton_steps, out["tree_capped"] = p.tree_capped;
   out["tree_factors"] = p.tree_factors, out["tree_inverse_diagonals"] = p.tree_inverse_diagonals;
   out["tree_substitutions"] = p.tree_substitutions, out["tree_path_solves"] = p.tree_path_solves;
+  out["tree_lane_slots"] = p.tree_lane_slots;
   return out;
 }
 
