@@ -290,14 +290,23 @@ std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t componen
   // Every lane solves the paths (one lane's work costs what all of theirs do); only this lane's
   // loads are non-zero, and only its answer is read.
   for (const std::int32_t node : path) pack.elimination.work(static_cast<std::size_t>(node)) = Block<TreeLanes, 6, 1>::Zero();
+  // The load as lanes: the number in this lane, 0 in the others (a select, not a store into one
+  // lane of a stored batch, which the next load would wait on).
+  alignas(64) double lane_index[kTreeLanes];
+  for (std::size_t k = 0; k < kTreeLanes; ++k) lane_index[k] = static_cast<double>(k);
+  const auto this_lane = TreeLanes::load_aligned(lane_index) == TreeLanes(static_cast<double>(lane));
   for (std::size_t s = 0; s < 2; ++s) {
     Block<TreeLanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
-    for (int i = 0; i < 6; ++i) set_lane(work(i, 0), lane, get_lane(work(i, 0), lane) + loads[s](i));
+    for (int i = 0; i < 6; ++i) work(i, 0) += xsimd::select(this_lane, TreeLanes(loads[s](i)), TreeLanes(0.0));
   }
   pack.elimination.solve_nodes(path);
   std::array<Vector6, 2> motion;
+  alignas(64) double values[kTreeLanes];
   for (std::size_t s = 0; s < 2; ++s) {
-    for (int i = 0; i < 6; ++i) motion[s](i) = get_lane(pack.elimination.work(static_cast<std::size_t>(local[s]))(i, 0), lane);
+    for (int i = 0; i < 6; ++i) {
+      pack.elimination.work(static_cast<std::size_t>(local[s]))(i, 0).store_aligned(values);
+      motion[s](i) = values[lane];
+    }
   }
   return motion;
 }
