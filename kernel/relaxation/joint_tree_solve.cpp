@@ -11,8 +11,9 @@
 #include "limber/kernel/relaxation/tree_packs.hpp"
 
 // Solving the joint trees each sweep: the limbs loaded as rigid bodies, the joints assembled,
-// factored and solved by the tree elimination, the limbs moved; Newton steps, and rounds with
-// the contacts (tree_contacts.hpp); islands as tasks.
+// factored and solved by the tree elimination in SIMD lanes across components of one shape
+// (tree_packs.hpp), the limbs moved; Newton steps, and rounds with the contacts
+// (tree_contacts.hpp); packs as tasks.
 namespace limber {
 namespace {
 
@@ -255,7 +256,7 @@ double move_limb(VerletState<Scalar>& state, const JointTrees& trees, std::size_
 
 // Newton steps a tree takes in one call at most, and the largest move after which it takes
 // another, from a fresh factor: a Newton move δ on a lever r leaves about δ²/r (1e-5 m on
-// 0.1 m: 1e-9 m). Every step factors afresh: in lanes a factor costs about what a solve does.
+// 0.1 m: 1e-9 m). Every step factors afresh (a kept factor would have to be chosen lane by lane).
 constexpr int kNewtonSteps = 4;
 constexpr double kNewtonMove = 1e-5;
 // The same for a round with contacts (tree_contacts.hpp), whose Jacobi pushes converge linearly,

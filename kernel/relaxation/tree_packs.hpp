@@ -9,11 +9,12 @@
 // lane, through the same code. Each lane's bits are those its component gets alone
 // (lane_blocks.hpp), so a ragdoll steps to the same bits whatever its neighbours in the pack.
 //
-// The scalar elimination (JointTrees::elimination) stays the staging area: a solve writes each
-// node's inputs there (the limbs' mass blocks, the joints' −A and right-hand sides, their J
-// blocks in block_a, block_b) as before; eliminate_pack() gathers a pack's lanes from it,
-// factors and solves them side by side, and writes each lane's solution back into its nodes'
-// work().
+// A solve stages each component one at a time as before: its limbs' mass and inertia
+// (JointTrees::mass, inertia), its joints' J blocks and active limits (block_a, block_b,
+// active_limits) and each node's right-hand side (the scalar elimination's work()). Then
+// eliminate_pack() gathers a pack's lanes from there, factors and solves them side by side, and
+// writes each lane's solution back into its nodes' work(). Of the scalar elimination
+// (JointTrees::elimination) only the ordering and work() are used.
 #pragma once
 
 #include <array>
@@ -60,8 +61,8 @@ struct TreePacks {
 /// lane occupancy). O(nodes).
 void build_tree_packs(JointTrees& trees, std::size_t lanes = kTreeLanes);
 
-/// Factors and solves the lanes of `pack` where `lanes` holds, each from its component's inputs
-/// in trees.elimination (diagonal() and work() of its nodes) and trees.block_a, block_b, and
+/// Factors and solves the lanes of `pack` where `lanes` holds, each from its component's staged
+/// inputs (trees.mass, inertia, block_a, block_b, active_limits and its nodes' work()), and
 /// writes each one's solution into its nodes' work(); with `mobility`, each one's limbs' blocks
 /// of the inverse too (TreeElimination::inverse_diagonal) into trees.mobility. The other lanes
 /// solve an identity system and write nothing. The pack keeps the factor for solve_pack() and
