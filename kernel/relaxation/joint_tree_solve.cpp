@@ -308,16 +308,23 @@ void release_limits(JointTrees& trees, std::uint32_t index) {
   }
 }
 
-// The lanes of `pack` whose components are awake and, with `contacts`, have contacts this
-// substep and are not settled, or, without, have none.
-LaneMask lanes_of(const JointTrees& trees, const TreePack& pack, bool contacts) {
+// Which of a pack's awake components a stage works on.
+enum class Lanes { awake, without_contacts, with_contacts_unsettled };
+
+// The lanes of `pack` whose components are awake and, for `which`, have no contacts this
+// substep, or have some and are not settled.
+LaneMask lanes_of(const JointTrees& trees, const TreePack& pack, Lanes which) {
   LaneMask lanes{};
   for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
     const std::int32_t c = pack.component[lane];
     if (c < 0 || !trees.component_awake[static_cast<std::size_t>(c)]) continue;
     const auto index = static_cast<std::uint32_t>(c);
     const bool has_contacts = !trees.contacts.empty() && !trees.component_contacts.row(index).empty();
-    lanes[lane] = contacts ? has_contacts && !trees.settled[index] : !has_contacts;
+    switch (which) {
+      case Lanes::awake: lanes[lane] = true; break;
+      case Lanes::without_contacts: lanes[lane] = !has_contacts; break;
+      case Lanes::with_contacts_unsettled: lanes[lane] = has_contacts && !trees.settled[index]; break;
+    }
   }
   return lanes;
 }
@@ -353,7 +360,7 @@ void newton_step(VerletState<Scalar>& state, TreePack& pack, const LaneMask& lan
 template <typename Scalar>
 double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
   JointTrees& trees = state.plan.joint_trees;
-  LaneMask running = lanes_of(trees, pack, false);
+  LaneMask running = lanes_of(trees, pack, Lanes::without_contacts);
   for_each_lane(pack, running, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
   double largest = 0;
   for (int newton = 0; newton < kNewtonSteps && any_lane(running); ++newton) {
@@ -375,7 +382,7 @@ double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
 template <typename Scalar>
 double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
-  const LaneMask lanes = lanes_of(trees, pack, true);
+  const LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   if (!any_lane(lanes)) return 0;
   if (round == 0) for_each_lane(pack, lanes, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
   newton_step(state, pack, lanes, true);
@@ -394,7 +401,7 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int roun
 template <typename Scalar>
 double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
   JointTrees& trees = state.plan.joint_trees;
-  LaneMask lanes = lanes_of(trees, pack, true);
+  LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
     const std::int32_t c = pack.component[lane];
     if (c >= 0) trees.load_scale[static_cast<std::size_t>(c)] = 1;
@@ -421,7 +428,7 @@ template <typename Scalar>
 double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
   double largest = 0;
-  for_each_lane(pack, lanes_of(trees, pack, true), [&](std::uint32_t c) {
+  for_each_lane(pack, lanes_of(trees, pack, Lanes::with_contacts_unsettled), [&](std::uint32_t c) {
     for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
     const double moved = move_component(state, c);
     largest = std::max(largest, moved);
@@ -436,7 +443,7 @@ double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round)
 template <typename Scalar>
 double close_joints(VerletState<Scalar>& state, TreePack& pack) {
   JointTrees& trees = state.plan.joint_trees;
-  const LaneMask lanes = lanes_of(trees, pack, true);
+  const LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   if (!any_lane(lanes)) return 0;
   newton_step(state, pack, lanes, false);
   double largest = 0;
@@ -449,11 +456,7 @@ template <typename Scalar>
 double pack_velocities(VerletState<Scalar>& state, TreePack& pack) {
   JointTrees& trees = state.plan.joint_trees;
   const std::uint32_t null_particle = state.particles.null_particle();
-  LaneMask lanes{};
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
-    const std::int32_t c = pack.component[lane];
-    lanes[lane] = c >= 0 && trees.component_awake[static_cast<std::size_t>(c)];
-  }
+  const LaneMask lanes = lanes_of(trees, pack, Lanes::awake);
   if (!any_lane(lanes)) return 0;
   for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, true); });
   eliminate_pack(trees, pack, lanes);

@@ -301,12 +301,9 @@ std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t componen
   }
   pack.elimination.solve_nodes(path);
   std::array<Vector6, 2> motion;
-  alignas(64) double values[kTreeLanes];
   for (std::size_t s = 0; s < 2; ++s) {
-    for (int i = 0; i < 6; ++i) {
-      pack.elimination.work(static_cast<std::size_t>(local[s]))(i, 0).store_aligned(values);
-      motion[s](i) = values[lane];
-    }
+    const Block<TreeLanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
+    for (int i = 0; i < 6; ++i) motion[s](i) = get_lane(work(i, 0), lane);  // a store, then one of its lanes: forwarded
   }
   return motion;
 }
