@@ -5,7 +5,11 @@
 //   build/bench/tree_elimination_bench
 //
 // Shapes: a ragdoll's tree (13 limbs as rigid bodies, 6 × 6 blocks; 12 joints of 5 rows — a
-// point and two limit or axis rows — padded as lanes need, one row count per joint) and a rope
+// point and two limit or axis rows — padded as lanes need, one row count per joint); the
+// `Scene` rows: the ragdoll of tools/scenes/ragdoll.json (the pile's and the rain's) as the joint
+// trees compile it, each joint with its fixed rows (points, axes, a row per limit), 8 instances
+// whose blocks stay in cache — the floor of a tree step's elimination stage (bench/ragdolls.md,
+// "Where a tree step goes, against its floor"); and a rope
 // (100 particles, 3 × 3 blocks; 100 distance constraints of one row, the first to the world).
 // Each iteration loads the inputs (a copy), factors and solves every instance: the time per
 // instance and per joint (counters `instance`, `joint`). The label says scalar or the lane
@@ -28,6 +32,8 @@
 #include "limber/kernel/numerics/constraint_elimination.hpp"
 #include "limber/kernel/numerics/lane_blocks.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
+#include "limber/kernel/verlet/compile.hpp"
 
 namespace limber {
 namespace {
@@ -35,24 +41,42 @@ namespace {
 constexpr std::size_t kInstances = 64;  // a multiple of every lane width
 
 struct Shape {
-  int bodies = 0, rows = 0;
-  std::vector<std::int32_t> inboard, outboard;
+  int bodies = 0;
+  std::vector<std::int32_t> inboard, outboard;  // per joint: its bodies (inboard −1: the world)
+  std::vector<std::uint8_t> rows;               // per joint
+  std::size_t instances = kInstances;           // a multiple of every lane width
 };
 
 // The ragdoll: limb 0 the pelvis; spine, torso, head; two arms of two limbs off the torso; two
 // legs of two off the pelvis; a hand on the right forearm.
 Shape ragdoll() {
   Shape shape;
-  shape.bodies = 13, shape.rows = 5;
+  shape.bodies = 13;
   const std::int32_t parent[13] = {-1, 0, 1, 2, 2, 4, 2, 6, 0, 8, 0, 10, 7};
-  for (std::int32_t limb = 1; limb < 13; ++limb) shape.inboard.push_back(parent[limb]), shape.outboard.push_back(limb);
+  for (std::int32_t limb = 1; limb < 13; ++limb) shape.inboard.push_back(parent[limb]), shape.outboard.push_back(limb), shape.rows.push_back(5);
+  return shape;
+}
+
+Shape scene_ragdoll() {
+  const Scene scene = load_scene_file(std::string(LIMBER_SOURCE_DIR) + "/tools/scenes/ragdoll.json");
+  VerletOptions options;
+  options.verlet.joint_solve = JointSolve::tree;
+  const VerletState<double> state = compile<double>(scene.model, options);
+  const JointTrees& trees = state.plan.joint_trees;
+  Shape shape;
+  shape.bodies = trees.elimination.body_count();
+  for (const JointTrees::Joint& joint : trees.joints) {
+    shape.inboard.push_back(joint.limb_a), shape.outboard.push_back(joint.limb_b);
+    shape.rows.push_back(static_cast<std::uint8_t>(joint.fixed_rows()));
+  }
+  shape.instances = 8;
   return shape;
 }
 
 Shape rope() {
   Shape shape;
-  shape.bodies = 100, shape.rows = 1;
-  for (std::int32_t particle = 0; particle < 100; ++particle) shape.inboard.push_back(particle - 1), shape.outboard.push_back(particle);
+  shape.bodies = 100;
+  for (std::int32_t particle = 0; particle < 100; ++particle) shape.inboard.push_back(particle - 1), shape.outboard.push_back(particle), shape.rows.push_back(1);
   return shape;
 }
 
@@ -79,10 +103,10 @@ std::vector<Batch<Value, B>> batches(const Shape& shape) {
   constexpr std::size_t width = lane_count<Value>();
   std::mt19937 random(5);
   std::uniform_real_distribution<double> entry(-1, 1);
-  std::vector<Batch<Value, B>> out(kInstances / width);
+  std::vector<Batch<Value, B>> out(shape.instances / width);
   for (Batch<Value, B>& batch : out) {
     batch.elimination.assign(order_tree(static_cast<std::size_t>(shape.bodies), shape.inboard, shape.outboard),
-                             static_cast<std::size_t>(shape.bodies), std::vector<std::uint8_t>(shape.inboard.size(), static_cast<std::uint8_t>(shape.rows)));
+                             static_cast<std::size_t>(shape.bodies), shape.rows);
     const std::size_t nodes = batch.elimination.node_count();
     batch.diagonal.assign(nodes, Block<Value, B, B>::Zero());
     batch.right.assign(nodes, Block<Value, B, 1>::Zero());
@@ -135,11 +159,37 @@ void BM_Eliminate(benchmark::State& run, const Shape& shape, bool inverse = fals
     }
   }
   // Time per instance and per joint (printed in seconds with an SI prefix).
-  run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  run.counters["joint"] = benchmark::Counter(static_cast<double>(kInstances * shape.inboard.size()),
+  run.counters["instance"] = benchmark::Counter(static_cast<double>(shape.instances), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.counters["joint"] = benchmark::Counter(static_cast<double>(shape.instances * shape.inboard.size()),
                                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   run.SetLabel((std::is_arithmetic_v<Value> ? "scalar" : std::to_string(xsimd::batch<double>::size) + " lanes") +
                std::string(inverse ? ", with the inverse diagonal" : ""));
+}
+
+// A solve alone with a kept factor (the trees' contact iterations, each a back-substitution):
+// every instance factored once, then each iteration reloads the right-hand sides and solves.
+template <typename Value, int B>
+void BM_Solve(benchmark::State& run, const Shape& shape) {
+  std::vector<Batch<Value, B>> all = batches<Value, B>(shape);
+  for (Batch<Value, B>& batch : all) {
+    TreeElimination<Value, B>& elimination = batch.elimination;
+    for (std::size_t node = 0; node < elimination.node_count(); ++node) elimination.diagonal(node) = batch.diagonal[node];
+    const TreeOrdering::Component& component = elimination.ordering().components[0];
+    elimination.factor(component.begin, component.end, [&](std::size_t c, std::int32_t body) -> const Block<Value, B, B>& {
+      return batch.edge[c][shape.outboard[c] == body ? 1 : 0];
+    });
+  }
+  for (auto _ : run) {
+    for (Batch<Value, B>& batch : all) {
+      TreeElimination<Value, B>& elimination = batch.elimination;
+      for (std::size_t node = 0; node < elimination.node_count(); ++node) elimination.work(node) = batch.right[node];
+      const TreeOrdering::Component& component = elimination.ordering().components[0];
+      elimination.solve(component.begin, component.end);
+      benchmark::DoNotOptimize(elimination.work(0));
+    }
+  }
+  run.counters["instance"] = benchmark::Counter(static_cast<double>(shape.instances), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.SetLabel((std::is_arithmetic_v<Value> ? "scalar" : std::to_string(xsimd::batch<double>::size) + " lanes") + std::string(", a solve with a kept factor"));
 }
 
 // Lanes fed from instances kept one at a time (as the joint trees keep each ragdoll's blocks):
@@ -153,8 +203,8 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
   constexpr std::size_t width = Value::size;
   std::vector<Batch<double, B>> instances = batches<double, B>(shape);
   std::vector<Batch<Value, B>> lanes = batches<Value, B>(shape);
-  std::vector<std::vector<Block<double, B, 1>>> solution(kInstances, std::vector<Block<double, B, 1>>(instances[0].elimination.node_count()));
-  std::vector<std::vector<Block<double, B, B>>> mobility(kInstances, std::vector<Block<double, B, B>>(static_cast<std::size_t>(shape.bodies)));
+  std::vector<std::vector<Block<double, B, 1>>> solution(shape.instances, std::vector<Block<double, B, 1>>(instances[0].elimination.node_count()));
+  std::vector<std::vector<Block<double, B, B>>> mobility(shape.instances, std::vector<Block<double, B, B>>(static_cast<std::size_t>(shape.bodies)));
   std::vector<const Block<double, B, B>*> in_matrix(width);
   std::vector<const Block<double, B, 1>*> in_vector(width);
   std::vector<Block<double, B, 1>*> out_vector(width);
@@ -191,7 +241,7 @@ void BM_EliminatePacked(benchmark::State& run, const Shape& shape, bool inverse)
     }
     benchmark::DoNotOptimize(solution.front().front());
   }
-  run.counters["instance"] = benchmark::Counter(kInstances, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  run.counters["instance"] = benchmark::Counter(static_cast<double>(shape.instances), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   run.SetLabel(std::to_string(width) + " lanes, packed from instances" + (inverse ? ", with the inverse diagonal" : ""));
 }
 
@@ -250,6 +300,12 @@ void BM_RagdollScalarInverse(benchmark::State& run) { BM_Eliminate<double, 6>(ru
 void BM_RagdollLanesPacked(benchmark::State& run) { BM_EliminatePacked<6>(run, ragdoll(), false); }
 void BM_RagdollLanesPackedInverse(benchmark::State& run) { BM_EliminatePacked<6>(run, ragdoll(), true); }
 void BM_RagdollLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, ragdoll()); }
+void BM_SceneRagdollScalar(benchmark::State& run) { BM_Eliminate<double, 6>(run, scene_ragdoll()); }
+void BM_SceneRagdollLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, scene_ragdoll()); }
+void BM_SceneRagdollLanesInverse(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, scene_ragdoll(), true); }
+void BM_SceneRagdollLanesSolve(benchmark::State& run) { BM_Solve<xsimd::batch<double>, 6>(run, scene_ragdoll()); }
+void BM_SceneRagdollLanesPacked(benchmark::State& run) { BM_EliminatePacked<6>(run, scene_ragdoll(), false); }
+void BM_SceneRagdollLanesPackedInverse(benchmark::State& run) { BM_EliminatePacked<6>(run, scene_ragdoll(), true); }
 void BM_RopeScalar(benchmark::State& run) { BM_Eliminate<double, 3>(run, rope()); }
 void BM_RopeLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 3>(run, rope()); }
 
@@ -258,6 +314,12 @@ BENCHMARK(BM_RagdollLanes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollLanesPacked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollScalarInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollScalar)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollLanes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollLanesInverse)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollLanesSolve)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollLanesPacked)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeLanes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_RopeConstraintSpace<double>)->Unit(benchmark::kMicrosecond);

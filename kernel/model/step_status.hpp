@@ -104,6 +104,11 @@ struct StepProfile {
   /// path solves (a loop contact's mobility); and the SIMD lanes the factors ran in (the packs'
   /// factors × lanes per pack: tree_factors / tree_lane_slots is the lanes' occupancy).
   int tree_factors = 0, tree_inverse_diagonals = 0, tree_substitutions = 0, tree_path_solves = 0, tree_lane_slots = 0;
+  /// s: the trees' share of `relax` and `velocity`, by what it does — staging (limb loads, joint
+  /// assembly, limit measures), elimination (gathers into SIMD lanes, factors, solves, path
+  /// solves, scatters), moves (the limbs' rigid moves) and contacts (gathering, impulses, loads).
+  /// Thread time: on more than one thread their sum can exceed the stages' wall time.
+  double tree_staging = 0, tree_elimination = 0, tree_moves = 0, tree_contacts = 0;
 
   /// Adds `part` (a substep's) field by field.
   StepProfile& operator+=(const StepProfile& part) {
@@ -116,6 +121,8 @@ struct StepProfile {
     tree_factors += part.tree_factors, tree_inverse_diagonals += part.tree_inverse_diagonals;
     tree_substitutions += part.tree_substitutions, tree_path_solves += part.tree_path_solves;
     tree_lane_slots += part.tree_lane_slots;
+    tree_staging += part.tree_staging, tree_elimination += part.tree_elimination;
+    tree_moves += part.tree_moves, tree_contacts += part.tree_contacts;
     return *this;
   }
 };

@@ -130,20 +130,37 @@ struct TreeContact {
   std::array<Eigen::Vector3d, 2> wanted_slide{};  ///< the tangential motion of the side's point asked for, m
 };
 
+/// Thread time of the joint trees' stages since the substep began, s, when the step is profiled
+/// (StepProfile's tree_* times; 0 otherwise), positions and velocities alike: staging (the limbs'
+/// loads, the joints' assembly with their limits' measures, the limits held), elimination (a
+/// pack's gathers, factor, solves, path solves and scatters), moves (the limbs' rigid moves and
+/// the velocity stage's changes) and contacts (their gathering, impulses, loads and overshoot).
+struct TreeStageSeconds {
+  double staging = 0, elimination = 0, moves = 0, contacts = 0;
+
+  TreeStageSeconds& operator+=(const TreeStageSeconds& part) {
+    staging += part.staging, elimination += part.elimination, moves += part.moves, contacts += part.contacts;
+    return *this;
+  }
+};
+
 /// What the joint trees did since the substep began (StepProfile's tree counts), per component
 /// or summed: position solves (project_joint_trees calls), their Newton steps, the solves that
 /// stopped at the cap with a move still ≥ 1e-5 m; and the elimination's work, positions and
 /// velocities alike: factors, inverse diagonals (the contacts' mobilities), whole
 /// back-substitutions, and path solves (a loop's mobility, along two paths to the root); summed
-/// only, the lanes the factors ran in (a pack's factor counts all its lanes, used or not).
+/// only, the lanes the factors ran in (a pack's factor counts all its lanes, used or not) and the
+/// stages' times.
 struct JointTreeCounts {
   int solves = 0, newton_steps = 0, capped = 0;
   int factors = 0, inverse_diagonals = 0, substitutions = 0, path_solves = 0, lane_slots = 0;
+  TreeStageSeconds seconds;
 
   JointTreeCounts& operator+=(const JointTreeCounts& part) {
     solves += part.solves, newton_steps += part.newton_steps, capped += part.capped;
     factors += part.factors, inverse_diagonals += part.inverse_diagonals;
     substitutions += part.substitutions, path_solves += part.path_solves, lane_slots += part.lane_slots;
+    seconds += part.seconds;
     return *this;
   }
 };
@@ -241,6 +258,8 @@ struct JointTrees {
   /// Counts since the substep began (begin_joint_trees), per component, for the step's profile
   /// (each written by its pack's task only).
   std::vector<JointTreeCounts> counts;
+  /// The contacts' time outside the packs' tasks since the substep began, s (profiled steps only).
+  double contact_seconds = 0;
   /// Contacts solved with the trees (tree_contacts.hpp; the pbd rule only): per particle, the
   /// tree limb it belongs to (−1: none); per limb its component (−1: none); per component its
   /// island. Per substep: the contacts, and by component the ones it has a side in.

@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "limber/kernel/model/step_status.hpp"
 #include "limber/kernel/relaxation/joint_projection.hpp"
 #include "limber/kernel/relaxation/joint_tree_limbs.hpp"
 #include "limber/kernel/relaxation/tree_contacts.hpp"
@@ -274,9 +275,11 @@ constexpr int kContactIterations = 4;
 template <typename Scalar>
 void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   JointTrees& trees = state.plan.joint_trees;
+  StageClock clock(state.options.profile);
   gather_tree_contacts(state, dt);
   std::fill(trees.counts.begin(), trees.counts.end(), JointTreeCounts{});
-  for (TreePack& pack : trees.packs->packs) pack.factors = 0;
+  for (TreePack& pack : trees.packs->packs) pack.factors = 0, pack.seconds = {};
+  trees.contact_seconds = clock.lap();
 }
 
 template <typename Scalar>
@@ -284,7 +287,11 @@ JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
   const JointTrees& trees = state.plan.joint_trees;
   JointTreeCounts counts;
   for (const JointTreeCounts& component : trees.counts) counts += component;
-  for (const TreePack& pack : trees.packs->packs) counts.lane_slots += pack.factors * static_cast<int>(kTreeLanes);
+  for (const TreePack& pack : trees.packs->packs) {
+    counts.lane_slots += pack.factors * static_cast<int>(kTreeLanes);
+    counts.seconds += pack.seconds;
+  }
+  counts.seconds.contacts += trees.contact_seconds;
   return counts;
 }
 
@@ -344,14 +351,18 @@ void for_each_lane(const TreePack& pack, const LaneMask& lanes, Visit&& visit) {
 template <typename Scalar>
 void newton_step(VerletState<Scalar>& state, TreePack& pack, const LaneMask& lanes, bool mobility) {
   JointTrees& trees = state.plan.joint_trees;
+  StageClock clock(state.options.profile);
   for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, false); });
+  pack.seconds.staging += clock.lap();
   eliminate_pack(trees, pack, lanes, mobility);
+  pack.seconds.elimination += clock.lap();
   for_each_lane(pack, lanes, [&](std::uint32_t c) {
     JointTreeCounts& counts = trees.counts[c];
     ++counts.factors, ++counts.substitutions, ++counts.newton_steps;
     counts.inverse_diagonals += mobility ? 1 : 0;
     hold_pushing_limits(trees, trees.elimination.ordering().components[c]);
   });
+  pack.seconds.staging += clock.lap();
 }
 
 // The components without contacts, on the positions: Newton steps until a step moves no particle
@@ -365,6 +376,7 @@ double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
   double largest = 0;
   for (int newton = 0; newton < kNewtonSteps && any_lane(running); ++newton) {
     newton_step(state, pack, running, false);
+    StageClock clock(state.options.profile);
     for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
       if (!running[lane]) continue;
       const auto c = static_cast<std::uint32_t>(pack.component[lane]);
@@ -373,6 +385,7 @@ double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
       running[lane] = moved >= kNewtonMove;
       if (running[lane] && newton == kNewtonSteps - 1) ++trees.counts[c].capped;
     }
+    pack.seconds.moves += clock.lap();
   }
   return largest;
 }
@@ -386,6 +399,8 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int roun
   if (!any_lane(lanes)) return 0;
   if (round == 0) for_each_lane(pack, lanes, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
   newton_step(state, pack, lanes, true);
+  // The loops' mobilities are path solves: elimination.
+  StageClock clock(state.options.profile);
   for_each_lane(pack, lanes, [&](std::uint32_t c) {
     for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) {
       trees.joint_motion[limb] = trees.elimination.work(limb);
@@ -393,6 +408,7 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int roun
     });
     take_loop_mobilities(state, c);
   });
+  pack.seconds.elimination += clock.lap();
   return 0;
 }
 
@@ -401,6 +417,7 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int roun
 template <typename Scalar>
 double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
   JointTrees& trees = state.plan.joint_trees;
+  StageClock clock(state.options.profile);
   LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
     const std::int32_t c = pack.component[lane];
@@ -411,14 +428,17 @@ double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
     for (std::uint32_t k = component.begin; k < component.end; ++k) trees.elimination.work(static_cast<std::size_t>(trees.elimination.ordering().order[k])).setZero();
     lanes[lane] = add_tree_contact_loads(trees, index);
   }
+  pack.seconds.contacts += clock.lap();
   if (!any_lane(lanes)) return 0;
   solve_pack(trees, pack, lanes);
+  pack.seconds.elimination += clock.lap();
   for_each_lane(pack, lanes, [&](std::uint32_t c) {
     ++trees.counts[c].substitutions;
     const double scale = tree_contact_overshoot(trees, c);
     trees.load_scale[c] = scale;
     for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) { trees.load_motion[limb] += trees.elimination.work(limb) / scale; });
   });
+  pack.seconds.contacts += clock.lap();
   return 0;
 }
 
@@ -427,6 +447,7 @@ double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
 template <typename Scalar>
 double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
+  StageClock clock(state.options.profile);
   double largest = 0;
   for_each_lane(pack, lanes_of(trees, pack, Lanes::with_contacts_unsettled), [&](std::uint32_t c) {
     for_each_limb(trees, trees.elimination.ordering().components[c], [&](std::size_t limb) { trees.elimination.work(limb) = trees.joint_motion[limb] + trees.load_motion[limb]; });
@@ -435,6 +456,7 @@ double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round)
     trees.settled[c] = moved < kContactRoundMove ? 1 : 0;
     if (!trees.settled[c] && round == kNewtonSteps - 1) ++trees.counts[c].capped;
   });
+  pack.seconds.moves += clock.lap();
   return largest;
 }
 
@@ -446,8 +468,10 @@ double close_joints(VerletState<Scalar>& state, TreePack& pack) {
   const LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   if (!any_lane(lanes)) return 0;
   newton_step(state, pack, lanes, false);
+  StageClock clock(state.options.profile);
   double largest = 0;
   for_each_lane(pack, lanes, [&](std::uint32_t c) { largest = std::max(largest, move_component(state, c)); });
+  pack.seconds.moves += clock.lap();
   return largest;
 }
 
@@ -458,8 +482,11 @@ double pack_velocities(VerletState<Scalar>& state, TreePack& pack) {
   const std::uint32_t null_particle = state.particles.null_particle();
   const LaneMask lanes = lanes_of(trees, pack, Lanes::awake);
   if (!any_lane(lanes)) return 0;
+  StageClock clock(state.options.profile);
   for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, true); });
+  pack.seconds.staging += clock.lap();
   eliminate_pack(trees, pack, lanes);
+  pack.seconds.elimination += clock.lap();
   double largest = 0;
   for_each_lane(pack, lanes, [&](std::uint32_t c) {
     ++trees.counts[c].factors, ++trees.counts[c].substitutions;
@@ -474,6 +501,7 @@ double pack_velocities(VerletState<Scalar>& state, TreePack& pack) {
       }
     });
   });
+  pack.seconds.moves += clock.lap();
   return largest;
 }
 
@@ -538,11 +566,15 @@ double project_joint_trees(VerletState<Scalar>& state) {
   for (int round = 0; round < kNewtonSteps; ++round) {
     largest = std::max(largest, solve_packs(state, TreeStage::contact_joints, round));
     for (int iteration = 0; iteration < kContactIterations; ++iteration) {
+      StageClock clock(state.options.profile);
       tree_contact_impulses(state, iteration == 0);
+      trees.contact_seconds += clock.lap();
       solve_packs(state, TreeStage::contact_loads, round);
     }
     largest = std::max(largest, solve_packs(state, TreeStage::contact_move, round));
+    StageClock clock(state.options.profile);
     end_tree_contact_round(trees);
+    trees.contact_seconds += clock.lap();
     bool settled = true;
     for (const std::uint32_t island : state.awake_islands) {
       for (const std::uint32_t index : trees.island_components.row(island)) {

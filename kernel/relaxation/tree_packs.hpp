@@ -47,6 +47,7 @@ struct TreePack {
   TreeElimination<TreeLanes, 6> elimination;        ///< over the local nodes, one component a lane
   std::vector<std::array<Block<TreeLanes, 6, 6>, 2>> edge;  ///< per local joint: J on limb A, on limb B
   int factors = 0;  ///< since the substep began (begin_joint_trees)
+  TreeStageSeconds seconds;  ///< the same (profiled steps only)
 };
 
 struct TreePacks {

@@ -457,6 +457,8 @@ StepReport substep(VerletState<Scalar>& state, double dt, double budget_us, int 
     profile.tree_factors = trees.factors, profile.tree_inverse_diagonals = trees.inverse_diagonals;
     profile.tree_substitutions = trees.substitutions, profile.tree_path_solves = trees.path_solves;
     profile.tree_lane_slots = trees.lane_slots;
+    profile.tree_staging = trees.seconds.staging, profile.tree_elimination = trees.seconds.elimination;
+    profile.tree_moves = trees.seconds.moves, profile.tree_contacts = trees.seconds.contacts;
   }
   return report;
 }

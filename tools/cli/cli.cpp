@@ -280,7 +280,8 @@ std::string limits_line(const Model& model, const RunRecord& record) {
 // --profile's lines: per stage, in the order the stages run, its total over the run, its share
 // of the steps' time, its time a step and what it did a step (StepProfile). The rigid methods
 // time their integrator and their contact detection; "rest" is the step's time outside the
-// stages listed.
+// stages listed. With joint trees, indented rows after `relax` split the trees' time (theirs in
+// `relax` and `velocity`; thread time) by what it does.
 std::string profile_lines(const RunRecord& record, bool rigid) {
   const StepProfile& p = record.profile;
   const double steps = std::max(1L, record.steps_done);
@@ -289,6 +290,7 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
     const char* name;
     double seconds;
     std::string counts;
+    bool part = false;  // a part of a stage above, not summed into "rest"
   };
   std::vector<Stage> stages{
       {"integrate", p.integrate, format("%.3g substeps", per_step(p.substeps))},
@@ -307,12 +309,18 @@ std::string profile_lines(const RunRecord& record, bool rigid) {
                       per_step(p.tree_inverse_diagonals), per_step(p.tree_substitutions), per_step(p.tree_path_solves));
     }
     stages.push_back({"relax", p.relax, relax});
+    if (p.tree_solves > 0) {
+      stages.push_back({"  staging", p.tree_staging, "trees: limb loads, joint assembly, limit measures", true});
+      stages.push_back({"  eliminate", p.tree_elimination, "trees: gathers into lanes, factors, solves, scatters", true});
+      stages.push_back({"  moves", p.tree_moves, "trees: the limbs' rigid moves", true});
+      stages.push_back({"  contacts", p.tree_contacts, "trees: contact impulses, loads, overshoot", true});
+    }
     stages.push_back({"velocity", p.velocity, format("%.4g velocity sweeps", per_step(p.velocity_sweeps))});
     stages.push_back({"restitution", p.restitution, ""});
     stages.push_back({"sleep", p.sleep, ""});
   }
   double staged = 0;
-  for (const Stage& stage : stages) staged += stage.seconds;
+  for (const Stage& stage : stages) staged += stage.part ? 0.0 : stage.seconds;
   stages.push_back({"rest", p.step - staged, rigid ? "contact response, projections, sleep" : "outside the stages"});
   stages.push_back({"step", p.step, ""});
   std::string lines = "profile     stage        total ms  % of step    us/step  per step\n";

@@ -31,6 +31,8 @@ py::dict profile_dict(const StepProfile& p) {
   out["tree_factors"] = p.tree_factors, out["tree_inverse_diagonals"] = p.tree_inverse_diagonals;
   out["tree_substitutions"] = p.tree_substitutions, out["tree_path_solves"] = p.tree_path_solves;
   out["tree_lane_slots"] = p.tree_lane_slots;
+  out["tree_staging"] = p.tree_staging, out["tree_elimination"] = p.tree_elimination;
+  out["tree_moves"] = p.tree_moves, out["tree_contacts"] = p.tree_contacts;
   return out;
 }
 
