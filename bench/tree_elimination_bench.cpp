@@ -8,8 +8,8 @@
 // point and two limit or axis rows — padded as lanes need, one row count per joint); the
 // `Scene` rows: the ragdoll of tools/scenes/ragdoll.json (the pile's and the rain's) as the joint
 // trees compile it, each joint with its fixed rows (points, axes, a row per limit), 8 instances
-// whose blocks stay in cache — the floor of a tree step's elimination stage (bench/ragdolls.md,
-// "Where a tree step goes, against its floor"); and a rope
+// whose blocks stay in cache, in double or float lanes — the floor of a tree step's elimination
+// stage (bench/ragdolls.md, "Where a tree step goes, against its floor", "Float lanes"); and a rope
 // (100 particles, 3 × 3 blocks; 100 distance constraints of one row, the first to the world).
 // Each iteration loads the inputs (a copy), factors and solves every instance: the time per
 // instance and per joint (counters `instance`, `joint`). The label says scalar or the lane
@@ -162,8 +162,8 @@ void BM_Eliminate(benchmark::State& run, const Shape& shape, bool inverse = fals
   run.counters["instance"] = benchmark::Counter(static_cast<double>(shape.instances), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   run.counters["joint"] = benchmark::Counter(static_cast<double>(shape.instances * shape.inboard.size()),
                                              benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  run.SetLabel((std::is_arithmetic_v<Value> ? "scalar" : std::to_string(xsimd::batch<double>::size) + " lanes") +
-               std::string(inverse ? ", with the inverse diagonal" : ""));
+  run.SetLabel((std::is_arithmetic_v<Value> ? std::string("scalar") : std::to_string(lane_count<Value>()) + " lanes") +
+               (sizeof(decltype(get_lane(Value(0), 0))) == 4 ? " of float" : "") + std::string(inverse ? ", with the inverse diagonal" : ""));
 }
 
 // A solve alone with a kept factor (the trees' contact iterations, each a back-substitution):
@@ -303,6 +303,8 @@ void BM_RagdollLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>,
 void BM_SceneRagdollScalar(benchmark::State& run) { BM_Eliminate<double, 6>(run, scene_ragdoll()); }
 void BM_SceneRagdollLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, scene_ragdoll()); }
 void BM_SceneRagdollLanesInverse(benchmark::State& run) { BM_Eliminate<xsimd::batch<double>, 6>(run, scene_ragdoll(), true); }
+void BM_SceneRagdollFloatLanes(benchmark::State& run) { BM_Eliminate<xsimd::batch<float>, 6>(run, scene_ragdoll()); }
+void BM_SceneRagdollFloatLanesInverse(benchmark::State& run) { BM_Eliminate<xsimd::batch<float>, 6>(run, scene_ragdoll(), true); }
 void BM_SceneRagdollLanesSolve(benchmark::State& run) { BM_Solve<xsimd::batch<double>, 6>(run, scene_ragdoll()); }
 void BM_SceneRagdollLanesPacked(benchmark::State& run) { BM_EliminatePacked<6>(run, scene_ragdoll(), false); }
 void BM_SceneRagdollLanesPackedInverse(benchmark::State& run) { BM_EliminatePacked<6>(run, scene_ragdoll(), true); }
@@ -317,6 +319,8 @@ BENCHMARK(BM_RagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollScalar)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollLanes)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollLanesInverse)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollFloatLanes)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_SceneRagdollFloatLanesInverse)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollLanesSolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollLanesPacked)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_SceneRagdollLanesPackedInverse)->Unit(benchmark::kMicrosecond);

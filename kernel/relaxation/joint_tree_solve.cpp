@@ -278,7 +278,7 @@ void begin_joint_trees(VerletState<Scalar>& state, double dt) {
   StageClock clock(state.options.profile);
   gather_tree_contacts(state, dt);
   std::fill(trees.counts.begin(), trees.counts.end(), JointTreeCounts{});
-  for (TreePack& pack : trees.packs->packs) pack.factors = 0, pack.seconds = {};
+  for (TreePack<Scalar>& pack : trees.packs->packs<Scalar>()) pack.factors = 0, pack.seconds = {};
   trees.contact_seconds = clock.lap();
 }
 
@@ -287,8 +287,8 @@ JointTreeCounts joint_tree_counts(const VerletState<Scalar>& state) {
   const JointTrees& trees = state.plan.joint_trees;
   JointTreeCounts counts;
   for (const JointTreeCounts& component : trees.counts) counts += component;
-  for (const TreePack& pack : trees.packs->packs) {
-    counts.lane_slots += pack.factors * static_cast<int>(kTreeLanes);
+  for (const TreePack<Scalar>& pack : trees.packs->packs<Scalar>()) {
+    counts.lane_slots += pack.factors * static_cast<int>(kTreeLanes<Scalar>);
     counts.seconds += pack.seconds;
   }
   counts.seconds.contacts += trees.contact_seconds;
@@ -320,9 +320,10 @@ enum class Lanes { awake, without_contacts, with_contacts_unsettled };
 
 // The lanes of `pack` whose components are awake and, for `which`, have no contacts this
 // substep, or have some and are not settled.
-LaneMask lanes_of(const JointTrees& trees, const TreePack& pack, Lanes which) {
+template <typename Number>
+LaneMask lanes_of(const JointTrees& trees, const TreePack<Number>& pack, Lanes which) {
   LaneMask lanes{};
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+  for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
     const std::int32_t c = pack.component[lane];
     if (c < 0 || !trees.component_awake[static_cast<std::size_t>(c)]) continue;
     const auto index = static_cast<std::uint32_t>(c);
@@ -339,9 +340,9 @@ LaneMask lanes_of(const JointTrees& trees, const TreePack& pack, Lanes which) {
 bool any_lane(const LaneMask& lanes) { return std::find(lanes.begin(), lanes.end(), true) != lanes.end(); }
 
 // Calls visit(component) for the component of each lane where `lanes` holds.
-template <typename Visit>
-void for_each_lane(const TreePack& pack, const LaneMask& lanes, Visit&& visit) {
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+template <typename Number, typename Visit>
+void for_each_lane(const TreePack<Number>& pack, const LaneMask& lanes, Visit&& visit) {
+  for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
     if (lanes[lane]) visit(static_cast<std::uint32_t>(pack.component[lane]));
   }
 }
@@ -349,7 +350,7 @@ void for_each_lane(const TreePack& pack, const LaneMask& lanes, Visit&& visit) {
 // A Newton step of the joints of `pack`'s lanes where `lanes` holds: staged, factored and solved
 // side by side (with `mobility`, each limb's block of the inverse too), the limits that push held.
 template <typename Scalar>
-void newton_step(VerletState<Scalar>& state, TreePack& pack, const LaneMask& lanes, bool mobility) {
+void newton_step(VerletState<Scalar>& state, TreePack<Scalar>& pack, const LaneMask& lanes, bool mobility) {
   JointTrees& trees = state.plan.joint_trees;
   StageClock clock(state.options.profile);
   for_each_lane(pack, lanes, [&](std::uint32_t c) { stage_component(state, trees, c, false); });
@@ -369,7 +370,7 @@ void newton_step(VerletState<Scalar>& state, TreePack& pack, const LaneMask& lan
 // of that component by kNewtonMove (at most kNewtonSteps); a lane that has converged drops out
 // of the next. Returns the largest move, m.
 template <typename Scalar>
-double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
+double pack_positions(VerletState<Scalar>& state, TreePack<Scalar>& pack) {
   JointTrees& trees = state.plan.joint_trees;
   LaneMask running = lanes_of(trees, pack, Lanes::without_contacts);
   for_each_lane(pack, running, [&](std::uint32_t c) { ++trees.counts[c].solves, release_limits(trees, c); });
@@ -377,7 +378,7 @@ double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
   for (int newton = 0; newton < kNewtonSteps && any_lane(running); ++newton) {
     newton_step(state, pack, running, false);
     StageClock clock(state.options.profile);
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    for (std::size_t lane = 0; lane < kTreeLanes<Scalar>; ++lane) {
       if (!running[lane]) continue;
       const auto c = static_cast<std::uint32_t>(pack.component[lane]);
       const double moved = move_component(state, c);
@@ -393,7 +394,7 @@ double pack_positions(VerletState<Scalar>& state, TreePack& pack) {
 // A round of the components with contacts (tree_contacts.hpp), stage 1: a Newton step of their
 // joints, solved but not applied (JointTrees::joint_motion), with each limb's mobility.
 template <typename Scalar>
-double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int round) {
+double contact_round_joints(VerletState<Scalar>& state, TreePack<Scalar>& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
   const LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   if (!any_lane(lanes)) return 0;
@@ -415,11 +416,11 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack& pack, int roun
 // Stage 3 of a round's iteration: the contacts' loads solved with the round's factor, their
 // motion scaled so that no contact overshoots and added to the round's (load_motion).
 template <typename Scalar>
-double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
+double contact_iteration_loads(VerletState<Scalar>& state, TreePack<Scalar>& pack) {
   JointTrees& trees = state.plan.joint_trees;
   StageClock clock(state.options.profile);
   LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+  for (std::size_t lane = 0; lane < kTreeLanes<Scalar>; ++lane) {
     const std::int32_t c = pack.component[lane];
     if (c >= 0) trees.load_scale[static_cast<std::size_t>(c)] = 1;
     if (!lanes[lane]) continue;
@@ -445,7 +446,7 @@ double contact_iteration_loads(VerletState<Scalar>& state, TreePack& pack) {
 // A round's end: each component moves by its joint step and its contacts' motion. It is settled
 // when that moves no particle by kContactRoundMove.
 template <typename Scalar>
-double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round) {
+double contact_round_move(VerletState<Scalar>& state, TreePack<Scalar>& pack, int round) {
   JointTrees& trees = state.plan.joint_trees;
   StageClock clock(state.options.profile);
   double largest = 0;
@@ -463,7 +464,7 @@ double contact_round_move(VerletState<Scalar>& state, TreePack& pack, int round)
 // After the rounds, the components they left unsettled take one more Newton step of their joints
 // alone, so that every sweep still ends with the joints closed (its contacts' next sweep's).
 template <typename Scalar>
-double close_joints(VerletState<Scalar>& state, TreePack& pack) {
+double close_joints(VerletState<Scalar>& state, TreePack<Scalar>& pack) {
   JointTrees& trees = state.plan.joint_trees;
   const LaneMask lanes = lanes_of(trees, pack, Lanes::with_contacts_unsettled);
   if (!any_lane(lanes)) return 0;
@@ -477,7 +478,7 @@ double close_joints(VerletState<Scalar>& state, TreePack& pack) {
 
 // The awake components on the velocities; returns the largest |Δv|, m/s.
 template <typename Scalar>
-double pack_velocities(VerletState<Scalar>& state, TreePack& pack) {
+double pack_velocities(VerletState<Scalar>& state, TreePack<Scalar>& pack) {
   JointTrees& trees = state.plan.joint_trees;
   const std::uint32_t null_particle = state.particles.null_particle();
   const LaneMask lanes = lanes_of(trees, pack, Lanes::awake);
@@ -517,7 +518,7 @@ struct PackStage {
   static double run(const void* context, std::size_t task) {
     const auto& stage = *static_cast<const PackStage*>(context);
     VerletState<Scalar>& state = *stage.state;
-    TreePack& pack = state.plan.joint_trees.packs->packs[task];
+    TreePack<Scalar>& pack = state.plan.joint_trees.packs->template packs<Scalar>()[task];
     switch (stage.kind) {
       case TreeStage::positions: return pack_positions(state, pack);
       case TreeStage::contact_joints: return contact_round_joints(state, pack, stage.round);
@@ -533,7 +534,7 @@ struct PackStage {
 template <typename Scalar>
 double solve_packs(VerletState<Scalar>& state, TreeStage kind, int round = 0) {
   const PackStage<Scalar> stage{&state, kind, round};
-  const std::size_t count = state.plan.joint_trees.packs->packs.size();
+  const std::size_t count = state.plan.joint_trees.packs->template packs<Scalar>().size();
   if (joint_trees_on_threads(state.plan) && count > 1) return state.plan.runner->run(count, &PackStage<Scalar>::run, &stage);
   double largest = 0;
   for (std::size_t task = 0; task < count; ++task) largest = std::max(largest, PackStage<Scalar>::run(&stage, task));

@@ -211,7 +211,7 @@ void order_trees(const VerletState<Scalar>& state, JointTrees& trees, const std:
   trees.settled.assign(component_count, 0);
   trees.path_scratch.assign(trees.elimination.ordering().order.size(), -1);
   trees.component_awake.assign(component_count, 0);
-  build_tree_packs(trees);
+  build_tree_packs<Scalar>(trees);
   trees.joint_motion.assign(limb_count, Vector6::Zero());
   trees.load_motion.assign(limb_count, Vector6::Zero());
 }

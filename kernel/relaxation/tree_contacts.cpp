@@ -229,7 +229,7 @@ void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component) {
     if (!contact.loop) continue;
     evaluate(state, contact);
     // The paths from its two limbs to the root carry the response.
-    const std::array<Eigen::Matrix<double, 6, 1>, 2> motion = solve_pack_path(trees, component, contact.limb, contact.normal_jacobian);
+    const std::array<Eigen::Matrix<double, 6, 1>, 2> motion = solve_pack_path<Scalar>(trees, component, contact.limb, contact.normal_jacobian);
     ++trees.counts[component].path_solves;
     for (std::size_t s = 0; s < 2; ++s) contact.loop_mobility[s] = contact.normal_jacobian[s].dot(motion[s]);
   }

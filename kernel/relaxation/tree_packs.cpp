@@ -45,12 +45,13 @@ std::vector<std::int32_t> shape_of(const JointTrees& trees, const TreeOrdering::
 }
 
 // A pack's local nodes, ordering and storage, from its first component.
-TreePack make_pack(const JointTrees& trees, const std::vector<std::uint32_t>& components) {
+template <typename Number>
+TreePack<Number> make_pack(const JointTrees& trees, const std::vector<std::uint32_t>& components) {
   const TreeOrdering& ordering = trees.elimination.ordering();
   const std::int32_t limbs = trees.elimination.body_count();
   const TreeOrdering::Component& first = ordering.components[components.front()];
   const std::uint32_t count = first.end - first.begin;
-  TreePack pack;
+  TreePack<Number> pack;
   pack.component.fill(-1);
   for (std::size_t lane = 0; lane < components.size(); ++lane) pack.component[lane] = static_cast<std::int32_t>(components[lane]);
   // Local indices: limbs first, then joints, each in the slice's order.
@@ -83,17 +84,20 @@ TreePack make_pack(const JointTrees& trees, const std::vector<std::uint32_t>& co
     pack.inboard_limb[here - static_cast<std::size_t>(lane_limbs)] = inboard < 0 ? -1 : local_of[static_cast<std::size_t>(inboard)];
   }
   local.components.push_back({0, count, 0});
-  pack.edge.assign(rows.size(), {Block<TreeLanes, 6, 6>::Zero(), Block<TreeLanes, 6, 6>::Zero()});
+  using Lanes = TreeLanes<Number>;
+  pack.edge.assign(rows.size(), {Block<Lanes, 6, 6>::Zero(), Block<Lanes, 6, 6>::Zero()});
   pack.elimination.assign(std::move(local), static_cast<std::size_t>(lane_limbs), std::move(rows));
   return pack;
 }
 
 }  // namespace
 
+template <typename Number>
 void build_tree_packs(JointTrees& trees, std::size_t lanes) {
-  lanes = std::clamp<std::size_t>(lanes, 1, kTreeLanes);
+  lanes = std::clamp<std::size_t>(lanes, 1, kTreeLanes<Number>);
   TreePacks& packs = *trees.packs;
-  packs.packs.clear();
+  packs.doubles.clear(), packs.floats.clear();
+  std::vector<TreePack<Number>>& built = packs.packs<Number>();
   const auto& components = trees.elimination.ordering().components;
   // Components by shape, shapes in the order first met, so the packing is deterministic.
   std::map<std::vector<std::int32_t>, std::size_t> shape_index;
@@ -109,8 +113,8 @@ void build_tree_packs(JointTrees& trees, std::size_t lanes) {
   for (const std::vector<std::uint32_t>& group : by_shape) {
     for (std::size_t begin = 0; begin < group.size(); begin += lanes) {
       const std::size_t end = std::min(group.size(), begin + lanes);
-      for (std::size_t k = begin; k < end; ++k) packs.pack_of[group[k]] = static_cast<std::uint32_t>(packs.packs.size()), packs.lane_of[group[k]] = static_cast<std::uint32_t>(k - begin);
-      packs.packs.push_back(make_pack(trees, std::vector<std::uint32_t>(group.begin() + static_cast<std::ptrdiff_t>(begin), group.begin() + static_cast<std::ptrdiff_t>(end))));
+      for (std::size_t k = begin; k < end; ++k) packs.pack_of[group[k]] = static_cast<std::uint32_t>(built.size()), packs.lane_of[group[k]] = static_cast<std::uint32_t>(k - begin);
+      built.push_back(make_pack<Number>(trees, std::vector<std::uint32_t>(group.begin() + static_cast<std::ptrdiff_t>(begin), group.begin() + static_cast<std::ptrdiff_t>(end))));
     }
   }
   packs.offset.assign(trees.elimination.node_count(), 0);
@@ -122,12 +126,13 @@ void build_tree_packs(JointTrees& trees, std::size_t lanes) {
 namespace {
 
 // The scalar elimination's node holding local node `local` of lane `lane` (a component's).
+template <typename Number>
 struct LaneNodes {
   const TreeOrdering& ordering;
-  const TreePack& pack;
-  std::array<std::uint32_t, kTreeLanes> begin{};
-  LaneNodes(const JointTrees& trees, const TreePack& pack, const LaneMask& lanes) : ordering(trees.elimination.ordering()), pack(pack) {
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+  const TreePack<Number>& pack;
+  std::array<std::uint32_t, kTreeLanes<Number>> begin{};
+  LaneNodes(const JointTrees& trees, const TreePack<Number>& pack, const LaneMask& lanes) : ordering(trees.elimination.ordering()), pack(pack) {
+    for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
       if (lanes[lane]) begin[lane] = ordering.components[static_cast<std::size_t>(pack.component[lane])].begin;
     }
   }
@@ -137,29 +142,32 @@ struct LaneNodes {
 // Up to 36 entries of a block, lane by lane: every lane's numbers are stored before any entry's
 // lanes are loaded (a load right after its lanes' stores waits for them: store-to-load
 // forwarding cannot join them into one load).
+template <typename Number>
 struct LaneEntries {
-  alignas(64) double value[36][kTreeLanes];
+  alignas(64) Number value[36][kTreeLanes<Number>];
   // entries[k] ← lanes of value[k], k < count.
   template <typename Entry>
   void load(int count, Entry&& entry) const {
-    for (int k = 0; k < count; ++k) entry(k) = TreeLanes::load_aligned(value[k]);
+    for (int k = 0; k < count; ++k) entry(k) = TreeLanes<Number>::load_aligned(value[k]);
   }
 };
 
 // The rows of local node `local`'s block (6 for a limb, its rows for a joint).
-int node_rows(const TreePack& pack, std::size_t local) {
+template <typename Number>
+int node_rows(const TreePack<Number>& pack, std::size_t local) {
   const std::int32_t lane_limbs = pack.elimination.body_count();
   return static_cast<std::int32_t>(local) < lane_limbs ? 6 : pack.elimination.rows(local - static_cast<std::size_t>(lane_limbs));
 }
 
 // Each lane's solution (the pack's work, each node's top rows) into its nodes' work().
-void scatter_solutions(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
-  LaneEntries entries;
+template <typename Number>
+void scatter_solutions(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, const LaneNodes<Number>& node_of) {
+  LaneEntries<Number> entries;
   for (std::size_t local = 0; local < pack.position.size(); ++local) {
     const int rows = node_rows(pack, local);
-    Block<TreeLanes, 6, 1>& work = pack.elimination.work(local);
+    Block<TreeLanes<Number>, 6, 1>& work = pack.elimination.work(local);
     for (int i = 0; i < rows; ++i) work(i, 0).store_aligned(entries.value[i]);
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
       if (!lanes[lane]) continue;
       Vector6& out = trees.elimination.work(node_of(lane, local));
       for (int i = 0; i < rows; ++i) out(i) = entries.value[i][lane];
@@ -168,24 +176,26 @@ void scatter_solutions(JointTrees& trees, TreePack& pack, const LaneMask& lanes,
 }
 
 // The lanes' right-hand sides (their nodes' work(), top rows; zero in the other lanes) into the pack's.
-void gather_right_sides(JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of) {
-  LaneEntries entries;
+template <typename Number>
+void gather_right_sides(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, const LaneNodes<Number>& node_of) {
+  LaneEntries<Number> entries;
   for (std::size_t local = 0; local < pack.position.size(); ++local) {
     const int rows = node_rows(pack, local);
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+    for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
       const Vector6* in = lanes[lane] ? &trees.elimination.work(node_of(lane, local)) : nullptr;
-      for (int i = 0; i < rows; ++i) entries.value[i][lane] = in ? (*in)(i) : 0.0;
+      for (int i = 0; i < rows; ++i) entries.value[i][lane] = in ? static_cast<Number>((*in)(i)) : Number(0);
     }
-    Block<TreeLanes, 6, 1>& work = pack.elimination.work(local);
-    entries.load(rows, [&](int i) -> TreeLanes& { return work(i, 0); });
+    Block<TreeLanes<Number>, 6, 1>& work = pack.elimination.work(local);
+    entries.load(rows, [&](int i) -> TreeLanes<Number>& { return work(i, 0); });
   }
 }
 
 // A limb's block M = diag(m E, I) (an empty lane's: the identity).
-void gather_limb_block(const JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of, std::size_t local) {
-  LaneEntries entries;
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
-    double* column[7];
+template <typename Number>
+void gather_limb_block(const JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, const LaneNodes<Number>& node_of, std::size_t local) {
+  LaneEntries<Number> entries;
+  for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
+    Number* column[7];
     for (int k = 0; k < 7; ++k) column[k] = &entries.value[k][lane];
     if (!lanes[lane]) {
       *column[0] = 1, *column[1] = 1, *column[2] = 0, *column[3] = 1, *column[4] = 0, *column[5] = 0, *column[6] = 1;
@@ -193,13 +203,12 @@ void gather_limb_block(const JointTrees& trees, TreePack& pack, const LaneMask& 
     }
     const std::size_t limb = node_of(lane, local);
     const Eigen::Matrix3d& inertia = trees.inertia[limb];
-    *column[0] = trees.mass[limb];
-    *column[1] = inertia(0, 0), *column[2] = inertia(1, 0), *column[3] = inertia(1, 1);
-    *column[4] = inertia(2, 0), *column[5] = inertia(2, 1), *column[6] = inertia(2, 2);
+    const double entry[7] = {trees.mass[limb], inertia(0, 0), inertia(1, 0), inertia(1, 1), inertia(2, 0), inertia(2, 1), inertia(2, 2)};
+    for (int k = 0; k < 7; ++k) *column[k] = static_cast<Number>(entry[k]);
   }
-  Block<TreeLanes, 6, 6>& block = pack.elimination.diagonal(local);
-  block = Block<TreeLanes, 6, 6>::Zero();
-  entries.load(7, [&](int k) -> TreeLanes& {
+  Block<TreeLanes<Number>, 6, 6>& block = pack.elimination.diagonal(local);
+  block = Block<TreeLanes<Number>, 6, 6>::Zero();
+  entries.load(7, [&](int k) -> TreeLanes<Number>& {
     static constexpr int kRow[7] = {0, 3, 4, 4, 5, 5, 5}, kColumn[7] = {0, 3, 3, 4, 3, 4, 5};
     return block(kRow[k], kColumn[k]);  // the lower triangle, which is what the factor reads
   });
@@ -208,12 +217,13 @@ void gather_limb_block(const JointTrees& trees, TreePack& pack, const LaneMask& 
 
 // A joint's −A (−1 on an idle limit's rows and on every row of an empty lane, else 0) and its
 // J blocks' top rows on limb A and limb B.
-void gather_joint_blocks(const JointTrees& trees, TreePack& pack, const LaneMask& lanes, const LaneNodes& node_of, std::size_t local) {
+template <typename Number>
+void gather_joint_blocks(const JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, const LaneNodes<Number>& node_of, std::size_t local) {
   const std::int32_t limbs = trees.elimination.body_count();
   const std::size_t joint = local - static_cast<std::size_t>(pack.elimination.body_count());
   const int rows = pack.elimination.rows(joint);
-  LaneEntries diagonal, inboard, outboard;
-  for (std::size_t lane = 0; lane < kTreeLanes; ++lane) {
+  LaneEntries<Number> diagonal, inboard, outboard;
+  for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) {
     if (!lanes[lane]) {
       for (int i = 0; i < rows; ++i) {
         diagonal.value[i][lane] = -1;
@@ -229,23 +239,28 @@ void gather_joint_blocks(const JointTrees& trees, TreePack& pack, const LaneMask
       if (row >= 0 && !(trees.active_limits[j] & (1u << l))) diagonal.value[row][lane] = -1;  // idle: μ = 0
     }
     for (int i = 0; i < rows; ++i) {
-      for (int c = 0; c < 6; ++c) inboard.value[i * 6 + c][lane] = trees.block_a[j](i, c), outboard.value[i * 6 + c][lane] = trees.block_b[j](i, c);
+      for (int c = 0; c < 6; ++c) {
+        inboard.value[i * 6 + c][lane] = static_cast<Number>(trees.block_a[j](i, c));
+        outboard.value[i * 6 + c][lane] = static_cast<Number>(trees.block_b[j](i, c));
+      }
     }
   }
-  Block<TreeLanes, 6, 6>& block = pack.elimination.diagonal(local);
-  block = Block<TreeLanes, 6, 6>::Zero();
-  diagonal.load(rows, [&](int i) -> TreeLanes& { return block(i, i); });
+  using Lanes = TreeLanes<Number>;
+  Block<Lanes, 6, 6>& block = pack.elimination.diagonal(local);
+  block = Block<Lanes, 6, 6>::Zero();
+  diagonal.load(rows, [&](int i) -> Lanes& { return block(i, i); });
   auto& edge = pack.edge[joint];
-  inboard.load(rows * 6, [&](int k) -> TreeLanes& { return edge[0](k / 6, k % 6); });
-  outboard.load(rows * 6, [&](int k) -> TreeLanes& { return edge[1](k / 6, k % 6); });
+  inboard.load(rows * 6, [&](int k) -> Lanes& { return edge[0](k / 6, k % 6); });
+  outboard.load(rows * 6, [&](int k) -> Lanes& { return edge[1](k / 6, k % 6); });
 }
 
 }  // namespace
 
-void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bool mobility) {
+template <typename Number>
+void eliminate_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, bool mobility) {
   const std::int32_t lane_limbs = pack.elimination.body_count();
   const auto count = static_cast<std::uint32_t>(pack.position.size());
-  const LaneNodes node_of(trees, pack, lanes);
+  const LaneNodes<Number> node_of(trees, pack, lanes);
   for (std::size_t local = 0; local < count; ++local) {
     if (static_cast<std::int32_t>(local) < lane_limbs) {
       gather_limb_block(trees, pack, lanes, node_of, local);
@@ -255,31 +270,34 @@ void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bo
   }
   gather_right_sides(trees, pack, lanes, node_of);
   ++pack.factors;
-  pack.elimination.eliminate(0, count, [&](std::size_t joint, std::int32_t limb) -> const Block<TreeLanes, 6, 6>& {
+  pack.elimination.eliminate(0, count, [&](std::size_t joint, std::int32_t limb) -> const Block<TreeLanes<Number>, 6, 6>& {
     return pack.edge[joint][pack.inboard_limb[joint] == limb ? 0 : 1];
   });
   scatter_solutions(trees, pack, lanes, node_of);
   if (!mobility) return;
   pack.elimination.inverse_diagonal(0, count);
   Matrix6 sink;
-  std::array<Matrix6*, kTreeLanes> blocks{};
+  std::array<Matrix6*, kTreeLanes<Number>> blocks{};
   for (std::size_t local = 0; local < static_cast<std::size_t>(lane_limbs); ++local) {
-    for (std::size_t lane = 0; lane < kTreeLanes; ++lane) blocks[lane] = lanes[lane] ? &trees.mobility[node_of(lane, local)] : &sink;
+    for (std::size_t lane = 0; lane < kTreeLanes<Number>; ++lane) blocks[lane] = lanes[lane] ? &trees.mobility[node_of(lane, local)] : &sink;
     unpack_lanes(pack.elimination.mobility(local), blocks);
   }
 }
 
-void solve_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes) {
-  const LaneNodes node_of(trees, pack, lanes);
+template <typename Number>
+void solve_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes) {
+  const LaneNodes<Number> node_of(trees, pack, lanes);
   gather_right_sides(trees, pack, lanes, node_of);
   pack.elimination.solve(0, static_cast<std::uint32_t>(pack.position.size()));
   scatter_solutions(trees, pack, lanes, node_of);
 }
 
+template <typename Number>
 std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
                                        const std::array<Vector6, 2>& loads) {
+  using Lanes = TreeLanes<Number>;
   TreePacks& packs = *trees.packs;
-  TreePack& pack = packs.packs[packs.pack_of[component]];
+  TreePack<Number>& pack = packs.packs<Number>()[packs.pack_of[component]];
   const std::size_t lane = packs.lane_of[component];
   std::array<std::int32_t, 2> local{};
   for (std::size_t s = 0; s < 2; ++s) local[s] = pack.local[packs.offset[static_cast<std::size_t>(limbs[s])]];
@@ -289,23 +307,33 @@ std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t componen
   const std::span<const std::int32_t> path = room.first(pack.elimination.path_to_root(local, room));
   // Every lane solves the paths (one lane's work costs what all of theirs do); only this lane's
   // loads are non-zero, and only its answer is read.
-  for (const std::int32_t node : path) pack.elimination.work(static_cast<std::size_t>(node)) = Block<TreeLanes, 6, 1>::Zero();
+  for (const std::int32_t node : path) pack.elimination.work(static_cast<std::size_t>(node)) = Block<Lanes, 6, 1>::Zero();
   // The load as lanes: the number in this lane, 0 in the others (a select, not a store into one
   // lane of a stored batch, which the next load would wait on).
-  alignas(64) double lane_index[kTreeLanes];
-  for (std::size_t k = 0; k < kTreeLanes; ++k) lane_index[k] = static_cast<double>(k);
-  const auto this_lane = TreeLanes::load_aligned(lane_index) == TreeLanes(static_cast<double>(lane));
+  alignas(64) Number lane_index[kTreeLanes<Number>];
+  for (std::size_t k = 0; k < kTreeLanes<Number>; ++k) lane_index[k] = static_cast<Number>(k);
+  const auto this_lane = Lanes::load_aligned(lane_index) == Lanes(static_cast<Number>(lane));
   for (std::size_t s = 0; s < 2; ++s) {
-    Block<TreeLanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
-    for (int i = 0; i < 6; ++i) work(i, 0) += xsimd::select(this_lane, TreeLanes(loads[s](i)), TreeLanes(0.0));
+    Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
+    for (int i = 0; i < 6; ++i) work(i, 0) += xsimd::select(this_lane, Lanes(static_cast<Number>(loads[s](i))), Lanes(Number(0)));
   }
   pack.elimination.solve_nodes(path);
   std::array<Vector6, 2> motion;
   for (std::size_t s = 0; s < 2; ++s) {
-    const Block<TreeLanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
+    const Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
     for (int i = 0; i < 6; ++i) motion[s](i) = get_lane(work(i, 0), lane);  // a store, then one of its lanes: forwarded
   }
   return motion;
 }
+
+#define LIMBER_INSTANTIATE(Number)                                                                                         \
+  template void build_tree_packs<Number>(JointTrees&, std::size_t);                                                       \
+  template void eliminate_pack<Number>(JointTrees&, TreePack<Number>&, const LaneMask&, bool);                           \
+  template void solve_pack<Number>(JointTrees&, TreePack<Number>&, const LaneMask&);                                     \
+  template std::array<Vector6, 2> solve_pack_path<Number>(JointTrees&, std::uint32_t, const std::array<std::int32_t, 2>&, \
+                                                          const std::array<Vector6, 2>&);
+LIMBER_INSTANTIATE(float)
+LIMBER_INSTANTIATE(double)
+#undef LIMBER_INSTANTIATE
 
 }  // namespace limber

@@ -8,6 +8,9 @@
 // pack, whose TreeElimination holds one component a lane; a shape met once is a pack of one
 // lane, through the same code. Each lane's bits are those its component gets alone
 // (lane_blocks.hpp), so a ragdoll steps to the same bits whatever its neighbours in the pack.
+// A pack works in the state's precision: a state in float factors in float lanes, twice as many
+// to a batch as doubles (the staging stays in double, and the inputs are rounded to float as
+// they are gathered).
 //
 // A solve stages each component one at a time as before: its limbs' mass and inertia
 // (JointTrees::mass, inertia), its joints' J blocks and active limits (block_a, block_b,
@@ -19,6 +22,7 @@
 
 #include <array>
 #include <cstdint>
+#include <type_traits>
 #include <vector>
 
 #include <xsimd/xsimd.hpp>
@@ -29,54 +33,76 @@
 
 namespace limber {
 
-/// The lanes of a pack: xsimd's widest batch of doubles for this build (4 with AVX2, 8 with
-/// AVX-512).
-using TreeLanes = xsimd::batch<double>;
-inline constexpr std::size_t kTreeLanes = TreeLanes::size;
-/// Which lanes of a pack a stage works on.
-using LaneMask = std::array<bool, kTreeLanes>;
+/// The lanes of a pack in precision Number (the state's: double or float): xsimd's widest batch
+/// of Number for this build — doubles 4 with AVX2, 8 with AVX-512; floats twice as many.
+template <typename Number>
+using TreeLanes = xsimd::batch<Number>;
+template <typename Number>
+inline constexpr std::size_t kTreeLanes = TreeLanes<Number>::size;
+/// Which lanes of a pack a stage works on (those past the pack's width are never set).
+using LaneMask = std::array<bool, kTreeLanes<float>>;
 
-/// Up to kTreeLanes components of one shape. A node's local index: the pack's limbs 0…L−1 and
-/// joints L…, each numbered in the order the components' slices of the elimination order list
-/// them.
+/// Up to kTreeLanes<Number> components of one shape. A node's local index: the pack's limbs
+/// 0…L−1 and joints L…, each numbered in the order the components' slices of the elimination
+/// order list them.
+template <typename Number>
 struct TreePack {
-  std::array<std::int32_t, kTreeLanes> component{};  ///< per lane (−1: an empty lane)
-  std::vector<std::uint32_t> position;              ///< per local node: its offset in a lane's slice
-  std::vector<std::int32_t> local;                  ///< per offset in a slice: its local node
-  std::vector<std::int32_t> inboard_limb;           ///< per local joint: its limb A's local index (−1: the world)
-  TreeElimination<TreeLanes, 6> elimination;        ///< over the local nodes, one component a lane
-  std::vector<std::array<Block<TreeLanes, 6, 6>, 2>> edge;  ///< per local joint: J on limb A, on limb B
-  int factors = 0;  ///< since the substep began (begin_joint_trees)
+  static constexpr std::size_t kLanes = kTreeLanes<Number>;
+  using Lanes = TreeLanes<Number>;
+  std::array<std::int32_t, kLanes> component{};  ///< per lane (−1: an empty lane)
+  std::vector<std::uint32_t> position;          ///< per local node: its offset in a lane's slice
+  std::vector<std::int32_t> local;              ///< per offset in a slice: its local node
+  std::vector<std::int32_t> inboard_limb;       ///< per local joint: its limb A's local index (−1: the world)
+  TreeElimination<Lanes, 6> elimination;        ///< over the local nodes, one component a lane
+  std::vector<std::array<Block<Lanes, 6, 6>, 2>> edge;  ///< per local joint: J on limb A, on limb B
+  int factors = 0;           ///< since the substep began (begin_joint_trees)
   TreeStageSeconds seconds;  ///< the same (profiled steps only)
 };
 
+/// The packs of a state in double or in float (the other list empty), and where each component
+/// and node is in them.
 struct TreePacks {
-  std::vector<TreePack> packs;
+  std::vector<TreePack<double>> doubles;
+  std::vector<TreePack<float>> floats;
   /// Per component: its pack and lane. Per node of the scalar elimination: its offset in its
   /// component's slice of the order.
   std::vector<std::uint32_t> pack_of, lane_of, offset;
+
+  template <typename Number>
+  std::vector<TreePack<Number>>& packs() {
+    if constexpr (std::is_same_v<Number, float>) {
+      return floats;
+    } else {
+      return doubles;
+    }
+  }
 };
 
-/// Groups trees' components by shape into packs of up to `lanes` (1…kTreeLanes) components
-/// (prepare_joint_trees, after the elimination is assigned; fewer lanes: for tests and studies of
-/// lane occupancy). O(nodes).
-void build_tree_packs(JointTrees& trees, std::size_t lanes = kTreeLanes);
+/// Groups trees' components by shape into packs of up to `lanes` (1…kTreeLanes<Number>)
+/// components, in Number's lanes (prepare_joint_trees, after the elimination is assigned; fewer
+/// lanes: for tests and studies of lane occupancy). O(nodes).
+template <typename Number>
+void build_tree_packs(JointTrees& trees, std::size_t lanes = kTreeLanes<Number>);
 
 /// Factors and solves the lanes of `pack` where `lanes` holds, each from its component's staged
 /// inputs (trees.mass, inertia, block_a, block_b, active_limits and its nodes' work()), and
 /// writes each one's solution into its nodes' work(); with `mobility`, each one's limbs' blocks
 /// of the inverse too (TreeElimination::inverse_diagonal) into trees.mobility. The other lanes
 /// solve an identity system and write nothing. The pack keeps the factor for solve_pack() and
-/// solve_pack_path() until its next eliminate_pack().
-void eliminate_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes, bool mobility = false);
+/// solve_pack_path() until its next eliminate_pack(). In float the inputs are rounded to float
+/// and the answers widened back.
+template <typename Number>
+void eliminate_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, bool mobility = false);
 
 /// Solves the lanes where `lanes` holds again with the pack's factor, for the right-hand sides
 /// in their components' work(), written back there.
-void solve_pack(JointTrees& trees, TreePack& pack, const LaneMask& lanes);
+template <typename Number>
+void solve_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes);
 
-/// The response of component `component` (its pack's factor) to the loads loads[s] (6-vectors:
-/// force, torque) at its limbs limbs[s] alone, solved on the paths from them to the root
-/// (TreeElimination::solve_nodes); returns each limb's motion. O(the paths' nodes).
+/// The response of component `component` (its pack's factor, in Number's packs) to the loads
+/// loads[s] (6-vectors: force, torque) at its limbs limbs[s] alone, solved on the paths from them
+/// to the root (TreeElimination::solve_nodes); returns each limb's motion. O(the paths' nodes).
+template <typename Number>
 std::array<Eigen::Matrix<double, 6, 1>, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
                                                            const std::array<Eigen::Matrix<double, 6, 1>, 2>& loads);
 

@@ -261,9 +261,9 @@ TEST(JointTrees, ThePileGivesTheSameBitsScalarAndSimdAndOnOneAndTwoThreads) {
 template <typename Scalar>
 std::vector<Scalar> run_packed(const Model& model, const VerletOptions& options, std::size_t lanes, int steps) {
   VerletState<Scalar> state = compile<Scalar>(model, options);
-  build_tree_packs(state.plan.joint_trees, lanes);
-  const std::size_t packs = state.plan.joint_trees.packs->packs.size();
-  EXPECT_EQ(packs, lanes == 1 ? 8 : (8 + kTreeLanes - 1) / kTreeLanes);  // eight ragdolls, one shape
+  build_tree_packs<Scalar>(state.plan.joint_trees, lanes);
+  const std::size_t packs = state.plan.joint_trees.packs->template packs<Scalar>().size();
+  EXPECT_EQ(packs, lanes == 1 ? 8 : (8 + kTreeLanes<Scalar> - 1) / kTreeLanes<Scalar>);  // eight ragdolls, one shape
   for (int k = 0; k < steps; ++k) step(state, model.settings.time_step);
   std::vector<Scalar> out;
   for (std::size_t p = 0; p < state.particles.size(); ++p) {
@@ -280,9 +280,9 @@ TEST(JointTrees, EveryLaneOfAPackGivesTheBitsOfItsRagdollInAPackOfItsOwn) {
   VerletOptions options = tree_options();
   options.relaxation.substeps = 2;
   options.relaxation.iterations = 1;
-  EXPECT_EQ(run_packed<float>(model, options, kTreeLanes, 200), run_packed<float>(model, options, 1, 200));
+  EXPECT_EQ(run_packed<float>(model, options, kTreeLanes<float>, 200), run_packed<float>(model, options, 1, 200));
   options.relaxation.projection = ProjectionRule::rattle;
-  EXPECT_EQ(run_packed<double>(model, options, kTreeLanes, 200), run_packed<double>(model, options, 1, 200));
+  EXPECT_EQ(run_packed<double>(model, options, kTreeLanes<double>, 200), run_packed<double>(model, options, 1, 200));
 }
 
 // Substeps × sweeps from 1 × 1 to 16 × 4 on four ragdolls of the pile, trees on, for 1 s (they
