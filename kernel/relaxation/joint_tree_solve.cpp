@@ -407,8 +407,8 @@ double contact_round_joints(VerletState<Scalar>& state, TreePack<Scalar>& pack, 
       trees.joint_motion[limb] = trees.elimination.work(limb);
       trees.load_motion[limb].setZero();
     });
-    take_loop_mobilities(state, c);
   });
+  take_loop_mobilities(state, pack, lanes);
   pack.seconds.elimination += clock.lap();
   return 0;
 }

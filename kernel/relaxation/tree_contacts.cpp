@@ -222,16 +222,34 @@ void gather_tree_contacts(VerletState<Scalar>& state, double h) {
 }
 
 template <typename Scalar>
-void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component) {
+void take_loop_mobilities(VerletState<Scalar>& state, TreePack<Scalar>& pack, const LaneMask& lanes) {
+  constexpr std::size_t kLanes = TreePack<Scalar>::kLanes;
   JointTrees& trees = state.plan.joint_trees;
-  for (const std::uint32_t c : trees.component_contacts.row(component)) {
-    TreeContact& contact = trees.contacts[c];
-    if (!contact.loop) continue;
-    evaluate(state, contact);
-    // The paths from its two limbs to the root carry the response.
-    const std::array<Eigen::Matrix<double, 6, 1>, 2> motion = solve_pack_path<Scalar>(trees, component, contact.limb, contact.normal_jacobian);
-    ++trees.counts[component].path_solves;
-    for (std::size_t s = 0; s < 2; ++s) contact.loop_mobility[s] = contact.normal_jacobian[s].dot(motion[s]);
+  std::array<std::size_t, kLanes> next{};  // per lane: its next contact in its component's row
+  std::array<PathLoad, kLanes> paths;
+  std::array<TreeContact*, kLanes> taken{};
+  for (;;) {
+    bool any = false;
+    for (std::size_t lane = 0; lane < kLanes; ++lane) {
+      taken[lane] = nullptr, paths[lane].limbs = {-1, -1};
+      if (!lanes[lane]) continue;
+      const auto component = static_cast<std::uint32_t>(pack.component[lane]);
+      const auto row = trees.component_contacts.row(component);
+      while (next[lane] < row.size() && !trees.contacts[row[next[lane]]].loop) ++next[lane];
+      if (next[lane] == row.size()) continue;
+      TreeContact& contact = trees.contacts[row[next[lane]++]];
+      evaluate(state, contact);
+      // The paths from its two limbs to the root carry the response.
+      paths[lane].limbs = contact.limb, paths[lane].load = contact.normal_jacobian;
+      taken[lane] = &contact, any = true;
+      ++trees.counts[component].path_solves;
+    }
+    if (!any) return;
+    solve_pack_paths(trees, pack, std::span<PathLoad, kLanes>(paths));
+    for (std::size_t lane = 0; lane < kLanes; ++lane) {
+      if (!taken[lane]) continue;
+      for (std::size_t s = 0; s < 2; ++s) taken[lane]->loop_mobility[s] = taken[lane]->normal_jacobian[s].dot(paths[lane].motion[s]);
+    }
   }
 }
 
@@ -357,7 +375,7 @@ int tree_contact_rows_pushed(const JointTrees& trees) {
 #define LIMBER_INSTANTIATE(Scalar)                                                           \
   template bool held_by_joint_trees<Scalar>(const VerletState<Scalar>&, const ContactRow&); \
   template void gather_tree_contacts<Scalar>(VerletState<Scalar>&, double);                  \
-  template void take_loop_mobilities<Scalar>(VerletState<Scalar>&, std::uint32_t);           \
+  template void take_loop_mobilities<Scalar>(VerletState<Scalar>&, TreePack<Scalar>&, const LaneMask&); \
   template void tree_contact_impulses<Scalar>(VerletState<Scalar>&, bool);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)

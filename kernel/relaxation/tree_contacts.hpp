@@ -34,11 +34,13 @@
 // trees splits its push by their mobilities; one between two limbs of one tree (a loop: a forearm
 // on its own torso) takes its exact mobility along n, the two sides' coupling through the tree
 // included, from one back-substitution on the paths from its limbs to the root
-// (take_loop_mobilities, in stage 1), and is listed once under its tree. Rows and plane contacts
+// (take_loop_mobilities, in stage 1: a pack's lanes each solve one of their loops together), and
+// is listed once under its tree. Rows and plane contacts
 // between a tree limb and anything else (a ball, a limb outside the trees) stay in the sweeps.
 #pragma once
 
 #include "limber/kernel/particles/verlet_state.hpp"
+#include "limber/kernel/relaxation/tree_packs.hpp"
 
 namespace limber {
 
@@ -53,13 +55,14 @@ bool held_by_joint_trees(const VerletState<Scalar>& state, const ContactRow& row
 template <typename Scalar>
 void gather_tree_contacts(VerletState<Scalar>& state, double h);
 
-/// Stage 1, after a component's factor (its joint step solved and kept): each of its loops — a
-/// contact whose two sides are limbs of its tree — measured at the positions, and its exact
-/// mobility along n, each side's share J_s·x_s of the motion x that a unit push makes (one
-/// back-substitution with the factor; the inverse diagonal's blocks leave out how the tree
-/// couples the two sides). Overwrites the component's work vectors.
+/// Stage 1, after the factor of `pack`'s lanes where `lanes` holds (their joint steps solved and
+/// kept): each of their components' loops — a contact whose two sides are limbs of its tree —
+/// measured at the positions, and its exact mobility along n, each side's share J_s·x_s of the
+/// motion x that a unit push makes (a back-substitution with the factor on the paths to the
+/// root; the inverse diagonal's blocks leave out how the tree couples the two sides). The lanes'
+/// k-th loops are solved together (solve_pack_paths).
 template <typename Scalar>
-void take_loop_mobilities(VerletState<Scalar>& state, std::uint32_t component);
+void take_loop_mobilities(VerletState<Scalar>& state, TreePack<Scalar>& pack, const LaneMask& lanes);
 
 /// Stage 2: every tree contact's impulses and loads, from its components' joint step and
 /// contact motion so far this round (JointTrees::joint_motion, load_motion) and their inverse

@@ -293,45 +293,57 @@ void solve_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes
 }
 
 template <typename Number>
-std::array<Vector6, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
-                                       const std::array<Vector6, 2>& loads) {
+void solve_pack_paths(JointTrees& trees, TreePack<Number>& pack, std::span<PathLoad, kTreeLanes<Number>> paths) {
   using Lanes = TreeLanes<Number>;
-  TreePacks& packs = *trees.packs;
-  TreePack<Number>& pack = packs.packs<Number>()[packs.pack_of[component]];
-  const std::size_t lane = packs.lane_of[component];
-  std::array<std::int32_t, 2> local{};
-  for (std::size_t s = 0; s < 2; ++s) local[s] = pack.local[packs.offset[static_cast<std::size_t>(limbs[s])]];
-  // The component's slice of the scratch holds the paths.
-  const TreeOrdering::Component& nodes = trees.elimination.ordering().components[component];
+  constexpr std::size_t kLanes = kTreeLanes<Number>;
+  const TreePacks& packs = *trees.packs;
+  // Each loaded lane's two limbs as the pack's local nodes; the sources of the union of paths.
+  std::array<std::array<std::int32_t, 2>, kLanes> local{};
+  std::array<std::int32_t, 2 * kLanes> sources{};
+  std::size_t source_count = 0, first = kLanes;
+  for (std::size_t lane = 0; lane < kLanes; ++lane) {
+    if (paths[lane].limbs[0] < 0) continue;
+    first = std::min(first, lane);
+    for (std::size_t s = 0; s < 2; ++s) {
+      local[lane][s] = pack.local[packs.offset[static_cast<std::size_t>(paths[lane].limbs[s])]];
+      sources[source_count++] = local[lane][s];
+    }
+  }
+  if (first == kLanes) return;
+  // A component's slice of the scratch (the first loaded lane's: the pack's task owns it) holds
+  // the union, which has at most a component's nodes.
+  const TreeOrdering::Component& nodes = trees.elimination.ordering().components[static_cast<std::size_t>(pack.component[first])];
   const std::span<std::int32_t> room(trees.path_scratch.data() + nodes.begin, nodes.end - nodes.begin);
-  const std::span<const std::int32_t> path = room.first(pack.elimination.path_to_root(local, room));
-  // Every lane solves the paths (one lane's work costs what all of theirs do); only this lane's
-  // loads are non-zero, and only its answer is read.
+  const std::span<const std::int32_t> path = room.first(pack.elimination.path_to_root(std::span(sources.data(), source_count), room));
   for (const std::int32_t node : path) pack.elimination.work(static_cast<std::size_t>(node)) = Block<Lanes, 6, 1>::Zero();
-  // The load as lanes: the number in this lane, 0 in the others (a select, not a store into one
-  // lane of a stored batch, which the next load would wait on).
-  alignas(64) Number lane_index[kTreeLanes<Number>];
-  for (std::size_t k = 0; k < kTreeLanes<Number>; ++k) lane_index[k] = static_cast<Number>(k);
-  const auto this_lane = Lanes::load_aligned(lane_index) == Lanes(static_cast<Number>(lane));
-  for (std::size_t s = 0; s < 2; ++s) {
-    Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
-    for (int i = 0; i < 6; ++i) work(i, 0) += xsimd::select(this_lane, Lanes(static_cast<Number>(loads[s](i))), Lanes(Number(0)));
+  // Each lane's loads in its lane alone, 0 in the others (a select, not a store into one lane of
+  // a stored batch, which the next load would wait on); adding an exact 0 changes no lane's bits.
+  alignas(64) Number lane_index[kLanes];
+  for (std::size_t k = 0; k < kLanes; ++k) lane_index[k] = static_cast<Number>(k);
+  const Lanes index = Lanes::load_aligned(lane_index);
+  for (std::size_t lane = first; lane < kLanes; ++lane) {
+    if (paths[lane].limbs[0] < 0) continue;
+    const auto this_lane = index == Lanes(static_cast<Number>(lane));
+    for (std::size_t s = 0; s < 2; ++s) {
+      Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[lane][s]));
+      for (int i = 0; i < 6; ++i) work(i, 0) += xsimd::select(this_lane, Lanes(static_cast<Number>(paths[lane].load[s](i))), Lanes(Number(0)));
+    }
   }
   pack.elimination.solve_nodes(path);
-  std::array<Vector6, 2> motion;
-  for (std::size_t s = 0; s < 2; ++s) {
-    const Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[s]));
-    for (int i = 0; i < 6; ++i) motion[s](i) = get_lane(work(i, 0), lane);  // a store, then one of its lanes: forwarded
+  for (std::size_t lane = first; lane < kLanes; ++lane) {
+    if (paths[lane].limbs[0] < 0) continue;
+    for (std::size_t s = 0; s < 2; ++s) {
+      const Block<Lanes, 6, 1>& work = pack.elimination.work(static_cast<std::size_t>(local[lane][s]));
+      for (int i = 0; i < 6; ++i) paths[lane].motion[s](i) = get_lane(work(i, 0), lane);  // a store, then one of its lanes: forwarded
+    }
   }
-  return motion;
 }
 
 #define LIMBER_INSTANTIATE(Number)                                                                                         \
   template void build_tree_packs<Number>(JointTrees&, std::size_t);                                                       \
   template void eliminate_pack<Number>(JointTrees&, TreePack<Number>&, const LaneMask&, bool);                           \
   template void solve_pack<Number>(JointTrees&, TreePack<Number>&, const LaneMask&);                                     \
-  template std::array<Vector6, 2> solve_pack_path<Number>(JointTrees&, std::uint32_t, const std::array<std::int32_t, 2>&, \
-                                                          const std::array<Vector6, 2>&);
+  template void solve_pack_paths<Number>(JointTrees&, TreePack<Number>&, std::span<PathLoad, kTreeLanes<Number>>);
 LIMBER_INSTANTIATE(float)
 LIMBER_INSTANTIATE(double)
 #undef LIMBER_INSTANTIATE

@@ -22,6 +22,7 @@
 
 #include <array>
 #include <cstdint>
+#include <span>
 #include <type_traits>
 #include <vector>
 
@@ -89,7 +90,7 @@ void build_tree_packs(JointTrees& trees, std::size_t lanes = kTreeLanes<Number>)
 /// writes each one's solution into its nodes' work(); with `mobility`, each one's limbs' blocks
 /// of the inverse too (TreeElimination::inverse_diagonal) into trees.mobility. The other lanes
 /// solve an identity system and write nothing. The pack keeps the factor for solve_pack() and
-/// solve_pack_path() until its next eliminate_pack(). In float the inputs are rounded to float
+/// solve_pack_paths() until its next eliminate_pack(). In float the inputs are rounded to float
 /// and the answers widened back.
 template <typename Number>
 void eliminate_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes, bool mobility = false);
@@ -99,11 +100,18 @@ void eliminate_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& l
 template <typename Number>
 void solve_pack(JointTrees& trees, TreePack<Number>& pack, const LaneMask& lanes);
 
-/// The response of component `component` (its pack's factor, in Number's packs) to the loads
-/// loads[s] (6-vectors: force, torque) at its limbs limbs[s] alone, solved on the paths from them
-/// to the root (TreeElimination::solve_nodes); returns each limb's motion. O(the paths' nodes).
+/// One lane's loads for solve_pack_paths: 6-vectors (force, torque) at two limbs of its
+/// component, and the motion of those two limbs they make.
+struct PathLoad {
+  std::array<std::int32_t, 2> limbs{-1, -1};  ///< the limbs (scalar elimination's nodes); −1: no load in this lane
+  std::array<Eigen::Matrix<double, 6, 1>, 2> load{}, motion{};
+};
+
+/// The responses of the components of `pack`'s lanes (its factor) to their loads paths[lane]
+/// alone, solved together on the union of the paths from the loaded limbs to the root
+/// (TreeElimination::solve_nodes): each lane's motion is the bits it gets solved alone (the other
+/// lanes' nodes carry exact zeros in it). O(the union's nodes), once for the whole pack.
 template <typename Number>
-std::array<Eigen::Matrix<double, 6, 1>, 2> solve_pack_path(JointTrees& trees, std::uint32_t component, const std::array<std::int32_t, 2>& limbs,
-                                                           const std::array<Eigen::Matrix<double, 6, 1>, 2>& loads);
+void solve_pack_paths(JointTrees& trees, TreePack<Number>& pack, std::span<PathLoad, kTreeLanes<Number>> paths);
 
 }  // namespace limber
