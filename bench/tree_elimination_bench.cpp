@@ -7,10 +7,11 @@
 // Shapes: a ragdoll's tree (13 limbs as rigid bodies, 6 × 6 blocks; 12 joints of 5 rows — a
 // point and two limit or axis rows — padded as lanes need, one row count per joint); the
 // `Scene` rows: the ragdoll of tools/scenes/ragdoll.json (the pile's and the rain's) as the joint
-// trees compile it, each joint with its fixed rows (points, axes, a row per limit), 8 instances
-// whose blocks stay in cache, in double or float lanes — the floor of a tree step's elimination
-// stage (bench/ragdolls.md, "Where a tree step goes, against its floor", "Float lanes"); and a rope
-// (100 particles, 3 × 3 blocks; 100 distance constraints of one row, the first to the world).
+// trees compile it, each joint with its fixed rows (points, axes, a row per limit), as many
+// instances as a batch holds floats (8 with AVX2), whose blocks stay in cache, in double or
+// float lanes — the floor of a tree step's elimination stage (bench/ragdolls.md, "Where a tree
+// step goes, against its floor", "Float lanes"); and a rope (100 particles, 3 × 3 blocks; 100
+// distance constraints of one row, the first to the world).
 // Each iteration loads the inputs (a copy), factors and solves every instance: the time per
 // instance and per joint (counters `instance`, `joint`). The label says scalar or the lane
 // count (xsimd's widest batch for this build: 8 doubles on AVX-512, 4 on AVX2). The `Packed`
@@ -69,7 +70,7 @@ Shape scene_ragdoll() {
     shape.inboard.push_back(joint.limb_a), shape.outboard.push_back(joint.limb_b);
     shape.rows.push_back(static_cast<std::uint8_t>(joint.fixed_rows()));
   }
-  shape.instances = 8;
+  shape.instances = xsimd::batch<float>::size;  // one batch of floats, a multiple of every lane width; in cache
   return shape;
 }
 
