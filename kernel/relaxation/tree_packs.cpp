@@ -109,11 +109,9 @@ void build_tree_packs(JointTrees& trees, std::size_t lanes) {
     if (fresh) by_shape.emplace_back();
     by_shape[found->second].push_back(c);
   }
-  packs.pack_of.assign(components.size(), 0), packs.lane_of.assign(components.size(), 0);
   for (const std::vector<std::uint32_t>& group : by_shape) {
     for (std::size_t begin = 0; begin < group.size(); begin += lanes) {
       const std::size_t end = std::min(group.size(), begin + lanes);
-      for (std::size_t k = begin; k < end; ++k) packs.pack_of[group[k]] = static_cast<std::uint32_t>(built.size()), packs.lane_of[group[k]] = static_cast<std::uint32_t>(k - begin);
       built.push_back(make_pack<Number>(trees, std::vector<std::uint32_t>(group.begin() + static_cast<std::ptrdiff_t>(begin), group.begin() + static_cast<std::ptrdiff_t>(end))));
     }
   }

@@ -60,14 +60,13 @@ struct TreePack {
   TreeStageSeconds seconds;  ///< the same (profiled steps only)
 };
 
-/// The packs of a state in double or in float (the other list empty), and where each component
-/// and node is in them.
+/// The packs of a state in double or in float (the other list empty), and where each node is in
+/// its component.
 struct TreePacks {
   std::vector<TreePack<double>> doubles;
   std::vector<TreePack<float>> floats;
-  /// Per component: its pack and lane. Per node of the scalar elimination: its offset in its
-  /// component's slice of the order.
-  std::vector<std::uint32_t> pack_of, lane_of, offset;
+  /// Per node of the scalar elimination: its offset in its component's slice of the order.
+  std::vector<std::uint32_t> offset;
 
   template <typename Number>
   std::vector<TreePack<Number>>& packs() {

@@ -135,10 +135,8 @@ TEST(JointTrees, TheProfileCountsEachSolveAndItsNewtonSteps) {
   EXPECT_GT(profile.tree_staging, 0);
   EXPECT_GT(profile.tree_elimination, 0);
   EXPECT_GT(profile.tree_moves, 0);
-  EXPECT_GE(profile.tree_contacts, 0);
   EXPECT_LT(profile.tree_staging + profile.tree_elimination + profile.tree_moves + profile.tree_contacts, profile.relax);
   VerletState<double> unprofiled = compile<double>(ragdoll(100, true), tree_options());
-  EXPECT_EQ(joint_tree_counts(unprofiled).seconds.staging, 0);
   step(unprofiled);
   const TreeStageSeconds seconds = joint_tree_counts(unprofiled).seconds;
   EXPECT_EQ(seconds.staging + seconds.elimination + seconds.moves + seconds.contacts, 0);
