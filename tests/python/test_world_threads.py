@@ -118,8 +118,11 @@ def test_run_stops_after_the_step_that_passes_its_wall_limit_and_says_so():
     world = limber.World(limber.chain(links=2000), "weighted")
     result = world.run(10**9, wall_limit=0.2)
     assert result["stopped"] == "wall_limit"
-    assert result["status"] == "ok"
     assert 0 < result["steps"] < 10**9
+    # How far the chain gets in 0.2 s depends on the machine, and a long weighted chain turns
+    # "inaccurate" after enough steps: the status must be the one those steps give, not "ok".
+    replay = limber.World(limber.chain(links=2000), "weighted").run(result["steps"])
+    assert replay["stopped"] == "steps" and replay["status"] == result["status"]
     assert world.time == pytest.approx(result["steps"] * limber.chain(links=2000).time_step)
     whole = world.run(3)
     assert whole["stopped"] == "steps" and whole["steps"] == 3
