@@ -3,13 +3,23 @@
 // joints, 0.1 m slender links, at a fixed pseudo-random state. ns_per_link staying flat from 10 to
 // 10⁵ links shows the algorithm is O(n); the workspace is sized before timing, so the loop
 // allocates nothing.
+//
+// The Humanoid rows time, on MuJoCo's humanoid.xml (its tree as limber compiles it: 27
+// velocity coordinates), one articulated-body pass against the constraint-space alternative to
+// sequential impulses: the composite-rigid-body H, its LᵀDL factor in the tree's sparsity, the
+// Delassus matrix of 18 rows (6 contacts × 3, each on a foot's or hand's path to the root) and
+// one solve (kernel/featherstone/joint_space_factor.hpp).
 //   build/bench/featherstone_bench --benchmark_min_time=0.2
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
+#include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
+#include "limber/kernel/featherstone/joint_space_factor.hpp"
+#include "limber/kernel/scene/scene_file.hpp"
 
 namespace {
 
@@ -66,6 +76,69 @@ void forward_dynamics_on_chain(benchmark::State& bench, ArticulatedJoint joint) 
 void BM_ArticulatedBodyRevoluteChain(benchmark::State& bench) { forward_dynamics_on_chain(bench, ArticulatedJoint::revolute); }
 void BM_ArticulatedBodySphericalChain(benchmark::State& bench) { forward_dynamics_on_chain(bench, ArticulatedJoint::spherical); }
 
+// humanoid.xml's tree (Debian's libmujoco-samples), or an empty tree when it is not installed.
+ArticulatedTree humanoid_tree() {
+  const std::filesystem::path file = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+  if (!std::filesystem::exists(file)) return {};
+  return compile_featherstone(load_scene_file(file).model).tree;
+}
+
+void BM_HumanoidArticulatedBodyPass(benchmark::State& bench) {
+  const ArticulatedTree tree = humanoid_tree();
+  if (tree.body_count() == 0) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
+  const Eigen::VectorXd q = tree.neutral_positions(), v = Eigen::VectorXd::Constant(tree.velocity_count(), 0.1);
+  const Eigen::VectorXd tau = Eigen::VectorXd::Zero(tree.velocity_count());
+  DynamicsWorkspace workspace;
+  workspace.resize(tree);
+  Eigen::VectorXd accelerations(tree.velocity_count());
+  for (auto _ : bench) {
+    forward_dynamics(tree, q, v, tau, Eigen::Vector3d(0, 0, -9.81), workspace, accelerations);
+    benchmark::DoNotOptimize(accelerations.data());
+  }
+}
+
+void BM_HumanoidFactorAndDelassus(benchmark::State& bench) {
+  const ArticulatedTree tree = humanoid_tree();
+  if (tree.body_count() == 0) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
+  const int nv = tree.velocity_count();
+  const Eigen::VectorXd q = tree.neutral_positions();
+  // Rows on the paths of the tree's leaves' coordinates (the feet and hands), dense there.
+  JointSpaceFactor factor;
+  factor.assign(tree);
+  std::vector<int> leaves;
+  for (int i = nv - 1; i >= 0; --i) {
+    bool leaf = true;
+    for (int k = i + 1; k < nv; ++k) leaf = leaf && factor.parent(k) != i;
+    if (leaf) leaves.push_back(i);
+  }
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> entry(-1, 1);
+  constexpr int kContacts = 6;  // a leaf may take more than one (the humanoid has 4 leaves)
+  Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3 * kContacts, nv);
+  for (int c = 0; c < kContacts; ++c) {
+    for (int row = 0; row < 3; ++row) {
+      for (int k = leaves[static_cast<std::size_t>(c) % leaves.size()]; k >= 0; k = factor.parent(k)) jacobian(3 * c + row, k) = entry(rng);
+    }
+  }
+  DynamicsWorkspace workspace;
+  workspace.resize(tree);
+  Eigen::MatrixXd h, a, half;
+  Eigen::VectorXd x(nv);
+  for (auto _ : bench) {
+    mass_matrix(tree, q, workspace, h);
+    factor.factor(h);
+    factor.delassus(jacobian, a, half);
+    x.setOnes();
+    factor.solve(x);
+    benchmark::DoNotOptimize(a.data());
+    benchmark::DoNotOptimize(x.data());
+  }
+  bench.counters["rows"] = static_cast<double>(jacobian.rows());
+  bench.counters["coordinates"] = nv;
+}
+
+BENCHMARK(BM_HumanoidArticulatedBodyPass)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HumanoidFactorAndDelassus)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodyRevoluteChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodySphericalChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
 

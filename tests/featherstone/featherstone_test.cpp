@@ -30,6 +30,7 @@ using testing::random_inertia;
 using testing::random_positions;
 using testing::random_rotation;
 using testing::random_tree;
+using testing::random_tree_kinds;
 using testing::random_vector;
 using testing::RandomTreeOptions;
 using testing::uniform_vector;
@@ -185,18 +186,6 @@ TEST(ArticulatedTree, EachJointOwnsAContiguousSliceOfQAndV) {
 }
 
 // --- Dynamics on random trees ----------------------------------------------------------------------
-
-std::vector<RandomTreeOptions> random_tree_kinds() {
-  std::vector<RandomTreeOptions> kinds;
-  for (const bool branching : {false, true}) {
-    for (const bool floating_base : {false, true}) {
-      for (const int bodies : {1, 2, 7, 15}) kinds.push_back({.bodies = bodies, .branching = branching, .floating_base = floating_base});
-    }
-  }
-  kinds.push_back({.bodies = 10, .joints = {ArticulatedJoint::spherical}});
-  kinds.push_back({.bodies = 10, .branching = true, .joints = {ArticulatedJoint::revolute, ArticulatedJoint::fixed}});
-  return kinds;
-}
 
 TEST(Dynamics, ArticulatedBodyAlgorithmSolvesTheMassMatrixEquation) {
   std::mt19937 rng(10);

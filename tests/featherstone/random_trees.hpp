@@ -110,4 +110,18 @@ inline Eigen::VectorXd random_vector(std::mt19937& rng, int size, double magnitu
   return x;
 }
 
+/// Chains and branching trees of 1–15 bodies, with and without a floating base; a chain of
+/// spherical joints; a branching tree of revolute and fixed joints.
+inline std::vector<RandomTreeOptions> random_tree_kinds() {
+  std::vector<RandomTreeOptions> kinds;
+  for (const bool branching : {false, true}) {
+    for (const bool floating_base : {false, true}) {
+      for (const int bodies : {1, 2, 7, 15}) kinds.push_back({.bodies = bodies, .branching = branching, .floating_base = floating_base});
+    }
+  }
+  kinds.push_back({.bodies = 10, .joints = {ArticulatedJoint::spherical}});
+  kinds.push_back({.bodies = 10, .branching = true, .joints = {ArticulatedJoint::revolute, ArticulatedJoint::fixed}});
+  return kinds;
+}
+
 }  // namespace limber::testing

@@ -1,0 +1,125 @@
+#include "limber/kernel/featherstone/joint_space_factor.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace limber {
+
+std::vector<int> dof_parents(const ArticulatedTree& tree) {
+  std::vector<int> parent(static_cast<std::size_t>(tree.velocity_count()), -1);
+  // The last coordinate of each body's path to the root, its own included (−1: none).
+  std::vector<int> last(static_cast<std::size_t>(tree.body_count()), -1);
+  for (int b = 0; b < tree.body_count(); ++b) {
+    const int up = tree.body(b).parent;
+    int before = up < 0 ? -1 : last[static_cast<std::size_t>(up)];
+    const int offset = tree.velocity_offset(b);
+    for (int k = 0; k < joint_velocity_count(tree.body(b).joint); ++k) {
+      parent[static_cast<std::size_t>(offset + k)] = before;
+      before = offset + k;
+    }
+    last[static_cast<std::size_t>(b)] = before;
+  }
+  return parent;
+}
+
+void JointSpaceFactor::assign(const std::vector<int>& dof_parent) {
+  const auto n = static_cast<int>(dof_parent.size());
+  for (int i = 0; i < n; ++i) {
+    const int up = dof_parent[static_cast<std::size_t>(i)];
+    if (up < -1 || up >= i) {
+      throw std::invalid_argument("JointSpaceFactor: coordinate " + std::to_string(i) + "'s parent " + std::to_string(up) +
+                                  " is not before it (expected -1 <= parent < " + std::to_string(i) + ")");
+    }
+  }
+  parent_ = dof_parent;
+  begin_.assign(static_cast<std::size_t>(n) + 1, 0);
+  ancestor_.clear();
+  for (int i = 0; i < n; ++i) {
+    begin_[static_cast<std::size_t>(i)] = static_cast<int>(ancestor_.size());
+    for (int j = parent_[static_cast<std::size_t>(i)]; j >= 0; j = parent_[static_cast<std::size_t>(j)]) ancestor_.push_back(j);
+  }
+  begin_[static_cast<std::size_t>(n)] = static_cast<int>(ancestor_.size());
+  entries_.assign(ancestor_.size(), 0.0);
+  pivot_.assign(static_cast<std::size_t>(n), 0.0);
+}
+
+double JointSpaceFactor::lower(int i, int j) const {
+  for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
+    if (ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];
+  }
+  return 0.0;
+}
+
+void JointSpaceFactor::factor(const Eigen::Ref<const Eigen::MatrixXd>& h) {
+  const int n = size();
+  if (h.rows() != n || h.cols() != n) {
+    throw std::invalid_argument("JointSpaceFactor::factor: H is " + std::to_string(h.rows()) + " x " + std::to_string(h.cols()) +
+                                ", expected " + std::to_string(n) + " x " + std::to_string(n));
+  }
+  for (int i = 0; i < n; ++i) {
+    pivot_[static_cast<std::size_t>(i)] = h(i, i);
+    for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
+      entries_[static_cast<std::size_t>(e)] = h(i, ancestor_[static_cast<std::size_t>(e)]);
+    }
+  }
+  // Table 6.3, from the leaves in: coordinate k's row divides by its pivot and updates the rows
+  // of its ancestors (k's ancestors are each ancestor's own ancestors, nearest first, so the
+  // entry of i = ancestor e of k at its ancestor f of k sits at a fixed offset in i's row).
+  for (int k = n - 1; k >= 0; --k) {
+    const double d = pivot_[static_cast<std::size_t>(k)];
+    if (!(d > 0)) throw std::domain_error("JointSpaceFactor::factor: pivot of coordinate " + std::to_string(k) + " is " + std::to_string(d) + ", not > 0 (H is not positive definite)");
+    const int begin = begin_[static_cast<std::size_t>(k)], end = begin_[static_cast<std::size_t>(k) + 1];
+    for (int e = begin; e < end; ++e) {
+      const auto i = static_cast<std::size_t>(ancestor_[static_cast<std::size_t>(e)]);
+      const double h_ki = entries_[static_cast<std::size_t>(e)];
+      const double l_ki = h_ki / d;
+      pivot_[i] -= l_ki * h_ki;
+      // i's ancestors are k's after e, in the same order, at the start of i's row.
+      double* row_i = entries_.data() + begin_[i];
+      for (int f = e + 1; f < end; ++f) row_i[f - e - 1] -= l_ki * entries_[static_cast<std::size_t>(f)];
+      entries_[static_cast<std::size_t>(e)] = l_ki;
+    }
+  }
+}
+
+void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const {
+  // Lᵀ z = y, from the leaves in: z_k is final once every descendant has given its part.
+  for (int k = size() - 1; k >= 0; --k) {
+    const double y_k = y[k];
+    if (y_k == 0) continue;
+    for (int e = begin_[static_cast<std::size_t>(k)]; e < begin_[static_cast<std::size_t>(k) + 1]; ++e) {
+      y[ancestor_[static_cast<std::size_t>(e)]] -= entries_[static_cast<std::size_t>(e)] * y_k;
+    }
+  }
+}
+
+void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x) const {
+  if (x.size() != size()) throw std::invalid_argument("JointSpaceFactor::solve: x has " + std::to_string(x.size()) + " entries, expected " + std::to_string(size()));
+  solve_transposed_lower(x);
+  for (int i = 0; i < size(); ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
+  // L x = z, from the root out.
+  for (int i = 0; i < size(); ++i) {
+    double sum = x[i];
+    for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
+      sum -= entries_[static_cast<std::size_t>(e)] * x[ancestor_[static_cast<std::size_t>(e)]];
+    }
+    x[i] = sum;
+  }
+}
+
+void JointSpaceFactor::delassus(const Eigen::Ref<const Eigen::MatrixXd>& jacobian, Eigen::MatrixXd& a, Eigen::MatrixXd& half) const {
+  if (jacobian.cols() != size()) {
+    throw std::invalid_argument("JointSpaceFactor::delassus: the Jacobian has " + std::to_string(jacobian.cols()) + " columns, expected " + std::to_string(size()));
+  }
+  const auto m = jacobian.rows();
+  // Y = J L⁻¹, scaled by D^(-1/2) so that A = Y Yᵀ; stored transposed (nv × m) for its columns.
+  half = jacobian.transpose();
+  for (Eigen::Index r = 0; r < m; ++r) {
+    solve_transposed_lower(half.col(r));
+    for (int i = 0; i < size(); ++i) half(i, r) /= std::sqrt(pivot_[static_cast<std::size_t>(i)]);
+  }
+  a.noalias() = half.transpose() * half;
+}
+
+}  // namespace limber

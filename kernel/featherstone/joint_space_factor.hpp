@@ -1,0 +1,79 @@
+// The joint-space inertia matrix H factored as LᵀDL in the sparsity its tree induces, and the
+// Delassus matrix of constraint rows formed through that factor (Featherstone, "Rigid Body
+// Dynamics Algorithms", 2008, §6.5, Tables 6.3 and 6.4; MuJoCo's mj_factorM, mj_solveM).
+//
+// Number the velocity coordinates (dofs) so that each comes after the one before it on its path
+// to the root, λ(i) < i: a joint's own coordinates in order, each joint's after its parent
+// body's (the order ArticulatedTree's velocity offsets already have). H_ij is then zero unless i
+// and j lie on one path to the root (one is an ancestor of the other), and H = LᵀDL with L unit
+// lower triangular has L_ij ≠ 0 only for j an ancestor of i: the factor fills nothing in,
+// costs O(Σ_i depth_i²) and a solve O(Σ_i depth_i) — O(n) for a humanoid's shallow tree, where a
+// dense Cholesky costs O(n³).
+//
+// With Y = J L⁻¹ (one back-substitution per row, touching only the row's dofs and their
+// ancestors), the rows' Delassus matrix is A = J H⁻¹ Jᵀ = Y D⁻¹ Yᵀ: the constraint-space
+// inverse inertia that projected solvers work on (MuJoCo's engine_solver.c forms its
+// A = J M⁻¹ Jᵀ this way).
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "limber/config.hpp"  // the instruction set limber was built for; stops a mismatched build
+#include "limber/kernel/featherstone/articulated_tree.hpp"
+
+namespace limber {
+
+/// λ(i) for each velocity coordinate i of `tree` (nv entries): the coordinate before it on its
+/// path to the root — its joint's previous coordinate, else the last coordinate of the nearest
+/// ancestor body with any (a fixed joint has none), else −1. Every λ(i) < i.
+std::vector<int> dof_parents(const ArticulatedTree& tree);
+
+/// H = LᵀDL over a tree's coordinates (see above). Sized once by assign(); factor() and the
+/// solves allocate nothing.
+class JointSpaceFactor {
+ public:
+  /// Sizes the factor for coordinates with parents `dof_parent` (λ(i) < i, −1 for a root).
+  /// Throws std::invalid_argument when a parent is not before its coordinate.
+  void assign(const std::vector<int>& dof_parent);
+  void assign(const ArticulatedTree& tree) { assign(dof_parents(tree)); }
+
+  /// nv, the coordinates.
+  int size() const { return static_cast<int>(parent_.size()); }
+  /// λ(i).
+  int parent(int i) const { return parent_[static_cast<std::size_t>(i)]; }
+
+  /// Factors H (nv × nv, symmetric positive definite: the composite-rigid-body algorithm's
+  /// mass_matrix). Only H_ii and H_ij with j an ancestor of i are read (the rest are zero in a
+  /// joint-space inertia). O(Σ depth²). Throws std::invalid_argument for a wrong size and
+  /// std::domain_error naming the coordinate when a pivot D_i is not > 0 (H not positive
+  /// definite: a coordinate that moves no mass and has no armature).
+  void factor(const Eigen::Ref<const Eigen::MatrixXd>& h);
+
+  /// x ← H⁻¹ x (nv): x ← L⁻¹ D⁻¹ L⁻ᵀ x. O(Σ depth).
+  void solve(Eigen::Ref<Eigen::VectorXd> x) const;
+
+  /// y ← L⁻ᵀ y (nv), the first half of solve(): for a row j of a Jacobian (1 × nv), y = jᵀ
+  /// becomes (j L⁻¹)ᵀ, non-zero only on j's coordinates and their ancestors.
+  void solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const;
+
+  /// The Delassus matrix A = J H⁻¹ Jᵀ (m × m, symmetric positive semi-definite; written to `a`,
+  /// resized) of the rows of `jacobian` (m × nv, velocity coordinates to constraint rates), as
+  /// Y D⁻¹ Yᵀ with Y = J L⁻¹. `half` is scratch (nv × m afterwards: (Y D^(−1/2))ᵀ). O(m·Σ depth + m²·nv).
+  void delassus(const Eigen::Ref<const Eigen::MatrixXd>& jacobian, Eigen::MatrixXd& a, Eigen::MatrixXd& half) const;
+
+  /// D_i, the pivots (> 0 once factored).
+  double pivot(int i) const { return pivot_[static_cast<std::size_t>(i)]; }
+  /// L_ij for j an ancestor of i (j = λ(i), λ(λ(i)), …); 0 for any other j < i.
+  double lower(int i, int j) const;
+
+ private:
+  std::vector<int> parent_;      // λ
+  std::vector<int> begin_;       // per coordinate: its ancestors' entries in entries_, nearest first (nv + 1)
+  std::vector<int> ancestor_;    // the ancestors j of each coordinate i, nearest first
+  std::vector<double> entries_;  // H_ij, then L_ij, for those (i, j)
+  std::vector<double> pivot_;    // H_ii, then D_i
+};
+
+}  // namespace limber
