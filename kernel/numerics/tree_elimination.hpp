@@ -106,8 +106,6 @@ class TreeElimination {
   std::size_t node_count() const { return ordering_.parent.size(); }
   std::int32_t body_count() const { return body_count_; }
   int rows(std::size_t constraint) const { return rows_[constraint]; }
-  /// Changes a constraint's row count (1…BodySize) before an eliminate(): an active set.
-  void set_rows(std::size_t constraint, int rows) { rows_[constraint] = static_cast<std::uint8_t>(rows); }
 
   /// Inputs, set before eliminate() for every node of the components solved: a body's block of M
   /// (its lower triangle is read), a constraint's −A in the top-left rows × rows corner (zero for

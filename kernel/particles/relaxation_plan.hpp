@@ -208,8 +208,8 @@ struct JointTrees {
     bool point = false;
     std::int32_t align_row = -1;
     Eigen::Vector3d t1 = Eigen::Vector3d::Zero(), t2 = Eigen::Vector3d::Zero(), e = Eigen::Vector3d::Zero();
-    /// Its limits (swing, twist, hinge range): slots of `limits` (−1: none), rows of the active
-    /// set only while reached.
+    /// Its limits (swing, twist, hinge range): slots of `limits` (−1: none), each a row of the
+    /// joint's at limit_row(k) whether reached or not (decoupled while idle: fixed_rows).
     std::array<std::int32_t, 2> limit{-1, -1};
     /// The point's and axis' rows.
     int rows() const { return (point ? 3 : 0) + (align_row >= 0 ? 2 : 0); }
