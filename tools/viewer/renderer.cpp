@@ -237,9 +237,15 @@ void describe_vertices() {
   glEnableVertexAttribArray(1);
 }
 
+}  // namespace
+
+// Outside the anonymous namespace: Renderer::Gl holds two (g++ warns of a member of an
+// anonymous-namespace type once the file shares a unity batch).
 struct Framebuffer {
   GLuint id = 0, colour = 0, depth_stencil = 0;
 };
+
+namespace {
 
 void destroy(Framebuffer& framebuffer) {
   glDeleteFramebuffers(1, &framebuffer.id);
