@@ -329,16 +329,29 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.drag_force.assign(tree_size, SpatialVector::Zero());
   JointSpaceContactScratch& contact = state.contact;
   contact.articulated.resize(tree);
-  contact.zero_velocities.setZero(nv), contact.zero_forces.setZero(nv), contact.unused_accelerations.setZero(nv);
+  contact.zero_velocities.setZero(nv);
   contact.spatial_impulse.assign(tree_size, SpatialVector::Zero());
   contact.body_change.assign(tree_size, SpatialVector::Zero());
-  contact.body_displacement.assign(tree_size, SpatialVector::Zero());
   contact.body_momentum.assign(tree_size, SpatialVector::Zero());
   contact.generalized_momentum.setZero(nv);
   contact.joint_bias.setZero(nv), contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
   contact.joint_impulse.setZero(nv);
   contact.contact_matrix.reserve(state.contacts.capacity());
   contact.push.reserve(state.contacts.capacity());
+  contact.inertia.assign(tree), contact.factor.assign(tree), contact.held.assign(tree);
+  contact.composite.resize(tree);
+  contact.response.setZero(nv);
+  // A contact's rows hold the coordinates of two paths to the root: at most twice the deepest.
+  std::vector<int> depth(static_cast<std::size_t>(nv), 0);
+  int deepest = 0;
+  for (int i = 0; i < nv; ++i) {
+    const int parent = contact.factor.parent(i);
+    depth[static_cast<std::size_t>(i)] = parent < 0 ? 1 : depth[static_cast<std::size_t>(parent)] + 1;
+    deepest = std::max(deepest, depth[static_cast<std::size_t>(i)]);
+  }
+  contact.row_begin.reserve(state.contacts.capacity() + 1);
+  contact.row_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
+  contact.row_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
 
   JointControlScratch& controls = state.controls;
   controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);

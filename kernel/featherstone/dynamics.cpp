@@ -1,5 +1,7 @@
 #include "limber/kernel/featherstone/dynamics.hpp"
 
+#include "limber/kernel/featherstone/joint_space_factor.hpp"
+
 #include "limber/kernel/numerics/small_cholesky.hpp"
 
 #include <cmath>
@@ -285,15 +287,15 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
   }
 }
 
-void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
-                 Eigen::MatrixXd& joint_space_inertia) {
-  require_size(q.size(), tree.position_count(), "mass_matrix: q");
-  if (!workspace.fits(tree)) workspace.resize(tree);
-  const int nv = tree.velocity_count();
-  joint_space_inertia.setZero(nv, nv);
-  DynamicsWorkspace& w = workspace;
-  const int n = tree.body_count();
+namespace {
 
+// The composite-rigid-body algorithm (Table 6.2): calls store(row, column, H_row,column) once for
+// each entry with `row` an earlier coordinate of the column's own joint or of an ancestor's, or
+// the column itself (the upper triangle of H by block, as ancestors come first; the armature on
+// the diagonal included). Every other entry of H is zero.
+template <typename Store>
+void composite_inertia(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& w, Store&& store) {
+  const int n = tree.body_count();
   // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ.
   for (int i = 0; i < n; ++i) {
     const auto index = static_cast<std::size_t>(i);
@@ -308,6 +310,7 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   }
   // For each joint's column of unit motions: F = I^c_i S_i, H_ii = S_iᵀ F; then F is carried
   // inward to each ancestor j, H_ji = S_jᵀ F (= H_ijᵀ).
+  double projected[6];
   for (int i = n - 1; i >= 0; --i) {
     const ArticulatedBody& body = tree.body(i);
     const int k = joint_velocity_count(body.joint);
@@ -315,24 +318,39 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
     for (int c = 0; c < k; ++c) {
       double unit[6] = {0, 0, 0, 0, 0, 0};
       unit[c] = 1;
-      double* h_column = joint_space_inertia.col(column + c).data();
       SpatialVector f = w.articulated_inertia[static_cast<std::size_t>(i)] * joint_velocity(body, unit);
-      project_force(body, f, h_column + column);
+      project_force(body, f, projected);
+      for (int r = 0; r <= c; ++r) store(column + r, column + c, projected[r] + (r == c ? body.armature : 0.0));
       for (int j = i; tree.body(j).parent >= 0;) {
         f = w.parent_to_body[static_cast<std::size_t>(j)].transpose_apply_force(f);
         j = tree.body(j).parent;
-        project_force(tree.body(j), f, h_column + tree.velocity_offset(j));
+        project_force(tree.body(j), f, projected);
+        for (int r = 0; r < joint_velocity_count(tree.body(j).joint); ++r) store(tree.velocity_offset(j) + r, column + c, projected[r]);
       }
     }
   }
-  // Ancestors come first, so the loop filled the diagonal blocks and the upper triangle; the
-  // lower triangle is its mirror. The armatures add to the diagonal.
-  for (int i = 0; i < n; ++i) {
-    if (tree.body(i).armature > 0) joint_space_inertia(tree.velocity_offset(i), tree.velocity_offset(i)) += tree.body(i).armature;
-  }
-  for (int column = 0; column < nv; ++column) {
-    for (int row = column + 1; row < nv; ++row) joint_space_inertia(row, column) = joint_space_inertia(column, row);
-  }
+}
+
+}  // namespace
+
+void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
+                 Eigen::MatrixXd& joint_space_inertia) {
+  require_size(q.size(), tree.position_count(), "mass_matrix: q");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  const int nv = tree.velocity_count();
+  joint_space_inertia.setZero(nv, nv);
+  composite_inertia(tree, q, workspace, [&](int row, int column, double value) {
+    joint_space_inertia(row, column) = value;
+    joint_space_inertia(column, row) = value;
+  });
+}
+
+void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
+                 JointSpaceFactor& factor) {
+  require_size(q.size(), tree.position_count(), "mass_matrix: q");
+  require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  composite_inertia(tree, q, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
 }
 
 }  // namespace limber

@@ -92,4 +92,12 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
                  Eigen::MatrixXd& joint_space_inertia);
 
+class JointSpaceFactor;
+/// The same H written into `factor`'s sparsity (joint_space_factor.hpp: only the entries on each
+/// coordinate's path to the root, the rest being zero), ready for factor.factor(). O(n·depth);
+/// allocates nothing once the workspace is sized. Throws std::invalid_argument when the factor
+/// is not assigned to this tree's coordinates.
+void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
+                 JointSpaceFactor& factor);
+
 }  // namespace limber

@@ -34,6 +34,7 @@
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/integration.hpp"
+#include "limber/kernel/featherstone/joint_space_factor.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/options.hpp"
@@ -45,20 +46,32 @@ namespace limber {
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
 /// compile so a step allocates nothing.
 struct JointSpaceContactScratch {
-  /// Articulated-body inertias at the contact configuration (ABA's U_i, D_i⁻¹ with v = 0, g = 0).
+  /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
   DynamicsWorkspace articulated;
-  Eigen::VectorXd zero_velocities, zero_forces, unused_accelerations;  ///< nv
+  Eigen::VectorXd zero_velocities;             ///< nv
   std::vector<SpatialVector> spatial_impulse;  ///< per tree body: the impulse on it, then ABA's p (body coordinates)
   std::vector<SpatialVector> body_change;      ///< per tree body: the change of its spatial velocity (or displacement)
   Eigen::VectorXd joint_bias;                  ///< nv: ABA's u_i = −S_iᵀ p_i of the impulse
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
-  std::vector<SpatialVector> body_displacement;  ///< per tree body: the push-out's spatial displacement
   std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K, world impulse at p → relative velocity at p
   std::vector<double> push;                      ///< per contact: accumulated push-out "impulse", kg·m
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
+  // The contacts' responses through the factor (joint_space_contacts.hpp, "Responses").
+  JointSpaceFactor inertia;                      ///< H at the contact configuration, in the factor's sparsity (not factored)
+  JointSpaceFactor factor;                       ///< its LᵀDL
+  JointSpaceFactor held;                         ///< the limit rows': H with the held rows' penalties, factored per island
+  DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch
+  /// Per contact: where its entries start in row_coordinate and row_value (contacts + 1).
+  std::vector<int> row_begin;
+  /// The contacts' rows J_c on the coordinates of their bodies' paths to the root: each entry a
+  /// coordinate and the three rows' values there (J_c v: the world x, y, z of the relative
+  /// velocity of the contact's points, a's minus b's; b's path entered negated).
+  std::vector<int> row_coordinate;
+  std::vector<Eigen::Vector3d> row_value;
+  Eigen::VectorXd response;                      ///< nv: one impulse's H⁻¹ J_cᵀ ι, on its islands' coordinates
 };
 
 /// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).

@@ -14,31 +14,105 @@ using namespace joint_space;
 
 // --- Contacts ------------------------------------------------------------------------------------
 
-// Contact matrices K (three unit test impulses each), approach speeds, and e = 0 for resting
-// contacts. Needs the articulated inertias at the current q.
+// Contact c's rows J_c (joint_space_contacts.hpp, "Responses"): for each of its tree bodies, the
+// generalized impulses of unit world impulses along x, y, z at its point — the spatial impulses
+// carried from the body to the root, τ_k = S_kᵀ f on every joint k on the way (Table 5.1's inward
+// pass) — b's negated.
+void contact_rows(FeatherstoneState& state, const RigidContact& contact) {
+  JointSpaceContactScratch& s = state.contact;
+  const ArticulatedTree& tree = state.tree;
+  for (const std::int32_t scene_body : {contact.a, contact.b}) {
+    if (scene_body < 0) continue;  // a plane
+    const double sign = scene_body == contact.a ? 1.0 : -1.0;
+    int i = state.tree_body[scene_body];
+    const PluckerTransform& world_to_body = state.kinematics.world_to_body[static_cast<std::size_t>(i)];
+    SpatialVector f[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      const Eigen::Vector3d impulse = sign * Eigen::Vector3d::Unit(axis);
+      f[axis] << world_to_body.rotation * (contact.point - world_to_body.translation).cross(impulse), world_to_body.rotation * impulse;
+    }
+    for (;;) {
+      const ArticulatedBody& body = tree.body(i);
+      with_degrees_of_freedom(body.joint, [&](auto dofs) {
+        constexpr int k = decltype(dofs)::value;
+        if constexpr (k > 0) {
+          Eigen::Matrix<double, k, 1> on_joint[3];
+          for (int axis = 0; axis < 3; ++axis) on_joint[axis] = project_on_joint<k>(body, f[axis]);
+          for (int r = 0; r < k; ++r) {
+            s.row_coordinate.push_back(tree.velocity_offset(i) + r);
+            s.row_value.emplace_back(on_joint[0][r], on_joint[1][r], on_joint[2][r]);
+          }
+        }
+      });
+      if (body.parent < 0) break;
+      for (SpatialVector& force : f) force = state.kinematics.parent_to_body[static_cast<std::size_t>(i)].transpose_apply_force(force);
+      i = body.parent;
+    }
+  }
+  s.row_begin.push_back(static_cast<int>(s.row_coordinate.size()));
+}
+
+// J_c x: the relative motion of contact c's points (m/s for velocities x = v, m for a push-out's
+// displacement).
+Eigen::Vector3d contact_motion(const JointSpaceContactScratch& s, std::size_t c, const Eigen::VectorXd& x) {
+  Eigen::Vector3d motion = Eigen::Vector3d::Zero();
+  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) motion += s.row_value[static_cast<std::size_t>(e)] * x[s.row_coordinate[static_cast<std::size_t>(e)]];
+  return motion;
+}
+
+// The impulse +ι on a and −ι on b at contact c's point: x += H⁻¹ J_cᵀ ι (x: v, or the push-out's
+// displacement) on the contact's islands, through the factor; returns the change of the
+// contact's relative motion, J_c H⁻¹ J_cᵀ ι.
+Eigen::Vector3d respond(FeatherstoneState& state, std::size_t c, const Eigen::Vector3d& impulse, Eigen::VectorXd* x) {
+  JointSpaceContactScratch& s = state.contact;
+  const RigidContact& contact = state.contacts[c];
+  const std::size_t island_a = state.island_of_body[contact.a];
+  const std::size_t island_b = contact.b < 0 ? island_a : state.island_of_body[contact.b];
+  const auto range = [&](std::size_t island, auto&& visit) {
+    const auto [first, last] = island_velocities(state, island);
+    visit(first, last);
+  };
+  const auto each_island = [&](auto&& visit) {
+    range(island_a, visit);
+    if (island_b != island_a) range(island_b, visit);
+  };
+  each_island([&](int first, int last) { s.response.segment(first, last - first).setZero(); });
+  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) s.response[s.row_coordinate[static_cast<std::size_t>(e)]] += s.row_value[static_cast<std::size_t>(e)].dot(impulse);
+  each_island([&](int first, int last) {
+    s.factor.solve(s.response, first, last);
+    if (x) x->segment(first, last - first) += s.response.segment(first, last - first);
+  });
+  return contact_motion(s, c, s.response);
+}
+
+// The contacts' rows, their matrices K = J_c H⁻¹ J_cᵀ (three responses each), approach speeds,
+// and e = 0 for resting contacts. Needs the factor at the current q.
 void prepare_contacts(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
+  s.row_begin.assign(1, 0);
+  s.row_coordinate.clear(), s.row_value.clear();
+  for (const RigidContact& contact : state.contacts) contact_rows(state, contact);
   s.contact_matrix.resize(state.contacts.size());
   for (std::size_t c = 0; c < state.contacts.size(); ++c) {
     RigidContact& contact = state.contacts[c];
     Eigen::Matrix3d& k = s.contact_matrix[c];
-    for (int axis = 0; axis < 3; ++axis) k.col(axis) = respond(state, contact, Eigen::Vector3d::Unit(axis), nullptr);
+    for (int axis = 0; axis < 3; ++axis) k.col(axis) = respond(state, c, Eigen::Vector3d::Unit(axis), nullptr);
     k = 0.5 * (k + k.transpose()).eval();  // symmetric in exact arithmetic
-    record_approach(contact, -relative_motion(state, contact, state.kinematics.velocity).dot(contact.normal), state.settings, dt);
+    record_approach(contact, -contact_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
   }
 }
 
 // Sequential impulses (joint_space_contacts.hpp, "Impulses"), the contacts' and the limit rows'.
+// Leaves state.kinematics' body velocities those of the new v.
 void impulse_passes(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  const ResponseTarget velocities{&state.v, &state.kinematics.velocity};
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool applied = false;  // a pass that applies nothing leaves nothing for the next
     for (std::size_t c = 0; c < state.contacts.size(); ++c) {
       const RigidContact& contact = state.contacts[c];
       const Eigen::Matrix3d& k = s.contact_matrix[c];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = relative_motion(state, contact, state.kinematics.velocity);
+      const Eigen::Vector3d relative = contact_motion(s, c, state.v);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -52,7 +126,7 @@ void impulse_passes(FeatherstoneState& state, double dt) {
         const double tangent_inverse_mass = tangent.dot(k * tangent);
         if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
       }
-      respond(state, contact, impulse, &velocities);
+      respond(state, c, impulse, &state.v);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
@@ -60,15 +134,14 @@ void impulse_passes(FeatherstoneState& state, double dt) {
     if (solve_limit_rows(state, dt, /*position=*/false)) applied = true;
     if (!applied) break;
   }
+  forward_kinematics(state.tree, state.q, state.v, state.kinematics);
 }
 
 // The position pass (joint_space_contacts.hpp, "Penetration").
 void push_out(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   s.displacement.setZero();
-  for (SpatialVector& d : s.body_displacement) d.setZero();
   s.push.assign(state.contacts.size(), 0.0);  // within the capacity reserved at compile
-  const ResponseTarget displacements{&s.displacement, &s.body_displacement};
   bool moved = false;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool pushed = false;
@@ -77,13 +150,13 @@ void push_out(FeatherstoneState& state, double dt) {
       const double target = push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = relative_motion(state, contact, s.body_displacement).dot(contact.normal);
+      const double done = contact_motion(s, c, s.displacement).dot(contact.normal);
       if (std::abs(target - done) <= kPushTolerance * target) continue;
       const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
       const double change = push - s.push[c];
       if (change == 0) continue;
       s.push[c] = push;
-      respond(state, contact, change * contact.normal, &displacements);
+      respond(state, c, change * contact.normal, &s.displacement);
       moved = pushed = true;
     }
     if (solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
@@ -114,7 +187,9 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
   find_limit_rows(state, dt);
   if (state.contacts.empty() && state.controls.rows.empty()) return false;
   JointSpaceContactScratch& s = state.contact;
-  forward_dynamics(state.tree, state.q, s.zero_velocities, s.zero_forces, Eigen::Vector3d::Zero(), s.articulated, s.unused_accelerations);
+  mass_matrix(state.tree, state.q, s.composite, s.inertia);
+  s.factor = s.inertia;  // the same sizes: no allocation
+  s.factor.factor();
   prepare_contacts(state, dt);
   measure_limit_rows(state);
   return true;

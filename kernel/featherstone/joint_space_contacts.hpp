@@ -1,30 +1,29 @@
 // Contacts of the Featherstone method, answered through the joint-space inertia: the impulsive
-// form of the equations of motion, H·Δv = Jᵀι (Featherstone 2008, chapter 11, impact), solved by
-// the articulated-body algorithm instead of forming H — an impulse on one link moves the whole
-// tree, at O(n) (Mirtich 1996, "Impulse-based dynamic simulation of rigid body systems", PhD
-// thesis, Berkeley, which also measures an articulated body's collision matrix with test
-// impulses; Kokkevis 2004, "Practical physics for articulated characters", GDC).
+// form of the equations of motion, H·Δv = Jᵀι (Featherstone 2008, chapter 11, impact) — an
+// impulse on one link moves the whole tree (Mirtich 1996, "Impulse-based dynamic simulation of
+// rigid body systems", PhD thesis, Berkeley; Kokkevis 2004, "Practical physics for articulated
+// characters", GDC).
 //
 // The contacts are found on the rigid bodies the state keeps beside (q, v)
 // (detect_rigid_contacts, kernel/collision/rigid_contacts.hpp): body a touches body b (b: a
 // plane, or another body) at p with normal n from b to a. Their response:
 //
-// Impulse response. A world impulse J at p on tree body i is a spatial impulse
-// f = (E((p − r) × J), E J) in the body's frame (E: world → body rotation, r: the body's origin).
-// Its generalized impulse τ = Jᵀ f (nv) is what propagating f to the root collects,
-// τ_k = S_kᵀ f on every joint k between i and the root; the joint velocities change by
-// Δv = H⁻¹ τ. Neither H nor Jᵀ is formed: Δv is the articulated-body algorithm (Table 7.1) run
-// with v = 0, g = 0, τ = 0 and f as an external force — its bias terms vanish, so its inward
-// pass is p_i = −f_i, u_i = −S_iᵀ p_i, p_λ += λX_i*(p_i + U_i D_i⁻¹ u_i) and its outward pass
-// Δv_i = D_i⁻¹(u_i − U_iᵀ ⁱX_λ Δa_λ), Δa_i = ⁱX_λ Δa_λ + S_i Δv_i gives every body's spatial
-// velocity change Δa_i as well. The articulated inertias I^A, U, D⁻¹ depend on q only: computed
-// once per step (one ABA with v = 0), each impulse then costs O(bodies of its island).
+// Responses. Once a step, the composite-rigid-body algorithm writes H into the sparsity of its
+// tree and it is factored as LᵀDL (joint_space_factor.hpp; MuJoCo's mj_crb and mj_factorM). A
+// contact's rows J_c (3 × nv: the world x, y, z of the relative velocity of its points, a's minus
+// b's) are the generalized impulses of unit world impulses at p, carried from each body to the
+// root (τ_k = S_kᵀ f on every joint k on the way, Table 5.1's inward pass): non-zero only on the
+// two bodies' paths. An impulse ι (+ι on a, −ι on b) changes the joint velocities by
+// Δv = H⁻¹ J_cᵀ ι, one solve with the factor on the contact's islands, and the contact's
+// relative velocity is J_c v. The factor's solve costs O(Σ depth) over an island's coordinates;
+// the articulated-body algorithm's impulse response with v = 0, g = 0, which answered each impulse
+// before, gives the same Δv at several times the work (on humanoid.xml the step ran 2.0× faster
+// with the factor, bench/models.md).
 //
-// Per contact, its collision matrix K (3×3, world: the change of the relative velocity
-// v_a(p) − v_b(p) per unit impulse +J on a and −J on b) is measured once per step with three
-// unit impulses: K = J_c H⁻¹ J_cᵀ for the contact's three rows J_c, symmetric positive
-// semi-definite; its normal-normal entry is the contact's effective inverse mass
-// 1/(J_n H⁻¹ J_nᵀ).
+// Per contact, its collision matrix K = J_c H⁻¹ J_cᵀ (3×3, world: the change of the relative
+// velocity v_a(p) − v_b(p) per unit impulse +J on a and −J on b) is measured once per step with
+// three unit impulses, symmetric positive semi-definite; its normal-normal entry is the contact's
+// effective inverse mass 1/(J_n H⁻¹ J_nᵀ).
 //
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
@@ -59,17 +58,18 @@
 // a = c) — each carried onto the joint's velocity coordinates (ω of
 // the tree child relative to its parent, child frame). A row joins the contacts' passes, after
 // the integrator, when it is violated or within 0.02 (rad or m) plus two steps of its approach of
-// its limit: an accumulated impulse λ ≥ 0 along the row through the articulated inertia keeps
+// its limit: an accumulated impulse λ ≥ 0 along the row through H⁻¹ keeps
 // row·v ≥ −max(C, 0)/Δt — restitution 0, and a limit not yet reached lets the joint arrive at it
 // exactly at the step's end (Catto's speculative contacts). Then the push-out takes the rows
 // with the contacts: a violation is pushed out in full (it is always the solver's: the Model's
 // poses are inside every limit), and a row inside its limit is not pushed past it. In each pass
 // an island's rows are solved together, after its contacts (joint_space_limits.cpp, "Holding
-// rows"): the rows held get a penalty 10⁶ times their effective mass on their joint's D_i in the
-// articulated-body factorization, which is exactly the response to joint impulses along them
-// and leaves them within round-off of their targets after one refinement; rows that would pull
-// are released, rows pushed past are held (an active set, at most 8 rounds). One by one,
-// Gauss–Seidel took hundreds of passes on neighbouring joints at their limits.
+// rows"): the rows held get a penalty 10⁶ times their effective mass on their joint's block of H
+// (H + Σ M·d·dᵀ, the island's coordinates factored again as LᵀDL), which is exactly the response
+// to joint impulses along them and leaves them within round-off of their targets after one
+// refinement; rows that would pull are released, rows pushed past are held (an active set, at
+// most 8 rounds). One by one, Gauss–Seidel took hundreds of passes on neighbouring joints at
+// their limits.
 //
 // Drives and friction, before the integrator (joint_control_forces), as forces held over the
 // step: a drive is the stable PD of Tan, Liu & Turk (2011, "Stable proportional-derivative

@@ -1,5 +1,6 @@
 #include "limber/kernel/featherstone/joint_space_factor.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -63,10 +64,33 @@ void JointSpaceFactor::factor(const Eigen::Ref<const Eigen::MatrixXd>& h) {
       entries_[static_cast<std::size_t>(e)] = h(i, ancestor_[static_cast<std::size_t>(e)]);
     }
   }
+  factor();
+}
+
+double& JointSpaceFactor::inertia(int i, int j) {
+  if (j == i) return pivot_[static_cast<std::size_t>(i)];
+  for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
+    if (ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];
+  }
+  throw std::invalid_argument("JointSpaceFactor: coordinate " + std::to_string(j) + " is not on coordinate " + std::to_string(i) + "'s path to the root");
+}
+
+void JointSpaceFactor::set_inertia(int i, int j, double value) { inertia(i, j) = value; }
+void JointSpaceFactor::add_inertia(int i, int j, double value) { inertia(i, j) += value; }
+
+void JointSpaceFactor::copy_inertia(const JointSpaceFactor& from, int first, int last) {
+  const auto entry = [&](int i) { return static_cast<std::ptrdiff_t>(begin_[static_cast<std::size_t>(i)]); };
+  std::copy(from.entries_.begin() + entry(first), from.entries_.begin() + entry(last), entries_.begin() + entry(first));
+  std::copy(from.pivot_.begin() + first, from.pivot_.begin() + last, pivot_.begin() + first);
+}
+
+void JointSpaceFactor::factor() { factor(0, size()); }
+
+void JointSpaceFactor::factor(int first, int last) {
   // Table 6.3, from the leaves in: coordinate k's row divides by its pivot and updates the rows
   // of its ancestors (k's ancestors are each ancestor's own ancestors, nearest first, so the
   // entry of i = ancestor e of k at its ancestor f of k sits at a fixed offset in i's row).
-  for (int k = n - 1; k >= 0; --k) {
+  for (int k = last - 1; k >= first; --k) {
     const double d = pivot_[static_cast<std::size_t>(k)];
     if (!(d > 0)) throw std::domain_error("JointSpaceFactor::factor: pivot of coordinate " + std::to_string(k) + " is " + std::to_string(d) + ", not > 0 (H is not positive definite)");
     const int begin = begin_[static_cast<std::size_t>(k)], end = begin_[static_cast<std::size_t>(k) + 1];
@@ -83,29 +107,41 @@ void JointSpaceFactor::factor(const Eigen::Ref<const Eigen::MatrixXd>& h) {
   }
 }
 
-void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const {
-  // Lᵀ z = y, from the leaves in: z_k is final once every descendant has given its part.
-  for (int k = size() - 1; k >= 0; --k) {
+namespace {
+
+// Lᵀ z = y on coordinates first…last − 1 (whole subtrees), from the leaves in: z_k is final once
+// every descendant has given its part.
+void transposed_lower_solve(const std::vector<int>& begin, const std::vector<int>& ancestor, const std::vector<double>& entries,
+                            Eigen::Ref<Eigen::VectorXd> y, int first, int last) {
+  for (int k = last - 1; k >= first; --k) {
     const double y_k = y[k];
     if (y_k == 0) continue;
-    for (int e = begin_[static_cast<std::size_t>(k)]; e < begin_[static_cast<std::size_t>(k) + 1]; ++e) {
-      y[ancestor_[static_cast<std::size_t>(e)]] -= entries_[static_cast<std::size_t>(e)] * y_k;
+    for (int e = begin[static_cast<std::size_t>(k)]; e < begin[static_cast<std::size_t>(k) + 1]; ++e) {
+      y[ancestor[static_cast<std::size_t>(e)]] -= entries[static_cast<std::size_t>(e)] * y_k;
     }
   }
 }
 
-void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x) const {
-  if (x.size() != size()) throw std::invalid_argument("JointSpaceFactor::solve: x has " + std::to_string(x.size()) + " entries, expected " + std::to_string(size()));
-  solve_transposed_lower(x);
-  for (int i = 0; i < size(); ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
+}  // namespace
+
+void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const { transposed_lower_solve(begin_, ancestor_, entries_, y, 0, size()); }
+
+void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
+  transposed_lower_solve(begin_, ancestor_, entries_, x, first, last);
+  for (int i = first; i < last; ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
   // L x = z, from the root out.
-  for (int i = 0; i < size(); ++i) {
+  for (int i = first; i < last; ++i) {
     double sum = x[i];
     for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
       sum -= entries_[static_cast<std::size_t>(e)] * x[ancestor_[static_cast<std::size_t>(e)]];
     }
     x[i] = sum;
   }
+}
+
+void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x) const {
+  if (x.size() != size()) throw std::invalid_argument("JointSpaceFactor::solve: x has " + std::to_string(x.size()) + " entries, expected " + std::to_string(size()));
+  solve(x, 0, size());
 }
 
 void JointSpaceFactor::delassus(const Eigen::Ref<const Eigen::MatrixXd>& jacobian, Eigen::MatrixXd& a, Eigen::MatrixXd& half) const {

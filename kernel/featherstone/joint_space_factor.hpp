@@ -51,8 +51,25 @@ class JointSpaceFactor {
   /// definite: a coordinate that moves no mass and has no armature).
   void factor(const Eigen::Ref<const Eigen::MatrixXd>& h);
 
+  /// H_ij = H_ji = value for j = i or an ancestor of i (the sparse mass_matrix writes H this
+  /// way); then factor() factors what was set. Throws std::invalid_argument for any other j.
+  void set_inertia(int i, int j, double value);
+  /// H_ij += value, as set_inertia (a penalty on a joint's coordinates: a held row).
+  void add_inertia(int i, int j, double value);
+  /// H on coordinates first…last − 1 (whole subtrees, as solve's range) copied from `from`, a
+  /// factor of the same coordinates holding H, not yet factored.
+  void copy_inertia(const JointSpaceFactor& from, int first, int last);
+  /// Factors the H set by set_inertia (as factor(h)); on coordinates first…last − 1 only
+  /// (whole subtrees), the rest left as they are.
+  void factor();
+  void factor(int first, int last);
+
   /// x ← H⁻¹ x (nv): x ← L⁻¹ D⁻¹ L⁻ᵀ x. O(Σ depth).
   void solve(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// The same on coordinates first…last − 1 only, which must hold whole subtrees (an island's:
+  /// no coordinate in the range has its parent outside it unless that parent is −1); x outside
+  /// the range is neither read nor written. H is block diagonal over such ranges.
+  void solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const;
 
   /// y ← L⁻ᵀ y (nv), the first half of solve(): for a row j of a Jacobian (1 × nv), y = jᵀ
   /// becomes (j L⁻¹)ᵀ, non-zero only on j's coordinates and their ancestors.
@@ -69,6 +86,8 @@ class JointSpaceFactor {
   double lower(int i, int j) const;
 
  private:
+  double& inertia(int i, int j);  // H_ij's slot (j = i or an ancestor), before factor()
+
   std::vector<int> parent_;      // λ
   std::vector<int> begin_;       // per coordinate: its ancestors' entries in entries_, nearest first (nv + 1)
   std::vector<int> ancestor_;    // the ancestors j of each coordinate i, nearest first

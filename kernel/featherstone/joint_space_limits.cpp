@@ -126,14 +126,22 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
   find_serial_limit_rows(state, dt);
 }
 
-// Each row's direction·H⁻¹·direction (one joint-block response per limited joint). Needs the
-// articulated inertias at the current q in state.contact.articulated.
+// Each row's direction·H⁻¹·direction (one joint-block of H⁻¹ per limited joint, through the
+// contacts' factor at the current q: state.contact.factor).
 void measure_limit_rows(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
   Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
   int measured_offset = -1;
   for (JointLimitRow& row : state.controls.rows) {
     if (row.offset != measured_offset) {
-      block = joint_block_response(state, static_cast<std::size_t>(row.island), row.offset, row.dofs);
+      const auto [first, last] = island_velocities(state, static_cast<std::size_t>(row.island));
+      for (int m = 0; m < row.dofs; ++m) {
+        s.response.segment(first, last - first).setZero();
+        s.response[row.offset + m] = 1;
+        s.factor.solve(s.response, first, last);
+        for (int r = 0; r < row.dofs; ++r) block(r, m) = s.response[row.offset + r];
+      }
+      block = (0.5 * (block + block.transpose())).eval();  // symmetric in exact arithmetic
       measured_offset = row.offset;
     }
     row.inverse_mass = row.direction.dot(block * row.direction);
@@ -145,9 +153,10 @@ void measure_limit_rows(FeatherstoneState& state) {
 // Sequential impulses converge slowly on limit rows of neighbouring joints (a light spine between
 // a torso and a pelvis both at their limits: each row's impulse undoes the other's), so an
 // island's rows are solved together, exactly: the rows held (the active set) get the penalty
-// M = kPenalty/(their inverse mass) on their joint's D_i in the articulated-body factorization —
-// H + Σ M·d·dᵀ, each held joint passing its parent nearly its whole inertia, as a locked joint
-// does — and the impulse Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
+// M = kPenalty/(their inverse mass) on their joint's coordinates — H + Σ M·d·dᵀ, factored as
+// LᵀDL on the island's coordinates (factor_held_rows; the joint friction adds the same penalty
+// to D_i in the articulated-body factorization instead, factor_held) — and the impulse
+// Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
 // impulses Σ λ·d with λ = M·(target − value − d·Δv), and each held row's value ends within
 // 1/kPenalty of its target. Rows whose λ would pull are released, rows the solve pushes past
 // their target are held, and the solve repeats (at most kActiveSetIterations times).
@@ -202,6 +211,46 @@ void clear_penalties(FeatherstoneState& state, std::size_t island) {
   for (int i = state.island_begin[island]; i < state.island_begin[island + 1]; ++i) state.controls.penalty[static_cast<std::size_t>(i)].setZero();
 }
 
+// The held rows' factor of island `island`: H (state.contact.inertia) with each held row's
+// penalty M·d·dᵀ on its joint's coordinates (state.controls.penalty), into state.contact.held.
+// The same system as the articulated-body factorization with the penalties on D_i (above).
+void factor_held_rows(FeatherstoneState& state, std::size_t island) {
+  JointSpaceContactScratch& s = state.contact;
+  const auto [first, last] = island_velocities(state, island);
+  s.held.copy_inertia(s.inertia, first, last);
+  for (int i = state.island_begin[island]; i < state.island_begin[island + 1]; ++i) {
+    const Eigen::Matrix3d& penalty = state.controls.penalty[static_cast<std::size_t>(i)];
+    const int k = joint_velocity_count(state.tree.body(i).joint), dofs = k <= 3 ? k : 0, offset = state.tree.velocity_offset(i);
+    for (int a = 0; a < dofs; ++a) {
+      for (int b = 0; b <= a; ++b) {
+        if (penalty(a, b) != 0) s.held.add_inertia(offset + a, offset + b, penalty(a, b));
+      }
+    }
+  }
+  s.held.factor(first, last);
+}
+
+// The response of island `island`'s held factor to state.contact.joint_impulse (its slice,
+// consumed: zeroed) into state.contact.joint_change (its slice).
+void solve_held(FeatherstoneState& state, std::size_t island) {
+  JointSpaceContactScratch& s = state.contact;
+  const auto [first, last] = island_velocities(state, island);
+  s.joint_change.segment(first, last - first) = s.joint_impulse.segment(first, last - first);
+  s.joint_impulse.segment(first, last - first).setZero();
+  s.held.solve(s.joint_change, first, last);
+}
+
+void respond_held(FeatherstoneState& state, std::size_t island) {
+  factor_held_rows(state, island);
+  solve_held(state, island);
+}
+
+// target += the last response of island `island` (its slice of joint_change).
+void add_joint_response(FeatherstoneState& state, std::size_t island, Eigen::VectorXd& target) {
+  const auto [first, last] = island_velocities(state, island);
+  target.segment(first, last - first) += state.contact.joint_change.segment(first, last - first);
+}
+
 // The limit rows, together per island: velocity level (values direction·v, targets
 // −max(C, 0)/Δt, accumulated impulses) or position level (values direction·δ of the push-out's
 // displacement, targets the violation to push out, or −C for a row inside its limit;
@@ -211,7 +260,7 @@ bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
   JointControlScratch& c = state.controls;
   JointSpaceContactScratch& s = state.contact;
   const Eigen::VectorXd& values = position ? s.displacement : state.v;
-  const ResponseTarget response = position ? ResponseTarget{&s.displacement, &s.body_displacement} : ResponseTarget{&state.v, &state.kinematics.velocity};
+  Eigen::VectorXd& target = position ? s.displacement : state.v;
   const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
   const auto accumulated = [&](JointLimitRow& row) -> double& { return position ? row.push : row.impulse; };
   bool changed_any = false;
@@ -248,8 +297,7 @@ bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
           add_joint_vector(-accumulated(row) * row.direction, s.joint_impulse, row.offset, row.dofs);
         }
       }
-      factor_held(state, k, nullptr);
-      impulse_response(state, k, c.held);
+      respond_held(state, k);
       bool changed = false;
       for (JointLimitRow& row : c.rows) {
         if (row.island != island) continue;
@@ -263,7 +311,7 @@ bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
         }
       }
       if (changed && iteration + 1 < kActiveSetIterations) continue;
-      add_response(state, k, response);
+      add_joint_response(state, k, target);
       // One refinement with the same factorization takes the held rows' residual, 1/kPenalty of
       // what they moved, to round-off.
       for (JointLimitRow& row : c.rows) {
@@ -274,13 +322,13 @@ bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
           add_joint_vector(kPenalty / row.inverse_mass * (row.target - row.value) * row.direction, s.joint_impulse, row.offset, row.dofs);
         }
       }
-      impulse_response(state, k, c.held);
+      solve_held(state, k);
       for (JointLimitRow& row : c.rows) {
         if (row.island != island || !(row.held && row.active)) continue;
         const double moved = joint_dot(row.direction, s.joint_change, row.offset, row.dofs);
         accumulated(row) = std::max(accumulated(row) + kPenalty / row.inverse_mass * (row.target - row.value - moved), 0.0);
       }
-      add_response(state, k, response);
+      add_joint_response(state, k, target);
       changed_any = true;
       break;
     }

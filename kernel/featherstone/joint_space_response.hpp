@@ -1,6 +1,7 @@
-// The joint-space response that the Featherstone method's contacts, limit rows and friction
-// share (joint_space_contacts.hpp explains it): an impulse's change of the joint velocities and
-// of the bodies' motions through the articulated-body algorithm. Internal to kernel/featherstone.
+// Helpers the Featherstone method's contacts, limit rows and joint friction share
+// (joint_space_contacts.hpp explains them): projections on a joint's motion subspace, sums over
+// a joint's velocities, and the passes' tolerances. The articulated-body impulse response the
+// friction uses is impulse_response (joint_space_contacts.hpp). Internal to kernel/featherstone.
 #pragma once
 
 #include <cstddef>
@@ -43,22 +44,6 @@ SpatialVector joint_motion(const ArticulatedBody& body, const Eigen::Matrix<doub
   return out;
 }
 
-// The world velocity (m/s) of body i's material point at world `point`, for its spatial
-// velocity `motion` (body coordinates; or a displacement, m): Eᵀv + Eᵀω × (p − r).
-inline Eigen::Vector3d point_motion(const PluckerTransform& world_to_body, const SpatialVector& motion, const Eigen::Vector3d& point) {
-  const Eigen::Matrix3d& e = world_to_body.rotation;
-  return e.transpose() * motion.tail<3>() + (e.transpose() * motion.head<3>()).cross(point - world_to_body.translation);
-}
-
-// Subtracts the spatial impulse of a world impulse J at world `point` from body i's ABA bias p
-// (p = −f): f = (E((p − r) × J), E J), body coordinates.
-inline void add_world_impulse(FeatherstoneState& state, int i, const Eigen::Vector3d& point, const Eigen::Vector3d& impulse) {
-  const PluckerTransform& world_to_body = state.kinematics.world_to_body[static_cast<std::size_t>(i)];
-  SpatialVector& bias = state.contact.spatial_impulse[static_cast<std::size_t>(i)];
-  bias.head<3>() -= world_to_body.rotation * (point - world_to_body.translation).cross(impulse);
-  bias.tail<3>() -= world_to_body.rotation * impulse;
-}
-
 // x·v over one joint's `dofs` (≤ 3) velocities from `offset` (element by element: GCC 12 misreads
 // a dynamic head() of a fixed Vector3 under AVX-512).
 inline double joint_dot(const Eigen::Vector3d& x, const Eigen::VectorXd& v, int offset, int dofs) {
@@ -77,24 +62,5 @@ constexpr double kSlowestApproach = 1e-6;
 // The push-out leaves a contact alone once what is still to push is below this fraction of its
 // target (the rest is pushed out in the next step).
 constexpr double kPushTolerance = 0.01;
-
-// What an impulse changes: joint velocities and bodies' spatial velocities, or the push-out's
-// displacement and bodies' spatial displacements.
-struct ResponseTarget {
-  Eigen::VectorXd* joints = nullptr;              // nv
-  std::vector<SpatialVector>* bodies = nullptr;   // per tree body
-};
-
-// Adds the last response of island `island` to `target`.
-void add_response(FeatherstoneState& state, std::size_t island, const ResponseTarget& target);
-
-// The motion of contact c's material points relative to each other, a's minus b's, m/s (or m),
-// for per-tree-body spatial motions `motion`.
-Eigen::Vector3d relative_motion(const FeatherstoneState& state, const RigidContact& contact, const std::vector<SpatialVector>& motion);
-
-// The impulse +J on a and −J on b at the contact's point: the change of their relative motion
-// (m/s per N·s, or m per kg·m), added to `target` when given.
-Eigen::Vector3d respond(FeatherstoneState& state, const RigidContact& contact, const Eigen::Vector3d& impulse,
-                        const ResponseTarget* target);
 
 }  // namespace limber::joint_space

@@ -150,12 +150,74 @@ TEST(JointSpaceFactor, ARowsHalfSolveTouchesOnlyItsPathToTheRoot) {
   });
 }
 
+TEST(JointSpaceFactor, TheSparseMassMatrixIsTheDenseOnesEntriesAndSolvesAsTheArticulatedBodyAlgorithm) {
+  // The contacts' responses went through the articulated-body algorithm with v = 0, g = 0 (its
+  // impulse response is H⁻¹τ); now through the factor of H written straight into its sparsity.
+  std::mt19937 rng(44);
+  DynamicsWorkspace workspace, sparse_workspace;
+  Eigen::MatrixXd h;
+  Eigen::VectorXd accelerations;
+  for (const RandomTreeOptions& kind : random_tree_kinds()) {
+    for (int trial = 0; trial < 10; ++trial) {
+      const ArticulatedTree tree = random_tree(rng, kind);
+      if (tree.velocity_count() == 0) continue;
+      const Eigen::VectorXd q = random_positions(rng, tree);
+      mass_matrix(tree, q, workspace, h);
+      JointSpaceFactor dense, sparse;
+      dense.assign(tree), sparse.assign(tree);
+      dense.factor(h);
+      mass_matrix(tree, q, sparse_workspace, sparse);
+      sparse.factor();
+      const int n = dense.size();
+      for (int i = 0; i < n; ++i) {
+        EXPECT_EQ(sparse.pivot(i), dense.pivot(i));
+        for (int j = 0; j < i; ++j) EXPECT_EQ(sparse.lower(i, j), dense.lower(i, j));
+      }
+      const Eigen::VectorXd tau = random_vector(rng, n, 5);
+      Eigen::VectorXd x = tau;
+      sparse.solve(x);
+      forward_dynamics(tree, q, Eigen::VectorXd::Zero(n), tau, Eigen::Vector3d::Zero(), workspace, accelerations);
+      EXPECT_LT((x - accelerations).norm(), 1e-10 * accelerations.norm()) << tree.body_count() << " bodies";
+    }
+  }
+}
+
+TEST(JointSpaceFactor, ASubtreesRangeFactorsAndSolvesAsTheWholeTree) {
+  // Two trees side by side (islands): each one's coordinates factored and solved alone give the
+  // bits of the whole.
+  std::mt19937 rng(45);
+  ArticulatedTree tree = random_tree(rng, {.bodies = 6, .branching = true, .floating_base = true});
+  const int first_count = tree.velocity_count();
+  const ArticulatedTree second = random_tree(rng, {.bodies = 5, .branching = true});
+  const int shift = tree.body_count();
+  for (ArticulatedBody body : second.bodies()) {
+    if (body.parent >= 0) body.parent += shift;
+    tree.add_body(body);
+  }
+  DynamicsWorkspace workspace;
+  JointSpaceFactor whole, parts;
+  whole.assign(tree), parts.assign(tree);
+  const Eigen::VectorXd q = random_positions(rng, tree);
+  mass_matrix(tree, q, workspace, whole);
+  parts = whole;
+  whole.factor();
+  parts.factor(first_count, parts.size());
+  parts.factor(0, first_count);
+  const Eigen::VectorXd b = random_vector(rng, whole.size(), 1);
+  Eigen::VectorXd x = b, y = b;
+  whole.solve(x);
+  parts.solve(y, first_count, parts.size());
+  parts.solve(y, 0, first_count);
+  EXPECT_EQ(x, y);
+}
+
 TEST(JointSpaceFactor, RefusesParentsOutOfOrderAndAnInertiaThatIsNotPositiveDefinite) {
   JointSpaceFactor factor;
   EXPECT_THROW(factor.assign({-1, 1}), std::invalid_argument);
   EXPECT_THROW(factor.assign({-1, -2}), std::invalid_argument);
   factor.assign({-1, 0});
   EXPECT_THROW(factor.factor(Eigen::MatrixXd::Identity(3, 3)), std::invalid_argument);
+  EXPECT_THROW(factor.set_inertia(0, 1, 1.0), std::invalid_argument);  // 1 is not on 0's path
   Eigen::Matrix2d singular;
   singular << 1, 1, 1, 1;  // a second coordinate that moves nothing the first does not
   try {
