@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "limber/kernel/featherstone/joint_space_limits.hpp"
 #include "limber/kernel/featherstone/joint_space_response.hpp"
@@ -189,7 +190,13 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   mass_matrix(state.tree, state.q, s.composite, s.inertia);
   s.factor = s.inertia;  // the same sizes: no allocation
-  s.factor.factor();
+  if (s.factor.factor() >= 0) {
+    // H is positive definite at any finite pose; it is not only once the state has gone
+    // non-finite. Say so through v, which the step's status checks, instead of answering the
+    // contacts with a broken factor.
+    state.v.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return false;
+  }
   prepare_contacts(state, dt);
   measure_limit_rows(state);
   return true;

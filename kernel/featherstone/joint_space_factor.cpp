@@ -64,7 +64,10 @@ void JointSpaceFactor::factor(const Eigen::Ref<const Eigen::MatrixXd>& h) {
       entries_[static_cast<std::size_t>(e)] = h(i, ancestor_[static_cast<std::size_t>(e)]);
     }
   }
-  factor();
+  const int bad = factor();
+  if (bad >= 0) {
+    throw std::domain_error("JointSpaceFactor::factor: pivot of coordinate " + std::to_string(bad) + " is not > 0 (H is not positive definite)");
+  }
 }
 
 double& JointSpaceFactor::inertia(int i, int j) {
@@ -84,15 +87,16 @@ void JointSpaceFactor::copy_inertia(const JointSpaceFactor& from, int first, int
   std::copy(from.pivot_.begin() + first, from.pivot_.begin() + last, pivot_.begin() + first);
 }
 
-void JointSpaceFactor::factor() { factor(0, size()); }
+int JointSpaceFactor::factor() { return factor(0, size()); }
 
-void JointSpaceFactor::factor(int first, int last) {
+int JointSpaceFactor::factor(int first, int last) {
+  int bad = -1;
   // Table 6.3, from the leaves in: coordinate k's row divides by its pivot and updates the rows
   // of its ancestors (k's ancestors are each ancestor's own ancestors, nearest first, so the
   // entry of i = ancestor e of k at its ancestor f of k sits at a fixed offset in i's row).
   for (int k = last - 1; k >= first; --k) {
     const double d = pivot_[static_cast<std::size_t>(k)];
-    if (!(d > 0)) throw std::domain_error("JointSpaceFactor::factor: pivot of coordinate " + std::to_string(k) + " is " + std::to_string(d) + ", not > 0 (H is not positive definite)");
+    if (!(d > 0) && bad < 0) bad = k;
     const int begin = begin_[static_cast<std::size_t>(k)], end = begin_[static_cast<std::size_t>(k) + 1];
     for (int e = begin; e < end; ++e) {
       const auto i = static_cast<std::size_t>(ancestor_[static_cast<std::size_t>(e)]);
@@ -105,6 +109,7 @@ void JointSpaceFactor::factor(int first, int last) {
       entries_[static_cast<std::size_t>(e)] = l_ki;
     }
   }
+  return bad;
 }
 
 namespace {

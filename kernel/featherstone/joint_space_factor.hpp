@@ -60,9 +60,11 @@ class JointSpaceFactor {
   /// factor of the same coordinates holding H, not yet factored.
   void copy_inertia(const JointSpaceFactor& from, int first, int last);
   /// Factors the H set by set_inertia (as factor(h)); on coordinates first…last − 1 only
-  /// (whole subtrees), the rest left as they are.
-  void factor();
-  void factor(int first, int last);
+  /// (whole subtrees), the rest left as they are. Returns −1, or the first coordinate (from the
+  /// leaves in) whose pivot was not > 0: H was not positive definite there (a state gone
+  /// non-finite), and the solves' answers are not to be used. Does not throw.
+  int factor();
+  int factor(int first, int last);
 
   /// x ← H⁻¹ x (nv): x ← L⁻¹ D⁻¹ L⁻ᵀ x. O(Σ depth).
   void solve(Eigen::Ref<Eigen::VectorXd> x) const;

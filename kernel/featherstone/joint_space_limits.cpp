@@ -227,7 +227,7 @@ void factor_held_rows(FeatherstoneState& state, std::size_t island) {
       }
     }
   }
-  s.held.factor(first, last);
+  s.held.factor(first, last);  // H's penalties only add to a factor prepare_constraints found positive
 }
 
 // The response of island `island`'s held factor to state.contact.joint_impulse (its slice,

@@ -220,6 +220,8 @@ TEST(JointSpaceFactor, RefusesParentsOutOfOrderAndAnInertiaThatIsNotPositiveDefi
   EXPECT_THROW(factor.set_inertia(0, 1, 1.0), std::invalid_argument);  // 1 is not on 0's path
   Eigen::Matrix2d singular;
   singular << 1, 1, 1, 1;  // a second coordinate that moves nothing the first does not
+  factor.set_inertia(0, 0, 1), factor.set_inertia(1, 1, 1), factor.set_inertia(1, 0, 1);
+  EXPECT_EQ(factor.factor(), 0);  // the step's form: says which coordinate, throws nothing
   try {
     factor.factor(singular);
     FAIL() << "a singular H was factored";
