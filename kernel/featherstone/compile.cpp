@@ -330,11 +330,9 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   JointSpaceContactScratch& contact = state.contact;
   contact.articulated.resize(tree);
   contact.zero_velocities.setZero(nv);
-  contact.spatial_impulse.assign(tree_size, SpatialVector::Zero());
-  contact.body_change.assign(tree_size, SpatialVector::Zero());
   contact.body_momentum.assign(tree_size, SpatialVector::Zero());
   contact.generalized_momentum.setZero(nv);
-  contact.joint_bias.setZero(nv), contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
+  contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
   contact.joint_impulse.setZero(nv);
   contact.contact_matrix.reserve(state.contacts.capacity());
   contact.push.reserve(state.contacts.capacity());
@@ -360,7 +358,6 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());
   controls.islands.reserve(state.islands.size());
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
-  controls.held.resize(tree);
 
 }
 

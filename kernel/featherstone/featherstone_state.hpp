@@ -49,9 +49,6 @@ struct JointSpaceContactScratch {
   /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
   DynamicsWorkspace articulated;
   Eigen::VectorXd zero_velocities;             ///< nv
-  std::vector<SpatialVector> spatial_impulse;  ///< per tree body: the impulse on it, then ABA's p (body coordinates)
-  std::vector<SpatialVector> body_change;      ///< per tree body: the change of its spatial velocity (or displacement)
-  Eigen::VectorXd joint_bias;                  ///< nv: ABA's u_i = −S_iᵀ p_i of the impulse
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
   std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K, world impulse at p → relative velocity at p
@@ -62,7 +59,7 @@ struct JointSpaceContactScratch {
   // The contacts' responses through the factor (joint_space_contacts.hpp, "Responses").
   JointSpaceFactor inertia;                      ///< H at the contact configuration, in the factor's sparsity (not factored)
   JointSpaceFactor factor;                       ///< its LᵀDL
-  JointSpaceFactor held;                         ///< the limit rows': H with the held rows' penalties, factored per island
+  JointSpaceFactor held;                         ///< the limit rows' and friction's: H with the held rows' penalties, factored per island
   DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch
   /// Per contact: where its entries start in row_coordinate and row_value (contacts + 1).
   std::vector<int> row_begin;
@@ -136,9 +133,9 @@ struct JointControlScratch {
   std::vector<JointFrictionBlock> friction;  ///< capacity: one per joint
   std::vector<JointLimitRow> rows;           ///< capacity: three per joint
   std::vector<std::int32_t> islands;         ///< the islands with rows (or friction); capacity: every island
-  /// Per tree body: the penalty added to its joint's D_i (top-left dofs × dofs) to hold rows.
+  /// Per tree body: the penalty added to its joint's block of H (top-left dofs × dofs) to hold
+  /// rows (JointSpaceContactScratch::held).
   std::vector<Eigen::Matrix3d> penalty;
-  DynamicsWorkspace held;  ///< the articulated inertias with the penalties (U, D⁻¹, parent_to_body)
 };
 
 struct FeatherstoneState : RigidScene {

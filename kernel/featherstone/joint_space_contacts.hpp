@@ -98,20 +98,6 @@ void resolve_joint_space_contacts(FeatherstoneState& state, double dt);
 /// rigid bodies: for tests of the impulses' energy.
 void apply_joint_space_impulses(FeatherstoneState& state, double dt);
 
-/// The response of island `island` (the articulated-body algorithm with v = 0, g = 0) to the
-/// impulses in state.contact.spatial_impulse (as ABA's biases p = −f, body coordinates) and
-/// state.contact.joint_impulse (generalized impulses, nv), which it consumes (zeroes): the joint
-/// velocity changes into contact.joint_change (the island's slice) and the bodies' spatial ones
-/// into contact.body_change. Uses the articulated inertias in contact.articulated, which the
-/// last forward_dynamics into it left (with its armature, if any).
-void impulse_response(FeatherstoneState& state, std::size_t island);
-/// impulse_response through the articulated inertias (U, D⁻¹, parent_to_body) of `inertias`.
-void impulse_response(FeatherstoneState& state, std::size_t island, const DynamicsWorkspace& inertias);
-
-/// The block of H⁻¹ (or of (H + armature)⁻¹, as impulse_response) for the `dofs` velocities of
-/// one joint from `offset`, measured with `dofs` unit impulses; top-left of a zero 3×3.
-Eigen::Matrix3d joint_block_response(FeatherstoneState& state, std::size_t island, int offset, int dofs);
-
 /// The pose of Model body `body`'s frame (joint_coordinates' FramePose) from state.kinematics.
 FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
 

@@ -126,22 +126,29 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
   find_serial_limit_rows(state, dt);
 }
 
-// Each row's direction·H⁻¹·direction (one joint-block of H⁻¹ per limited joint, through the
-// contacts' factor at the current q: state.contact.factor).
-void measure_limit_rows(FeatherstoneState& state) {
+// The block of H⁻¹ for the `dofs` (≤ 3) velocities of one joint from `offset` (island
+// `island`), through state.contact.factor; top-left of a zero 3×3.
+Eigen::Matrix3d inverse_block(FeatherstoneState& state, std::size_t island, int offset, int dofs) {
   JointSpaceContactScratch& s = state.contact;
+  const auto [first, last] = island_velocities(state, island);
+  Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+  for (int m = 0; m < dofs; ++m) {
+    s.response.segment(first, last - first).setZero();
+    s.response[offset + m] = 1;
+    s.factor.solve(s.response, first, last);
+    for (int r = 0; r < dofs; ++r) block(r, m) = s.response[offset + r];
+  }
+  return 0.5 * (block + block.transpose());  // symmetric in exact arithmetic
+}
+
+// Each row's direction·H⁻¹·direction (one block of H⁻¹ per limited joint, through the contacts'
+// factor at the current q: state.contact.factor).
+void measure_limit_rows(FeatherstoneState& state) {
   Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
   int measured_offset = -1;
   for (JointLimitRow& row : state.controls.rows) {
     if (row.offset != measured_offset) {
-      const auto [first, last] = island_velocities(state, static_cast<std::size_t>(row.island));
-      for (int m = 0; m < row.dofs; ++m) {
-        s.response.segment(first, last - first).setZero();
-        s.response[row.offset + m] = 1;
-        s.factor.solve(s.response, first, last);
-        for (int r = 0; r < row.dofs; ++r) block(r, m) = s.response[row.offset + r];
-      }
-      block = (0.5 * (block + block.transpose())).eval();  // symmetric in exact arithmetic
+      block = inverse_block(state, static_cast<std::size_t>(row.island), row.offset, row.dofs);
       measured_offset = row.offset;
     }
     row.inverse_mass = row.direction.dot(block * row.direction);
@@ -154,57 +161,13 @@ void measure_limit_rows(FeatherstoneState& state) {
 // a torso and a pelvis both at their limits: each row's impulse undoes the other's), so an
 // island's rows are solved together, exactly: the rows held (the active set) get the penalty
 // M = kPenalty/(their inverse mass) on their joint's coordinates — H + Σ M·d·dᵀ, factored as
-// LᵀDL on the island's coordinates (factor_held_rows; the joint friction adds the same penalty
-// to D_i in the articulated-body factorization instead, factor_held) — and the impulse
-// Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
+// LᵀDL on the island's coordinates (factor_held_rows; the joint friction's blocks the same way,
+// on H + h·G) — and the impulse Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
 // impulses Σ λ·d with λ = M·(target − value − d·Δv), and each held row's value ends within
 // 1/kPenalty of its target. Rows whose λ would pull are released, rows the solve pushes past
 // their target are held, and the solve repeats (at most kActiveSetIterations times).
 constexpr double kPenalty = 1e6;
 constexpr int kActiveSetIterations = 8;
-
-// The articulated-body factorization of island `island` at the current q (parent_to_body from
-// state.contact.articulated) with `armature` (nv, or none) and state.controls.penalty added to each
-// D_i, into state.controls.held: the inward pass of the articulated-body algorithm (Table 7.1).
-void factor_held(FeatherstoneState& state, std::size_t island, const Eigen::VectorXd* armature) {
-  const ArticulatedTree& tree = state.tree;
-  const DynamicsWorkspace& base = state.contact.articulated;
-  JointControlScratch& c = state.controls;
-  DynamicsWorkspace& w = c.held;
-  const int begin = state.island_begin[island], end = state.island_begin[island + 1];
-  for (int i = begin; i < end; ++i) {
-    const auto index = static_cast<std::size_t>(i);
-    w.articulated_inertia[index] = tree.body(i).inertia.matrix();
-    w.parent_to_body[index] = base.parent_to_body[index];
-  }
-  for (int i = end - 1; i >= begin; --i) {
-    const ArticulatedBody& body = tree.body(i);
-    const auto index = static_cast<std::size_t>(i);
-    const int offset = tree.velocity_offset(i);
-    const SpatialMatrix& ia = w.articulated_inertia[index];
-    SpatialMatrix through;
-    with_degrees_of_freedom(body.joint, [&](auto dofs) {
-      constexpr int k = decltype(dofs)::value;
-      if constexpr (k == 0) {
-        through = ia;
-      } else {
-        const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
-        const Eigen::Matrix<double, 6, k> u = ia * s;
-        Eigen::Matrix<double, k, k> d = s.transpose() * u;
-        if constexpr (k == 1) d(0, 0) += body.armature;
-        if (armature) d.diagonal() += armature->template segment<k>(offset);
-        if constexpr (k <= 3) d += c.penalty[index].template topLeftCorner<k, k>();
-        const Eigen::Matrix<double, k, k> d_inverse = d.inverse();
-        w.projected_inertia.template middleCols<k>(offset) = u;
-        w.joint_inertia_inverse.template block<k, k>(0, offset) = d_inverse;
-        through.noalias() = ia - u * d_inverse * u.transpose();
-      }
-    });
-    if (body.parent >= 0) {
-      w.articulated_inertia[static_cast<std::size_t>(body.parent)] += w.parent_to_body[index].transpose_apply_inertia(through);
-    }
-  }
-}
 
 // Clears the penalties of island `island`'s bodies.
 void clear_penalties(FeatherstoneState& state, std::size_t island) {
@@ -340,8 +303,8 @@ bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
 // rest (penalty kPenalty times its block of (H + h·G)⁻¹ inverted), a sliding one takes the impulse
 // friction·h against the velocity it ends with; a stuck joint whose impulse would pass its bound
 // slides, a sliding one that friction would turn back sticks. Adds the responses to the
-// predicted velocities; the impulses stay in the blocks. Needs state.contact.articulated (with
-// the drives' armature, state.controls.armature).
+// predicted velocities; the impulses stay in the blocks. Needs state.contact.inertia and factor
+// holding H + h·G at the step's start (the drives' armature, state.controls.armature).
 void solve_friction(FeatherstoneState& state) {
   JointControlScratch& c = state.controls;
   JointSpaceContactScratch& s = state.contact;
@@ -366,8 +329,7 @@ void solve_friction(FeatherstoneState& state) {
           add_joint_vector(block.impulse, s.joint_impulse, block.offset, block.dofs);
         }
       }
-      factor_held(state, k, &c.armature);
-      impulse_response(state, k, c.held);
+      respond_held(state, k);
       bool changed = false;
       for (JointFrictionBlock& block : c.friction) {
         if (block.island != island) continue;
@@ -401,7 +363,7 @@ void solve_friction(FeatherstoneState& state) {
         block.rate = after;  // now the residual
         add_joint_vector(-kPenalty * (block.mass * after), s.joint_impulse, block.offset, block.dofs);
       }
-      impulse_response(state, k, c.held);
+      solve_held(state, k);
       for (JointFrictionBlock& block : c.friction) {
         if (block.island != island) continue;
         if (block.held && block.stuck) {
@@ -496,7 +458,7 @@ void gather_friction(FeatherstoneState& state, double h) {
     block.island = island_of(state, held);
     block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
     block.bound = controls.joints[k].friction * h;
-    const Eigen::Matrix3d response = joint_block_response(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
+    const Eigen::Matrix3d response = inverse_block(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
     if (held.dofs == 1) {
       block.mass(0, 0) = 1 / response(0, 0);
     } else {
@@ -513,7 +475,7 @@ void gather_friction(FeatherstoneState& state, double h) {
     JointFrictionBlock block;
     block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
     block.bound = bound * h;
-    block.mass(0, 0) = 1 / joint_block_response(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
+    block.mass(0, 0) = 1 / inverse_block(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
     block.rate[0] = c.predicted[node.offset];
     c.friction.push_back(block);
     if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
@@ -550,7 +512,16 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
 
   c.friction.clear();
   c.islands.clear();
-  if (friction) gather_friction(state, h);
+  if (friction) {
+    // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
+    // add their penalties to it per island: factor_held_rows).
+    mass_matrix(state.tree, state.q, s.composite, s.inertia);
+    for (int i = 0; i < state.tree.velocity_count(); ++i) {
+      if (c.armature[i] != 0) s.inertia.add_inertia(i, i, c.armature[i]);
+    }
+    s.factor = s.inertia;  // the same sizes: no allocation
+    if (s.factor.factor() < 0) gather_friction(state, h);  // else the state is non-finite: the step's status says so
+  }
 
   // The forces held over the step: the loads, the drives' at the predicted velocity, friction's j/h.
   c.forces = loads + c.drive_force - c.drive_gain.cwiseProduct(c.predicted);
