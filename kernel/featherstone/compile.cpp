@@ -350,6 +350,12 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.row_begin.reserve(state.contacts.capacity() + 1);
   contact.row_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
   contact.row_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
+  contact.half_begin.reserve(state.contacts.capacity() + 1);
+  contact.half_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
+  contact.half_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
+  contact.path.reserve(2 * static_cast<std::size_t>(deepest));
+  contact.lagging.setZero(nv);
+  contact.scatter.setZero(nv, 3);
 
   JointControlScratch& controls = state.controls;
   controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);

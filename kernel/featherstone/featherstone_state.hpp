@@ -68,7 +68,19 @@ struct JointSpaceContactScratch {
   /// velocity of the contact's points, a's minus b's; b's path entered negated).
   std::vector<int> row_coordinate;
   std::vector<Eigen::Vector3d> row_value;
-  Eigen::VectorXd response;                      ///< nv: one impulse's H⁻¹ J_cᵀ ι, on its islands' coordinates
+  Eigen::VectorXd response;                      ///< nv: a solve's scratch
+  /// Per contact: where its half rows start in half_coordinate and half_value (contacts + 1).
+  std::vector<int> half_begin;
+  /// The contacts' half rows Y_c = L⁻ᵀ J_cᵀ (each coordinate of the union of their bodies' paths
+  /// once, in descending order, and Y_c's three columns there): K_c = Y_cᵀ D⁻¹ Y_c, and an
+  /// impulse ι adds D⁻¹ Y_c ι to `lagging` on those coordinates alone.
+  std::vector<int> half_coordinate;
+  std::vector<Eigen::Vector3d> half_value;
+  /// nv: y = D⁻¹ L⁻ᵀ Σ J_cᵀ ι of the impulses not yet in v (or the displacement), which is v's
+  /// share L⁻¹ y; J_c of it is Y_cᵀ y.
+  Eigen::VectorXd lagging;
+  Eigen::Matrix<double, Eigen::Dynamic, 3> scatter;  ///< nv × 3 scratch, zero between uses
+  std::vector<int> path;                             ///< one contact's coordinates (scratch)
 };
 
 /// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).

@@ -1,6 +1,7 @@
 #include "limber/kernel/featherstone/joint_space_contacts.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <limits>
 
@@ -61,44 +62,66 @@ Eigen::Vector3d contact_motion(const JointSpaceContactScratch& s, std::size_t c,
   return motion;
 }
 
-// The impulse +ι on a and −ι on b at contact c's point: x += H⁻¹ J_cᵀ ι (x: v, or the push-out's
-// displacement) on the contact's islands, through the factor; returns the change of the
-// contact's relative motion, J_c H⁻¹ J_cᵀ ι.
-Eigen::Vector3d respond(FeatherstoneState& state, std::size_t c, const Eigen::Vector3d& impulse, Eigen::VectorXd* x) {
-  JointSpaceContactScratch& s = state.contact;
-  const RigidContact& contact = state.contacts[c];
-  const std::size_t island_a = state.island_of_body[contact.a];
-  const std::size_t island_b = contact.b < 0 ? island_a : state.island_of_body[contact.b];
-  const auto range = [&](std::size_t island, auto&& visit) {
-    const auto [first, last] = island_velocities(state, island);
-    visit(first, last);
-  };
-  const auto each_island = [&](auto&& visit) {
-    range(island_a, visit);
-    if (island_b != island_a) range(island_b, visit);
-  };
-  each_island([&](int first, int last) { s.response.segment(first, last - first).setZero(); });
-  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) s.response[s.row_coordinate[static_cast<std::size_t>(e)]] += s.row_value[static_cast<std::size_t>(e)].dot(impulse);
-  each_island([&](int first, int last) {
-    s.factor.solve(s.response, first, last);
-    if (x) x->segment(first, last - first) += s.response.segment(first, last - first);
-  });
-  return contact_motion(s, c, s.response);
+// Contact c's half rows Y_c = L⁻ᵀ J_cᵀ (on the union of its bodies' paths) and its matrix
+// K = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c. Needs its rows and the factor.
+Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t c) {
+  s.path.clear();
+  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) {
+    const int k = s.row_coordinate[static_cast<std::size_t>(e)];
+    s.scatter.row(k) += s.row_value[static_cast<std::size_t>(e)].transpose();
+    s.path.push_back(k);
+  }
+  std::sort(s.path.begin(), s.path.end(), std::greater<>());
+  s.path.erase(std::unique(s.path.begin(), s.path.end()), s.path.end());
+  s.factor.solve_transposed_lower(s.scatter, s.path);
+  Eigen::Matrix3d k_c = Eigen::Matrix3d::Zero();
+  for (const int k : s.path) {
+    const Eigen::Vector3d y = s.scatter.row(k).transpose();
+    s.scatter.row(k).setZero();
+    s.half_coordinate.push_back(k);
+    s.half_value.push_back(y);
+    k_c.noalias() += y * y.transpose() / s.factor.pivot(k);
+  }
+  s.half_begin.push_back(static_cast<int>(s.half_coordinate.size()));
+  return k_c;
 }
 
-// The contacts' rows, their matrices K = J_c H⁻¹ J_cᵀ (three responses each), approach speeds,
-// and e = 0 for resting contacts. Needs the factor at the current q.
+// J_c of the impulses not yet in x: Y_cᵀ y (see `lagging`).
+Eigen::Vector3d lagging_motion(const JointSpaceContactScratch& s, std::size_t c) {
+  Eigen::Vector3d motion = Eigen::Vector3d::Zero();
+  for (int e = s.half_begin[c]; e < s.half_begin[c + 1]; ++e) motion += s.half_value[static_cast<std::size_t>(e)] * s.lagging[s.half_coordinate[static_cast<std::size_t>(e)]];
+  return motion;
+}
+
+// The impulse +ι on a and −ι on b at contact c's point: y += D⁻¹ Y_c ι, on the contact's paths
+// alone; its motion H⁻¹ J_cᵀ ι = L⁻¹ D⁻¹ Y_c ι joins x at the next settle().
+void respond(JointSpaceContactScratch& s, std::size_t c, const Eigen::Vector3d& impulse) {
+  for (int e = s.half_begin[c]; e < s.half_begin[c + 1]; ++e) {
+    const int k = s.half_coordinate[static_cast<std::size_t>(e)];
+    s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(impulse) / s.factor.pivot(k);
+  }
+}
+
+// x += L⁻¹ y: the impulses so far joined to x (v, or the push-out's displacement); y = 0.
+void settle(JointSpaceContactScratch& s, Eigen::VectorXd& x) {
+  s.factor.solve_lower(s.lagging);
+  x += s.lagging;
+  s.lagging.setZero();
+}
+
+// The contacts' rows, half rows and matrices K = J_c H⁻¹ J_cᵀ, approach speeds, and e = 0 for
+// resting contacts. Needs the factor at the current q.
 void prepare_contacts(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   s.row_begin.assign(1, 0);
   s.row_coordinate.clear(), s.row_value.clear();
-  for (const RigidContact& contact : state.contacts) contact_rows(state, contact);
+  s.half_begin.assign(1, 0);
+  s.half_coordinate.clear(), s.half_value.clear();
   s.contact_matrix.resize(state.contacts.size());
   for (std::size_t c = 0; c < state.contacts.size(); ++c) {
     RigidContact& contact = state.contacts[c];
-    Eigen::Matrix3d& k = s.contact_matrix[c];
-    for (int axis = 0; axis < 3; ++axis) k.col(axis) = respond(state, c, Eigen::Vector3d::Unit(axis), nullptr);
-    k = 0.5 * (k + k.transpose()).eval();  // symmetric in exact arithmetic
+    contact_rows(state, contact);
+    s.contact_matrix[c] = half_rows(s, c);
     record_approach(contact, -contact_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
   }
 }
@@ -113,7 +136,7 @@ void impulse_passes(FeatherstoneState& state, double dt) {
       const RigidContact& contact = state.contacts[c];
       const Eigen::Matrix3d& k = s.contact_matrix[c];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = contact_motion(s, c, state.v);
+      const Eigen::Vector3d relative = contact_motion(s, c, state.v) + lagging_motion(s, c);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -127,14 +150,18 @@ void impulse_passes(FeatherstoneState& state, double dt) {
         const double tangent_inverse_mass = tangent.dot(k * tangent);
         if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
       }
-      respond(state, c, impulse, &state.v);
+      respond(s, c, impulse);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
     // reached lets the joint arrive at it by the step's end), each island's rows together.
-    if (solve_limit_rows(state, dt, /*position=*/false)) applied = true;
+    if (!state.controls.rows.empty()) {
+      settle(s, state.v);
+      if (solve_limit_rows(state, dt, /*position=*/false)) applied = true;
+    }
     if (!applied) break;
   }
+  settle(s, state.v);
   forward_kinematics(state.tree, state.q, state.v, state.kinematics);
 }
 
@@ -151,18 +178,22 @@ void push_out(FeatherstoneState& state, double dt) {
       const double target = push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = contact_motion(s, c, s.displacement).dot(contact.normal);
+      const double done = (contact_motion(s, c, s.displacement) + lagging_motion(s, c)).dot(contact.normal);
       if (std::abs(target - done) <= kPushTolerance * target) continue;
       const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
       const double change = push - s.push[c];
       if (change == 0) continue;
       s.push[c] = push;
-      respond(state, c, change * contact.normal, &s.displacement);
+      respond(s, c, change * contact.normal);
       moved = pushed = true;
     }
-    if (solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
+    if (!state.controls.rows.empty()) {
+      settle(s, s.displacement);
+      if (solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
+    }
     if (!pushed) break;
   }
+  settle(s, s.displacement);
   if (!moved) return;
   // Every body's momentum in its own frame, I_i v_i, before the push-out.
   const ArticulatedTree& tree = state.tree;

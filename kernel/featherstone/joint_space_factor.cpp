@@ -131,17 +131,37 @@ void transposed_lower_solve(const std::vector<int>& begin, const std::vector<int
 
 void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const { transposed_lower_solve(begin_, ancestor_, entries_, y, 0, size()); }
 
-void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
-  transposed_lower_solve(begin_, ancestor_, entries_, x, first, last);
-  for (int i = first; i < last; ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
-  // L x = z, from the root out.
+void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const {
+  for (const int k : coordinates) {
+    const Eigen::RowVector3d y_k = y.row(k);
+    for (int e = begin_[static_cast<std::size_t>(k)]; e < begin_[static_cast<std::size_t>(k) + 1]; ++e) {
+      y.row(ancestor_[static_cast<std::size_t>(e)]) -= entries_[static_cast<std::size_t>(e)] * y_k;
+    }
+  }
+}
+
+namespace {
+
+// L x = z on coordinates first…last − 1 (whole subtrees), from the root out.
+void lower_solve(const std::vector<int>& begin, const std::vector<int>& ancestor, const std::vector<double>& entries,
+                 Eigen::Ref<Eigen::VectorXd> x, int first, int last) {
   for (int i = first; i < last; ++i) {
     double sum = x[i];
-    for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
-      sum -= entries_[static_cast<std::size_t>(e)] * x[ancestor_[static_cast<std::size_t>(e)]];
+    for (int e = begin[static_cast<std::size_t>(i)]; e < begin[static_cast<std::size_t>(i) + 1]; ++e) {
+      sum -= entries[static_cast<std::size_t>(e)] * x[ancestor[static_cast<std::size_t>(e)]];
     }
     x[i] = sum;
   }
+}
+
+}  // namespace
+
+void JointSpaceFactor::solve_lower(Eigen::Ref<Eigen::VectorXd> x) const { lower_solve(begin_, ancestor_, entries_, x, 0, size()); }
+
+void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
+  transposed_lower_solve(begin_, ancestor_, entries_, x, first, last);
+  for (int i = first; i < last; ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
+  lower_solve(begin_, ancestor_, entries_, x, first, last);
 }
 
 void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x) const {

@@ -68,6 +68,12 @@ class JointSpaceFactor {
 
   /// x ← H⁻¹ x (nv): x ← L⁻¹ D⁻¹ L⁻ᵀ x. O(Σ depth).
   void solve(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// y ← L⁻ᵀ y for a y (nv × 3) non-zero only on `coordinates`, which must hold every ancestor
+  /// of each (a union of paths to the root) in descending order: O(their entries of L). The
+  /// half rows of a contact, Y = L⁻ᵀ Jᵀ, stay on its paths.
+  void solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const;
+  /// x ← L⁻¹ x (nv), the last part of solve() (after L⁻ᵀ and D⁻¹). O(Σ depth).
+  void solve_lower(Eigen::Ref<Eigen::VectorXd> x) const;
   /// The same on coordinates first…last − 1 only, which must hold whole subtrees (an island's:
   /// no coordinate in the range has its parent outside it unless that parent is −1); x outside
   /// the range is neither read nor written. H is block diagonal over such ranges.

@@ -211,6 +211,35 @@ TEST(JointSpaceFactor, ASubtreesRangeFactorsAndSolvesAsTheWholeTree) {
   EXPECT_EQ(x, y);
 }
 
+TEST(JointSpaceFactor, HalfRowsOnAPathGiveTheDelassusBlockAndTheSolve) {
+  // The contacts' way (joint_space_contacts.cpp): Y = L⁻ᵀ Jᵀ on the loaded coordinates' paths,
+  // K = Yᵀ D⁻¹ Y, and a motion L⁻¹ D⁻¹ Y ι, against the dense Delassus block and solve.
+  for_random_inertias(46, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
+    JointSpaceFactor factor;
+    factor.assign(tree);
+    factor.factor(h);
+    const int n = factor.size();
+    const int loaded = std::uniform_int_distribution<int>(0, n - 1)(rng);
+    std::vector<int> path;
+    for (int k = loaded; k >= 0; k = factor.parent(k)) path.push_back(k);  // descending
+    Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(3, n);
+    for (const int k : path) jacobian.col(k) = random_vector(rng, 3, 1);
+    Eigen::Matrix<double, Eigen::Dynamic, 3> y = jacobian.transpose();
+    factor.solve_transposed_lower(y, path);
+    Eigen::Matrix3d k_half = Eigen::Matrix3d::Zero();
+    for (const int k : path) k_half += y.row(k).transpose() * y.row(k) / factor.pivot(k);
+    Eigen::MatrixXd a, half;
+    factor.delassus(jacobian, a, half);
+    EXPECT_LT((k_half - a).norm(), 1e-12 * a.norm()) << tree.body_count() << " bodies";
+    const Eigen::Vector3d impulse = random_vector(rng, 3, 1);
+    Eigen::VectorXd motion = Eigen::VectorXd::Zero(n), reference = jacobian.transpose() * impulse;
+    for (const int k : path) motion[k] = y.row(k).dot(impulse) / factor.pivot(k);
+    factor.solve_lower(motion);
+    factor.solve(reference);
+    EXPECT_LT((motion - reference).norm(), 1e-12 * reference.norm());
+  });
+}
+
 TEST(JointSpaceFactor, RefusesParentsOutOfOrderAndAnInertiaThatIsNotPositiveDefinite) {
   JointSpaceFactor factor;
   EXPECT_THROW(factor.assign({-1, 1}), std::invalid_argument);
