@@ -13,17 +13,15 @@
 // contact's rows J_c (3 × nv: the world x, y, z of the relative velocity of its points, a's minus
 // b's) are the generalized impulses of unit world impulses at p, carried from each body to the
 // root (τ_k = S_kᵀ f on every joint k on the way, Table 5.1's inward pass): non-zero only on the
-// two bodies' paths. An impulse ι (+ι on a, −ι on b) changes the joint velocities by
-// Δv = H⁻¹ J_cᵀ ι, one solve with the factor on the contact's islands, and the contact's
-// relative velocity is J_c v. The factor's solve costs O(Σ depth) over an island's coordinates;
-// the articulated-body algorithm's impulse response with v = 0, g = 0, which answered each impulse
-// before, gives the same Δv at several times the work (on humanoid.xml the step ran 2.0× faster
-// with the factor, bench/models.md).
-//
-// Per contact, its collision matrix K = J_c H⁻¹ J_cᵀ (3×3, world: the change of the relative
-// velocity v_a(p) − v_b(p) per unit impulse +J on a and −J on b) is measured once per step with
-// three unit impulses, symmetric positive semi-definite; its normal-normal entry is the contact's
-// effective inverse mass 1/(J_n H⁻¹ J_nᵀ).
+// two bodies' paths, and so are its half rows Y_c = L⁻ᵀ J_cᵀ (MuJoCo's half-solve). Its
+// collision matrix is K_c = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c (3×3, world: the change of the relative
+// velocity per unit impulse +J on a and −J on b; its normal-normal entry is the contact's
+// effective inverse mass 1/(J_n H⁻¹ J_nᵀ)). An impulse ι moves the joints by
+// Δv = H⁻¹ J_cᵀ ι = L⁻¹ y with y = D⁻¹ Y_c ι: the passes add y on the contact's paths alone and
+// read a contact's relative velocity as J_c v + Y_cᵀ y, and v takes L⁻¹ y (one forward pass)
+// before the limit rows and after the passes. So an impulse costs its two paths, not its
+// islands: against the articulated-body algorithm's impulse response with v = 0, g = 0, which
+// answered each impulse before, humanoid.xml's step ran 2.55× faster (bench/models.md).
 //
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
