@@ -33,7 +33,8 @@ bool on_path(const std::vector<int>& parent, int i, int j) {
   return false;
 }
 
-// Calls check(tree, H) for ten random trees of each kind with any coordinates, H at random positions.
+// Calls check(rng, tree, H, its factor) for ten random trees of each kind with any coordinates,
+// H at random positions.
 template <typename Check>
 void for_random_inertias(unsigned seed, Check&& check) {
   std::mt19937 rng(seed);
@@ -44,7 +45,10 @@ void for_random_inertias(unsigned seed, Check&& check) {
       const ArticulatedTree tree = random_tree(rng, kind);
       if (tree.velocity_count() == 0) continue;  // a fixed single body
       mass_matrix(tree, random_positions(rng, tree), workspace, h);
-      check(rng, tree, h);
+      JointSpaceFactor factor;
+      factor.assign(tree);
+      factor.factor(h);
+      check(rng, tree, h, factor);
     }
   }
 }
@@ -65,10 +69,7 @@ TEST(JointSpaceFactor, EachCoordinatesParentIsTheOneBeforeItOnItsPathToTheRoot) 
 }
 
 TEST(JointSpaceFactor, ReproducesTheInertiaAndFillsNothingIn) {
-  for_random_inertias(40, [](std::mt19937&, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
-    JointSpaceFactor factor;
-    factor.assign(tree);
-    factor.factor(h);
+  for_random_inertias(40, [](std::mt19937&, const ArticulatedTree& tree, const Eigen::MatrixXd& h, const JointSpaceFactor& factor) {
     const int n = factor.size();
     const std::vector<int> parent = dof_parents(tree);
     Eigen::MatrixXd l = Eigen::MatrixXd::Identity(n, n);
@@ -91,10 +92,7 @@ TEST(JointSpaceFactor, ReproducesTheInertiaAndFillsNothingIn) {
 }
 
 TEST(JointSpaceFactor, SolvesAsADenseCholeskyDoes) {
-  for_random_inertias(41, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
-    JointSpaceFactor factor;
-    factor.assign(tree);
-    factor.factor(h);
+  for_random_inertias(41, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h, const JointSpaceFactor& factor) {
     const Eigen::VectorXd b = random_vector(rng, factor.size(), 5);
     Eigen::VectorXd x = b;
     factor.solve(x);
@@ -110,10 +108,7 @@ TEST(JointSpaceFactor, SolvesAsADenseCholeskyDoes) {
 }
 
 TEST(JointSpaceFactor, DelassusMatrixIsTheRowsInverseInertia) {
-  for_random_inertias(42, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
-    JointSpaceFactor factor;
-    factor.assign(tree);
-    factor.factor(h);
+  for_random_inertias(42, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h, const JointSpaceFactor& factor) {
     const int n = factor.size();
     // Rows that touch a few coordinates, as contacts and limits do, and a dense one.
     Eigen::MatrixXd jacobian = Eigen::MatrixXd::Zero(5, n);
@@ -131,10 +126,7 @@ TEST(JointSpaceFactor, DelassusMatrixIsTheRowsInverseInertia) {
 }
 
 TEST(JointSpaceFactor, ARowsHalfSolveTouchesOnlyItsPathToTheRoot) {
-  for_random_inertias(43, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
-    JointSpaceFactor factor;
-    factor.assign(tree);
-    factor.factor(h);
+  for_random_inertias(43, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd&, const JointSpaceFactor& factor) {
     const std::vector<int> parent = dof_parents(tree);
     const int n = factor.size();
     const int loaded = std::uniform_int_distribution<int>(0, n - 1)(rng);
@@ -214,10 +206,7 @@ TEST(JointSpaceFactor, ASubtreesRangeFactorsAndSolvesAsTheWholeTree) {
 TEST(JointSpaceFactor, HalfRowsOnAPathGiveTheDelassusBlockAndTheSolve) {
   // The contacts' way (joint_space_contacts.cpp): Y = L⁻ᵀ Jᵀ on the loaded coordinates' paths,
   // K = Yᵀ D⁻¹ Y, and a motion L⁻¹ D⁻¹ Y ι, against the dense Delassus block and solve.
-  for_random_inertias(46, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd& h) {
-    JointSpaceFactor factor;
-    factor.assign(tree);
-    factor.factor(h);
+  for_random_inertias(46, [](std::mt19937& rng, const ArticulatedTree& tree, const Eigen::MatrixXd&, const JointSpaceFactor& factor) {
     const int n = factor.size();
     const int loaded = std::uniform_int_distribution<int>(0, n - 1)(rng);
     std::vector<int> path;
