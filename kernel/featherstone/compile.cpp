@@ -340,13 +340,7 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.composite.resize(tree);
   contact.response.setZero(nv);
   // A contact's rows hold the coordinates of two paths to the root: at most twice the deepest.
-  std::vector<int> depth(static_cast<std::size_t>(nv), 0);
-  int deepest = 0;
-  for (int i = 0; i < nv; ++i) {
-    const int parent = contact.factor.parent(i);
-    depth[static_cast<std::size_t>(i)] = parent < 0 ? 1 : depth[static_cast<std::size_t>(parent)] + 1;
-    deepest = std::max(deepest, depth[static_cast<std::size_t>(i)]);
-  }
+  const int deepest = contact.factor.deepest();
   contact.row_begin.reserve(state.contacts.capacity() + 1);
   contact.row_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
   contact.row_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());

@@ -127,7 +127,7 @@ void prepare_contacts(FeatherstoneState& state, double dt) {
 }
 
 // Sequential impulses (joint_space_contacts.hpp, "Impulses"), the contacts' and the limit rows'.
-// Leaves state.kinematics' body velocities those of the new v.
+// state.kinematics' body velocities are left those of the old v.
 void impulse_passes(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
@@ -162,7 +162,6 @@ void impulse_passes(FeatherstoneState& state, double dt) {
     if (!applied) break;
   }
   settle(s, state.v);
-  forward_kinematics(state.tree, state.q, state.v, state.kinematics);
 }
 
 // The position pass (joint_space_contacts.hpp, "Penetration").
@@ -195,8 +194,9 @@ void push_out(FeatherstoneState& state, double dt) {
   }
   settle(s, s.displacement);
   if (!moved) return;
-  // Every body's momentum in its own frame, I_i v_i, before the push-out.
+  // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v).
   const ArticulatedTree& tree = state.tree;
+  forward_kinematics(tree, state.q, state.v, state.kinematics);
   for (int i = 0; i < tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);
     s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];

@@ -45,6 +45,12 @@ void JointSpaceFactor::assign(const std::vector<int>& dof_parent) {
   pivot_.assign(static_cast<std::size_t>(n), 0.0);
 }
 
+int JointSpaceFactor::deepest() const {
+  int most = 0;
+  for (int i = 0; i < size(); ++i) most = std::max(most, begin_[static_cast<std::size_t>(i) + 1] - begin_[static_cast<std::size_t>(i)] + 1);
+  return most;
+}
+
 double JointSpaceFactor::lower(int i, int j) const {
   for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
     if (ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];

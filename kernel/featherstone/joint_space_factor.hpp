@@ -43,6 +43,8 @@ class JointSpaceFactor {
   int size() const { return static_cast<int>(parent_.size()); }
   /// λ(i).
   int parent(int i) const { return parent_[static_cast<std::size_t>(i)]; }
+  /// The most coordinates on one path to the root (the deepest coordinate's ancestors and itself).
+  int deepest() const;
 
   /// Factors H (nv × nv, symmetric positive definite: the composite-rigid-body algorithm's
   /// mass_matrix). Only H_ii and H_ij with j an ancestor of i are read (the rest are zero in a

@@ -1,11 +1,7 @@
 // Helpers the Featherstone method's contacts, limit rows and joint friction share
 // (joint_space_contacts.hpp explains them): projections on a joint's motion subspace, sums over
-// a joint's velocities, and the passes' tolerances. The articulated-body impulse response the
-// friction uses is impulse_response (joint_space_contacts.hpp). Internal to kernel/featherstone.
+// a joint's velocities, and the passes' tolerances. Internal to kernel/featherstone.
 #pragma once
-
-#include <cstddef>
-#include <vector>
 
 #include <Eigen/Core>
 
@@ -24,24 +20,6 @@ Eigen::Matrix<double, k, 1> project_on_joint(const ArticulatedBody& body, const 
   } else {
     return f;
   }
-}
-
-// S x: the spatial motion of joint rates x.
-template <int k>
-SpatialVector joint_motion(const ArticulatedBody& body, const Eigen::Matrix<double, k, 1>& x) {
-  SpatialVector out = SpatialVector::Zero();
-  if constexpr (k == 1) {
-    if (body.joint == ArticulatedJoint::revolute) {
-      out.head<3>() = body.joint_axis * x[0];
-    } else {
-      out.tail<3>() = body.joint_axis * x[0];
-    }
-  } else if constexpr (k == 3) {
-    out.head<3>() = x;
-  } else {
-    out = x;
-  }
-  return out;
 }
 
 // x·v over one joint's `dofs` (≤ 3) velocities from `offset` (element by element: GCC 12 misreads
