@@ -339,17 +339,40 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.inertia.assign(tree), contact.factor.assign(tree), contact.held.assign(tree);
   contact.composite.resize(tree);
   contact.response.setZero(nv);
-  // A contact's rows hold the coordinates of two paths to the root: at most twice the deepest.
+  // The blocks (joint_space_contacts.hpp, "Constraint space"): every contact the scene reserved
+  // and every limit row. A block's rows hold the coordinates of at most two paths to the root.
   const int deepest = contact.factor.deepest();
-  contact.row_begin.reserve(state.contacts.capacity() + 1);
-  contact.row_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
-  contact.row_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
-  contact.half_begin.reserve(state.contacts.capacity() + 1);
-  contact.half_coordinate.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
-  contact.half_value.reserve(2 * static_cast<std::size_t>(deepest) * state.contacts.capacity());
+  const std::size_t limit_rows = 3 * model.joints.size() + 2 * state.serial_axes.size();
+  const std::size_t blocks = state.contacts.capacity() + limit_rows;
+  const std::size_t entries = 2 * static_cast<std::size_t>(deepest) * blocks;
+  contact.row_begin.reserve(blocks + 1), contact.half_begin.reserve(blocks + 1), contact.column_begin.reserve(blocks + 1);
+  contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
+  contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
+  contact.first_island.reserve(blocks), contact.second_island.reserve(blocks);
+  contact.motion.reserve(blocks), contact.impulse.reserve(blocks), contact.limit_local.assign(blocks, -1);
+  contact.island_block_begin.reserve(state.islands.size() + 1), contact.island_block.reserve(2 * blocks);
+  // The Delassus matrix's blocks pair the blocks of one island: room for each island's limit
+  // rows and two contacts per body and plane (as the Lagrange method reserves its batches); a
+  // step past it allocates.
+  std::size_t pairs = 0, island_rows = 0;
+  std::vector<std::size_t> rows_of_island(state.islands.size(), 0);
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    if (state.tree_joint[k].dofs > 0) rows_of_island[state.island_of_body[state.scene_body[static_cast<std::size_t>(state.tree_joint[k].body)]]] += 3;
+  }
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    const std::size_t contacts = 2 * state.islands[k].bodies.size() * std::max<std::size_t>(state.planes.size(), 1);
+    pairs += (rows_of_island[k] + contacts) * (rows_of_island[k] + contacts);
+    island_rows = std::max(island_rows, rows_of_island[k] + 2 * state.serial_axes.size());
+  }
+  contact.column_block.reserve(pairs), contact.column_value.reserve(pairs);
   contact.path.reserve(2 * static_cast<std::size_t>(deepest));
   contact.lagging.setZero(nv);
   contact.scatter.setZero(nv, 3);
+  contact.limit_delassus.setZero(static_cast<Eigen::Index>(island_rows), static_cast<Eigen::Index>(island_rows));
+  contact.limit_value.setZero(static_cast<Eigen::Index>(island_rows)), contact.limit_target.setZero(static_cast<Eigen::Index>(island_rows));
+  contact.limit_accumulated.setZero(static_cast<Eigen::Index>(island_rows)), contact.limit_change.setZero(static_cast<Eigen::Index>(island_rows));
+  contact.limit_active.assign(island_rows, 0), contact.limit_block.reserve(island_rows);
+  contact.active_set.reserve(static_cast<int>(island_rows));
 
   JointControlScratch& controls = state.controls;
   controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);

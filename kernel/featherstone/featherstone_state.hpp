@@ -38,6 +38,7 @@
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "limber/kernel/model/options.hpp"
+#include "limber/kernel/numerics/active_set.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 
 namespace limber {
@@ -45,42 +46,66 @@ namespace limber {
 
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
 /// compile so a step allocates nothing.
+///
+/// Blocks. The step's constraints in joint space are blocks of rows (joint_space_contacts.hpp,
+/// "Constraint space"): contact c is block c (three rows: the world x, y, z of its points'
+/// relative velocity), limit row k (JointControlScratch::rows) is block contacts + k (one row,
+/// its first column; the other two are zero).
 struct JointSpaceContactScratch {
   /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
   DynamicsWorkspace articulated;
   Eigen::VectorXd zero_velocities;             ///< nv
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
-  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K, world impulse at p → relative velocity at p
+  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K = A_cc, world impulse at p → relative velocity at p
   std::vector<double> push;                      ///< per contact: accumulated push-out "impulse", kg·m
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
-  // The contacts' responses through the factor (joint_space_contacts.hpp, "Responses").
+  // The blocks' responses through the factor (joint_space_contacts.hpp, "Responses").
   JointSpaceFactor inertia;                      ///< H at the contact configuration, in the factor's sparsity (not factored)
   JointSpaceFactor factor;                       ///< its LᵀDL
-  JointSpaceFactor held;                         ///< the limit rows' and friction's: H with the held rows' penalties, factored per island
+  JointSpaceFactor held;                         ///< the joint friction's: H + h·G with the held joints' penalties, factored per island
   DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch
-  /// Per contact: where its entries start in row_coordinate and row_value (contacts + 1).
+  /// Per block: where its entries start in row_coordinate and row_value (blocks + 1).
   std::vector<int> row_begin;
-  /// The contacts' rows J_c on the coordinates of their bodies' paths to the root: each entry a
-  /// coordinate and the three rows' values there (J_c v: the world x, y, z of the relative
-  /// velocity of the contact's points, a's minus b's; b's path entered negated).
+  /// The blocks' rows J_g on the coordinates of their paths to the root: each entry a coordinate
+  /// and the three rows' values there (a contact's b path entered negated; a limit row's
+  /// ancestors with zeros, so that its entries hold its whole path).
   std::vector<int> row_coordinate;
   std::vector<Eigen::Vector3d> row_value;
   Eigen::VectorXd response;                      ///< nv: a solve's scratch
-  /// Per contact: where its half rows start in half_coordinate and half_value (contacts + 1).
+  /// Per block: where its half rows start in half_coordinate and half_value (blocks + 1).
   std::vector<int> half_begin;
-  /// The contacts' half rows Y_c = L⁻ᵀ J_cᵀ (each coordinate of the union of their bodies' paths
-  /// once, in descending order, and Y_c's three columns there): K_c = Y_cᵀ D⁻¹ Y_c, and an
-  /// impulse ι adds D⁻¹ Y_c ι to `lagging` on those coordinates alone.
+  /// The blocks' half rows Y_g = L⁻ᵀ J_gᵀ (each coordinate of their paths once, in descending
+  /// order, and Y_g's three columns there): A_hg = Y_hᵀ D⁻¹ Y_g.
   std::vector<int> half_coordinate;
   std::vector<Eigen::Vector3d> half_value;
-  /// nv: y = D⁻¹ L⁻ᵀ Σ J_cᵀ ι of the impulses not yet in v (or the displacement), which is v's
-  /// share L⁻¹ y; J_c of it is Y_cᵀ y.
+  /// Per block: its islands (the second −1 unless a contact joins two).
+  std::vector<std::int32_t> first_island, second_island;
+  /// The blocks of island k are island_block[island_block_begin[k] … island_block_begin[k + 1]).
+  std::vector<int> island_block_begin, island_block;
+  /// The Delassus matrix by block columns: column g holds A_hg (3 × 3: an impulse on g's rows →
+  /// the motion of h's rows) for every block h sharing an island with g, g itself included, at
+  /// column_begin[g] … column_begin[g + 1] (blocks + 1).
+  std::vector<int> column_begin, column_block;
+  std::vector<Eigen::Matrix3d> column_value;
+  /// Per block: its rows' motion J_g x + Σ_h A_gh λ_h (x: v or the push-out's displacement at
+  /// the passes' start) and its accumulated impulse λ_g.
+  std::vector<Eigen::Vector3d> motion, impulse;
+  /// nv: y = D⁻¹ Σ_g Y_g λ_g, which moves x by L⁻¹ y (settle).
   Eigen::VectorXd lagging;
   Eigen::Matrix<double, Eigen::Dynamic, 3> scatter;  ///< nv × 3 scratch, zero between uses
-  std::vector<int> path;                             ///< one contact's coordinates (scratch)
+  std::vector<int> path;                             ///< one block's coordinates (scratch)
+  // An island's limit rows solved together (joint_space_limits.cpp): their Delassus matrix,
+  // values, targets, accumulated impulses, changes, held flags, blocks; capacity the most limit
+  // rows of one island.
+  Eigen::MatrixXd limit_delassus;
+  Eigen::VectorXd limit_value, limit_target, limit_accumulated, limit_change;
+  std::vector<char> limit_active;
+  std::vector<int> limit_block;
+  std::vector<int> limit_local;  ///< per block: its place among its island's limit rows in a solve, or −1
+  ActiveSet active_set;
 };
 
 /// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).
@@ -114,11 +139,6 @@ struct JointLimitRow {
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< first `dofs` entries: ∂C/∂v
   double gap = 0;             ///< C: how far inside the limit (< 0: violated), rad or m
   double inverse_mass = 0;    ///< direction·H⁻¹·direction
-  double impulse = 0, push = 0;  ///< accumulated, ≥ 0
-  // The block solve's scratch: the row's value and target, whether it is held, its impulse's change.
-  double value = 0, target = 0, change = 0;
-  bool active = false;  ///< to be held in the next round
-  bool held = false;    ///< held in the last factorization
 };
 
 /// A joint's friction over a step (joint_space_contacts.hpp, "Drives and friction").
@@ -145,8 +165,8 @@ struct JointControlScratch {
   std::vector<JointFrictionBlock> friction;  ///< capacity: one per joint
   std::vector<JointLimitRow> rows;           ///< capacity: three per joint
   std::vector<std::int32_t> islands;         ///< the islands with rows (or friction); capacity: every island
-  /// Per tree body: the penalty added to its joint's block of H (top-left dofs × dofs) to hold
-  /// rows (JointSpaceContactScratch::held).
+  /// Per tree body: the penalty added to its joint's block of H + h·G (top-left dofs × dofs) to
+  /// hold its friction (JointSpaceContactScratch::held).
   std::vector<Eigen::Matrix3d> penalty;
 };
 

@@ -54,19 +54,32 @@ void contact_rows(FeatherstoneState& state, const RigidContact& contact) {
   s.row_begin.push_back(static_cast<int>(s.row_coordinate.size()));
 }
 
-// J_c x: the relative motion of contact c's points (m/s for velocities x = v, m for a push-out's
-// displacement).
-Eigen::Vector3d contact_motion(const JointSpaceContactScratch& s, std::size_t c, const Eigen::VectorXd& x) {
+// The entries of limit row `row`'s block: direction on its joint's velocities, zeros on the
+// rest of its path to the root (joint_space_contacts.hpp, "Constraint space").
+void limit_row_entries(FeatherstoneState& state, const JointLimitRow& row) {
+  JointSpaceContactScratch& s = state.contact;
+  for (int i = row.body; i >= 0; i = state.tree.body(i).parent) {
+    const int offset = state.tree.velocity_offset(i), dofs = joint_velocity_count(state.tree.body(i).joint);
+    for (int k = offset; k < offset + dofs; ++k) {
+      const int m = k - row.offset;
+      s.row_coordinate.push_back(k);
+      s.row_value.emplace_back(m >= 0 && m < row.dofs ? row.direction[m] : 0.0, 0.0, 0.0);
+    }
+  }
+  s.row_begin.push_back(static_cast<int>(s.row_coordinate.size()));
+}
+
+// J_g x: block g's rows' motion (m/s for velocities x = v, m for a push-out's displacement).
+Eigen::Vector3d block_motion(const JointSpaceContactScratch& s, std::size_t g, const Eigen::VectorXd& x) {
   Eigen::Vector3d motion = Eigen::Vector3d::Zero();
-  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) motion += s.row_value[static_cast<std::size_t>(e)] * x[s.row_coordinate[static_cast<std::size_t>(e)]];
+  for (int e = s.row_begin[g]; e < s.row_begin[g + 1]; ++e) motion += s.row_value[static_cast<std::size_t>(e)] * x[s.row_coordinate[static_cast<std::size_t>(e)]];
   return motion;
 }
 
-// Contact c's half rows Y_c = L⁻ᵀ J_cᵀ (on the union of its bodies' paths) and its matrix
-// K = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c. Needs its rows and the factor.
-Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t c) {
+// Block g's half rows Y_g = L⁻ᵀ J_gᵀ (on its path). Needs its rows and the factor.
+void half_rows(JointSpaceContactScratch& s, std::size_t g) {
   s.path.clear();
-  for (int e = s.row_begin[c]; e < s.row_begin[c + 1]; ++e) {
+  for (int e = s.row_begin[g]; e < s.row_begin[g + 1]; ++e) {
     const int k = s.row_coordinate[static_cast<std::size_t>(e)];
     s.scatter.row(k) += s.row_value[static_cast<std::size_t>(e)].transpose();
     s.path.push_back(k);
@@ -74,69 +87,104 @@ Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t c) {
   std::sort(s.path.begin(), s.path.end(), std::greater<>());
   s.path.erase(std::unique(s.path.begin(), s.path.end()), s.path.end());
   s.factor.solve_transposed_lower(s.scatter, s.path);
-  Eigen::Matrix3d k_c = Eigen::Matrix3d::Zero();
   for (const int k : s.path) {
-    const Eigen::Vector3d y = s.scatter.row(k).transpose();
-    s.scatter.row(k).setZero();
     s.half_coordinate.push_back(k);
-    s.half_value.push_back(y);
-    k_c.noalias() += y * y.transpose() / s.factor.pivot(k);
+    s.half_value.push_back(s.scatter.row(k).transpose());
+    s.scatter.row(k).setZero();
   }
   s.half_begin.push_back(static_cast<int>(s.half_coordinate.size()));
-  return k_c;
 }
 
-// J_c of the impulses not yet in x: Y_cᵀ y (see `lagging`).
-Eigen::Vector3d lagging_motion(const JointSpaceContactScratch& s, std::size_t c) {
-  Eigen::Vector3d motion = Eigen::Vector3d::Zero();
-  for (int e = s.half_begin[c]; e < s.half_begin[c + 1]; ++e) motion += s.half_value[static_cast<std::size_t>(e)] * s.lagging[s.half_coordinate[static_cast<std::size_t>(e)]];
-  return motion;
-}
-
-// The impulse +ι on a and −ι on b at contact c's point: y += D⁻¹ Y_c ι, on the contact's paths
-// alone; its motion H⁻¹ J_cᵀ ι = L⁻¹ D⁻¹ Y_c ι joins x at the next settle().
-void respond(JointSpaceContactScratch& s, std::size_t c, const Eigen::Vector3d& impulse) {
-  for (int e = s.half_begin[c]; e < s.half_begin[c + 1]; ++e) {
-    const int k = s.half_coordinate[static_cast<std::size_t>(e)];
-    s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(impulse) / s.factor.pivot(k);
+// The Delassus matrix's block columns (joint_space_contacts.hpp, "Constraint space"): for each
+// block g, A_hg = Y_hᵀ D⁻¹ Y_g for every block h on one of g's islands, through D⁻¹ Y_g
+// scattered on g's path. Needs the blocks' half rows and islands.
+void form_delassus(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
+  const std::size_t blocks = s.first_island.size();
+  // The blocks by island (a block on two islands in both).
+  s.island_block_begin.assign(state.islands.size() + 1, 0);
+  for (std::size_t g = 0; g < blocks; ++g) {
+    ++s.island_block_begin[static_cast<std::size_t>(s.first_island[g]) + 1];
+    if (s.second_island[g] >= 0) ++s.island_block_begin[static_cast<std::size_t>(s.second_island[g]) + 1];
+  }
+  for (std::size_t k = 0; k < state.islands.size(); ++k) s.island_block_begin[k + 1] += s.island_block_begin[k];
+  s.island_block.resize(static_cast<std::size_t>(s.island_block_begin.back()));
+  for (std::size_t g = 0; g < blocks; ++g) {  // each island's begin runs to its end...
+    for (const std::int32_t island : {s.first_island[g], s.second_island[g]}) {
+      if (island >= 0) s.island_block[static_cast<std::size_t>(s.island_block_begin[static_cast<std::size_t>(island)]++)] = static_cast<int>(g);
+    }
+  }
+  for (std::size_t k = state.islands.size(); k > 0; --k) s.island_block_begin[k] = s.island_block_begin[k - 1];  // ...and is put back
+  s.island_block_begin[0] = 0;
+  const std::size_t contacts = state.contacts.size();
+  s.contact_matrix.resize(contacts);
+  s.column_begin.assign(1, 0);
+  s.column_block.clear(), s.column_value.clear();
+  for (std::size_t g = 0; g < blocks; ++g) {
+    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+      const int k = s.half_coordinate[static_cast<std::size_t>(e)];
+      s.scatter.row(k) = s.half_value[static_cast<std::size_t>(e)].transpose() / s.factor.pivot(k);
+    }
+    for (const std::int32_t island : {s.first_island[g], s.second_island[g]}) {
+      if (island < 0) continue;
+      const auto k = static_cast<std::size_t>(island);
+      for (int slot = s.island_block_begin[k]; slot < s.island_block_begin[k + 1]; ++slot) {
+        const auto h = static_cast<std::size_t>(s.island_block[static_cast<std::size_t>(slot)]);
+        // A block on both of g's islands is met twice: take it on the first.
+        if (island == s.second_island[g] && (s.first_island[h] == s.first_island[g] || s.second_island[h] == s.first_island[g])) continue;
+        Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+        for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
+          a.noalias() += s.half_value[static_cast<std::size_t>(e)] * s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]);
+        }
+        s.column_block.push_back(static_cast<int>(h));
+        s.column_value.push_back(a);
+        if (h != g) continue;  // the diagonal: a contact's K, a limit row's inverse mass
+        if (g < contacts) {
+          s.contact_matrix[g] = a;
+        } else {
+          state.controls.rows[g - contacts].inverse_mass = a(0, 0);
+        }
+      }
+    }
+    s.column_begin.push_back(static_cast<int>(s.column_block.size()));
+    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]).setZero();
   }
 }
 
-// x += L⁻¹ y: the impulses so far joined to x (v, or the push-out's displacement); y = 0.
+// The blocks' motions J_g x and impulses 0, for passes on x.
+void start_passes(JointSpaceContactScratch& s, const Eigen::VectorXd& x) {
+  const std::size_t blocks = s.first_island.size();
+  s.motion.resize(blocks), s.impulse.resize(blocks);
+  for (std::size_t g = 0; g < blocks; ++g) s.motion[g] = block_motion(s, g, x), s.impulse[g].setZero();
+}
+
+// x += H⁻¹ Σ_g J_gᵀ λ_g = L⁻¹ D⁻¹ Σ_g Y_g λ_g: the passes' impulses joined to x (v, or the
+// push-out's displacement), one forward pass.
 void settle(JointSpaceContactScratch& s, Eigen::VectorXd& x) {
+  for (std::size_t g = 0; g < s.impulse.size(); ++g) {
+    if (s.impulse[g].isZero(0)) continue;
+    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+      const int k = s.half_coordinate[static_cast<std::size_t>(e)];
+      s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(s.impulse[g]) / s.factor.pivot(k);
+    }
+  }
   s.factor.solve_lower(s.lagging);
   x += s.lagging;
   s.lagging.setZero();
 }
 
-// The contacts' rows, half rows and matrices K = J_c H⁻¹ J_cᵀ, approach speeds, and e = 0 for
-// resting contacts. Needs the factor at the current q.
-void prepare_contacts(FeatherstoneState& state, double dt) {
-  JointSpaceContactScratch& s = state.contact;
-  s.row_begin.assign(1, 0);
-  s.row_coordinate.clear(), s.row_value.clear();
-  s.half_begin.assign(1, 0);
-  s.half_coordinate.clear(), s.half_value.clear();
-  s.contact_matrix.resize(state.contacts.size());
-  for (std::size_t c = 0; c < state.contacts.size(); ++c) {
-    RigidContact& contact = state.contacts[c];
-    contact_rows(state, contact);
-    s.contact_matrix[c] = half_rows(s, c);
-    record_approach(contact, -contact_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
-  }
-}
-
-// Sequential impulses (joint_space_contacts.hpp, "Impulses"), the contacts' and the limit rows'.
-// state.kinematics' body velocities are left those of the old v.
+// Sequential impulses (joint_space_contacts.hpp, "Impulses") on the contacts' blocks, and the
+// limit rows' blocks held per island, in constraint space; v takes them at the end.
 void impulse_passes(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
+  start_passes(s, state.v);
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool applied = false;  // a pass that applies nothing leaves nothing for the next
     for (std::size_t c = 0; c < state.contacts.size(); ++c) {
       const RigidContact& contact = state.contacts[c];
       const Eigen::Matrix3d& k = s.contact_matrix[c];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = contact_motion(s, c, state.v) + lagging_motion(s, c);
+      const Eigen::Vector3d relative = s.motion[c];
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -150,15 +198,12 @@ void impulse_passes(FeatherstoneState& state, double dt) {
         const double tangent_inverse_mass = tangent.dot(k * tangent);
         if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
       }
-      respond(s, c, impulse);
+      apply_block_impulse(s, static_cast<int>(c), impulse);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
     // reached lets the joint arrive at it by the step's end), each island's rows together.
-    if (!state.controls.rows.empty()) {
-      settle(s, state.v);
-      if (solve_limit_rows(state, dt, /*position=*/false)) applied = true;
-    }
+    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/false)) applied = true;
     if (!applied) break;
   }
   settle(s, state.v);
@@ -168,6 +213,7 @@ void impulse_passes(FeatherstoneState& state, double dt) {
 void push_out(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   s.displacement.setZero();
+  start_passes(s, s.displacement);
   s.push.assign(state.contacts.size(), 0.0);  // within the capacity reserved at compile
   bool moved = false;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
@@ -177,23 +223,20 @@ void push_out(FeatherstoneState& state, double dt) {
       const double target = push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = (contact_motion(s, c, s.displacement) + lagging_motion(s, c)).dot(contact.normal);
+      const double done = s.motion[c].dot(contact.normal);
       if (std::abs(target - done) <= kPushTolerance * target) continue;
       const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
       const double change = push - s.push[c];
       if (change == 0) continue;
       s.push[c] = push;
-      respond(s, c, change * contact.normal);
+      apply_block_impulse(s, static_cast<int>(c), change * contact.normal);
       moved = pushed = true;
     }
-    if (!state.controls.rows.empty()) {
-      settle(s, s.displacement);
-      if (solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
-    }
+    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
     if (!pushed) break;
   }
-  settle(s, s.displacement);
   if (!moved) return;
+  settle(s, s.displacement);
   // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v).
   const ArticulatedTree& tree = state.tree;
   forward_kinematics(tree, state.q, state.v, state.kinematics);
@@ -213,8 +256,14 @@ void push_out(FeatherstoneState& state, double dt) {
   forward_dynamics(tree, state.q, s.zero_velocities, s.generalized_momentum, Eigen::Vector3d::Zero(), s.articulated, state.v);
 }
 
-// The contacts and limit rows of the step, their matrices and inverse masses; false when there are
-// none.
+// The island of scene body b (−1 for a plane).
+std::int32_t island_of_scene_body(const FeatherstoneState& state, std::int32_t b) {
+  return b < 0 ? -1 : static_cast<std::int32_t>(state.island_of_body[static_cast<std::size_t>(b)]);
+}
+
+// The step's blocks — the contacts, then the limit rows — their rows, half rows and Delassus
+// matrix through the factor of H at the current q, approach speeds and e = 0 for resting
+// contacts; false when there are none.
 bool prepare_constraints(FeatherstoneState& state, double dt) {
   find_limit_rows(state, dt);
   if (state.contacts.empty() && state.controls.rows.empty()) return false;
@@ -228,8 +277,25 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
     state.v.setConstant(std::numeric_limits<double>::quiet_NaN());
     return false;
   }
-  prepare_contacts(state, dt);
-  measure_limit_rows(state);
+  s.row_begin.assign(1, 0);
+  s.row_coordinate.clear(), s.row_value.clear();
+  s.half_begin.assign(1, 0);
+  s.half_coordinate.clear(), s.half_value.clear();
+  s.first_island.clear(), s.second_island.clear();
+  for (std::size_t c = 0; c < state.contacts.size(); ++c) {
+    RigidContact& contact = state.contacts[c];
+    contact_rows(state, contact);
+    half_rows(s, c);
+    const std::int32_t a = island_of_scene_body(state, contact.a), b = island_of_scene_body(state, contact.b);
+    s.first_island.push_back(a), s.second_island.push_back(b == a ? -1 : b);
+    record_approach(contact, -block_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
+  }
+  for (const JointLimitRow& row : state.controls.rows) {
+    limit_row_entries(state, row);
+    half_rows(s, s.first_island.size());
+    s.first_island.push_back(row.island), s.second_island.push_back(-1);
+  }
+  form_delassus(state);
   return true;
 }
 

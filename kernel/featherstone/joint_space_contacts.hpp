@@ -16,12 +16,21 @@
 // two bodies' paths, and so are its half rows Y_c = L⁻ᵀ J_cᵀ (MuJoCo's half-solve). Its
 // collision matrix is K_c = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c (3×3, world: the change of the relative
 // velocity per unit impulse +J on a and −J on b; its normal-normal entry is the contact's
-// effective inverse mass 1/(J_n H⁻¹ J_nᵀ)). An impulse ι moves the joints by
-// Δv = H⁻¹ J_cᵀ ι = L⁻¹ y with y = D⁻¹ Y_c ι: the passes add y on the contact's paths alone and
-// read a contact's relative velocity as J_c v + Y_cᵀ y, and v takes L⁻¹ y (one forward pass)
-// before the limit rows and after the passes. So an impulse costs its two paths, not its
-// islands: against the articulated-body algorithm's impulse response with v = 0, g = 0, which
-// answered each impulse before, humanoid.xml's step ran 2.55× faster (bench/models.md).
+// effective inverse mass 1/(J_n H⁻¹ J_nᵀ)).
+//
+// Constraint space. The contacts and the limit rows (below) are blocks of rows — a contact's
+// three, a limit's one — and their Delassus matrix A = J H⁻¹ Jᵀ = Y D⁻¹ Yᵀ is formed once a
+// step, block by block: A_hg = Y_hᵀ D⁻¹ Y_g for blocks g and h on one island (a contact between
+// two islands on both; blocks on different islands do not move each other), by scattering
+// D⁻¹ Y_g on g's path and reading it along h's (Carpentier et al. 2021, "Proximal and sparse
+// resolution of constrained dynamic equations", the Delassus matrix through the factor). The
+// passes then work on the blocks' motions w = J x + A λ alone (x: v, or the push-out's
+// displacement at the passes' start; λ the impulses so far): an impulse on g moves the w of the
+// blocks on its islands by A's column g, O(blocks) instead of a pass over its paths, and x takes
+// every impulse at the passes' end as H⁻¹ Jᵀ λ = L⁻¹ D⁻¹ Σ Y_g λ_g, one forward pass. The same
+// impulses as answering each through the factor (humanoid.xml: energy, penetration and limits
+// to the printed digit); against that, humanoid.xml's contact stage took 0.68× the time,
+// 22_humanoids.xml's 0.68× and humanoid100.xml's 0.71× (bench/models.md).
 //
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
@@ -61,13 +70,12 @@
 // exactly at the step's end (Catto's speculative contacts). Then the push-out takes the rows
 // with the contacts: a violation is pushed out in full (it is always the solver's: the Model's
 // poses are inside every limit), and a row inside its limit is not pushed past it. In each pass
-// an island's rows are solved together, after its contacts (joint_space_limits.cpp, "Holding
-// rows"): the rows held get a penalty 10⁶ times their effective mass on their joint's block of H
-// (H + Σ M·d·dᵀ, the island's coordinates factored again as LᵀDL), which is exactly the response
-// to joint impulses along them and leaves them within round-off of their targets after one
-// refinement; rows that would pull are released, rows pushed past are held (an active set, at
-// most 8 rounds). One by one, Gauss–Seidel took hundreds of passes on neighbouring joints at
-// their limits.
+// an island's rows are solved together, after its contacts, in constraint space: their block of
+// A and an active-set solve of their complementarity problem (kernel/numerics/active_set.hpp;
+// joint_space_limits.cpp, "Holding rows") holds them on their targets to round-off — rows that
+// would pull are released, rows pushed past are held, at most 8 rounds. One by one,
+// Gauss–Seidel took hundreds of passes on neighbouring joints at their limits; a penalty on H's
+// joint blocks, refactored per round (before the Delassus matrix), cost a factor a round.
 //
 // Drives and friction, before the integrator (joint_control_forces), as forces held over the
 // step: a drive is the stable PD of Tan, Liu & Turk (2011, "Stable proportional-derivative
@@ -77,8 +85,9 @@
 // ABA, O(n), unconditionally stable in k and c. Friction then gives each joint the impulse j that
 // stops its predicted velocity through that same inertia, clamped to |j| ≤ friction·h (per DOF;
 // a spherical joint's 3-vector by its norm, against the velocity it slides at), an island's
-// joints together as the limit rows (stuck joints held, sliding ones at the bound), and holds
-// j/h over the step — so a joint friction holds does not creep, whatever the integrator.
+// joints together (stuck joints held by a penalty on their block of H + h·G, refactored;
+// sliding ones at the bound), and holds j/h over the step — so a joint friction holds does not
+// creep, whatever the integrator.
 #pragma once
 
 #include <vector>

@@ -81,7 +81,7 @@ void find_serial_limit_rows(FeatherstoneState& state, double dt) {
 }
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps, directions, approach speeds (inverse masses: measure_limit_rows).
+// gaps and directions (their inverse masses come with the blocks' Delassus matrix).
 void find_limit_rows(FeatherstoneState& state, double dt) {
   std::vector<JointLimitRow>& rows = state.controls.rows;
   rows.clear();
@@ -141,42 +141,89 @@ Eigen::Matrix3d inverse_block(FeatherstoneState& state, std::size_t island, int 
   return 0.5 * (block + block.transpose());  // symmetric in exact arithmetic
 }
 
-// Each row's direction·H⁻¹·direction (one block of H⁻¹ per limited joint, through the contacts'
-// factor at the current q: state.contact.factor).
-void measure_limit_rows(FeatherstoneState& state) {
-  Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
-  int measured_offset = -1;
-  for (JointLimitRow& row : state.controls.rows) {
-    if (row.offset != measured_offset) {
-      block = inverse_block(state, static_cast<std::size_t>(row.island), row.offset, row.dofs);
-      measured_offset = row.offset;
-    }
-    row.inverse_mass = row.direction.dot(block * row.direction);
-  }
-}
-
-// --- Holding rows: an island's rows solved together ------------------------------------------------
+// --- Holding rows: an island's limit rows solved together -----------------------------------------
 //
 // Sequential impulses converge slowly on limit rows of neighbouring joints (a light spine between
 // a torso and a pelvis both at their limits: each row's impulse undoes the other's), so an
-// island's rows are solved together, exactly: the rows held (the active set) get the penalty
-// M = kPenalty/(their inverse mass) on their joint's coordinates — H + Σ M·d·dᵀ, factored as
-// LᵀDL on the island's coordinates (factor_held_rows; the joint friction's blocks the same way,
-// on H + h·G) — and the impulse Σ M·(target − value)·d. Its response Δv is exactly H⁻¹ of the joint
-// impulses Σ λ·d with λ = M·(target − value − d·Δv), and each held row's value ends within
-// 1/kPenalty of its target. Rows whose λ would pull are released, rows the solve pushes past
-// their target are held, and the solve repeats (at most kActiveSetIterations times).
-constexpr double kPenalty = 1e6;
+// island's rows are solved together, exactly, in constraint space: their Delassus matrix (the
+// blocks' A, joint_space_contacts.hpp, "Constraint space") and an active-set solve of their
+// complementarity problem (kernel/numerics/active_set.hpp): the rows held reach their targets,
+// rows that would pull are released, rows left past their targets are held, at most
+// kActiveSetIterations rounds.
 constexpr int kActiveSetIterations = 8;
+
+// The limit rows of island `island` into the solve's scratch (their Delassus matrix, values,
+// targets and impulses so far, held flags); returns how many, 0 when none needs a change.
+int gather_island_rows(FeatherstoneState& state, std::int32_t island, double dt, bool position, double tolerance) {
+  JointSpaceContactScratch& s = state.contact;
+  const int contacts = static_cast<int>(state.contacts.size());
+  s.limit_block.clear();
+  for (std::size_t k = 0; k < state.controls.rows.size(); ++k) {
+    if (state.controls.rows[k].island == island) s.limit_block.push_back(contacts + static_cast<int>(k));
+  }
+  const int m = static_cast<int>(s.limit_block.size());
+  bool needed = false;
+  for (int i = 0; i < m; ++i) {
+    const auto g = static_cast<std::size_t>(s.limit_block[static_cast<std::size_t>(i)]);
+    const JointLimitRow& row = state.controls.rows[g - static_cast<std::size_t>(contacts)];
+    s.limit_local[g] = i;
+    const double value = s.motion[g][0], accumulated = s.impulse[g][0];
+    // Position: a violation in full (it is never the Model's, always the solver's), and a row
+    // inside its limit not pushed past it. Velocity: a limit not yet reached lets the joint arrive
+    // at it by the step's end.
+    const double target = position ? -row.gap : (row.gap > 0 ? -row.gap / dt : 0.0);
+    const bool active = row.inverse_mass > 0 && (value < target - tolerance || accumulated > 0);
+    needed = needed || (active && std::abs(target - value) > tolerance + (position ? 1e-5 * std::abs(target) : 0.0));
+    s.limit_value[i] = value, s.limit_target[i] = target, s.limit_accumulated[i] = accumulated;
+    s.limit_active[static_cast<std::size_t>(i)] = active;
+  }
+  if (!needed) {
+    for (const int g : s.limit_block) s.limit_local[static_cast<std::size_t>(g)] = -1;
+    return 0;
+  }
+  for (int j = 0; j < m; ++j) {
+    const auto g = static_cast<std::size_t>(s.limit_block[static_cast<std::size_t>(j)]);
+    for (int e = s.column_begin[g]; e < s.column_begin[g + 1]; ++e) {
+      const int i = s.limit_local[static_cast<std::size_t>(s.column_block[static_cast<std::size_t>(e)])];
+      if (i >= 0) s.limit_delassus(i, j) = s.column_value[static_cast<std::size_t>(e)](0, 0);
+    }
+  }
+  for (const int g : s.limit_block) s.limit_local[static_cast<std::size_t>(g)] = -1;
+  return m;
+}
+
+// The limit rows, together per island, on the blocks' motions: velocity level (values
+// direction·v, targets −max(C, 0)/Δt) or position level (values direction·δ of the push-out's
+// displacement, targets the violation to push out, or −C for a row inside its limit). Their
+// impulses change the motions of every block on the island. Returns whether it changed any.
+bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
+  JointSpaceContactScratch& s = state.contact;
+  const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
+  bool changed_any = false;
+  for (const std::int32_t island : state.controls.islands) {
+    const int m = gather_island_rows(state, island, dt, position, tolerance);
+    if (m == 0) continue;
+    s.active_set.solve(s.limit_delassus.topLeftCorner(m, m), s.limit_value.head(m), s.limit_target.head(m), s.limit_accumulated.head(m),
+                       s.limit_active, tolerance, s.limit_change.head(m), kActiveSetIterations);
+    for (int i = 0; i < m; ++i) {
+      if (s.limit_change[i] == 0) continue;
+      apply_block_impulse(s, s.limit_block[static_cast<std::size_t>(i)], Eigen::Vector3d(s.limit_change[i], 0, 0));
+      changed_any = true;
+    }
+  }
+  return changed_any;
+}
+
+// Joint friction's held joints: the penalty on their block of H + h·G, in units of its inverse.
+constexpr double kPenalty = 1e6;
 
 // Clears the penalties of island `island`'s bodies.
 void clear_penalties(FeatherstoneState& state, std::size_t island) {
   for (int i = state.island_begin[island]; i < state.island_begin[island + 1]; ++i) state.controls.penalty[static_cast<std::size_t>(i)].setZero();
 }
 
-// The held rows' factor of island `island`: H (state.contact.inertia) with each held row's
-// penalty M·d·dᵀ on its joint's coordinates (state.controls.penalty), into state.contact.held.
-// The same system as the articulated-body factorization with the penalties on D_i (above).
+// The held joints' factor of island `island`: H + h·G (state.contact.inertia) with each held
+// joint's penalty on its coordinates (state.controls.penalty), into state.contact.held.
 void factor_held_rows(FeatherstoneState& state, std::size_t island) {
   JointSpaceContactScratch& s = state.contact;
   const auto [first, last] = island_velocities(state, island);
@@ -190,7 +237,7 @@ void factor_held_rows(FeatherstoneState& state, std::size_t island) {
       }
     }
   }
-  s.held.factor(first, last);  // H's penalties only add to a factor prepare_constraints found positive
+  s.held.factor(first, last);  // the penalties only add to a factor joint_control_forces found positive
 }
 
 // The response of island `island`'s held factor to state.contact.joint_impulse (its slice,
@@ -208,99 +255,11 @@ void respond_held(FeatherstoneState& state, std::size_t island) {
   solve_held(state, island);
 }
 
-// target += the last response of island `island` (its slice of joint_change).
-void add_joint_response(FeatherstoneState& state, std::size_t island, Eigen::VectorXd& target) {
-  const auto [first, last] = island_velocities(state, island);
-  target.segment(first, last - first) += state.contact.joint_change.segment(first, last - first);
-}
 
-// The limit rows, together per island: velocity level (values direction·v, targets
-// −max(C, 0)/Δt, accumulated impulses) or position level (values direction·δ of the push-out's
-// displacement, targets the violation to push out, or −C for a row inside its limit;
-// accumulated pushes). The responses are added to (v, body velocities) or to (δ, body
-// displacements). Returns whether it changed anything.
-bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
-  JointControlScratch& c = state.controls;
-  JointSpaceContactScratch& s = state.contact;
-  const Eigen::VectorXd& values = position ? s.displacement : state.v;
-  Eigen::VectorXd& target = position ? s.displacement : state.v;
-  const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
-  const auto accumulated = [&](JointLimitRow& row) -> double& { return position ? row.push : row.impulse; };
-  bool changed_any = false;
-  for (const std::int32_t island : c.islands) {
-    bool needed = false;
-    for (JointLimitRow& row : c.rows) {
-      if (row.island != island) continue;
-      row.value = joint_dot(row.direction, values, row.offset, row.dofs);
-      if (position) {
-        row.target = -row.gap;  // a violation in full: it is never the Model's, always the solver's
-      } else {
-        row.target = row.gap > 0 ? -row.gap / dt : 0.0;
-      }
-      row.active = row.inverse_mass > 0 && (row.value < row.target - tolerance || accumulated(row) > 0);
-      needed = needed || (row.active && std::abs(row.target - row.value) > tolerance + (position ? 1e-5 * std::abs(row.target) : 0.0));
-    }
-    if (!needed) continue;
-    const auto k = static_cast<std::size_t>(island);
-    for (int iteration = 0;; ++iteration) {
-      // Held rows: the penalty and its impulse; released rows give back what they had.
-      clear_penalties(state, k);
-      for (JointLimitRow& row : c.rows) {
-        if (row.island != island) continue;
-        row.held = row.active;
-        if (row.held) {
-          const double penalty = kPenalty / row.inverse_mass;
-          const Eigen::Vector3d d = row.direction;
-          Eigen::Matrix3d& block = c.penalty[static_cast<std::size_t>(row.body)];
-          for (int a = 0; a < row.dofs; ++a) {
-            for (int b = 0; b < row.dofs; ++b) block(a, b) += penalty * d[a] * d[b];
-          }
-          add_joint_vector(penalty * (row.target - row.value) * d, s.joint_impulse, row.offset, row.dofs);
-        } else if (accumulated(row) > 0) {
-          add_joint_vector(-accumulated(row) * row.direction, s.joint_impulse, row.offset, row.dofs);
-        }
-      }
-      respond_held(state, k);
-      bool changed = false;
-      for (JointLimitRow& row : c.rows) {
-        if (row.island != island) continue;
-        const double moved = joint_dot(row.direction, s.joint_change, row.offset, row.dofs);
-        if (row.held) {
-          row.change = kPenalty / row.inverse_mass * (row.target - row.value - moved);
-          if (accumulated(row) + row.change < 0) row.active = false, changed = true;  // it would pull: release it
-        } else {
-          row.change = -accumulated(row);
-          if (row.inverse_mass > 0 && row.value + moved < row.target - tolerance) row.active = true, changed = true;
-        }
-      }
-      if (changed && iteration + 1 < kActiveSetIterations) continue;
-      add_joint_response(state, k, target);
-      // One refinement with the same factorization takes the held rows' residual, 1/kPenalty of
-      // what they moved, to round-off.
-      for (JointLimitRow& row : c.rows) {
-        if (row.island != island) continue;
-        accumulated(row) = std::max(accumulated(row) + row.change, 0.0);
-        row.value = joint_dot(row.direction, values, row.offset, row.dofs);
-        if (row.held && row.active) {
-          add_joint_vector(kPenalty / row.inverse_mass * (row.target - row.value) * row.direction, s.joint_impulse, row.offset, row.dofs);
-        }
-      }
-      solve_held(state, k);
-      for (JointLimitRow& row : c.rows) {
-        if (row.island != island || !(row.held && row.active)) continue;
-        const double moved = joint_dot(row.direction, s.joint_change, row.offset, row.dofs);
-        accumulated(row) = std::max(accumulated(row) + kPenalty / row.inverse_mass * (row.target - row.value - moved), 0.0);
-      }
-      add_joint_response(state, k, target);
-      changed_any = true;
-      break;
-    }
-  }
-  return changed_any;
-}
-
-// Joint friction, together per island, as the rows (see "Holding rows"): a stuck joint is held at
-// rest (penalty kPenalty times its block of (H + h·G)⁻¹ inverted), a sliding one takes the impulse
+// Joint friction, together per island: a stuck joint is held at rest by a penalty on its block of
+// H + h·G (kPenalty times its block of (H + h·G)⁻¹ inverted; the island's coordinates factored
+// again as LᵀDL, factor_held_rows), which is exactly the response to the joint impulses that hold
+// it and leaves it within 1/kPenalty of rest, refined once; a sliding one takes the impulse
 // friction·h against the velocity it ends with; a stuck joint whose impulse would pass its bound
 // slides, a sliding one that friction would turn back sticks. Adds the responses to the
 // predicted velocities; the impulses stay in the blocks. Needs state.contact.inertia and factor

@@ -9,14 +9,11 @@
 namespace limber::joint_space {
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps, directions, approach speeds (inverse masses: measure_limit_rows).
+// gaps and directions (their inverse masses come with the blocks' Delassus matrix).
 void find_limit_rows(FeatherstoneState& state, double dt);
-// Each row's direction·H⁻¹·direction (one block of H⁻¹ per limited joint). Needs the
-// contacts' factor of H at the current q (state.contact.factor).
-void measure_limit_rows(FeatherstoneState& state);
 // One pass over the islands' rows, each island's together (joint_space_limits.cpp, "Holding
-// rows"): on the velocities, or (`position`) on the push-out's displacement. True when it
-// changed any.
+// rows"), on the blocks' motions and impulses (state.contact): the velocities' passes, or
+// (`position`) the push-out's. True when it changed any.
 bool solve_limit_rows(FeatherstoneState& state, double dt, bool position);
 
 }  // namespace limber::joint_space

@@ -34,6 +34,17 @@ inline void add_joint_vector(const Eigen::Vector3d& x, Eigen::VectorXd& v, int o
   for (int m = 0; m < dofs; ++m) v[offset + m] += x[m];
 }
 
+// Block g's impulse λ_g += change, and the motion of every block h sharing an island with it
+// (joint_space_contacts.hpp, "Constraint space"): motion_h += A_hg·change.
+inline void apply_block_impulse(JointSpaceContactScratch& s, int g, const Eigen::Vector3d& change) {
+  const auto index = static_cast<std::size_t>(g);
+  s.impulse[index] += change;
+  for (int e = s.column_begin[index]; e < s.column_begin[index + 1]; ++e) {
+    const auto entry = static_cast<std::size_t>(e);
+    s.motion[static_cast<std::size_t>(s.column_block[entry])].noalias() += s.column_value[entry] * change;
+  }
+}
+
 // Approach speeds below this are left to the push-out (an impulse for them would cost a pass
 // over the island and change nothing that matters), m/s.
 constexpr double kSlowestApproach = 1e-6;

@@ -255,7 +255,7 @@ void LimbCollisions::exclude_joined_pairs(const Model& model) {
   const auto exclude = [&](std::uint32_t a, std::uint32_t b) {
     if (a != b) excluded_.emplace_back(std::min(a, b), std::max(a, b));
   };
-  for (const auto [a, b] : joined_pairs(model)) {
+  for (const auto& [a, b] : joined_pairs(model)) {
     if (!any_welded) {
       exclude(a, b);
       continue;
