@@ -4,6 +4,7 @@
 // (bench/speed.md, "MuJoCo's models").
 //
 //   build/bench/mjcf_race [MODEL.xml ...] [--seconds S] [--rounds R] [--method M ...]
+//                         [--integrator semi-implicit|rk4]
 //
 // MODEL defaults to MuJoCo's humanoid.xml and 22_humanoids.xml (libmujoco-samples). Each round
 // runs every engine from the file's initial state for S simulated seconds (default 5), one engine
@@ -19,12 +20,14 @@
 // - energy: each engine's own, at the start and the end: MuJoCo's potential (gravity and joint
 //   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs).
 // Method M is any method that can run the model (default: particles, on 1 and 2 threads, and
-// featherstone).
+// featherstone). --integrator sets Featherstone's (RK4 by default; semi-implicit Euler is
+// MuJoCo's default, the integrator it races with here).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -87,6 +90,7 @@ Measures run_mujoco(const mjModel* model, mjData* data, long steps, bool measure
 struct Runner {
   Method method = Method::particles;
   int threads = 1;
+  std::optional<Integrator> integrator;  ///< Featherstone's, when not its default
 };
 
 // The stepping thread's CPU time, s; the wall time when helper threads work too.
@@ -98,6 +102,7 @@ double clock_seconds(int threads) {
 Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure) {
   WorldOptions options = world_options(runner.method, scene.methods);
   options.particles.threads = runner.threads;
+  if (runner.integrator) options.featherstone.integrator = *runner.integrator;
   World world(scene.model, options);
   Measures out;
   if (measure) out.energy_start = world.observe().energy();
@@ -160,8 +165,9 @@ void race(const std::filesystem::path& file, double seconds, int rounds, const s
   std::printf("|---|---:|---:|---:|---:|---:|---|\n");
   print_row("MuJoCo 2.2.2 mj_step", mujoco_load, mujoco_times, mujoco_first, steps, dt, humanoids);
   for (std::size_t k = 0; k < methods.size(); ++k) {
-    const std::string name = "limber " + std::string(method_name(methods[k].method)) + ", " + std::to_string(methods[k].threads) +
-                             (methods[k].threads == 1 ? " thread" : " threads");
+    std::string name = "limber " + std::string(method_name(methods[k].method)) + ", " + std::to_string(methods[k].threads) +
+                       (methods[k].threads == 1 ? " thread" : " threads");
+    if (methods[k].integrator && methods[k].method == Method::featherstone) name += std::string(", ") + integrator_name(*methods[k].integrator);
     print_row(name.c_str(), limber_load, limber_times[k], limber_first[k], steps, dt, humanoids);
   }
   mj_deleteData(data);
@@ -177,6 +183,7 @@ int main(int argc, char** argv) {
   std::vector<Runner> methods;
   double seconds = 5;
   int rounds = 3;
+  std::optional<Integrator> integrator;
   try {
     for (int i = 1; i < argc; ++i) {
       const std::string argument = argv[i];
@@ -188,14 +195,24 @@ int main(int argc, char** argv) {
         const std::string name = argv[++i];
         bool known = false;
         for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
-          if (method_name(method) == name) methods.push_back({method, 1}), known = true;
+          if (method_name(method) == name) methods.push_back({method, 1, std::nullopt}), known = true;
         }
         if (!known) throw std::invalid_argument("unknown method " + name + " (particles, springs, lagrange or featherstone)");
+      } else if (argument == "--integrator" && i + 1 < argc) {
+        const std::string name = argv[++i];
+        if (name == "semi-implicit") {
+          integrator = Integrator::semi_implicit_euler;
+        } else if (name == "rk4") {
+          integrator = Integrator::rk4;
+        } else {
+          throw std::invalid_argument("unknown integrator " + name + " (semi-implicit or rk4)");
+        }
       } else {
         files.emplace_back(argument);
       }
     }
-    if (methods.empty()) methods = {{Method::particles, 1}, {Method::particles, 2}, {Method::featherstone, 1}};
+    if (methods.empty()) methods = {{Method::particles, 1, std::nullopt}, {Method::particles, 2, std::nullopt}, {Method::featherstone, 1, std::nullopt}};
+    for (Runner& runner : methods) runner.integrator = integrator;
     if (files.empty()) files = {"/usr/share/mujoco/model/humanoid/humanoid.xml", "/usr/share/mujoco/model/humanoid/22_humanoids.xml"};
     for (const auto& file : files) race(file, seconds, rounds, methods);
   } catch (const std::exception& error) {

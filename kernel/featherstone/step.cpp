@@ -74,6 +74,17 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   for (int k = 0; k < substeps; ++k) {
     // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp).
     const bool controlled = joint_control_forces(state, state.joint_forces, h);
+    if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
+      // The stable PD's dynamics already are this step's: (H + h·G) v̇ = τ − C + F − G·v gives
+      // v⁺ = v + h·v̇ with H v̇ = τ − C + F − G·v⁺, the velocity semi-implicit Euler ends with
+      // under the forces held: the integrator's own ABA would find the same v̇ again. (Friction's
+      // held joints are within its penalty's 1/kPenalty in the predicted velocity; the integrator
+      // takes them exactly.)
+      state.v = state.controls.predicted;
+      state.integration.stage_displacement = h * state.v;
+      displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q);
+      continue;
+    }
     integrate(state.tree, state.q, state.v, controlled ? state.controls.forces : state.joint_forces, state.settings.gravity, h,
               state.options.integrator, state.integration);
   }

@@ -19,6 +19,8 @@
 #include <gtest/gtest.h>
 
 #include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/integration.hpp"
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
 #include "tests/support/allocation_counter.hpp"
@@ -377,6 +379,34 @@ TEST(FeatherstoneJointDrives, StiffDriveStaysStableFarPastAnExplicitStep) {
       EXPECT_LT(std::abs(coordinates(state, 0).angle - target), 1e-3) << integrator_name(integrator);
     }
   }
+}
+
+TEST(FeatherstoneJointDrives, UnderSemiImplicitEulerTheDrivesDynamicsAreTheStepsOwn) {
+  // The step takes the stable PD's predicted velocity as semi-implicit Euler's (step.cpp): it must
+  // be what the integrator gives under the forces the drives hold, to round-off. A ball joint
+  // driven toward a turn, spinning and under gravity (so Coriolis and gravity terms are in v̇).
+  Model model = pivoted_limb(JointType::spherical, Vector3::UnitX(), /*reversed=*/false);
+  model.settings.sleep.enabled = false;
+  model.bodies[0].angular_velocity = Vector3(4, 1, 0);
+  JointDrive drive;
+  drive.stiffness = 30, drive.damping = 3;
+  drive.target_rotation = 0.8 * Vector3(1, -1, 2).normalized();
+  model.joints[0].drive = drive;
+  FeatherstoneState state = compile_featherstone(model, {.integrator = Integrator::semi_implicit_euler});
+  const double dt = 1.0 / 240;
+  double largest = 0, speed = 0;
+  for (int s = 0; s < 240; ++s) {
+    FeatherstoneState integrated = state;
+    ASSERT_TRUE(joint_control_forces(integrated, integrated.joint_forces, dt));
+    integrate(integrated.tree, integrated.q, integrated.v, integrated.controls.forces, integrated.settings.gravity, dt,
+              Integrator::semi_implicit_euler, integrated.integration);
+    ASSERT_EQ(step(state, dt).status, StepStatus::ok);
+    largest = std::max({largest, (state.v - integrated.v).lpNorm<Eigen::Infinity>(), (state.q - integrated.q).lpNorm<Eigen::Infinity>()});
+    speed = std::max(speed, state.v.lpNorm<Eigen::Infinity>());
+  }
+  EXPECT_GT(speed, 1.0);  // it moves
+  EXPECT_LT(largest, 1e-12 * speed);
+  RecordProperty("largest_difference", number(largest));
 }
 
 TEST(FeatherstoneJointDrives, BallJointDriveReachesItsTargetRotation) {
