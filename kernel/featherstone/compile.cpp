@@ -335,7 +335,6 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
   contact.joint_impulse.setZero(nv);
   contact.contact_matrix.reserve(state.contacts.capacity());
-  contact.push.reserve(state.contacts.capacity());
   contact.inertia.assign(tree), contact.factor.assign(tree), contact.held.assign(tree);
   contact.composite.resize(tree);
   contact.response.setZero(nv);

@@ -58,7 +58,6 @@ struct JointSpaceContactScratch {
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
   std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K = A_cc, world impulse at p → relative velocity at p
-  std::vector<double> push;                      ///< per contact: accumulated push-out "impulse", kg·m
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)

@@ -214,7 +214,6 @@ void push_out(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   s.displacement.setZero();
   start_passes(s, s.displacement);
-  s.push.assign(state.contacts.size(), 0.0);  // within the capacity reserved at compile
   bool moved = false;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool pushed = false;
@@ -225,10 +224,9 @@ void push_out(FeatherstoneState& state, double dt) {
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
       const double done = s.motion[c].dot(contact.normal);
       if (std::abs(target - done) <= kPushTolerance * target) continue;
-      const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
-      const double change = push - s.push[c];
+      const double pushed_so_far = s.impulse[c].dot(contact.normal);  // the push-out's impulses are along the normal
+      const double change = std::max(pushed_so_far + (target - done) / normal_inverse_mass, 0.0) - pushed_so_far;
       if (change == 0) continue;
-      s.push[c] = push;
       apply_block_impulse(s, static_cast<int>(c), change * contact.normal);
       moved = pushed = true;
     }
