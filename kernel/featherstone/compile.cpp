@@ -349,7 +349,7 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
   contact.first_island.reserve(blocks), contact.second_island.reserve(blocks);
   contact.motion.reserve(blocks), contact.impulse.reserve(blocks), contact.limit_local.assign(blocks, -1);
-  contact.island_block_begin.reserve(state.islands.size() + 1), contact.island_block.reserve(2 * blocks);
+  contact.island_block_begin.reserve(state.islands.size() + 1), contact.island_block.reserve(2 * blocks), contact.island_slot.reserve(blocks);
   // The Delassus matrix's blocks pair the blocks of one island: room for each island's limit
   // rows and two contacts per body and plane (as the Lagrange method reserves its batches); a
   // step past it allocates.

@@ -82,8 +82,9 @@ struct JointSpaceContactScratch {
   std::vector<Eigen::Vector3d> half_value;
   /// Per block: its islands (the second −1 unless a contact joins two).
   std::vector<std::int32_t> first_island, second_island;
-  /// The blocks of island k are island_block[island_block_begin[k] … island_block_begin[k + 1]).
-  std::vector<int> island_block_begin, island_block;
+  /// The blocks of island k are island_block[island_block_begin[k] … island_block_begin[k + 1]);
+  /// island_slot[g] is block g's place among its first island's.
+  std::vector<int> island_block_begin, island_block, island_slot;
   /// The Delassus matrix by block columns: column g holds A_hg (3 × 3: an impulse on g's rows →
   /// the motion of h's rows) for every block h sharing an island with g, g itself included, at
   /// column_begin[g] … column_begin[g + 1] (blocks + 1).

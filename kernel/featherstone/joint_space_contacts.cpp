@@ -95,13 +95,31 @@ void half_rows(JointSpaceContactScratch& s, std::size_t g) {
   s.half_begin.push_back(static_cast<int>(s.half_coordinate.size()));
 }
 
-// The Delassus matrix's block columns (joint_space_contacts.hpp, "Constraint space"): for each
-// block g, A_hg = Y_hᵀ D⁻¹ Y_g for every block h on one of g's islands, through D⁻¹ Y_g
-// scattered on g's path. Needs the blocks' half rows and islands.
-void form_delassus(FeatherstoneState& state) {
+// A_hg = Y_hᵀ D⁻¹ Y_g (3 × 3) of blocks h and g, with D⁻¹ Y_g in s.scatter on g's path; a limit
+// row's block (`h_row`, `g_row`: one row) has only its first row or column.
+Eigen::Matrix3d delassus_block(const JointSpaceContactScratch& s, std::size_t h, bool h_row, bool g_row) {
+  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
+  for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
+    const Eigen::Vector3d& y = s.half_value[static_cast<std::size_t>(e)];
+    const auto z = s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]);
+    if (h_row && g_row) {
+      a(0, 0) += y[0] * z[0];
+    } else if (h_row) {
+      a.row(0) += y[0] * z;
+    } else if (g_row) {
+      a.col(0) += z[0] * y;
+    } else {
+      a.noalias() += y * z;
+    }
+  }
+  return a;
+}
+
+// The blocks by island (a block on two islands in both), and each one's place in its first
+// island's list.
+void group_blocks_by_island(FeatherstoneState& state) {
   JointSpaceContactScratch& s = state.contact;
   const std::size_t blocks = s.first_island.size();
-  // The blocks by island (a block on two islands in both).
   s.island_block_begin.assign(state.islands.size() + 1, 0);
   for (std::size_t g = 0; g < blocks; ++g) {
     ++s.island_block_begin[static_cast<std::size_t>(s.first_island[g]) + 1];
@@ -116,11 +134,29 @@ void form_delassus(FeatherstoneState& state) {
   }
   for (std::size_t k = state.islands.size(); k > 0; --k) s.island_block_begin[k] = s.island_block_begin[k - 1];  // ...and is put back
   s.island_block_begin[0] = 0;
+  s.island_slot.resize(blocks);
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    for (int slot = s.island_block_begin[k]; slot < s.island_block_begin[k + 1]; ++slot) {
+      const auto g = static_cast<std::size_t>(s.island_block[static_cast<std::size_t>(slot)]);
+      if (static_cast<std::size_t>(s.first_island[g]) == k) s.island_slot[g] = slot - s.island_block_begin[k];
+    }
+  }
+}
+
+// The Delassus matrix's block columns (joint_space_contacts.hpp, "Constraint space"): for each
+// block g, A_hg for every block h on one of g's islands — through D⁻¹ Y_g scattered on g's path,
+// or, for two blocks of one island alone, as A_ghᵀ from h's column when h came first. Needs the
+// blocks' half rows and islands.
+void form_delassus(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
+  group_blocks_by_island(state);
+  const std::size_t blocks = s.first_island.size();
   const std::size_t contacts = state.contacts.size();
   s.contact_matrix.resize(contacts);
   s.column_begin.assign(1, 0);
   s.column_block.clear(), s.column_value.clear();
   for (std::size_t g = 0; g < blocks; ++g) {
+    const bool g_row = g >= contacts, g_alone = s.second_island[g] < 0;
     for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
       const int k = s.half_coordinate[static_cast<std::size_t>(e)];
       s.scatter.row(k) = s.half_value[static_cast<std::size_t>(e)].transpose() / s.factor.pivot(k);
@@ -132,10 +168,10 @@ void form_delassus(FeatherstoneState& state) {
         const auto h = static_cast<std::size_t>(s.island_block[static_cast<std::size_t>(slot)]);
         // A block on both of g's islands is met twice: take it on the first.
         if (island == s.second_island[g] && (s.first_island[h] == s.first_island[g] || s.second_island[h] == s.first_island[g])) continue;
-        Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-        for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
-          a.noalias() += s.half_value[static_cast<std::size_t>(e)] * s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]);
-        }
+        // h's column lists its one island's blocks in order: A_gh sits at g's place there.
+        const Eigen::Matrix3d a = h < g && g_alone && s.second_island[h] < 0
+                                      ? Eigen::Matrix3d(s.column_value[static_cast<std::size_t>(s.column_begin[h] + s.island_slot[g])].transpose())
+                                      : delassus_block(s, h, h >= contacts, g_row);
         s.column_block.push_back(static_cast<int>(h));
         s.column_value.push_back(a);
         if (h != g) continue;  // the diagonal: a contact's K, a limit row's inverse mass

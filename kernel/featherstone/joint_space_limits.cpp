@@ -46,6 +46,14 @@ MeasuredJoint measure_joint(const FeatherstoneState& state, std::size_t k) {
   return out;
 }
 
+// A revolute or prismatic joint's coordinate (the Model's angle or slide, rad or m): sign·q of its
+// tree body, 0 at the Model's initial pose as the joint frames are. It is what measure_joint reads
+// from the poses (to round-off, 10⁻¹⁵ on humanoid.xml), without the poses' quaternions and
+// arc tangent; unlike that angle, a hinge's is not wrapped to (−π, π].
+double tree_coordinate(const FeatherstoneState& state, const TreeJoint& held) {
+  return held.sign * state.q[state.tree.position_offset(held.body)];
+}
+
 // Whether joint k's island is awake.
 bool awake(const FeatherstoneState& state, const TreeJoint& held) {
   return !state.islands[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]].sleeping;
@@ -91,20 +99,20 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     const Joint& joint = controls.joints[k];
     const TreeJoint& held = state.tree_joint[k];
     if (!joint.limits.any() || held.dofs == 0 || !awake(state, held)) continue;
-    const JointFrame& frame = controls.frames[k];
-    const MeasuredJoint measured = measure_joint(state, k);
-    const JointCoordinates& q = measured.coordinates;
     JointLimitRow row;
     row.island = island_of(state, held);
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
     const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt); };
     if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
       if (!joint.limits.range) continue;
-      const double x = joint.type == JointType::revolute ? q.angle : q.slide;
+      const double x = tree_coordinate(state, held);
       add(x - joint.limits.range->min, Eigen::Vector3d(held.sign, 0, 0));
       add(joint.limits.range->max - x, Eigen::Vector3d(-held.sign, 0, 0));
       continue;
     }
+    const JointFrame& frame = controls.frames[k];
+    const MeasuredJoint measured = measure_joint(state, k);
+    const JointCoordinates& q = measured.coordinates;
     // Spherical: rates of the swing and twist as rows on the relative angular velocity ω
     // (inboard frame), carried onto v.
     const Eigen::Vector3d axis = (rotation_of(q.rotation) * frame.rest_axis).normalized();  // a = D·a₀
@@ -372,10 +380,10 @@ void gather_drive_forces(FeatherstoneState& state, double h) {
     if (!joint.drive || held.dofs == 0 || !awake(state, held)) continue;
     const JointDrive& drive = *joint.drive;
     if (!(drive.stiffness > 0 || drive.damping > 0)) continue;
-    const MeasuredJoint measured = measure_joint(state, k);
-    const JointCoordinates& q = measured.coordinates;
     c.drive_gain.segment(held.offset, held.dofs).setConstant(drive.stiffness * h + drive.damping);
     if (joint.type == JointType::spherical) {
+      const MeasuredJoint measured = measure_joint(state, k);
+      const JointCoordinates& q = measured.coordinates;
       // The turn E = D_target·D⁻¹ that takes the deviation D to the target (inboard frame), as a
       // rotation vector, the shorter way round.
       const JointFrame& frame = controls.frames[k];
@@ -386,9 +394,8 @@ void gather_drive_forces(FeatherstoneState& state, double h) {
           drive.stiffness * turn.angle() * turn.axis() + drive.damping * (frame.inboard_rest.conjugate() * drive.target_angular_velocity);
       c.drive_force.segment<3>(held.offset) = measured.inboard_to_velocity * torque;
     } else {
-      const bool revolute = joint.type == JointType::revolute;
-      double error = drive.target - (revolute ? q.angle : q.slide);
-      if (revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
+      double error = drive.target - tree_coordinate(state, held);
+      if (joint.type == JointType::revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
       c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
     }
   }
