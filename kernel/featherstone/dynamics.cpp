@@ -45,13 +45,13 @@ void require_size(Eigen::Index actual, int expected, const char* what) {
   }
 }
 
-// First pass of ABA and RNEA: ⁱX_λ, v_i = ⁱX_λ v_λ + v_J and c_i = v_i × v_J (Tables 5.1, 7.1).
-void propagate_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
-                          const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& w) {
+// First pass of ABA and RNEA: ⁱX_λ (unless `q` is null: the workspace holds them), v_i = ⁱX_λ v_λ +
+// v_J and c_i = v_i × v_J (Tables 5.1, 7.1).
+void propagate_velocities(const ArticulatedTree& tree, const double* q, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& w) {
   for (int i = 0; i < tree.body_count(); ++i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
-    w.parent_to_body[index] = joint_transform(body, q.data() + tree.position_offset(i)) * body.tree_transform;
+    if (q) w.parent_to_body[index] = joint_transform(body, q + tree.position_offset(i)) * body.tree_transform;
     const SpatialVector joint_motion = joint_velocity(body, v.data() + tree.velocity_offset(i));
     if (body.parent >= 0) {
       w.velocity[index] = w.parent_to_body[index].apply_motion(w.velocity[static_cast<std::size_t>(body.parent)]) + joint_motion;
@@ -141,8 +141,14 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
   require_size(q.size(), tree.position_count(), "forward_kinematics: q");
   require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  propagate_velocities(tree, q, v, workspace);
+  propagate_velocities(tree, q.data(), v, workspace);
   compose_world_transforms(tree, workspace);
+}
+
+void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
+  require_size(v.size(), tree.velocity_count(), "body_velocities: v");
+  if (!workspace.fits(tree)) throw std::invalid_argument("body_velocities: the workspace holds no poses of this tree");
+  propagate_velocities(tree, nullptr, v, workspace);
 }
 
 namespace {
@@ -161,7 +167,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
   const int n = tree.body_count();
 
   // Pass 1 (outward): velocities, bias accelerations; I^A_i = I_i, p^A_i = v_i ×* I_i v_i.
-  propagate_velocities(tree, q, v, w);
+  propagate_velocities(tree, q.data(), v, w);
   for (int i = 0; i < n; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const SpatialInertia& inertia = tree.body(i).inertia;
@@ -263,7 +269,7 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 
   // Outward: a_i = ⁱX_λ a_λ + S_i v̇_i + c_i; f_i = I_i a_i + v_i ×* I_i v_i (the net force the
   // body needs, by the Newton–Euler equation).
-  propagate_velocities(tree, q, v, w);
+  propagate_velocities(tree, q.data(), v, w);
   const SpatialVector a0 = base_acceleration(gravity);
   for (int i = 0; i < n; ++i) {
     const ArticulatedBody& body = tree.body(i);
@@ -293,20 +299,17 @@ namespace {
 // each entry with `row` an earlier coordinate of the column's own joint or of an ancestor's, or
 // the column itself (the upper triangle of H by block, as ancestors come first; the armature on
 // the diagonal included). Every other entry of H is zero.
+// The poses are `parent_to_body` (ⁱX_λ per body).
 template <typename Store>
-void composite_inertia(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& w, Store&& store) {
+void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTransform>& parent_to_body, DynamicsWorkspace& w, Store&& store) {
   const int n = tree.body_count();
   // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ.
-  for (int i = 0; i < n; ++i) {
-    const auto index = static_cast<std::size_t>(i);
-    w.parent_to_body[index] = joint_transform(tree.body(i), q.data() + tree.position_offset(i)) * tree.body(i).tree_transform;
-    w.articulated_inertia[index] = tree.body(i).inertia.matrix();
-  }
+  for (int i = 0; i < n; ++i) w.articulated_inertia[static_cast<std::size_t>(i)] = tree.body(i).inertia.matrix();
   for (int i = n - 1; i >= 0; --i) {
     const int parent = tree.body(i).parent;
     if (parent < 0) continue;
     const auto index = static_cast<std::size_t>(i);
-    w.articulated_inertia[static_cast<std::size_t>(parent)] += w.parent_to_body[index].transpose_apply_inertia(w.articulated_inertia[index]);
+    w.articulated_inertia[static_cast<std::size_t>(parent)] += parent_to_body[index].transpose_apply_inertia(w.articulated_inertia[index]);
   }
   // For each joint's column of unit motions: F = I^c_i S_i, H_ii = S_iᵀ F; then F is carried
   // inward to each ancestor j, H_ji = S_jᵀ F (= H_ijᵀ).
@@ -322,7 +325,7 @@ void composite_inertia(const ArticulatedTree& tree, const Eigen::Ref<const Eigen
       project_force(body, f, projected);
       for (int r = 0; r <= c; ++r) store(column + r, column + c, projected[r] + (r == c ? body.armature : 0.0));
       for (int j = i; tree.body(j).parent >= 0;) {
-        f = w.parent_to_body[static_cast<std::size_t>(j)].transpose_apply_force(f);
+        f = parent_to_body[static_cast<std::size_t>(j)].transpose_apply_force(f);
         j = tree.body(j).parent;
         project_force(tree.body(j), f, projected);
         for (int r = 0; r < joint_velocity_count(tree.body(j).joint); ++r) store(tree.velocity_offset(j) + r, column + c, projected[r]);
@@ -339,7 +342,8 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   if (!workspace.fits(tree)) workspace.resize(tree);
   const int nv = tree.velocity_count();
   joint_space_inertia.setZero(nv, nv);
-  composite_inertia(tree, q, workspace, [&](int row, int column, double value) {
+  body_poses(tree, q, workspace);
+  composite_inertia(tree, workspace.parent_to_body, workspace, [&](int row, int column, double value) {
     joint_space_inertia(row, column) = value;
     joint_space_inertia(column, row) = value;
   });
@@ -349,8 +353,15 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
                  JointSpaceFactor& factor) {
   require_size(q.size(), tree.position_count(), "mass_matrix: q");
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
+  body_poses(tree, q, workspace);
+  composite_inertia(tree, workspace.parent_to_body, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+}
+
+void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor) {
+  require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
+  if (!poses.fits(tree)) throw std::invalid_argument("mass_matrix: the poses are not of this tree");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  composite_inertia(tree, q, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+  composite_inertia(tree, poses.parent_to_body, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
 }
 
 }  // namespace limber

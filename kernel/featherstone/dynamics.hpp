@@ -60,6 +60,11 @@ void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vecto
 void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
 
+/// The bodies' velocities alone (workspace.velocity, v: nv) at the poses workspace already holds
+/// (body_poses or forward_kinematics of the current q): forward_kinematics without recomputing
+/// the poses, the same bits.
+void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
+
 /// The articulated-body algorithm (Table 7.1): the joint accelerations v̇ (nv, written to
 /// `joint_accelerations`, resized) for positions q (nq), velocities v (nv), joint forces τ (nv;
 /// N·m for revolute and spherical, N for prismatic, (n, f) in the child frame for floating) and
@@ -99,5 +104,8 @@ class JointSpaceFactor;
 /// is not assigned to this tree's coordinates.
 void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace,
                  JointSpaceFactor& factor);
+/// The same at the poses `poses` holds (its parent_to_body: body_poses or forward_kinematics of
+/// the current q), without recomputing them; the same bits.
+void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor);
 
 }  // namespace limber

@@ -271,9 +271,10 @@ void push_out(FeatherstoneState& state, double dt) {
   }
   if (!moved) return;
   settle(s, s.displacement);
-  // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v).
+  // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v; the
+  // poses are those detection saw).
   const ArticulatedTree& tree = state.tree;
-  forward_kinematics(tree, state.q, state.v, state.kinematics);
+  body_velocities(tree, state.v, state.kinematics);
   for (int i = 0; i < tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);
     s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];
@@ -302,7 +303,7 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
   find_limit_rows(state, dt);
   if (state.contacts.empty() && state.controls.rows.empty()) return false;
   JointSpaceContactScratch& s = state.contact;
-  mass_matrix(state.tree, state.q, s.composite, s.inertia);
+  mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);  // at the poses detection saw
   s.factor = s.inertia;  // the same sizes: no allocation
   if (s.factor.factor() >= 0) {
     // H is positive definite at any finite pose; it is not only once the state has gone
@@ -333,19 +334,26 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
   return true;
 }
 
+// The passes leave state.kinematics' poses those of q (the push-out's body_poses when it moved
+// q): the rigid bodies need only the new velocities.
+void mirror_new_velocities(FeatherstoneState& state) {
+  body_velocities(state.tree, state.v, state.kinematics);
+  mirror_rigid_bodies(state);
+}
+
 }  // namespace
 
 void apply_joint_space_impulses(FeatherstoneState& state, double dt) {
   if (!prepare_constraints(state, dt)) return;
   impulse_passes(state, dt);
-  refresh_rigid_bodies(state);
+  mirror_new_velocities(state);
 }
 
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
   if (!prepare_constraints(state, dt)) return;
   impulse_passes(state, dt);
   push_out(state, dt);
-  refresh_rigid_bodies(state);
+  mirror_new_velocities(state);
 }
 
 }  // namespace limber

@@ -481,7 +481,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   if (friction) {
     // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
     // add their penalties to it per island: factor_held_rows).
-    mass_matrix(state.tree, state.q, s.composite, s.inertia);
+    mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);  // at the poses forward_kinematics just found
     for (int i = 0; i < state.tree.velocity_count(); ++i) {
       if (c.armature[i] != 0) s.inertia.add_inertia(i, i, c.armature[i]);
     }

@@ -104,6 +104,10 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
 
 void refresh_rigid_bodies(FeatherstoneState& state) {
   forward_kinematics(state.tree, state.q, state.v, state.kinematics);
+  mirror_rigid_bodies(state);
+}
+
+void mirror_rigid_bodies(FeatherstoneState& state) {
   RigidBodyState& y = state.bodies.state;
   for (int i = 0; i < state.tree.body_count(); ++i) {
     const auto index = static_cast<std::size_t>(i);

@@ -36,6 +36,8 @@ inline StepReport step(FeatherstoneState& state) { return step(state, state.sett
 /// Recomputes the rigid bodies (positions, orientations, momenta) and state.kinematics (poses
 /// and spatial velocities of the tree bodies) from (q, v) by forward kinematics.
 void refresh_rigid_bodies(FeatherstoneState& state);
+/// The same from state.kinematics as it stands (its poses and velocities already those of (q, v)).
+void mirror_rigid_bodies(FeatherstoneState& state);
 
 /// After detect_rigid_contacts moved a ball (continuous collision): every ball's floating joint
 /// takes its rigid body's position (its origin is the centre of mass), then refresh_rigid_bodies.

@@ -248,5 +248,30 @@ TEST(JointSpaceFactor, RefusesParentsOutOfOrderAndAnInertiaThatIsNotPositiveDefi
   }
 }
 
+TEST(JointSpaceFactor, TheStepsReusedPosesGiveTheSameBits) {
+  // The step forms H and the bodies' velocities from poses it already holds (mass_matrix from a
+  // workspace, body_velocities): they must be what the same calls from q give, bit for bit.
+  std::mt19937 rng(44);
+  for (const RandomTreeOptions& kind : random_tree_kinds()) {
+    const ArticulatedTree tree = random_tree(rng, kind);
+    if (tree.velocity_count() == 0) continue;
+    const Eigen::VectorXd q = random_positions(rng, tree), v = random_vector(rng, tree.velocity_count(), 2.0);
+    DynamicsWorkspace from_q, poses, composite;
+    forward_kinematics(tree, q, v, from_q);
+    body_poses(tree, q, poses);
+    body_velocities(tree, v, poses);
+    for (int i = 0; i < tree.body_count(); ++i) {
+      EXPECT_EQ(poses.velocity[static_cast<std::size_t>(i)], from_q.velocity[static_cast<std::size_t>(i)]) << "body " << i;
+    }
+    JointSpaceFactor h_from_q, h_from_poses;
+    h_from_q.assign(tree), h_from_poses.assign(tree);
+    mass_matrix(tree, q, composite, h_from_q);
+    mass_matrix(tree, poses, composite, h_from_poses);
+    ASSERT_LT(h_from_q.factor(), 0);
+    ASSERT_LT(h_from_poses.factor(), 0);
+    for (int i = 0; i < h_from_q.size(); ++i) EXPECT_EQ(h_from_q.pivot(i), h_from_poses.pivot(i)) << "coordinate " << i;
+  }
+}
+
 }  // namespace
 }  // namespace limber
