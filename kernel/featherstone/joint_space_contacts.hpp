@@ -111,7 +111,8 @@ FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
 /// The joint forces (nv) of a step of h seconds from (q, v) into state.controls.forces: `loads`
 /// (nv, the applied loads and drag as joint forces) plus the drives' stable-PD forces and the
 /// joints' friction (see above), read from state.joint_controls. Returns false, writing nothing,
-/// when no awake island has a drive or friction. Refreshes state.kinematics to (q, v).
+/// when no awake island has a drive or friction. Reads the poses in state.kinematics, which must
+/// be those of q (as they are between steps).
 /// Allocates nothing.
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h);
 

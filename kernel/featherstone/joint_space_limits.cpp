@@ -464,7 +464,6 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
     for (const SerialAxis& axis : joint.serial_axes) drives = drives || acting(axis.drive), friction = friction || axis.friction > 0;
   }
   if (!drives && !friction) return false;
-  forward_kinematics(state.tree, state.q, state.v, state.kinematics);
 
   c.drive_force.setZero(), c.drive_gain.setZero();
   if (drives) gather_drive_forces(state, h);

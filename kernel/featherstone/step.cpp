@@ -72,7 +72,9 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   const int substeps = turn_substeps(state, dt);
   const double h = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
-    // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp).
+    // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), at
+    // the poses of q: state.kinematics' at the step's start, found again after a substep.
+    if (k > 0) body_poses(state.tree, state.q, state.kinematics);
     const bool controlled = joint_control_forces(state, state.joint_forces, h);
     if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
       // The stable PD's dynamics already are this step's: (H + h·G) v̇ = τ − C + F − G·v gives
