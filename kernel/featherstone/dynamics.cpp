@@ -4,6 +4,7 @@
 
 #include "limber/kernel/numerics/small_cholesky.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -153,12 +154,12 @@ void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::
 
 namespace {
 
-// Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal.
-void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+// Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal; the poses from
+// q (nq), or, q null, those `poses` holds.
+void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* poses,
                                 const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                                 const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
                                 Eigen::VectorXd& joint_accelerations) {
-  require_size(q.size(), tree.position_count(), "forward_dynamics: q");
   require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
   require_size(joint_forces.size(), tree.velocity_count(), "forward_dynamics: joint forces");
   if (!workspace.fits(tree)) workspace.resize(tree);
@@ -167,7 +168,8 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
   const int n = tree.body_count();
 
   // Pass 1 (outward): velocities, bias accelerations; I^A_i = I_i, p^A_i = v_i ×* I_i v_i.
-  propagate_velocities(tree, q.data(), v, w);
+  if (!q && poses != &w) std::copy(poses->parent_to_body.begin(), poses->parent_to_body.end(), w.parent_to_body.begin());
+  propagate_velocities(tree, q, v, w);
   for (int i = 0; i < n; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const SpatialInertia& inertia = tree.body(i).inertia;
@@ -245,15 +247,24 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const Eigen::Ref<co
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
-  articulated_body_algorithm(tree, q, v, joint_forces, nullptr, gravity, workspace, joint_accelerations);
+  require_size(q.size(), tree.position_count(), "forward_dynamics: q");
+  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, nullptr, gravity, workspace, joint_accelerations);
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Ref<const Eigen::VectorXd>& armature, const Eigen::Vector3d& gravity,
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  require_size(q.size(), tree.position_count(), "forward_dynamics: q");
   require_size(armature.size(), tree.velocity_count(), "forward_dynamics: armature");
-  articulated_body_algorithm(tree, q, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations);
+  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations);
+}
+
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
+                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
+                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  if (!poses.fits(tree)) throw std::invalid_argument("forward_dynamics: the poses are not of this tree");
+  articulated_body_algorithm(tree, nullptr, &poses, v, joint_forces, armature, gravity, workspace, joint_accelerations);
 }
 
 void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -97,12 +97,20 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace) {
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses) {
   if (!workspace.fits(tree)) workspace.resize(tree);
   FeatherstoneIntegratorWorkspace& w = workspace;
+  // v̇ at the step's start, at the poses given when there are.
+  const auto start_dynamics = [&](const Eigen::VectorXd& start_q, const Eigen::VectorXd& start_v) {
+    if (poses) {
+      forward_dynamics(tree, *poses, start_v, joint_forces, nullptr, gravity, w.dynamics, w.accelerations);
+    } else {
+      forward_dynamics(tree, start_q, start_v, joint_forces, gravity, w.dynamics, w.accelerations);
+    }
+  };
   switch (integrator) {
     case Integrator::semi_implicit_euler:
-      forward_dynamics(tree, q, v, joint_forces, gravity, w.dynamics, w.accelerations);
+      start_dynamics(q, v);
       v += h * w.accelerations;
       w.stage_displacement = h * v;
       displace_positions(tree, q, w.stage_displacement, q);
@@ -116,7 +124,11 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
       w.stage_displacement.setZero();
       w.acceleration_sum.setZero(), w.displacement_rate_sum.setZero();
       for (int s = 0; s < 4; ++s) {
-        forward_dynamics(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w.dynamics, w.accelerations);
+        if (s == 0) {
+          start_dynamics(w.stage_positions, w.stage_velocities);
+        } else {
+          forward_dynamics(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w.dynamics, w.accelerations);
+        }
         displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate);
         w.acceleration_sum += kWeights[s] * w.accelerations;
         w.displacement_rate_sum += kWeights[s] * w.stage_rate;

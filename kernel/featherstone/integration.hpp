@@ -50,10 +50,12 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 /// Advances (q, v) by h seconds under constant joint forces τ (nv) and gravity g (world frame,
 /// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized. Implements
 /// semi_implicit_euler (v ← v + h v̇(q, v); q ← q ⊕ h v with the new v; order 1) and rk4
-/// (stages combined in the tangent space; order 4); compile refuses the others.
+/// (stages combined in the tangent space; order 4); compile refuses the others. `poses`, when
+/// given, holds the poses of q (body_poses or forward_kinematics), which the first stage then
+/// does not recompute: the same bits.
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace);
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses = nullptr);
 
 /// T = Σ ½ v_iᵀ I_i v_i over the bodies, J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

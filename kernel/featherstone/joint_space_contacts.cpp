@@ -288,7 +288,7 @@ void push_out(FeatherstoneState& state, double dt) {
   // the child frames the push-out turned, and a limb spinning fast about its axis relative to its
   // parent would swing that spin onto its neighbours.
   joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum);
-  forward_dynamics(tree, state.q, s.zero_velocities, s.generalized_momentum, Eigen::Vector3d::Zero(), s.articulated, state.v);
+  forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated, state.v);
 }
 
 // The island of scene body b (−1 for a plane).

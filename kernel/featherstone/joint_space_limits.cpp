@@ -472,7 +472,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   c.armature = h * c.drive_gain;
   c.explicit_force = loads + c.drive_force - c.drive_gain.cwiseProduct(state.v);
   JointSpaceContactScratch& s = state.contact;
-  forward_dynamics(state.tree, state.q, state.v, c.explicit_force, c.armature, state.settings.gravity, s.articulated, c.acceleration);
+  forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated, c.acceleration);
   c.predicted = state.v + h * c.acceleration;
 
   c.friction.clear();

@@ -72,8 +72,9 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   const int substeps = turn_substeps(state, dt);
   const double h = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
-    // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), at
-    // the poses of q: state.kinematics' at the step's start, found again after a substep.
+    // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), and
+    // the integrator's first pass, at the poses of q: state.kinematics' at the step's start, found
+    // again after a substep.
     if (k > 0) body_poses(state.tree, state.q, state.kinematics);
     const bool controlled = joint_control_forces(state, state.joint_forces, h);
     if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
@@ -88,7 +89,7 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
       continue;
     }
     integrate(state.tree, state.q, state.v, controlled ? state.controls.forces : state.joint_forces, state.settings.gravity, h,
-              state.options.integrator, state.integration);
+              state.options.integrator, state.integration, &state.kinematics);
   }
   if (any_asleep) {
     for (std::size_t k = 0; k < state.islands.size(); ++k) {

@@ -249,8 +249,9 @@ TEST(JointSpaceFactor, RefusesParentsOutOfOrderAndAnInertiaThatIsNotPositiveDefi
 }
 
 TEST(JointSpaceFactor, TheStepsReusedPosesGiveTheSameBits) {
-  // The step forms H and the bodies' velocities from poses it already holds (mass_matrix from a
-  // workspace, body_velocities): they must be what the same calls from q give, bit for bit.
+  // The step forms H, the bodies' velocities and the articulated-body pass from poses it already
+  // holds (mass_matrix, body_velocities and forward_dynamics from a workspace): they must be what
+  // the same calls from q give, bit for bit.
   std::mt19937 rng(44);
   for (const RandomTreeOptions& kind : random_tree_kinds()) {
     const ArticulatedTree tree = random_tree(rng, kind);
@@ -270,6 +271,13 @@ TEST(JointSpaceFactor, TheStepsReusedPosesGiveTheSameBits) {
     ASSERT_LT(h_from_q.factor(), 0);
     ASSERT_LT(h_from_poses.factor(), 0);
     for (int i = 0; i < h_from_q.size(); ++i) EXPECT_EQ(h_from_q.pivot(i), h_from_poses.pivot(i)) << "coordinate " << i;
+    const Eigen::VectorXd tau = random_vector(rng, tree.velocity_count(), 5.0), armature = random_vector(rng, tree.velocity_count(), 1.0).cwiseAbs();
+    const Eigen::Vector3d gravity(0, 0, -9.81);
+    Eigen::VectorXd from_q_acceleration, from_poses_acceleration;
+    DynamicsWorkspace articulated;
+    forward_dynamics(tree, q, v, tau, armature, gravity, articulated, from_q_acceleration);
+    forward_dynamics(tree, poses, v, tau, armature.data(), gravity, articulated, from_poses_acceleration);
+    EXPECT_EQ(from_q_acceleration, from_poses_acceleration);
   }
 }
 
