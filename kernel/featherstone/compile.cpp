@@ -317,6 +317,67 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
 }
 
 // Scratch, sized once: step() never allocates.
+// The constraint blocks' scratch (joint_space_contacts.hpp, "Constraint space"), for every
+// contact the scene reserved and every limit row its limited joints can have. The factor of H
+// (and, with joint friction, H + h·G and its held copy) holds O(Σ depth) entries — a chain of n
+// one-DOF joints n²/2 — so only a tree within kEagerFactorEntries gets it here; a larger one's
+// first step with a contact or limit row sizes it (prepare_constraints). The rows' entries and
+// the limit rows' Delassus matrices are reserved up to kReservedEntries each; a step past them
+// allocates.
+constexpr std::size_t kEagerFactorEntries = std::size_t{1} << 21;
+constexpr std::size_t kReservedEntries = std::size_t{1} << 21;
+void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
+  const ArticulatedTree& tree = state.tree;
+  const int nv = tree.velocity_count();
+  JointSpaceContactScratch& contact = state.contact;
+  const std::vector<int> parent = dof_parents(tree);
+  std::vector<std::size_t> depth(parent.size(), 1);
+  std::size_t factor_entries = 0, deepest = 0;
+  for (std::size_t i = 0; i < parent.size(); ++i) {
+    if (parent[i] >= 0) depth[i] = depth[static_cast<std::size_t>(parent[i])] + 1;
+    factor_entries += depth[i] - 1, deepest = std::max(deepest, depth[i]);
+  }
+  bool friction = false;
+  for (const Joint& joint : model.joints) {
+    friction = friction || joint.friction > 0;
+    for (const SerialAxis& axis : joint.serial_axes) friction = friction || axis.friction > 0;
+  }
+  if (factor_entries <= kEagerFactorEntries) {
+    contact.factor.assign(tree);
+    if (friction) contact.inertia.assign(tree), contact.held.assign(tree);
+  }
+  contact.contact_matrix.reserve(state.contacts.capacity());
+  contact.composite.resize(tree);
+  contact.response.setZero(nv);
+  // Limit rows: two for a hinge's or slide's range or a serial axis's, three for a ball's cone
+  // and twist; per island.
+  std::vector<std::size_t> rows_of_island(state.islands.size(), 0);
+  for (std::size_t k = 0; k < model.joints.size(); ++k) {
+    const Joint& joint = model.joints[k];
+    const TreeJoint& held = state.tree_joint[k];
+    std::size_t rows = joint.limits.any() && held.dofs > 0 ? (joint.type == JointType::spherical ? 3 : 2) : 0;
+    for (const SerialAxis& axis : joint.serial_axes) rows += axis.range ? 2 : 0;
+    if (rows > 0) rows_of_island[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]] += rows;
+  }
+  std::size_t limit_rows = 0, island_rows = 0, limit_entries = 0;
+  for (const std::size_t rows : rows_of_island) {
+    limit_rows += rows, island_rows = std::max(island_rows, rows), limit_entries += rows * rows;
+  }
+  // A block's rows hold the coordinates of at most two paths to the root.
+  const std::size_t blocks = state.contacts.capacity() + limit_rows;
+  const std::size_t entries = std::min(2 * deepest * blocks, kReservedEntries);
+  contact.row_begin.reserve(blocks + 1), contact.half_begin.reserve(blocks + 1);
+  contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
+  contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
+  contact.push.reserve(state.contacts.capacity());
+  contact.limit_row_begin.reserve(state.islands.size() + 1), contact.limit_row.reserve(limit_rows);
+  contact.limit_matrix_begin.reserve(state.islands.size() + 1), contact.limit_matrix.reserve(std::min(limit_entries, kReservedEntries));
+  contact.path.reserve(2 * deepest);
+  contact.lagging.setZero(nv);
+  contact.scatter.setZero(nv, 3);
+  contact.reserve_limit_rows(static_cast<int>(std::min<std::size_t>(island_rows, 256)));
+}
+
 void size_scratch(FeatherstoneState& state, const Model& model) {
   const ArticulatedTree& tree = state.tree;
   const std::size_t tree_size = state.scene_body.size();
@@ -334,50 +395,13 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   contact.generalized_momentum.setZero(nv);
   contact.joint_change.setZero(nv), contact.displacement.setZero(nv);
   contact.joint_impulse.setZero(nv);
-  contact.contact_matrix.reserve(state.contacts.capacity());
-  contact.inertia.assign(tree), contact.factor.assign(tree), contact.held.assign(tree);
-  contact.composite.resize(tree);
-  contact.response.setZero(nv);
-  // The blocks (joint_space_contacts.hpp, "Constraint space"): every contact the scene reserved
-  // and every limit row. A block's rows hold the coordinates of at most two paths to the root.
-  const int deepest = contact.factor.deepest();
-  const std::size_t limit_rows = 3 * model.joints.size() + 2 * state.serial_axes.size();
-  const std::size_t blocks = state.contacts.capacity() + limit_rows;
-  const std::size_t entries = 2 * static_cast<std::size_t>(deepest) * blocks;
-  contact.row_begin.reserve(blocks + 1), contact.half_begin.reserve(blocks + 1), contact.column_begin.reserve(blocks + 1);
-  contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
-  contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
-  contact.first_island.reserve(blocks), contact.second_island.reserve(blocks);
-  contact.motion.reserve(blocks), contact.impulse.reserve(blocks), contact.limit_local.assign(blocks, -1);
-  contact.island_block_begin.reserve(state.islands.size() + 1), contact.island_block.reserve(2 * blocks), contact.island_slot.reserve(blocks);
-  // The Delassus matrix's blocks pair the blocks of one island: room for each island's limit
-  // rows and two contacts per body and plane (as the Lagrange method reserves its batches); a
-  // step past it allocates.
-  std::size_t pairs = 0, island_rows = 0;
-  std::vector<std::size_t> rows_of_island(state.islands.size(), 0);
-  for (std::size_t k = 0; k < model.joints.size(); ++k) {
-    if (state.tree_joint[k].dofs > 0) rows_of_island[state.island_of_body[state.scene_body[static_cast<std::size_t>(state.tree_joint[k].body)]]] += 3;
-  }
-  for (std::size_t k = 0; k < state.islands.size(); ++k) {
-    const std::size_t contacts = 2 * state.islands[k].bodies.size() * std::max<std::size_t>(state.planes.size(), 1);
-    pairs += (rows_of_island[k] + contacts) * (rows_of_island[k] + contacts);
-    island_rows = std::max(island_rows, rows_of_island[k] + 2 * state.serial_axes.size());
-  }
-  contact.column_block.reserve(pairs), contact.column_value.reserve(pairs);
-  contact.path.reserve(2 * static_cast<std::size_t>(deepest));
-  contact.lagging.setZero(nv);
-  contact.scatter.setZero(nv, 3);
-  contact.limit_delassus.setZero(static_cast<Eigen::Index>(island_rows), static_cast<Eigen::Index>(island_rows));
-  contact.limit_value.setZero(static_cast<Eigen::Index>(island_rows)), contact.limit_target.setZero(static_cast<Eigen::Index>(island_rows));
-  contact.limit_accumulated.setZero(static_cast<Eigen::Index>(island_rows)), contact.limit_change.setZero(static_cast<Eigen::Index>(island_rows));
-  contact.limit_active.assign(island_rows, 0), contact.limit_block.reserve(island_rows);
-  contact.active_set.reserve(static_cast<int>(island_rows));
+  size_constraint_scratch(state, model);
 
   JointControlScratch& controls = state.controls;
   controls.drive_force.setZero(nv), controls.drive_gain.setZero(nv), controls.armature.setZero(nv);
   controls.explicit_force.setZero(nv), controls.acceleration.setZero(nv), controls.predicted.setZero(nv), controls.forces.setZero(nv);
   controls.friction.reserve(model.joints.size() + state.serial_axes.size());
-  controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());
+  controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());  // what find_limit_rows may add
   controls.islands.reserve(state.islands.size());
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
 

@@ -48,23 +48,25 @@ namespace limber {
 /// compile so a step allocates nothing.
 ///
 /// Blocks. The step's constraints in joint space are blocks of rows (joint_space_contacts.hpp,
-/// "Constraint space"): contact c is block c (three rows: the world x, y, z of its points'
-/// relative velocity), limit row k (JointControlScratch::rows) is block contacts + k (one row,
-/// its first column; the other two are zero).
+/// "Responses"): contact c is block c (three rows: the world x, y, z of its points' relative
+/// velocity), limit row k (JointControlScratch::rows) is block contacts + k (one row, its first
+/// column; the other two are zero).
 struct JointSpaceContactScratch {
   /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
   DynamicsWorkspace articulated;
   Eigen::VectorXd zero_velocities;             ///< nv
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
-  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K = A_cc, world impulse at p → relative velocity at p
+  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K = Y_cᵀ D⁻¹ Y_c, world impulse at p → relative velocity at p
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
   // The blocks' responses through the factor (joint_space_contacts.hpp, "Responses").
-  JointSpaceFactor inertia;                      ///< H at the contact configuration, in the factor's sparsity (not factored)
-  JointSpaceFactor factor;                       ///< its LᵀDL
-  JointSpaceFactor held;                         ///< the joint friction's: H + h·G with the held joints' penalties, factored per island
+  // The factors hold O(Σ depth) entries: compile sizes them for a small tree, a large tree's
+  // first step that needs them does (compile.cpp, size_constraint_scratch).
+  JointSpaceFactor factor;                       ///< H's LᵀDL at the constraints' configuration (or the friction's H + h·G)
+  JointSpaceFactor inertia;                      ///< with joint friction: H + h·G, not factored
+  JointSpaceFactor held;                         ///< with joint friction: H + h·G with the held joints' penalties, factored per island
   DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch
   /// Per block: where its entries start in row_coordinate and row_value (blocks + 1).
   std::vector<int> row_begin;
@@ -80,32 +82,31 @@ struct JointSpaceContactScratch {
   /// order, and Y_g's three columns there): A_hg = Y_hᵀ D⁻¹ Y_g.
   std::vector<int> half_coordinate;
   std::vector<Eigen::Vector3d> half_value;
-  /// Per block: its islands (the second −1 unless a contact joins two).
-  std::vector<std::int32_t> first_island, second_island;
-  /// The blocks of island k are island_block[island_block_begin[k] … island_block_begin[k + 1]);
-  /// island_slot[g] is block g's place among its first island's.
-  std::vector<int> island_block_begin, island_block, island_slot;
-  /// The Delassus matrix by block columns: column g holds A_hg (3 × 3: an impulse on g's rows →
-  /// the motion of h's rows) for every block h sharing an island with g, g itself included, at
-  /// column_begin[g] … column_begin[g + 1] (blocks + 1).
-  std::vector<int> column_begin, column_block;
-  std::vector<Eigen::Matrix3d> column_value;
-  /// Per block: its rows' motion J_g x + Σ_h A_gh λ_h (x: v or the push-out's displacement at
-  /// the passes' start) and its accumulated impulse λ_g.
-  std::vector<Eigen::Vector3d> motion, impulse;
-  /// nv: y = D⁻¹ Σ_g Y_g λ_g, which moves x by L⁻¹ y (settle).
+  /// The limit rows' Delassus matrix A = Y D⁻¹ Yᵀ, one dense block per island with limit rows
+  /// (JointControlScratch::islands, in order): island t's rows are
+  /// limit_row[limit_row_begin[t] … limit_row_begin[t + 1]) (indices into JointControlScratch::rows),
+  /// its m × m matrix (column-major) at limit_matrix[limit_matrix_begin[t]].
+  std::vector<int> limit_row_begin, limit_row, limit_matrix_begin;
+  std::vector<double> limit_matrix;
+  /// nv: y = D⁻¹ Σ_g Y_g λ_g of the impulses not yet in x (v, or the push-out's displacement),
+  /// which moves x by L⁻¹ y (settle); J_g of it is Y_gᵀ y.
   Eigen::VectorXd lagging;
+  std::vector<double> push;  ///< per contact: accumulated push-out "impulse", kg·m
   Eigen::Matrix<double, Eigen::Dynamic, 3> scatter;  ///< nv × 3 scratch, zero between uses
   std::vector<int> path;                             ///< one block's coordinates (scratch)
-  // An island's limit rows solved together (joint_space_limits.cpp): their Delassus matrix,
-  // values, targets, accumulated impulses, changes, held flags, blocks; capacity the most limit
-  // rows of one island.
-  Eigen::MatrixXd limit_delassus;
+  // An island's limit rows solved together (joint_space_limits.cpp): values, targets,
+  // accumulated impulses, changes, held flags; capacity the most limit rows of one island.
   Eigen::VectorXd limit_value, limit_target, limit_accumulated, limit_change;
   std::vector<char> limit_active;
-  std::vector<int> limit_block;
-  std::vector<int> limit_local;  ///< per block: its place among its island's limit rows in a solve, or −1
   ActiveSet active_set;
+
+  /// Room for an island's m limit rows in one solve (grows, never shrinks).
+  void reserve_limit_rows(int m) {
+    if (limit_value.size() >= m) return;
+    limit_value.setZero(m), limit_target.setZero(m), limit_accumulated.setZero(m), limit_change.setZero(m);
+    limit_active.assign(static_cast<std::size_t>(m), 0);
+    active_set.reserve(m);
+  }
 };
 
 /// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).
@@ -139,6 +140,7 @@ struct JointLimitRow {
   Eigen::Vector3d direction = Eigen::Vector3d::Zero();  ///< first `dofs` entries: ∂C/∂v
   double gap = 0;             ///< C: how far inside the limit (< 0: violated), rad or m
   double inverse_mass = 0;    ///< direction·H⁻¹·direction
+  double impulse = 0, push = 0;  ///< accumulated, ≥ 0
 };
 
 /// A joint's friction over a step (joint_space_contacts.hpp, "Drives and friction").

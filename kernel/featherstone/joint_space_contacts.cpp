@@ -76,8 +76,9 @@ Eigen::Vector3d block_motion(const JointSpaceContactScratch& s, std::size_t g, c
   return motion;
 }
 
-// Block g's half rows Y_g = L⁻ᵀ J_gᵀ (on its path). Needs its rows and the factor.
-void half_rows(JointSpaceContactScratch& s, std::size_t g) {
+// Block g's half rows Y_g = L⁻ᵀ J_gᵀ (on its path) and its diagonal block Y_gᵀ D⁻¹ Y_g. Needs
+// its rows and the factor.
+Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g) {
   s.path.clear();
   for (int e = s.row_begin[g]; e < s.row_begin[g + 1]; ++e) {
     const int k = s.row_coordinate[static_cast<std::size_t>(e)];
@@ -87,140 +88,29 @@ void half_rows(JointSpaceContactScratch& s, std::size_t g) {
   std::sort(s.path.begin(), s.path.end(), std::greater<>());
   s.path.erase(std::unique(s.path.begin(), s.path.end()), s.path.end());
   s.factor.solve_transposed_lower(s.scatter, s.path);
+  Eigen::Matrix3d diagonal = Eigen::Matrix3d::Zero();
   for (const int k : s.path) {
-    s.half_coordinate.push_back(k);
-    s.half_value.push_back(s.scatter.row(k).transpose());
+    const Eigen::Vector3d y = s.scatter.row(k).transpose();
     s.scatter.row(k).setZero();
+    s.half_coordinate.push_back(k);
+    s.half_value.push_back(y);
+    diagonal.noalias() += y * y.transpose() / s.factor.pivot(k);
   }
   s.half_begin.push_back(static_cast<int>(s.half_coordinate.size()));
+  return diagonal;
 }
 
-// A_hg = Y_hᵀ D⁻¹ Y_g (3 × 3) of blocks h and g, with D⁻¹ Y_g in s.scatter on g's path; a limit
-// row's block (`h_row`, `g_row`: one row) has only its first row or column.
-Eigen::Matrix3d delassus_block(const JointSpaceContactScratch& s, std::size_t h, bool h_row, bool g_row) {
-  Eigen::Matrix3d a = Eigen::Matrix3d::Zero();
-  for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
-    const Eigen::Vector3d& y = s.half_value[static_cast<std::size_t>(e)];
-    const auto z = s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]);
-    if (h_row && g_row) {
-      a(0, 0) += y[0] * z[0];
-    } else if (h_row) {
-      a.row(0) += y[0] * z;
-    } else if (g_row) {
-      a.col(0) += z[0] * y;
-    } else {
-      a.noalias() += y * z;
-    }
-  }
-  return a;
-}
-
-// The blocks by island (a block on two islands in both), and each one's place in its first
-// island's list.
-void group_blocks_by_island(FeatherstoneState& state) {
-  JointSpaceContactScratch& s = state.contact;
-  const std::size_t blocks = s.first_island.size();
-  s.island_block_begin.assign(state.islands.size() + 1, 0);
-  for (std::size_t g = 0; g < blocks; ++g) {
-    ++s.island_block_begin[static_cast<std::size_t>(s.first_island[g]) + 1];
-    if (s.second_island[g] >= 0) ++s.island_block_begin[static_cast<std::size_t>(s.second_island[g]) + 1];
-  }
-  for (std::size_t k = 0; k < state.islands.size(); ++k) s.island_block_begin[k + 1] += s.island_block_begin[k];
-  s.island_block.resize(static_cast<std::size_t>(s.island_block_begin.back()));
-  for (std::size_t g = 0; g < blocks; ++g) {  // each island's begin runs to its end...
-    for (const std::int32_t island : {s.first_island[g], s.second_island[g]}) {
-      if (island >= 0) s.island_block[static_cast<std::size_t>(s.island_block_begin[static_cast<std::size_t>(island)]++)] = static_cast<int>(g);
-    }
-  }
-  for (std::size_t k = state.islands.size(); k > 0; --k) s.island_block_begin[k] = s.island_block_begin[k - 1];  // ...and is put back
-  s.island_block_begin[0] = 0;
-  s.island_slot.resize(blocks);
-  for (std::size_t k = 0; k < state.islands.size(); ++k) {
-    for (int slot = s.island_block_begin[k]; slot < s.island_block_begin[k + 1]; ++slot) {
-      const auto g = static_cast<std::size_t>(s.island_block[static_cast<std::size_t>(slot)]);
-      if (static_cast<std::size_t>(s.first_island[g]) == k) s.island_slot[g] = slot - s.island_block_begin[k];
-    }
-  }
-}
-
-// The Delassus matrix's block columns (joint_space_contacts.hpp, "Constraint space"): for each
-// block g, A_hg for every block h on one of g's islands — through D⁻¹ Y_g scattered on g's path,
-// or, for two blocks of one island alone, as A_ghᵀ from h's column when h came first. Needs the
-// blocks' half rows and islands.
-void form_delassus(FeatherstoneState& state) {
-  JointSpaceContactScratch& s = state.contact;
-  group_blocks_by_island(state);
-  const std::size_t blocks = s.first_island.size();
-  const std::size_t contacts = state.contacts.size();
-  s.contact_matrix.resize(contacts);
-  s.column_begin.assign(1, 0);
-  s.column_block.clear(), s.column_value.clear();
-  for (std::size_t g = 0; g < blocks; ++g) {
-    const bool g_row = g >= contacts, g_alone = s.second_island[g] < 0;
-    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
-      const int k = s.half_coordinate[static_cast<std::size_t>(e)];
-      s.scatter.row(k) = s.half_value[static_cast<std::size_t>(e)].transpose() / s.factor.pivot(k);
-    }
-    for (const std::int32_t island : {s.first_island[g], s.second_island[g]}) {
-      if (island < 0) continue;
-      const auto k = static_cast<std::size_t>(island);
-      for (int slot = s.island_block_begin[k]; slot < s.island_block_begin[k + 1]; ++slot) {
-        const auto h = static_cast<std::size_t>(s.island_block[static_cast<std::size_t>(slot)]);
-        // A block on both of g's islands is met twice: take it on the first.
-        if (island == s.second_island[g] && (s.first_island[h] == s.first_island[g] || s.second_island[h] == s.first_island[g])) continue;
-        // h's column lists its one island's blocks in order: A_gh sits at g's place there.
-        const Eigen::Matrix3d a = h < g && g_alone && s.second_island[h] < 0
-                                      ? Eigen::Matrix3d(s.column_value[static_cast<std::size_t>(s.column_begin[h] + s.island_slot[g])].transpose())
-                                      : delassus_block(s, h, h >= contacts, g_row);
-        s.column_block.push_back(static_cast<int>(h));
-        s.column_value.push_back(a);
-        if (h != g) continue;  // the diagonal: a contact's K, a limit row's inverse mass
-        if (g < contacts) {
-          s.contact_matrix[g] = a;
-        } else {
-          state.controls.rows[g - contacts].inverse_mass = a(0, 0);
-        }
-      }
-    }
-    s.column_begin.push_back(static_cast<int>(s.column_block.size()));
-    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) s.scatter.row(s.half_coordinate[static_cast<std::size_t>(e)]).setZero();
-  }
-}
-
-// The blocks' motions J_g x and impulses 0, for passes on x.
-void start_passes(JointSpaceContactScratch& s, const Eigen::VectorXd& x) {
-  const std::size_t blocks = s.first_island.size();
-  s.motion.resize(blocks), s.impulse.resize(blocks);
-  for (std::size_t g = 0; g < blocks; ++g) s.motion[g] = block_motion(s, g, x), s.impulse[g].setZero();
-}
-
-// x += H⁻¹ Σ_g J_gᵀ λ_g = L⁻¹ D⁻¹ Σ_g Y_g λ_g: the passes' impulses joined to x (v, or the
-// push-out's displacement), one forward pass.
-void settle(JointSpaceContactScratch& s, Eigen::VectorXd& x) {
-  for (std::size_t g = 0; g < s.impulse.size(); ++g) {
-    if (s.impulse[g].isZero(0)) continue;
-    for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
-      const int k = s.half_coordinate[static_cast<std::size_t>(e)];
-      s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(s.impulse[g]) / s.factor.pivot(k);
-    }
-  }
-  s.factor.solve_lower(s.lagging);
-  x += s.lagging;
-  s.lagging.setZero();
-}
-
-// Sequential impulses (joint_space_contacts.hpp, "Impulses") on the contacts' blocks, and the
-// limit rows' blocks held per island, in constraint space; v takes them at the end.
+// Sequential impulses (joint_space_contacts.hpp, "Impulses"), the contacts' and the limit rows'.
 void impulse_passes(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  start_passes(s, state.v);
+  for (JointLimitRow& row : state.controls.rows) row.impulse = 0;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool applied = false;  // a pass that applies nothing leaves nothing for the next
     for (std::size_t c = 0; c < state.contacts.size(); ++c) {
       const RigidContact& contact = state.contacts[c];
       const Eigen::Matrix3d& k = s.contact_matrix[c];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = s.motion[c];
+      const Eigen::Vector3d relative = block_motion(s, c, state.v) + lagging_motion(s, c);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -234,12 +124,12 @@ void impulse_passes(FeatherstoneState& state, double dt) {
         const double tangent_inverse_mass = tangent.dot(k * tangent);
         if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
       }
-      apply_block_impulse(s, static_cast<int>(c), impulse);
+      respond(s, c, impulse);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
     // reached lets the joint arrive at it by the step's end), each island's rows together.
-    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/false)) applied = true;
+    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/false, state.v)) applied = true;
     if (!applied) break;
   }
   settle(s, state.v);
@@ -249,7 +139,8 @@ void impulse_passes(FeatherstoneState& state, double dt) {
 void push_out(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
   s.displacement.setZero();
-  start_passes(s, s.displacement);
+  s.push.assign(state.contacts.size(), 0.0);  // within the capacity reserved at compile
+  for (JointLimitRow& row : state.controls.rows) row.push = 0;
   bool moved = false;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool pushed = false;
@@ -258,15 +149,16 @@ void push_out(FeatherstoneState& state, double dt) {
       const double target = push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = s.motion[c].dot(contact.normal);
+      const double done = lagging_motion(s, c).dot(contact.normal);  // the displacement is all in y until settled
       if (std::abs(target - done) <= kPushTolerance * target) continue;
-      const double pushed_so_far = s.impulse[c].dot(contact.normal);  // the push-out's impulses are along the normal
-      const double change = std::max(pushed_so_far + (target - done) / normal_inverse_mass, 0.0) - pushed_so_far;
+      const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
+      const double change = push - s.push[c];
       if (change == 0) continue;
-      apply_block_impulse(s, static_cast<int>(c), change * contact.normal);
+      s.push[c] = push;
+      respond(s, c, change * contact.normal);
       moved = pushed = true;
     }
-    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/true)) moved = pushed = true;
+    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/true, s.displacement)) moved = pushed = true;
     if (!pushed) break;
   }
   if (!moved) return;
@@ -291,20 +183,15 @@ void push_out(FeatherstoneState& state, double dt) {
   forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated, state.v);
 }
 
-// The island of scene body b (−1 for a plane).
-std::int32_t island_of_scene_body(const FeatherstoneState& state, std::int32_t b) {
-  return b < 0 ? -1 : static_cast<std::int32_t>(state.island_of_body[static_cast<std::size_t>(b)]);
-}
-
-// The step's blocks — the contacts, then the limit rows — their rows, half rows and Delassus
-// matrix through the factor of H at the current q, approach speeds and e = 0 for resting
-// contacts; false when there are none.
+// The step's blocks — the contacts, then the limit rows — their rows and half rows through the
+// factor of H at the current q, the contacts' K, the limit rows' Delassus matrix per island,
+// approach speeds and e = 0 for resting contacts; false when there are none.
 bool prepare_constraints(FeatherstoneState& state, double dt) {
   find_limit_rows(state, dt);
   if (state.contacts.empty() && state.controls.rows.empty()) return false;
   JointSpaceContactScratch& s = state.contact;
-  mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);  // at the poses detection saw
-  s.factor = s.inertia;  // the same sizes: no allocation
+  if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
+  mass_matrix(state.tree, state.kinematics, s.composite, s.factor);  // at the poses detection saw
   if (s.factor.factor() >= 0) {
     // H is positive definite at any finite pose; it is not only once the state has gone
     // non-finite. Say so through v, which the step's status checks, instead of answering the
@@ -316,21 +203,18 @@ bool prepare_constraints(FeatherstoneState& state, double dt) {
   s.row_coordinate.clear(), s.row_value.clear();
   s.half_begin.assign(1, 0);
   s.half_coordinate.clear(), s.half_value.clear();
-  s.first_island.clear(), s.second_island.clear();
+  s.contact_matrix.resize(state.contacts.size());
   for (std::size_t c = 0; c < state.contacts.size(); ++c) {
     RigidContact& contact = state.contacts[c];
     contact_rows(state, contact);
-    half_rows(s, c);
-    const std::int32_t a = island_of_scene_body(state, contact.a), b = island_of_scene_body(state, contact.b);
-    s.first_island.push_back(a), s.second_island.push_back(b == a ? -1 : b);
+    s.contact_matrix[c] = half_rows(s, c);
     record_approach(contact, -block_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
   }
-  for (const JointLimitRow& row : state.controls.rows) {
+  for (JointLimitRow& row : state.controls.rows) {
     limit_row_entries(state, row);
-    half_rows(s, s.first_island.size());
-    s.first_island.push_back(row.island), s.second_island.push_back(-1);
+    row.inverse_mass = half_rows(s, state.contacts.size() + static_cast<std::size_t>(&row - state.controls.rows.data()))(0, 0);
   }
-  form_delassus(state);
+  form_limit_delassus(state);
   return true;
 }
 

@@ -16,21 +16,20 @@
 // two bodies' paths, and so are its half rows Y_c = L⁻ᵀ J_cᵀ (MuJoCo's half-solve). Its
 // collision matrix is K_c = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c (3×3, world: the change of the relative
 // velocity per unit impulse +J on a and −J on b; its normal-normal entry is the contact's
-// effective inverse mass 1/(J_n H⁻¹ J_nᵀ)).
+// effective inverse mass 1/(J_n H⁻¹ J_nᵀ)). A limit row (below) is a row on its joint's
+// velocities, with half rows on its joint's path. An impulse ι moves the joints by
+// Δv = H⁻¹ J_cᵀ ι = L⁻¹ y with y = D⁻¹ Y_c ι: the passes add y on the row's path alone and read a
+// row's motion as J x + Yᵀ y (x: v, or the push-out's displacement), and x takes every impulse
+// at the passes' end as L⁻¹ y, one forward pass. So an impulse costs its paths, not its islands.
 //
-// Constraint space. The contacts and the limit rows (below) are blocks of rows — a contact's
-// three, a limit's one — and their Delassus matrix A = J H⁻¹ Jᵀ = Y D⁻¹ Yᵀ is formed once a
-// step, block by block: A_hg = Y_hᵀ D⁻¹ Y_g for blocks g and h on one island (a contact between
-// two islands on both; blocks on different islands do not move each other), by scattering
-// D⁻¹ Y_g on g's path and reading it along h's (Carpentier et al. 2021, "Proximal and sparse
-// resolution of constrained dynamic equations", the Delassus matrix through the factor). The
-// passes then work on the blocks' motions w = J x + A λ alone (x: v, or the push-out's
-// displacement at the passes' start; λ the impulses so far): an impulse on g moves the w of the
-// blocks on its islands by A's column g, O(blocks) instead of a pass over its paths, and x takes
-// every impulse at the passes' end as H⁻¹ Jᵀ λ = L⁻¹ D⁻¹ Σ Y_g λ_g, one forward pass. The same
-// impulses as answering each through the factor (humanoid.xml: energy, penetration and limits
-// to the printed digit); against that, humanoid.xml's contact stage took 0.68× the time,
-// 22_humanoids.xml's 0.68× and humanoid100.xml's 0.71× (bench/models.md).
+// Constraint space. The limit rows of an island, solved together (below), need their Delassus
+// matrix A = J H⁻¹ Jᵀ = Y D⁻¹ Yᵀ: it is formed once a step per island from their half rows
+// (Carpentier et al. 2021, "Proximal and sparse resolution of constrained dynamic equations":
+// the Delassus matrix through the factor). The contacts are not in it: a contact's impulse costs
+// its paths through y, where a Delassus matrix over an island's contacts costs their count
+// squared times a path to form: with one (tried), a 200-link chain lying on the ground (400
+// contacts) took 2.9× the step of answering each through y, humanoid.xml 1.08× and
+// 22_humanoids.xml 1.14× (bench/models.md).
 //
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
@@ -75,7 +74,7 @@
 // joint_space_limits.cpp, "Holding rows") holds them on their targets to round-off — rows that
 // would pull are released, rows pushed past are held, at most 8 rounds. One by one,
 // Gauss–Seidel took hundreds of passes on neighbouring joints at their limits; a penalty on H's
-// joint blocks, refactored per round (before the Delassus matrix), cost a factor a round.
+// joint blocks, refactored per round (before this), cost a factor a round.
 //
 // Drives and friction, before the integrator (joint_control_forces), as forces held over the
 // step: a drive is the stable PD of Tan, Liu & Turk (2011, "Stable proportional-derivative

@@ -153,29 +153,63 @@ Eigen::Matrix3d inverse_block(FeatherstoneState& state, std::size_t island, int 
 //
 // Sequential impulses converge slowly on limit rows of neighbouring joints (a light spine between
 // a torso and a pelvis both at their limits: each row's impulse undoes the other's), so an
-// island's rows are solved together, exactly, in constraint space: their Delassus matrix (the
-// blocks' A, joint_space_contacts.hpp, "Constraint space") and an active-set solve of their
-// complementarity problem (kernel/numerics/active_set.hpp): the rows held reach their targets,
-// rows that would pull are released, rows left past their targets are held, at most
-// kActiveSetIterations rounds.
+// island's rows are solved together, exactly, in constraint space: their Delassus matrix
+// A = Y D⁻¹ Yᵀ through the factor (formed once a step, form_limit_delassus) and an active-set
+// solve of their complementarity problem (kernel/numerics/active_set.hpp): the rows held reach
+// their targets, rows that would pull are released, rows left past their targets are held, at
+// most kActiveSetIterations rounds.
 constexpr int kActiveSetIterations = 8;
 
-// The limit rows of island `island` into the solve's scratch (their Delassus matrix, values,
-// targets and impulses so far, held flags); returns how many, 0 when none needs a change.
-int gather_island_rows(FeatherstoneState& state, std::int32_t island, double dt, bool position, double tolerance) {
+// The limit rows' block of the Delassus matrix per island with rows (their blocks' half rows on
+// their paths: A_ij = Σ_k Y_i,k Y_j,k / D_k over the coordinates the paths share).
+void form_limit_delassus(FeatherstoneState& state) {
   JointSpaceContactScratch& s = state.contact;
-  const int contacts = static_cast<int>(state.contacts.size());
-  s.limit_block.clear();
-  for (std::size_t k = 0; k < state.controls.rows.size(); ++k) {
-    if (state.controls.rows[k].island == island) s.limit_block.push_back(contacts + static_cast<int>(k));
+  const std::vector<JointLimitRow>& rows = state.controls.rows;
+  const std::size_t contacts = state.contacts.size();
+  s.limit_row_begin.assign(1, 0), s.limit_row.clear();
+  s.limit_matrix_begin.assign(1, 0), s.limit_matrix.clear();
+  s.response.setZero();  // scratch: D⁻¹ Y_j on its path, zero elsewhere
+  for (const std::int32_t island : state.controls.islands) {
+    const auto first = s.limit_row.size();
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      if (rows[k].island == island) s.limit_row.push_back(static_cast<int>(k));
+    }
+    const std::size_t m = s.limit_row.size() - first;
+    s.limit_row_begin.push_back(static_cast<int>(s.limit_row.size()));
+    const std::size_t at = s.limit_matrix.size();
+    s.limit_matrix.resize(at + m * m);  // within what compile reserved, unless the rows grew past it
+    for (std::size_t j = 0; j < m; ++j) {
+      const std::size_t g = contacts + static_cast<std::size_t>(s.limit_row[first + j]);
+      for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+        const int k = s.half_coordinate[static_cast<std::size_t>(e)];
+        s.response[k] = s.half_value[static_cast<std::size_t>(e)][0] / s.factor.pivot(k);
+      }
+      for (std::size_t i = 0; i < m; ++i) {
+        const std::size_t h = contacts + static_cast<std::size_t>(s.limit_row[first + i]);
+        double entry = 0;
+        for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
+          entry += s.half_value[static_cast<std::size_t>(e)][0] * s.response[s.half_coordinate[static_cast<std::size_t>(e)]];
+        }
+        s.limit_matrix[at + j * m + i] = entry;
+      }
+      for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) s.response[s.half_coordinate[static_cast<std::size_t>(e)]] = 0;
+    }
+    s.limit_matrix_begin.push_back(static_cast<int>(s.limit_matrix.size()));
   }
-  const int m = static_cast<int>(s.limit_block.size());
+}
+
+// The limit rows of the t-th island with rows into the solve's scratch (values J_l x + Y_lᵀ y,
+// targets, impulses so far, held flags); returns how many, 0 when none needs a change.
+int gather_island_rows(FeatherstoneState& state, std::size_t t, double dt, bool position, const Eigen::VectorXd& x, double tolerance) {
+  JointSpaceContactScratch& s = state.contact;
+  const int first = s.limit_row_begin[t], m = s.limit_row_begin[t + 1] - first;
+  s.reserve_limit_rows(m);  // past what compile reserved (an island of more than 256 rows) it allocates
   bool needed = false;
   for (int i = 0; i < m; ++i) {
-    const auto g = static_cast<std::size_t>(s.limit_block[static_cast<std::size_t>(i)]);
-    const JointLimitRow& row = state.controls.rows[g - static_cast<std::size_t>(contacts)];
-    s.limit_local[g] = i;
-    const double value = s.motion[g][0], accumulated = s.impulse[g][0];
+    const auto k = static_cast<std::size_t>(s.limit_row[static_cast<std::size_t>(first + i)]);
+    const JointLimitRow& row = state.controls.rows[k];
+    const double value = joint_dot(row.direction, x, row.offset, row.dofs) + lagging_motion(s, state.contacts.size() + k)[0];
+    const double accumulated = position ? row.push : row.impulse;
     // Position: a violation in full (it is never the Model's, always the solver's), and a row
     // inside its limit not pushed past it. Velocity: a limit not yet reached lets the joint arrive
     // at it by the step's end.
@@ -185,37 +219,29 @@ int gather_island_rows(FeatherstoneState& state, std::int32_t island, double dt,
     s.limit_value[i] = value, s.limit_target[i] = target, s.limit_accumulated[i] = accumulated;
     s.limit_active[static_cast<std::size_t>(i)] = active;
   }
-  if (!needed) {
-    for (const int g : s.limit_block) s.limit_local[static_cast<std::size_t>(g)] = -1;
-    return 0;
-  }
-  for (int j = 0; j < m; ++j) {
-    const auto g = static_cast<std::size_t>(s.limit_block[static_cast<std::size_t>(j)]);
-    for (int e = s.column_begin[g]; e < s.column_begin[g + 1]; ++e) {
-      const int i = s.limit_local[static_cast<std::size_t>(s.column_block[static_cast<std::size_t>(e)])];
-      if (i >= 0) s.limit_delassus(i, j) = s.column_value[static_cast<std::size_t>(e)](0, 0);
-    }
-  }
-  for (const int g : s.limit_block) s.limit_local[static_cast<std::size_t>(g)] = -1;
-  return m;
+  return needed ? m : 0;
 }
 
-// The limit rows, together per island, on the blocks' motions: velocity level (values
-// direction·v, targets −max(C, 0)/Δt) or position level (values direction·δ of the push-out's
-// displacement, targets the violation to push out, or −C for a row inside its limit). Their
-// impulses change the motions of every block on the island. Returns whether it changed any.
-bool solve_limit_rows(FeatherstoneState& state, double dt, bool position) {
+// The limit rows, together per island: velocity level (values direction·v, targets
+// −max(C, 0)/Δt) or position level (values direction·δ of the push-out's displacement, targets
+// the violation to push out, or −C for a row inside its limit); x is v or the displacement, with
+// the impulses so far in state.contact.lagging. Returns whether it changed any.
+bool solve_limit_rows(FeatherstoneState& state, double dt, bool position, const Eigen::VectorXd& x) {
   JointSpaceContactScratch& s = state.contact;
   const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
   bool changed_any = false;
-  for (const std::int32_t island : state.controls.islands) {
-    const int m = gather_island_rows(state, island, dt, position, tolerance);
+  for (std::size_t t = 0; t + 1 < s.limit_row_begin.size(); ++t) {
+    const int m = gather_island_rows(state, t, dt, position, x, tolerance);
     if (m == 0) continue;
-    s.active_set.solve(s.limit_delassus.topLeftCorner(m, m), s.limit_value.head(m), s.limit_target.head(m), s.limit_accumulated.head(m),
-                       s.limit_active, tolerance, s.limit_change.head(m), kActiveSetIterations);
+    const Eigen::Map<const Eigen::MatrixXd> delassus(s.limit_matrix.data() + s.limit_matrix_begin[t], m, m);
+    s.active_set.solve(delassus, s.limit_value.head(m), s.limit_target.head(m), s.limit_accumulated.head(m), s.limit_active, tolerance,
+                       s.limit_change.head(m), kActiveSetIterations);
     for (int i = 0; i < m; ++i) {
       if (s.limit_change[i] == 0) continue;
-      apply_block_impulse(s, s.limit_block[static_cast<std::size_t>(i)], Eigen::Vector3d(s.limit_change[i], 0, 0));
+      const auto k = static_cast<std::size_t>(s.limit_row[static_cast<std::size_t>(s.limit_row_begin[t] + i)]);
+      JointLimitRow& row = state.controls.rows[k];
+      (position ? row.push : row.impulse) += s.limit_change[i];
+      respond(s, state.contacts.size() + k, Eigen::Vector3d(s.limit_change[i], 0, 0));
       changed_any = true;
     }
   }
@@ -480,7 +506,9 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   if (friction) {
     // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
     // add their penalties to it per island: factor_held_rows).
-    mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);  // at the poses forward_kinematics just found
+    if (s.held.size() != state.tree.velocity_count()) s.inertia.assign(state.tree), s.held.assign(state.tree);  // a large tree's first use
+    if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);
+    mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);
     for (int i = 0; i < state.tree.velocity_count(); ++i) {
       if (c.armature[i] != 0) s.inertia.add_inertia(i, i, c.armature[i]);
     }

@@ -11,9 +11,12 @@ namespace limber::joint_space {
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
 // gaps and directions (their inverse masses come with the blocks' Delassus matrix).
 void find_limit_rows(FeatherstoneState& state, double dt);
+// The limit rows' Delassus matrix per island (joint_space_limits.cpp, "Holding rows"), from their
+// half rows. Needs them (prepare_constraints).
+void form_limit_delassus(FeatherstoneState& state);
 // One pass over the islands' rows, each island's together (joint_space_limits.cpp, "Holding
-// rows"), on the blocks' motions and impulses (state.contact): the velocities' passes, or
-// (`position`) the push-out's. True when it changed any.
-bool solve_limit_rows(FeatherstoneState& state, double dt, bool position);
+// rows"): on the velocities x = v, or (`position`) the push-out's displacement x, with the
+// impulses so far in state.contact.lagging. True when it changed any.
+bool solve_limit_rows(FeatherstoneState& state, double dt, bool position, const Eigen::VectorXd& x);
 
 }  // namespace limber::joint_space
