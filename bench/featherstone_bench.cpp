@@ -9,6 +9,9 @@
 // sequential impulses: the composite-rigid-body H, its LᵀDL factor in the tree's sparsity, the
 // Delassus matrix of 18 rows (6 contacts × 3, each on a foot's or hand's path to the root) and
 // one solve (kernel/featherstone/joint_space_factor.hpp).
+//
+// The Chain rows time a whole step of a hanging chain against one articulated-body pass of its
+// tree (bench/chains.md: the step's cost in passes).
 //   build/bench/featherstone_bench --benchmark_min_time=0.2
 #include <benchmark/benchmark.h>
 
@@ -19,6 +22,8 @@
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/joint_space_factor.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/scene/generators.hpp"
 #include "limber/kernel/scene/scene_file.hpp"
 
 namespace {
@@ -137,6 +142,43 @@ void BM_HumanoidFactorAndDelassus(benchmark::State& bench) {
   bench.counters["coordinates"] = nv;
 }
 
+// A whole step of the method against one articulated-body pass of the same tree: a chain of N
+// links (the scene file's chain generator: ball joints) hanging straight down from its pin, awake,
+// stepped by semi-implicit Euler at 1/240 s (one pass a step). ChainStep / ChainPass is the
+// step's cost in passes.
+Model hanging_chain(std::size_t links) {
+  ChainSpec spec;
+  spec.links = links;
+  spec.direction = Vector3(0, 0, -1);
+  Model model = make_chain_model(spec);
+  model.settings.sleep.enabled = false;
+  return model;
+}
+
+void BM_ChainStep(benchmark::State& bench) {
+  FeatherstoneState state = compile_featherstone(hanging_chain(static_cast<std::size_t>(bench.range(0))), {.integrator = Integrator::semi_implicit_euler});
+  for (auto _ : bench) {
+    benchmark::DoNotOptimize(step(state).status);
+    benchmark::ClobberMemory();
+  }
+  bench.counters["links"] = static_cast<double>(bench.range(0));
+}
+
+void BM_ChainPass(benchmark::State& bench) {
+  FeatherstoneState state = compile_featherstone(hanging_chain(static_cast<std::size_t>(bench.range(0))), {.integrator = Integrator::semi_implicit_euler});
+  DynamicsWorkspace workspace;
+  workspace.resize(state.tree);
+  Eigen::VectorXd accelerations(state.tree.velocity_count());
+  for (auto _ : bench) {
+    forward_dynamics(state.tree, state.q, state.v, state.joint_forces, state.settings.gravity, workspace, accelerations);
+    benchmark::DoNotOptimize(accelerations.data());
+    benchmark::ClobberMemory();
+  }
+  bench.counters["links"] = static_cast<double>(bench.range(0));
+}
+
+BENCHMARK(BM_ChainStep)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_ChainPass)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidArticulatedBodyPass)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidFactorAndDelassus)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodyRevoluteChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
