@@ -89,7 +89,7 @@ void find_serial_limit_rows(FeatherstoneState& state, double dt) {
 }
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with the blocks' Delassus matrix).
+// gaps and directions (their inverse masses come with their half rows, prepare_constraints).
 void find_limit_rows(FeatherstoneState& state, double dt) {
   std::vector<JointLimitRow>& rows = state.controls.rows;
   rows.clear();

@@ -9,7 +9,7 @@
 namespace limber::joint_space {
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with the blocks' Delassus matrix).
+// gaps and directions (their inverse masses come with their half rows, prepare_constraints).
 void find_limit_rows(FeatherstoneState& state, double dt);
 // The limit rows' Delassus matrix per island (joint_space_limits.cpp, "Holding rows"), from their
 // half rows. Needs them (prepare_constraints).
