@@ -45,12 +45,6 @@ void JointSpaceFactor::assign(const std::vector<int>& dof_parent) {
   pivot_.assign(static_cast<std::size_t>(n), 0.0);
 }
 
-int JointSpaceFactor::deepest() const {
-  int most = 0;
-  for (int i = 0; i < size(); ++i) most = std::max(most, begin_[static_cast<std::size_t>(i) + 1] - begin_[static_cast<std::size_t>(i)] + 1);
-  return most;
-}
-
 double JointSpaceFactor::lower(int i, int j) const {
   for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
     if (ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];
@@ -78,8 +72,13 @@ void JointSpaceFactor::factor(const Eigen::Ref<const Eigen::MatrixXd>& h) {
 
 double& JointSpaceFactor::inertia(int i, int j) {
   if (j == i) return pivot_[static_cast<std::size_t>(i)];
-  for (int e = begin_[static_cast<std::size_t>(i)]; e < begin_[static_cast<std::size_t>(i) + 1]; ++e) {
-    if (ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];
+  // i's ancestors are listed nearest first, one a level: an ancestor j with a ancestors of its own
+  // is i's (count(i) − count(j) − 1)-th. The composite-rigid-body algorithm stores O(Σ depth)
+  // entries, so a search along the path would make it O(Σ depth²).
+  const auto count = [&](int k) { return begin_[static_cast<std::size_t>(k) + 1] - begin_[static_cast<std::size_t>(k)]; };
+  if (j >= 0 && j < i) {
+    const int e = begin_[static_cast<std::size_t>(i)] + count(i) - count(j) - 1;
+    if (e >= begin_[static_cast<std::size_t>(i)] && ancestor_[static_cast<std::size_t>(e)] == j) return entries_[static_cast<std::size_t>(e)];
   }
   throw std::invalid_argument("JointSpaceFactor: coordinate " + std::to_string(j) + " is not on coordinate " + std::to_string(i) + "'s path to the root");
 }

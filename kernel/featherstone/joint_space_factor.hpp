@@ -43,8 +43,6 @@ class JointSpaceFactor {
   int size() const { return static_cast<int>(parent_.size()); }
   /// λ(i).
   int parent(int i) const { return parent_[static_cast<std::size_t>(i)]; }
-  /// The most coordinates on one path to the root (the deepest coordinate's ancestors and itself).
-  int deepest() const;
 
   /// Factors H (nv × nv, symmetric positive definite: the composite-rigid-body algorithm's
   /// mass_matrix). Only H_ii and H_ij with j an ancestor of i are read (the rest are zero in a
@@ -96,7 +94,7 @@ class JointSpaceFactor {
   double lower(int i, int j) const;
 
  private:
-  double& inertia(int i, int j);  // H_ij's slot (j = i or an ancestor), before factor()
+  double& inertia(int i, int j);  // H_ij's slot (j = i or an ancestor), before factor(); O(1)
 
   std::vector<int> parent_;      // λ
   std::vector<int> begin_;       // per coordinate: its ancestors' entries in entries_, nearest first (nv + 1)
