@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -65,6 +66,13 @@ struct ArticulatedBody {
   bool joint_frame = false;
 };
 
+/// Tree bodies first … last − 1 holding whole subtrees (an island's): each body's parent is in
+/// the range or is −1 (the world). The algorithms that take one read and write only its bodies'
+/// and coordinates' entries, so that disjoint ranges may run on different threads.
+struct BodyRange {
+  int first = 0, last = 0;
+};
+
 /// A validated tree with the offsets of each joint's coordinates. Adding bodies keeps it valid;
 /// nothing else changes it.
 class ArticulatedTree {
@@ -87,6 +95,14 @@ class ArticulatedTree {
 
   /// q for the zero configuration: angles and displacements 0, quaternions (1, 0, 0, 0).
   Eigen::VectorXd neutral_positions() const;
+
+  /// Where bodies first … last − 1 have their coordinates in v and in q: [begin, end).
+  std::pair<int, int> velocity_span(int first, int last) const {
+    return {velocity_offset(first), last < body_count() ? velocity_offset(last) : velocity_count_};
+  }
+  std::pair<int, int> position_span(int first, int last) const {
+    return {position_offset(first), last < body_count() ? position_offset(last) : position_count_};
+  }
 
  private:
   std::vector<ArticulatedBody> bodies_;

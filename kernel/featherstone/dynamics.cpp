@@ -47,9 +47,10 @@ void require_size(Eigen::Index actual, int expected, const char* what) {
 }
 
 // First pass of ABA and RNEA: ⁱX_λ (unless `q` is null: the workspace holds them), v_i = ⁱX_λ v_λ +
-// v_J and c_i = v_i × v_J (Tables 5.1, 7.1).
-void propagate_velocities(const ArticulatedTree& tree, const double* q, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& w) {
-  for (int i = 0; i < tree.body_count(); ++i) {
+// v_J and c_i = v_i × v_J (Tables 5.1, 7.1), for the bodies of `range`.
+void propagate_velocities(const ArticulatedTree& tree, const double* q, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& w,
+                          BodyRange range) {
+  for (int i = range.first; i < range.last; ++i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
     if (q) w.parent_to_body[index] = joint_transform(body, q + tree.position_offset(i)) * body.tree_transform;
@@ -117,9 +118,9 @@ PluckerTransform joint_transform(const ArticulatedBody& body, const double* join
 }
 
 namespace {
-// ⁱX_0 = ⁱX_λ ^λX_0 from parent_to_body, outward.
-void compose_world_transforms(const ArticulatedTree& tree, DynamicsWorkspace& w) {
-  for (int i = 0; i < tree.body_count(); ++i) {
+// ⁱX_0 = ⁱX_λ ^λX_0 from parent_to_body, outward, for the bodies of `range`.
+void compose_world_transforms(const ArticulatedTree& tree, DynamicsWorkspace& w, BodyRange range) {
+  for (int i = range.first; i < range.last; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const int parent = tree.body(i).parent;
     w.world_to_body[index] = parent >= 0 ? w.parent_to_body[index] * w.world_to_body[static_cast<std::size_t>(parent)] : w.parent_to_body[index];
@@ -128,13 +129,18 @@ void compose_world_transforms(const ArticulatedTree& tree, DynamicsWorkspace& w)
 }  // namespace
 
 void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace) {
-  require_size(q.size(), tree.position_count(), "body_poses: q");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  for (int i = 0; i < tree.body_count(); ++i) {
+  body_poses(tree, q, workspace, {0, tree.body_count()});
+}
+
+void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace, BodyRange range) {
+  require_size(q.size(), tree.position_count(), "body_poses: q");
+  if (!workspace.fits(tree)) throw std::invalid_argument("body_poses: the workspace is not sized for this tree");
+  for (int i = range.first; i < range.last; ++i) {
     workspace.parent_to_body[static_cast<std::size_t>(i)] =
         joint_transform(tree.body(i), q.data() + tree.position_offset(i)) * tree.body(i).tree_transform;
   }
-  compose_world_transforms(tree, workspace);
+  compose_world_transforms(tree, workspace, range);
 }
 
 void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -142,35 +148,40 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
   require_size(q.size(), tree.position_count(), "forward_kinematics: q");
   require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  propagate_velocities(tree, q.data(), v, workspace);
-  compose_world_transforms(tree, workspace);
+  propagate_velocities(tree, q.data(), v, workspace, {0, tree.body_count()});
+  compose_world_transforms(tree, workspace, {0, tree.body_count()});
 }
 
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
+  body_velocities(tree, v, workspace, {0, tree.body_count()});
+}
+
+void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range) {
   require_size(v.size(), tree.velocity_count(), "body_velocities: v");
   if (!workspace.fits(tree)) throw std::invalid_argument("body_velocities: the workspace holds no poses of this tree");
-  propagate_velocities(tree, nullptr, v, workspace);
+  propagate_velocities(tree, nullptr, v, workspace, range);
 }
 
 namespace {
 
 // Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal; the poses from
-// q (nq), or, q null, those `poses` holds.
+// q (nq), or, q null, those `poses` holds; for the bodies of `range` (joint_accelerations sized nv,
+// written on their coordinates).
 void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* poses,
                                 const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                                 const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
-                                Eigen::VectorXd& joint_accelerations) {
+                                Eigen::VectorXd& joint_accelerations, BodyRange range) {
   require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
   require_size(joint_forces.size(), tree.velocity_count(), "forward_dynamics: joint forces");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  joint_accelerations.resize(tree.velocity_count());
+  if (joint_accelerations.size() != tree.velocity_count()) joint_accelerations.resize(tree.velocity_count());
   DynamicsWorkspace& w = workspace;
-  const int n = tree.body_count();
+  const auto first = static_cast<std::ptrdiff_t>(range.first), last = static_cast<std::ptrdiff_t>(range.last);
 
   // Pass 1 (outward): velocities, bias accelerations; I^A_i = I_i, p^A_i = v_i ×* I_i v_i.
-  if (!q && poses != &w) std::copy(poses->parent_to_body.begin(), poses->parent_to_body.end(), w.parent_to_body.begin());
-  propagate_velocities(tree, q, v, w);
-  for (int i = 0; i < n; ++i) {
+  if (!q && poses != &w) std::copy(poses->parent_to_body.begin() + first, poses->parent_to_body.begin() + last, w.parent_to_body.begin() + first);
+  propagate_velocities(tree, q, v, w, range);
+  for (int i = range.first; i < range.last; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const SpatialInertia& inertia = tree.body(i).inertia;
     w.articulated_inertia[index] = inertia.matrix();
@@ -180,7 +191,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
   // Pass 2 (inward): U_i = I^A_i S_i, D_i = S_iᵀ U_i, u_i = τ_i − S_iᵀ p^A_i; the body's
   // articulated inertia I^a = I^A − U D⁻¹ Uᵀ and bias force p^a = p^A + I^a c + U D⁻¹ u, as
   // seen through its joint, are added to the parent's.
-  for (int i = n - 1; i >= 0; --i) {
+  for (int i = range.last - 1; i >= range.first; --i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
     const int offset = tree.velocity_offset(i);
@@ -221,7 +232,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
 
   // Pass 3 (outward): a' = ⁱX_λ a_λ + c_i, v̇_i = D_i⁻¹ (u_i − U_iᵀ a'), a_i = a' + S_i v̇_i.
   const SpatialVector a0 = base_acceleration(gravity);
-  for (int i = 0; i < n; ++i) {
+  for (int i = range.first; i < range.last; ++i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
     const int offset = tree.velocity_offset(i);
@@ -248,7 +259,8 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
   require_size(q.size(), tree.position_count(), "forward_dynamics: q");
-  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, nullptr, gravity, workspace, joint_accelerations);
+  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, nullptr, gravity, workspace, joint_accelerations,
+                             {0, tree.body_count()});
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -257,14 +269,21 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
   require_size(q.size(), tree.position_count(), "forward_dynamics: q");
   require_size(armature.size(), tree.velocity_count(), "forward_dynamics: armature");
-  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations);
+  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations,
+                             {0, tree.body_count()});
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
                       const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  forward_dynamics(tree, poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, {0, tree.body_count()});
+}
+
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
+                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
+                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range) {
   if (!poses.fits(tree)) throw std::invalid_argument("forward_dynamics: the poses are not of this tree");
-  articulated_body_algorithm(tree, nullptr, &poses, v, joint_forces, armature, gravity, workspace, joint_accelerations);
+  articulated_body_algorithm(tree, nullptr, &poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, range);
 }
 
 void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -280,7 +299,7 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 
   // Outward: a_i = ⁱX_λ a_λ + S_i v̇_i + c_i; f_i = I_i a_i + v_i ×* I_i v_i (the net force the
   // body needs, by the Newton–Euler equation).
-  propagate_velocities(tree, q.data(), v, w);
+  propagate_velocities(tree, q.data(), v, w, {0, n});
   const SpatialVector a0 = base_acceleration(gravity);
   for (int i = 0; i < n; ++i) {
     const ArticulatedBody& body = tree.body(i);
@@ -310,13 +329,13 @@ namespace {
 // each entry with `row` an earlier coordinate of the column's own joint or of an ancestor's, or
 // the column itself (the upper triangle of H by block, as ancestors come first; the armature on
 // the diagonal included). Every other entry of H is zero.
-// The poses are `parent_to_body` (ⁱX_λ per body).
+// The poses are `parent_to_body` (ⁱX_λ per body); the bodies those of `range`.
 template <typename Store>
-void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTransform>& parent_to_body, DynamicsWorkspace& w, Store&& store) {
-  const int n = tree.body_count();
+void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTransform>& parent_to_body, DynamicsWorkspace& w,
+                       BodyRange range, Store&& store) {
   // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ.
-  for (int i = 0; i < n; ++i) w.articulated_inertia[static_cast<std::size_t>(i)] = tree.body(i).inertia.matrix();
-  for (int i = n - 1; i >= 0; --i) {
+  for (int i = range.first; i < range.last; ++i) w.articulated_inertia[static_cast<std::size_t>(i)] = tree.body(i).inertia.matrix();
+  for (int i = range.last - 1; i >= range.first; --i) {
     const int parent = tree.body(i).parent;
     if (parent < 0) continue;
     const auto index = static_cast<std::size_t>(i);
@@ -325,7 +344,7 @@ void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTra
   // For each joint's column of unit motions: F = I^c_i S_i, H_ii = S_iᵀ F; then F is carried
   // inward to each ancestor j, H_ji = S_jᵀ F (= H_ijᵀ).
   double projected[6];
-  for (int i = n - 1; i >= 0; --i) {
+  for (int i = range.last - 1; i >= range.first; --i) {
     const ArticulatedBody& body = tree.body(i);
     const int k = joint_velocity_count(body.joint);
     const int column = tree.velocity_offset(i);
@@ -354,7 +373,7 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   const int nv = tree.velocity_count();
   joint_space_inertia.setZero(nv, nv);
   body_poses(tree, q, workspace);
-  composite_inertia(tree, workspace.parent_to_body, workspace, [&](int row, int column, double value) {
+  composite_inertia(tree, workspace.parent_to_body, workspace, {0, tree.body_count()}, [&](int row, int column, double value) {
     joint_space_inertia(row, column) = value;
     joint_space_inertia(column, row) = value;
   });
@@ -365,14 +384,22 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   require_size(q.size(), tree.position_count(), "mass_matrix: q");
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
   body_poses(tree, q, workspace);
-  composite_inertia(tree, workspace.parent_to_body, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+  composite_inertia(tree, workspace.parent_to_body, workspace, {0, tree.body_count()},
+                    [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
 }
 
 void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor) {
+  if (!workspace.fits(tree)) workspace.resize(tree);
+  mass_matrix(tree, poses, workspace, factor, {0, tree.body_count()});
+}
+
+void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor,
+                 BodyRange range) {
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
   if (!poses.fits(tree)) throw std::invalid_argument("mass_matrix: the poses are not of this tree");
-  if (!workspace.fits(tree)) workspace.resize(tree);
-  composite_inertia(tree, poses.parent_to_body, workspace, [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+  if (!workspace.fits(tree)) throw std::invalid_argument("mass_matrix: the workspace is not sized for this tree");
+  composite_inertia(tree, poses.parent_to_body, workspace, range,
+                    [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
 }
 
 }  // namespace limber

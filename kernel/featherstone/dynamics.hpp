@@ -54,6 +54,8 @@ PluckerTransform joint_transform(const ArticulatedBody& body, const double* join
 
 /// Body poses: fills workspace.parent_to_body and world_to_body for positions q (nq).
 void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace);
+/// The same for the bodies of `range` alone (the workspace sized for the tree), the same bits.
+void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace, BodyRange range);
 
 /// Body poses and velocities: fills workspace.parent_to_body, world_to_body and velocity
 /// (v_i, body coordinates). q: nq, v: nv.
@@ -64,6 +66,8 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 /// (body_poses or forward_kinematics of the current q): forward_kinematics without recomputing
 /// the poses, the same bits.
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
+/// The same for the bodies of `range` alone, the same bits.
+void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range);
 
 /// The articulated-body algorithm (Table 7.1): the joint accelerations v̇ (nv, written to
 /// `joint_accelerations`, resized) for positions q (nq), velocities v (nv), joint forces τ (nv;
@@ -90,6 +94,11 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
                       const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
+/// The same for the bodies of `range` alone: v̇ on their coordinates (joint_accelerations of size
+/// nv), the workspace's entries of their bodies and coordinates; the same bits.
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
+                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
+                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range);
 
 /// Recursive Newton–Euler (Table 5.1): the joint forces τ (nv, written to `joint_forces`,
 /// resized) that give accelerations v̇ (nv) at q, v under gravity g. With v̇ = 0 it is the bias
@@ -113,5 +122,9 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
 /// The same at the poses `poses` holds (its parent_to_body: body_poses or forward_kinematics of
 /// the current q), without recomputing them; the same bits.
 void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor);
+/// The same for the coordinates of the bodies of `range` alone (the workspace sized for the
+/// tree), the same bits.
+void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor,
+                 BodyRange range);
 
 }  // namespace limber

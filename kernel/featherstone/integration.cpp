@@ -67,11 +67,16 @@ bool FeatherstoneIntegratorWorkspace::fits(const ArticulatedTree& tree) const {
 
 void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out) {
+  displace_positions(tree, q, displacement, out, {0, tree.body_count()});
+}
+
+void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out, BodyRange range) {
   if (q.size() != tree.position_count() || out.size() != tree.position_count() || displacement.size() != tree.velocity_count()) {
     throw std::invalid_argument("displace_positions: expected q and out of size " + std::to_string(tree.position_count()) +
                                 " and a displacement of size " + std::to_string(tree.velocity_count()));
   }
-  for (int i = 0; i < tree.body_count(); ++i) {
+  for (int i = range.first; i < range.last; ++i) {
     const int p = tree.position_offset(i), d = tree.velocity_offset(i);
     switch (tree.body(i).joint) {
       case ArticulatedJoint::revolute:

@@ -46,6 +46,9 @@ struct FeatherstoneIntegratorWorkspace {
 /// out = q ⊕ displacement (see above). q, out: nq (out may be q itself); displacement: nv.
 void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out);
+/// The same on the coordinates of the bodies of `range` alone.
+void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out, BodyRange range);
 
 /// Advances (q, v) by h seconds under constant joint forces τ (nv) and gravity g (world frame,
 /// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized. Implements

@@ -162,6 +162,9 @@ void lower_solve(const std::vector<int>& begin, const std::vector<int>& ancestor
 }  // namespace
 
 void JointSpaceFactor::solve_lower(Eigen::Ref<Eigen::VectorXd> x) const { lower_solve(begin_, ancestor_, entries_, x, 0, size()); }
+void JointSpaceFactor::solve_lower(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
+  lower_solve(begin_, ancestor_, entries_, x, first, last);
+}
 
 void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
   transposed_lower_solve(begin_, ancestor_, entries_, x, first, last);

@@ -74,6 +74,8 @@ class JointSpaceFactor {
   void solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const;
   /// x ← L⁻¹ x (nv), the last part of solve() (after L⁻ᵀ and D⁻¹). O(Σ depth).
   void solve_lower(Eigen::Ref<Eigen::VectorXd> x) const;
+  /// The same on coordinates first…last − 1 only (whole subtrees, as solve's range).
+  void solve_lower(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const;
   /// The same on coordinates first…last − 1 only, which must hold whole subtrees (an island's:
   /// no coordinate in the range has its parent outside it unless that parent is −1); x outside
   /// the range is neither read nor written. H is block diagonal over such ranges.
