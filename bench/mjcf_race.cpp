@@ -3,14 +3,14 @@
 // per 1/60 s, the largest joint gap, the deepest penetration and the energy over the fall
 // (bench/speed.md, "MuJoCo's models").
 //
-//   build/bench/mjcf_race [MODEL.xml ...] [--seconds S] [--rounds R] [--method M ...]
+//   build/bench/mjcf_race [MODEL.xml ...] [--seconds S] [--rounds R] [--method M [--threads N] ...]
 //                         [--integrator semi-implicit|rk4]
 //
 // MODEL defaults to MuJoCo's humanoid.xml and 22_humanoids.xml (libmujoco-samples). Each round
 // runs every engine from the file's initial state for S simulated seconds (default 5), one engine
 // after the other, so a busy machine slows them alike; a row gives the median over R rounds
-// (default 3) of the stepping thread's CPU time (of the wall time, for the particles on 2
-// threads, whose helper thread works too). limber runs with the import's settings
+// (default 3) of the stepping thread's CPU time (of the wall time, for a method on 2 threads,
+// whose helper thread works too). limber runs with the import's settings
 // (scene.methods: the particles' joint trees, 2 substeps of 2 sweeps). The measures come from
 // the first round:
 // - joint gap: limber's observer (relative to the limbs' length); MuJoCo's joints are its
@@ -19,8 +19,8 @@
 //   each other and the ground (the CLI's measure);
 // - energy: each engine's own, at the start and the end: MuJoCo's potential (gravity and joint
 //   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs).
-// Method M is any method that can run the model (default: particles, on 1 and 2 threads, and
-// featherstone). --integrator sets Featherstone's (RK4 by default; semi-implicit Euler is
+// Method M is any method that can run the model, on N threads (default 1; default methods:
+// particles and featherstone, each on 1 and 2 threads). --integrator sets Featherstone's (RK4 by default; semi-implicit Euler is
 // MuJoCo's default, the integrator it races with here).
 #include <algorithm>
 #include <chrono>
@@ -102,6 +102,7 @@ double clock_seconds(int threads) {
 Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure) {
   WorldOptions options = world_options(runner.method, scene.methods);
   options.particles.threads = runner.threads;
+  options.featherstone.threads = runner.threads;
   if (runner.integrator) options.featherstone.integrator = *runner.integrator;
   World world(scene.model, options);
   Measures out;
@@ -198,6 +199,10 @@ int main(int argc, char** argv) {
           if (method_name(method) == name) methods.push_back({method, 1, std::nullopt}), known = true;
         }
         if (!known) throw std::invalid_argument("unknown method " + name + " (particles, springs, lagrange or featherstone)");
+      } else if (argument == "--threads" && i + 1 < argc) {
+        if (methods.empty()) throw std::invalid_argument("--threads: follows the --method it applies to");
+        methods.back().threads = std::stoi(argv[++i]);
+        if (methods.back().threads < 1 || methods.back().threads > kMaxThreads) throw std::invalid_argument("--threads: must be in [1, 256]");
       } else if (argument == "--integrator" && i + 1 < argc) {
         const std::string name = argv[++i];
         if (name == "semi-implicit") {
@@ -211,7 +216,10 @@ int main(int argc, char** argv) {
         files.emplace_back(argument);
       }
     }
-    if (methods.empty()) methods = {{Method::particles, 1, std::nullopt}, {Method::particles, 2, std::nullopt}, {Method::featherstone, 1, std::nullopt}};
+    if (methods.empty()) {
+      methods = {{Method::particles, 1, std::nullopt}, {Method::particles, 2, std::nullopt}, {Method::featherstone, 1, std::nullopt},
+                 {Method::featherstone, 2, std::nullopt}};
+    }
     for (Runner& runner : methods) runner.integrator = integrator;
     if (files.empty()) files = {"/usr/share/mujoco/model/humanoid/humanoid.xml", "/usr/share/mujoco/model/humanoid/22_humanoids.xml"};
     for (const auto& file : files) race(file, seconds, rounds, methods);

@@ -1,7 +1,9 @@
 #include "limber/kernel/featherstone/compile.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "limber/kernel/featherstone/step.hpp"
@@ -321,7 +323,7 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
 // contact the scene reserved and every limit row its limited joints can have. The factor of H
 // (and, with joint friction, H + h·G and its held copy) holds O(Σ depth) entries — a chain of n
 // one-DOF joints n²/2 — so only a tree within kEagerFactorEntries gets it here; a larger one's
-// first step with a contact or limit row sizes it (prepare_constraints). The rows' entries and
+// first step with a contact or limit row sizes it (solve_groups). The rows' entries and
 // the limit rows' Delassus matrices are reserved up to kReservedEntries each; a step past them
 // allocates.
 constexpr std::size_t kEagerFactorEntries = std::size_t{1} << 21;
@@ -346,7 +348,6 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
     contact.factor.assign(tree);
     if (friction) contact.inertia.assign(tree), contact.held.assign(tree);
   }
-  contact.contact_matrix.reserve(state.contacts.capacity());
   contact.composite.resize(tree);
   contact.response.setZero(nv);
   // Limit rows: two for a hinge's or slide's range or a serial axis's, three for a ball's cone
@@ -359,23 +360,34 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
     for (const SerialAxis& axis : joint.serial_axes) rows += axis.range ? 2 : 0;
     if (rows > 0) rows_of_island[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]] += rows;
   }
-  std::size_t limit_rows = 0, island_rows = 0, limit_entries = 0;
-  for (const std::size_t rows : rows_of_island) {
-    limit_rows += rows, island_rows = std::max(island_rows, rows), limit_entries += rows * rows;
-  }
+  std::size_t limit_rows = 0, limit_entries = 0;
+  for (const std::size_t rows : rows_of_island) limit_rows += rows, limit_entries += rows * rows;
   // A block's rows hold the coordinates of at most two paths to the root.
   const std::size_t blocks = state.contacts.capacity() + limit_rows;
   const std::size_t entries = std::min(2 * deepest * blocks, kReservedEntries);
-  contact.row_begin.reserve(blocks + 1), contact.half_begin.reserve(blocks + 1);
+  contact.block_source.reserve(blocks);
+  contact.row_begin.reserve(blocks + 1), contact.half_end.reserve(blocks);
   contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
   contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
-  contact.push.reserve(state.contacts.capacity());
-  contact.limit_row_begin.reserve(state.islands.size() + 1), contact.limit_row.reserve(limit_rows);
-  contact.limit_matrix_begin.reserve(state.islands.size() + 1), contact.limit_matrix.reserve(std::min(limit_entries, kReservedEntries));
-  contact.path.reserve(2 * deepest);
+  contact.contact_matrix.reserve(blocks), contact.push.reserve(blocks);
+  contact.path_length.assign(static_cast<std::size_t>(tree.body_count()), 0);
+  for (int i = 0; i < tree.body_count(); ++i) {
+    const int parent = tree.body(i).parent;
+    contact.path_length[static_cast<std::size_t>(i)] = joint_velocity_count(tree.body(i).joint) + (parent >= 0 ? contact.path_length[static_cast<std::size_t>(parent)] : 0);
+  }
+  // The groups: at most one per island.
+  const std::size_t islands = state.islands.size();
+  contact.groups.reserve(islands), contact.group_island.reserve(islands), contact.limit_islands.reserve(islands);
+  contact.limit_matrix.reserve(std::min(limit_entries, kReservedEntries));
+  contact.island_link.assign(islands, 0), contact.island_group.assign(islands, 0);
+  contact.island_rows.assign(islands, 0), contact.island_cursor.assign(islands, 0);
+  contact.island_scratch.resize(islands);
+  for (std::size_t k = 0; k < islands; ++k) {
+    contact.island_scratch[k].path.reserve(2 * deepest);
+    contact.island_scratch[k].reserve_limit_rows(static_cast<int>(std::min<std::size_t>(rows_of_island[k], 256)));
+  }
   contact.lagging.setZero(nv);
   contact.scatter.setZero(nv, 3);
-  contact.reserve_limit_rows(static_cast<int>(std::min<std::size_t>(island_rows, 256)));
 }
 
 void size_scratch(FeatherstoneState& state, const Model& model) {
@@ -407,6 +419,17 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
 
 }
 
+// The contact groups' threads (FeatherstoneOptions::threads): none for one.
+void start_threads(FeatherstoneState& state) {
+  const FeatherstoneOptions& options = state.options;
+  if (options.threads < 0 || options.threads > kMaxThreads) {
+    throw std::invalid_argument("options: threads must be 0 (automatic) or in [1, " + std::to_string(kMaxThreads) + "]");
+  }
+  const bool crowd = state.islands.size() >= kParallelMinimumTreeIslands;
+  const int threads = options.threads > 0 ? options.threads : crowd ? static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) : 1;
+  if (threads > 1) state.runner.reset(options.threading, threads, options.tasks);
+}
+
 }  // namespace
 
 // The passes in order (kernel/PIPELINE.md lists them).
@@ -426,6 +449,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   set_joint_anchors(state, model, frames);
   place_tree_joints(state, model);
   size_scratch(state, model);
+  start_threads(state);
   refresh_rigid_bodies(state);
   return state;
 }

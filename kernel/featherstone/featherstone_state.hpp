@@ -40,24 +40,63 @@
 #include "limber/kernel/model/options.hpp"
 #include "limber/kernel/numerics/active_set.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
 
 
+/// Islands joined by the step's contacts, with their contacts and limit rows: solved as one task,
+/// apart from every other group (joint_space_contacts.hpp, "Groups"). Its islands are
+/// JointSpaceContactScratch::group_island[first_island … last_island) (ascending); its blocks
+/// first_block … last_block − 1, its contacts' first and its limit rows' from first_row_block
+/// (island by island); its islands with limit rows limit_islands[first_limit … last_limit).
+struct ConstraintGroup {
+  int first_island = 0, last_island = 0;
+  int first_block = 0, first_row_block = 0, last_block = 0;
+  int first_limit = 0, last_limit = 0;
+};
+
+/// An island's limit rows, solved together (joint_space_limits.cpp, "Holding rows"): blocks
+/// first_block … first_block + rows − 1, their Delassus matrix (rows × rows, column-major) at
+/// JointSpaceContactScratch::limit_matrix[matrix].
+struct LimitIsland {
+  std::int32_t island = 0;
+  int first_block = 0, rows = 0;
+  std::size_t matrix = 0;
+};
+
+/// What one island's group uses alone while it is solved (the group's first island's; its own
+/// limit rows' solve its own): reserved at compile, grown past that by the rows a step needs.
+struct IslandSolveScratch {
+  std::vector<int> path;  ///< one block's coordinates
+  // The island's limit rows solved together: values, targets, accumulated impulses, changes, held
+  // flags.
+  Eigen::VectorXd limit_value, limit_target, limit_accumulated, limit_change;
+  std::vector<char> limit_active;
+  ActiveSet active_set;
+
+  /// Room for m limit rows in one solve (grows, never shrinks).
+  void reserve_limit_rows(int m) {
+    if (limit_value.size() >= m) return;
+    limit_value.setZero(m), limit_target.setZero(m), limit_accumulated.setZero(m), limit_change.setZero(m);
+    limit_active.assign(static_cast<std::size_t>(m), 0);
+    active_set.reserve(m);
+  }
+};
+
 /// Scratch of the contact response (kernel/featherstone/joint_space_contacts.hpp), sized at
-/// compile so a step allocates nothing.
+/// compile so a step allocates nothing. The vectors over bodies or coordinates are shared by the
+/// groups, each writing only its islands' entries.
 ///
 /// Blocks. The step's constraints in joint space are blocks of rows (joint_space_contacts.hpp,
-/// "Responses"): contact c is block c (three rows: the world x, y, z of its points' relative
-/// velocity), limit row k (JointControlScratch::rows) is block contacts + k (one row, its first
-/// column; the other two are zero).
+/// "Responses"), group after group: a contact's block has three rows (the world x, y, z of its
+/// points' relative velocity), a limit row's block one (its first column; the other two are zero).
 struct JointSpaceContactScratch {
   /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
   DynamicsWorkspace articulated;
   Eigen::VectorXd zero_velocities;             ///< nv
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
-  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per contact: K = Y_cᵀ D⁻¹ Y_c, world impulse at p → relative velocity at p
   std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
@@ -68,6 +107,12 @@ struct JointSpaceContactScratch {
   JointSpaceFactor inertia;                      ///< with joint friction: H + h·G, not factored
   JointSpaceFactor held;                         ///< with joint friction: H + h·G with the held joints' penalties, factored per island
   DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch
+  Eigen::VectorXd response;                      ///< nv: a solve's scratch
+  std::vector<int> path_length;                  ///< per tree body: the coordinates on its path to the root
+
+  /// Per block: the contact (an index into state.contacts) or limit row (into
+  /// JointControlScratch::rows) it holds.
+  std::vector<std::int32_t> block_source;
   /// Per block: where its entries start in row_coordinate and row_value (blocks + 1).
   std::vector<int> row_begin;
   /// The blocks' rows J_g on the coordinates of their paths to the root: each entry a coordinate
@@ -75,38 +120,28 @@ struct JointSpaceContactScratch {
   /// ancestors with zeros, so that its entries hold its whole path).
   std::vector<int> row_coordinate;
   std::vector<Eigen::Vector3d> row_value;
-  Eigen::VectorXd response;                      ///< nv: a solve's scratch
-  /// Per block: where its half rows start in half_coordinate and half_value (blocks + 1).
-  std::vector<int> half_begin;
-  /// The blocks' half rows Y_g = L⁻ᵀ J_gᵀ (each coordinate of their paths once, in descending
-  /// order, and Y_g's three columns there): A_hg = Y_hᵀ D⁻¹ Y_g.
+  /// The blocks' half rows Y_g = L⁻ᵀ J_gᵀ: from row_begin[g] to half_end[g] (each coordinate of
+  /// the block's paths once, in descending order, and Y_g's three columns there):
+  /// A_hg = Y_hᵀ D⁻¹ Y_g.
+  std::vector<int> half_end;
   std::vector<int> half_coordinate;
   std::vector<Eigen::Vector3d> half_value;
-  /// The limit rows' Delassus matrix A = Y D⁻¹ Yᵀ, one dense block per island with limit rows
-  /// (JointControlScratch::islands, in order): island t's rows are
-  /// limit_row[limit_row_begin[t] … limit_row_begin[t + 1]) (indices into JointControlScratch::rows),
-  /// its m × m matrix (column-major) at limit_matrix[limit_matrix_begin[t]].
-  std::vector<int> limit_row_begin, limit_row, limit_matrix_begin;
-  std::vector<double> limit_matrix;
+  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per block (a contact's): K = Y_cᵀ D⁻¹ Y_c, world impulse at p → relative velocity at p
+  std::vector<double> push;                      ///< per block (a contact's): accumulated push-out "impulse", kg·m
   /// nv: y = D⁻¹ Σ_g Y_g λ_g of the impulses not yet in x (v, or the push-out's displacement),
   /// which moves x by L⁻¹ y (settle); J_g of it is Y_gᵀ y.
   Eigen::VectorXd lagging;
-  std::vector<double> push;  ///< per contact: accumulated push-out "impulse", kg·m
   Eigen::Matrix<double, Eigen::Dynamic, 3> scatter;  ///< nv × 3 scratch, zero between uses
-  std::vector<int> path;                             ///< one block's coordinates (scratch)
-  // An island's limit rows solved together (joint_space_limits.cpp): values, targets,
-  // accumulated impulses, changes, held flags; capacity the most limit rows of one island.
-  Eigen::VectorXd limit_value, limit_target, limit_accumulated, limit_change;
-  std::vector<char> limit_active;
-  ActiveSet active_set;
 
-  /// Room for an island's m limit rows in one solve (grows, never shrinks).
-  void reserve_limit_rows(int m) {
-    if (limit_value.size() >= m) return;
-    limit_value.setZero(m), limit_target.setZero(m), limit_accumulated.setZero(m), limit_change.setZero(m);
-    limit_active.assign(static_cast<std::size_t>(m), 0);
-    active_set.reserve(m);
-  }
+  // The groups (ConstraintGroup), their islands and their islands with limit rows.
+  std::vector<ConstraintGroup> groups;
+  std::vector<std::int32_t> group_island;
+  std::vector<LimitIsland> limit_islands;
+  std::vector<double> limit_matrix;  ///< the islands' limit rows' Delassus matrices
+  // Forming the groups, per island: union–find links, its group, its limit rows' count, and where
+  // the next of them goes among the blocks.
+  std::vector<std::int32_t> island_link, island_group, island_rows, island_cursor;
+  std::vector<IslandSolveScratch> island_scratch;  ///< per island
 };
 
 /// A Model joint as the tree holds it (every Model joint is one tree body's joint to its parent).
@@ -177,6 +212,8 @@ struct FeatherstoneState : RigidScene {
   Eigen::VectorXd q;  ///< nq: joint positions (articulated_tree.hpp's layout)
   Eigen::VectorXd v;  ///< nv: joint velocities
   FeatherstoneOptions options;
+  /// The constraint groups' threads (FeatherstoneOptions::threads; one: none).
+  RunnerHandle runner;
 
   // Tree body i ↔ rigid-scene body b.
   std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last); −1: a joint frame

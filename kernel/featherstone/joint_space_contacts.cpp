@@ -16,13 +16,14 @@ using namespace joint_space;
 
 // --- Contacts ------------------------------------------------------------------------------------
 
-// Contact c's rows J_c (joint_space_contacts.hpp, "Responses"): for each of its tree bodies, the
-// generalized impulses of unit world impulses along x, y, z at its point — the spatial impulses
-// carried from the body to the root, τ_k = S_kᵀ f on every joint k on the way (Table 5.1's inward
-// pass) — b's negated.
-void contact_rows(FeatherstoneState& state, const RigidContact& contact) {
+// Contact block g's rows J_c (joint_space_contacts.hpp, "Responses"), from row_begin[g]: for each
+// of its tree bodies, the generalized impulses of unit world impulses along x, y, z at its point —
+// the spatial impulses carried from the body to the root, τ_k = S_kᵀ f on every joint k on the
+// way (Table 5.1's inward pass) — b's negated.
+void contact_rows(FeatherstoneState& state, std::size_t g, const RigidContact& contact) {
   JointSpaceContactScratch& s = state.contact;
   const ArticulatedTree& tree = state.tree;
+  auto entry = static_cast<std::size_t>(s.row_begin[g]);
   for (const std::int32_t scene_body : {contact.a, contact.b}) {
     if (scene_body < 0) continue;  // a plane
     const double sign = scene_body == contact.a ? 1.0 : -1.0;
@@ -40,9 +41,9 @@ void contact_rows(FeatherstoneState& state, const RigidContact& contact) {
         if constexpr (k > 0) {
           Eigen::Matrix<double, k, 1> on_joint[3];
           for (int axis = 0; axis < 3; ++axis) on_joint[axis] = project_on_joint<k>(body, f[axis]);
-          for (int r = 0; r < k; ++r) {
-            s.row_coordinate.push_back(tree.velocity_offset(i) + r);
-            s.row_value.emplace_back(on_joint[0][r], on_joint[1][r], on_joint[2][r]);
+          for (int r = 0; r < k; ++r, ++entry) {
+            s.row_coordinate[entry] = tree.velocity_offset(i) + r;
+            s.row_value[entry] = Eigen::Vector3d(on_joint[0][r], on_joint[1][r], on_joint[2][r]);
           }
         }
       });
@@ -51,22 +52,21 @@ void contact_rows(FeatherstoneState& state, const RigidContact& contact) {
       i = body.parent;
     }
   }
-  s.row_begin.push_back(static_cast<int>(s.row_coordinate.size()));
 }
 
-// The entries of limit row `row`'s block: direction on its joint's velocities, zeros on the
-// rest of its path to the root (joint_space_contacts.hpp, "Constraint space").
-void limit_row_entries(FeatherstoneState& state, const JointLimitRow& row) {
+// Limit row block g's entries, from row_begin[g]: its direction on its joint's velocities, zeros
+// on the rest of its path to the root (joint_space_contacts.hpp, "Constraint space").
+void limit_row_entries(FeatherstoneState& state, std::size_t g, const JointLimitRow& row) {
   JointSpaceContactScratch& s = state.contact;
+  auto entry = static_cast<std::size_t>(s.row_begin[g]);
   for (int i = row.body; i >= 0; i = state.tree.body(i).parent) {
     const int offset = state.tree.velocity_offset(i), dofs = joint_velocity_count(state.tree.body(i).joint);
-    for (int k = offset; k < offset + dofs; ++k) {
+    for (int k = offset; k < offset + dofs; ++k, ++entry) {
       const int m = k - row.offset;
-      s.row_coordinate.push_back(k);
-      s.row_value.emplace_back(m >= 0 && m < row.dofs ? row.direction[m] : 0.0, 0.0, 0.0);
+      s.row_coordinate[entry] = k;
+      s.row_value[entry] = Eigen::Vector3d(m >= 0 && m < row.dofs ? row.direction[m] : 0.0, 0.0, 0.0);
     }
   }
-  s.row_begin.push_back(static_cast<int>(s.row_coordinate.size()));
 }
 
 // J_g x: block g's rows' motion (m/s for velocities x = v, m for a push-out's displacement).
@@ -77,40 +77,64 @@ Eigen::Vector3d block_motion(const JointSpaceContactScratch& s, std::size_t g, c
 }
 
 // Block g's half rows Y_g = L⁻ᵀ J_gᵀ (on its path) and its diagonal block Y_gᵀ D⁻¹ Y_g. Needs
-// its rows and the factor.
-Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g) {
-  s.path.clear();
+// its rows and the factor; `path` is scratch.
+Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g, std::vector<int>& path) {
+  path.clear();
   for (int e = s.row_begin[g]; e < s.row_begin[g + 1]; ++e) {
     const int k = s.row_coordinate[static_cast<std::size_t>(e)];
     s.scatter.row(k) += s.row_value[static_cast<std::size_t>(e)].transpose();
-    s.path.push_back(k);
+    path.push_back(k);
   }
-  std::sort(s.path.begin(), s.path.end(), std::greater<>());
-  s.path.erase(std::unique(s.path.begin(), s.path.end()), s.path.end());
-  s.factor.solve_transposed_lower(s.scatter, s.path);
+  std::sort(path.begin(), path.end(), std::greater<>());
+  path.erase(std::unique(path.begin(), path.end()), path.end());
+  s.factor.solve_transposed_lower(s.scatter, path);
   Eigen::Matrix3d diagonal = Eigen::Matrix3d::Zero();
-  for (const int k : s.path) {
+  auto entry = static_cast<std::size_t>(s.row_begin[g]);  // a block has no more half rows than rows
+  for (const int k : path) {
     const Eigen::Vector3d y = s.scatter.row(k).transpose();
     s.scatter.row(k).setZero();
-    s.half_coordinate.push_back(k);
-    s.half_value.push_back(y);
+    s.half_coordinate[entry] = k;
+    s.half_value[entry] = y;
+    ++entry;
     diagonal.noalias() += y * y.transpose() / s.factor.pivot(k);
   }
-  s.half_begin.push_back(static_cast<int>(s.half_coordinate.size()));
+  s.half_end[g] = static_cast<int>(entry);
   return diagonal;
 }
 
-// Sequential impulses (joint_space_contacts.hpp, "Impulses"), the contacts' and the limit rows'.
-void impulse_passes(FeatherstoneState& state, double dt) {
+// Calls visit(k, range) for each island k of `group` and its tree bodies.
+template <typename Visit>
+void for_each_island(const FeatherstoneState& state, const ConstraintGroup& group, Visit&& visit) {
+  for (int n = group.first_island; n < group.last_island; ++n) {
+    const auto k = static_cast<std::size_t>(state.contact.group_island[static_cast<std::size_t>(n)]);
+    visit(k, BodyRange{state.island_begin[k], state.island_begin[k + 1]});
+  }
+}
+
+// x += L⁻¹ y on the group's islands: the impulses so far joined to x (one forward pass); y = 0.
+void settle(FeatherstoneState& state, const ConstraintGroup& group, Eigen::VectorXd& x) {
   JointSpaceContactScratch& s = state.contact;
-  for (JointLimitRow& row : state.controls.rows) row.impulse = 0;
+  for_each_island(state, group, [&](std::size_t k, BodyRange) {
+    const auto [first, last] = island_velocities(state, k);
+    s.factor.solve_lower(s.lagging, first, last);
+    x.segment(first, last - first) += s.lagging.segment(first, last - first);
+    s.lagging.segment(first, last - first).setZero();
+  });
+}
+
+// Sequential impulses (joint_space_contacts.hpp, "Impulses"), the group's contacts' and limit
+// rows'.
+void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
+  JointSpaceContactScratch& s = state.contact;
+  for (int g = group.first_row_block; g < group.last_block; ++g) state.controls.rows[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])].impulse = 0;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool applied = false;  // a pass that applies nothing leaves nothing for the next
-    for (std::size_t c = 0; c < state.contacts.size(); ++c) {
-      const RigidContact& contact = state.contacts[c];
-      const Eigen::Matrix3d& k = s.contact_matrix[c];
+    for (int block = group.first_block; block < group.first_row_block; ++block) {
+      const auto g = static_cast<std::size_t>(block);
+      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
+      const Eigen::Matrix3d& k = s.contact_matrix[g];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = block_motion(s, c, state.v) + lagging_motion(s, c);
+      const Eigen::Vector3d relative = block_motion(s, g, state.v) + lagging_motion(s, g);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -124,120 +148,296 @@ void impulse_passes(FeatherstoneState& state, double dt) {
         const double tangent_inverse_mass = tangent.dot(k * tangent);
         if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
       }
-      respond(s, c, impulse);
+      respond(s, g, impulse);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
     // reached lets the joint arrive at it by the step's end), each island's rows together.
-    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/false, state.v)) applied = true;
+    if (solve_limit_rows(state, group, dt, /*position=*/false, state.v)) applied = true;
     if (!applied) break;
   }
-  settle(s, state.v);
+  settle(state, group, state.v);
 }
 
-// The position pass (joint_space_contacts.hpp, "Penetration").
-void push_out(FeatherstoneState& state, double dt) {
+// The joint velocities that keep every body's motion in its own frame as closely as the joints
+// allow at the pose the push-out moved the group's islands to, in the kinetic-energy metric:
+// v = H⁻¹ Σ J_iᵀ I_i v_i, by the inward pass and ABA with v = 0, g = 0. An H-orthogonal projection
+// of motions whose energy is the old one, so it never adds kinetic energy — where keeping v
+// would: v holds relative velocities in the child frames the push-out turned, and a limb spinning
+// fast about its axis relative to its parent would swing that spin onto its neighbours.
+void displace_group(FeatherstoneState& state, const ConstraintGroup& group) {
   JointSpaceContactScratch& s = state.contact;
-  s.displacement.setZero();
-  s.push.assign(state.contacts.size(), 0.0);  // within the capacity reserved at compile
-  for (JointLimitRow& row : state.controls.rows) row.push = 0;
+  const ArticulatedTree& tree = state.tree;
+  for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
+    // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v; the
+    // poses are those detection saw).
+    body_velocities(tree, state.v, state.kinematics, bodies);
+    for (int i = bodies.first; i < bodies.last; ++i) {
+      const auto index = static_cast<std::size_t>(i);
+      s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];
+    }
+    displace_positions(tree, state.q, s.displacement, state.q, bodies);
+    body_poses(tree, state.q, state.kinematics, bodies);
+    joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
+    forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated,
+                     state.v, bodies);
+  });
+}
+
+// The position pass (joint_space_contacts.hpp, "Penetration") over the group.
+void push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
+  JointSpaceContactScratch& s = state.contact;
+  for_each_island(state, group, [&](std::size_t k, BodyRange) {
+    const auto [first, last] = island_velocities(state, k);
+    s.displacement.segment(first, last - first).setZero();
+  });
+  for (int g = group.first_block; g < group.first_row_block; ++g) s.push[static_cast<std::size_t>(g)] = 0;
+  for (int g = group.first_row_block; g < group.last_block; ++g) state.controls.rows[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])].push = 0;
   bool moved = false;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool pushed = false;
-    for (std::size_t c = 0; c < state.contacts.size(); ++c) {
-      const RigidContact& contact = state.contacts[c];
+    for (int block = group.first_block; block < group.first_row_block; ++block) {
+      const auto g = static_cast<std::size_t>(block);
+      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
       const double target = push_out_distance(contact, state.settings, dt);
-      const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[c] * contact.normal);
+      const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[g] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = lagging_motion(s, c).dot(contact.normal);  // the displacement is all in y until settled
+      const double done = lagging_motion(s, g).dot(contact.normal);  // the displacement is all in y until settled
       if (std::abs(target - done) <= kPushTolerance * target) continue;
-      const double push = std::max(s.push[c] + (target - done) / normal_inverse_mass, 0.0);
-      const double change = push - s.push[c];
+      const double push = std::max(s.push[g] + (target - done) / normal_inverse_mass, 0.0);
+      const double change = push - s.push[g];
       if (change == 0) continue;
-      s.push[c] = push;
-      respond(s, c, change * contact.normal);
+      s.push[g] = push;
+      respond(s, g, change * contact.normal);
       moved = pushed = true;
     }
-    if (!state.controls.rows.empty() && solve_limit_rows(state, dt, /*position=*/true, s.displacement)) moved = pushed = true;
+    if (solve_limit_rows(state, group, dt, /*position=*/true, s.displacement)) moved = pushed = true;
     if (!pushed) break;
   }
   if (!moved) return;
-  settle(s, s.displacement);
-  // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v; the
-  // poses are those detection saw).
-  const ArticulatedTree& tree = state.tree;
-  body_velocities(tree, state.v, state.kinematics);
-  for (int i = 0; i < tree.body_count(); ++i) {
-    const auto index = static_cast<std::size_t>(i);
-    s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];
-  }
-  displace_positions(tree, state.q, s.displacement, state.q);
-  body_poses(tree, state.q, state.kinematics);
-  // The joint velocities that keep every body's motion in its own frame as closely as the joints
-  // allow at the new pose, in the kinetic-energy metric: v = H⁻¹ Σ J_iᵀ I_i v_i, by the inward
-  // pass and ABA with v = 0, g = 0. An H-orthogonal projection of motions whose energy is the old
-  // one, so it never adds kinetic energy — where keeping v would: v holds relative velocities in
-  // the child frames the push-out turned, and a limb spinning fast about its axis relative to its
-  // parent would swing that spin onto its neighbours.
-  joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum);
-  forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated, state.v);
+  settle(state, group, s.displacement);
+  displace_group(state, group);
 }
 
-// The step's blocks — the contacts, then the limit rows — their rows and half rows through the
-// factor of H at the current q, the contacts' K, the limit rows' Delassus matrix per island,
-// approach speeds and e = 0 for resting contacts; false when there are none.
-bool prepare_constraints(FeatherstoneState& state, double dt) {
-  find_limit_rows(state, dt);
-  if (state.contacts.empty() && state.controls.rows.empty()) return false;
+// The group's blocks — its contacts, then its limit rows — their rows and half rows through the
+// factor of H at the current q (its islands' part), the contacts' K, the limit rows' Delassus
+// matrix per island, approach speeds and e = 0 for resting contacts. False, with the group's v
+// not finite, when H was not positive definite.
+bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
-  mass_matrix(state.tree, state.kinematics, s.composite, s.factor);  // at the poses detection saw
-  if (s.factor.factor() >= 0) {
+  bool factored = true;
+  for_each_island(state, group, [&](std::size_t k, BodyRange bodies) {
+    mass_matrix(state.tree, state.kinematics, s.composite, s.factor, bodies);  // at the poses detection saw
+    const auto [first, last] = island_velocities(state, k);
+    factored = s.factor.factor(first, last) < 0 && factored;
+  });
+  if (!factored) {
     // H is positive definite at any finite pose; it is not only once the state has gone
     // non-finite. Say so through v, which the step's status checks, instead of answering the
     // contacts with a broken factor.
-    state.v.setConstant(std::numeric_limits<double>::quiet_NaN());
+    for_each_island(state, group, [&](std::size_t k, BodyRange) {
+      const auto [first, last] = island_velocities(state, k);
+      state.v.segment(first, last - first).setConstant(std::numeric_limits<double>::quiet_NaN());
+    });
     return false;
   }
-  s.row_begin.assign(1, 0);
-  s.row_coordinate.clear(), s.row_value.clear();
-  s.half_begin.assign(1, 0);
-  s.half_coordinate.clear(), s.half_value.clear();
-  s.contact_matrix.resize(state.contacts.size());
-  for (std::size_t c = 0; c < state.contacts.size(); ++c) {
-    RigidContact& contact = state.contacts[c];
-    contact_rows(state, contact);
-    s.contact_matrix[c] = half_rows(s, c);
-    record_approach(contact, -block_motion(s, c, state.v).dot(contact.normal), state.settings, dt);
+  std::vector<int>& path = s.island_scratch[static_cast<std::size_t>(s.group_island[static_cast<std::size_t>(group.first_island)])].path;
+  for (int block = group.first_block; block < group.first_row_block; ++block) {
+    const auto g = static_cast<std::size_t>(block);
+    RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
+    contact_rows(state, g, contact);
+    s.contact_matrix[g] = half_rows(s, g, path);
+    record_approach(contact, -block_motion(s, g, state.v).dot(contact.normal), state.settings, dt);
   }
-  for (JointLimitRow& row : state.controls.rows) {
-    limit_row_entries(state, row);
-    row.inverse_mass = half_rows(s, state.contacts.size() + static_cast<std::size_t>(&row - state.controls.rows.data()))(0, 0);
+  for (int block = group.first_row_block; block < group.last_block; ++block) {
+    const auto g = static_cast<std::size_t>(block);
+    JointLimitRow& row = state.controls.rows[static_cast<std::size_t>(s.block_source[g])];
+    limit_row_entries(state, g, row);
+    row.inverse_mass = half_rows(s, g, path)(0, 0);
   }
-  form_limit_delassus(state);
+  form_limit_delassus(state, group);
   return true;
 }
 
 // The passes leave state.kinematics' poses those of q (the push-out's body_poses when it moved
 // q): the rigid bodies need only the new velocities.
-void mirror_new_velocities(FeatherstoneState& state) {
-  body_velocities(state.tree, state.v, state.kinematics);
-  mirror_rigid_bodies(state);
+void mirror_new_velocities(FeatherstoneState& state, const ConstraintGroup& group) {
+  for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
+    body_velocities(state.tree, state.v, state.kinematics, bodies);
+    mirror_rigid_bodies(state, bodies);
+  });
+}
+
+// One group, whole: its impulses, then (`push`) its push-out.
+void solve_group(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool push) {
+  if (!prepare_group(state, group, dt)) return;
+  impulse_passes(state, group, dt);
+  if (push) push_out(state, group, dt);
+  mirror_new_velocities(state, group);
+}
+
+// --- Groups --------------------------------------------------------------------------------------
+
+// The root of island k's set (union–find with path halving).
+std::int32_t set_of(std::vector<std::int32_t>& link, std::int32_t k) {
+  while (link[static_cast<std::size_t>(k)] != k) {
+    link[static_cast<std::size_t>(k)] = link[static_cast<std::size_t>(link[static_cast<std::size_t>(k)])];
+    k = link[static_cast<std::size_t>(k)];
+  }
+  return k;
+}
+
+// Block g's entries: the coordinates of its bodies' paths to the root.
+int block_entries(const FeatherstoneState& state, std::size_t g, bool contact) {
+  const JointSpaceContactScratch& s = state.contact;
+  const auto length = [&](std::int32_t tree_body) { return s.path_length[static_cast<std::size_t>(tree_body)]; };
+  const auto source = static_cast<std::size_t>(s.block_source[g]);
+  if (!contact) return length(state.controls.rows[source].body);
+  const RigidContact& c = state.contacts[source];
+  return length(state.tree_body[c.a]) + (c.b >= 0 ? length(state.tree_body[c.b]) : 0);
+}
+
+// The islands each group holds (ascending), and how many contacts, limit rows and islands with
+// limit rows; the groups in the order of their first islands.
+void find_groups(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
+  const auto islands = static_cast<std::int32_t>(state.islands.size());
+  for (std::int32_t k = 0; k < islands; ++k) {
+    s.island_link[static_cast<std::size_t>(k)] = k, s.island_group[static_cast<std::size_t>(k)] = -1;
+    s.island_rows[static_cast<std::size_t>(k)] = 0;
+  }
+  constexpr std::int32_t kTouched = -2;  // an island with a contact or a limit row, not yet in a group
+  for (const RigidContact& contact : state.contacts) {
+    const auto a = static_cast<std::int32_t>(state.island_of_body[contact.a]);
+    s.island_group[static_cast<std::size_t>(a)] = kTouched;
+    if (contact.b < 0) continue;
+    const auto b = static_cast<std::int32_t>(state.island_of_body[contact.b]);
+    s.island_group[static_cast<std::size_t>(b)] = kTouched;
+    s.island_link[static_cast<std::size_t>(set_of(s.island_link, a))] = set_of(s.island_link, b);
+  }
+  for (const JointLimitRow& row : state.controls.rows) {
+    s.island_group[static_cast<std::size_t>(row.island)] = kTouched;
+    ++s.island_rows[static_cast<std::size_t>(row.island)];
+  }
+  s.groups.clear();
+  for (std::int32_t k = 0; k < islands; ++k) {
+    const auto index = static_cast<std::size_t>(k);
+    if (s.island_group[index] == -1) continue;
+    const auto root = static_cast<std::size_t>(set_of(s.island_link, k));
+    if (s.island_group[root] < 0) {  // the set's first island
+      s.island_group[root] = static_cast<std::int32_t>(s.groups.size());
+      s.groups.emplace_back();
+    }
+    s.island_group[index] = s.island_group[root];
+    ConstraintGroup& group = s.groups[static_cast<std::size_t>(s.island_group[index])];
+    ++group.last_island;
+    group.last_block += s.island_rows[index];  // counts for now (lay_out_groups)
+    if (s.island_rows[index] > 0) ++group.last_limit;
+  }
+  for (const RigidContact& contact : state.contacts) {
+    ++s.groups[static_cast<std::size_t>(s.island_group[state.island_of_body[contact.a]])].first_row_block;  // a count, too
+  }
+}
+
+// The groups' islands, blocks (contacts, then limit rows island by island) and limit matrices
+// laid out group after group, from find_groups' counts.
+void lay_out_groups(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
+  int islands = 0, blocks = 0, limits = 0;
+  for (ConstraintGroup& group : s.groups) {
+    const int count = group.last_island, contacts = group.first_row_block, rows = group.last_block, with_rows = group.last_limit;
+    group.first_island = group.last_island = islands;
+    islands += count;
+    group.first_block = group.last_block = blocks, group.first_row_block = blocks + contacts;
+    blocks += contacts + rows;
+    group.first_limit = group.last_limit = limits;
+    limits += with_rows;
+  }
+  s.group_island.resize(static_cast<std::size_t>(islands));
+  s.block_source.resize(static_cast<std::size_t>(blocks));
+  s.limit_islands.resize(static_cast<std::size_t>(limits));
+  // last_island, last_block and last_limit are the cursors: each ends where its group does.
+  for (std::size_t k = 0; k < s.island_group.size(); ++k) {
+    if (s.island_group[k] >= 0) s.group_island[static_cast<std::size_t>(s.groups[static_cast<std::size_t>(s.island_group[k])].last_island++)] = static_cast<std::int32_t>(k);
+  }
+  for (std::size_t c = 0; c < state.contacts.size(); ++c) {
+    ConstraintGroup& group = s.groups[static_cast<std::size_t>(s.island_group[state.island_of_body[state.contacts[c].a]])];
+    s.block_source[static_cast<std::size_t>(group.last_block++)] = static_cast<std::int32_t>(c);
+  }
+  std::size_t matrix = 0;
+  for (ConstraintGroup& group : s.groups) {
+    for (int n = group.first_island; n < group.last_island; ++n) {
+      const std::int32_t k = s.group_island[static_cast<std::size_t>(n)];
+      const int rows = s.island_rows[static_cast<std::size_t>(k)];
+      if (rows == 0) continue;
+      s.limit_islands[static_cast<std::size_t>(group.last_limit++)] = {k, group.last_block, rows, matrix};
+      s.island_cursor[static_cast<std::size_t>(k)] = group.last_block;
+      group.last_block += rows;
+      matrix += static_cast<std::size_t>(rows) * static_cast<std::size_t>(rows);
+    }
+  }
+  for (std::size_t r = 0; r < state.controls.rows.size(); ++r) {
+    s.block_source[static_cast<std::size_t>(s.island_cursor[static_cast<std::size_t>(state.controls.rows[r].island)]++)] = static_cast<std::int32_t>(r);
+  }
+  s.limit_matrix.resize(matrix);  // within what compile reserved, unless the rows grew past it
+}
+
+// The step's groups (ConstraintGroup) and the room of their blocks' rows; false when there is
+// nothing to solve.
+bool form_groups(FeatherstoneState& state) {
+  JointSpaceContactScratch& s = state.contact;
+  if (state.contacts.empty() && state.controls.rows.empty()) return false;
+  find_groups(state);
+  lay_out_groups(state);
+  const std::size_t blocks = s.block_source.size();
+  s.row_begin.resize(blocks + 1);
+  s.row_begin[0] = 0;
+  for (const ConstraintGroup& group : s.groups) {
+    for (int g = group.first_block; g < group.last_block; ++g) {
+      const auto index = static_cast<std::size_t>(g);
+      s.row_begin[index + 1] = s.row_begin[index] + block_entries(state, index, g < group.first_row_block);
+    }
+  }
+  const auto entries = static_cast<std::size_t>(s.row_begin[blocks]);
+  s.row_coordinate.resize(entries), s.row_value.resize(entries);
+  s.half_coordinate.resize(entries), s.half_value.resize(entries);
+  s.half_end.resize(blocks), s.contact_matrix.resize(blocks), s.push.resize(blocks);
+  return true;
+}
+
+// A group as a task (BlockRunner::BlockFunction).
+struct GroupTask {
+  FeatherstoneState* state;
+  double dt;
+  bool push;
+};
+double run_group(const void* context, std::size_t g) {
+  const GroupTask& task = *static_cast<const GroupTask*>(context);
+  solve_group(*task.state, task.state->contact.groups[g], task.dt, task.push);
+  return 0;
+}
+
+// Every group, on the state's threads when it has them and more than one group.
+void solve_groups(FeatherstoneState& state, double dt, bool push) {
+  find_limit_rows(state, dt);
+  if (!form_groups(state)) return;
+  JointSpaceContactScratch& s = state.contact;
+  if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
+  BlockRunner* runner = state.runner.get();
+  if (runner == nullptr || runner->threads() < 2 || s.groups.size() < 2) {
+    for (const ConstraintGroup& group : s.groups) solve_group(state, group, dt, push);
+    return;
+  }
+  const GroupTask task{&state, dt, push};
+  runner->begin();
+  runner->run(s.groups.size(), &run_group, &task);
+  runner->end();
 }
 
 }  // namespace
 
-void apply_joint_space_impulses(FeatherstoneState& state, double dt) {
-  if (!prepare_constraints(state, dt)) return;
-  impulse_passes(state, dt);
-  mirror_new_velocities(state);
-}
+void apply_joint_space_impulses(FeatherstoneState& state, double dt) { solve_groups(state, dt, /*push=*/false); }
 
-void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
-  if (!prepare_constraints(state, dt)) return;
-  impulse_passes(state, dt);
-  push_out(state, dt);
-  mirror_new_velocities(state);
-}
+void resolve_joint_space_contacts(FeatherstoneState& state, double dt) { solve_groups(state, dt, /*push=*/true); }
 
 }  // namespace limber

@@ -31,6 +31,17 @@
 // contacts) took 2.9× the step of answering each through y, humanoid.xml 1.08× and
 // 22_humanoids.xml 1.14× (bench/models.md).
 //
+// Groups. The islands a step's contacts join (a contact between two islands joins them; a limit
+// row stays in its own) form groups, and each group is solved whole — H's factor on its islands,
+// its blocks, impulses, push-out and re-projection — apart from every other: its rows touch only
+// its islands' coordinates, so the groups' answers do not depend on each other, nor on their
+// order. They are the tasks of FeatherstoneOptions::threads (the same bits for any thread count,
+// and as when all were solved in one sweep); the groups in the order of their first islands, the
+// blocks of each in the contacts' order, then its islands' limit rows. A group whose push-out
+// moves nothing is not re-projected (until this design the whole tree was, when any group
+// moved; the same motion but for round-off). Islands no contact or limit row touches cost
+// nothing here.
+//
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
 // (v_n = n·(v_a(p) − v_b(p)) < 0) gets the normal impulse j_n = −(1 + e)·v_n / (nᵀKn) — Newton's
@@ -46,7 +57,7 @@
 // Settings::contact_recovery_speed·Δt (an initial overlap is not flung out); projected
 // Gauss–Seidel over the contacts on the linearized map from a joint-space displacement
 // δ = H⁻¹Jᵀλ (λ ≥ 0, accumulated per contact) to the contact points' motion, the same passes;
-// then q ← q ⊕ δ (displace_positions). No velocity bias (Baumgarte) is added; but v holds
+// then q ← q ⊕ δ (displace_positions) on the group's islands. No velocity bias (Baumgarte) is added; but v holds
 // relative velocities in the child frames the push-out turned, so v is re-projected: the
 // velocities that keep every body's motion in its own frame as closely as the joints allow at
 // the new pose, in the kinetic-energy metric, v = H⁻¹ Σ J_iᵀ I_i v_i (one inward pass and one
@@ -96,8 +107,9 @@
 namespace limber {
 
 /// Impulses, then push-out, for state.contacts (found by detect_rigid_contacts on the refreshed
-/// rigid bodies) and the joint limits' rows; dt is the step's. Leaves (q, v), state.kinematics and the rigid bodies
-/// consistent. Allocates nothing.
+/// rigid bodies) and the joint limits' rows, group by group (above) on the state's threads; dt is
+/// the step's. Leaves (q, v), state.kinematics and the rigid bodies consistent. Allocates
+/// nothing once the scratch has met the step's groups (compile reserves for a group per island).
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt);
 
 /// Applies only the impulses of resolve_joint_space_contacts (no push-out) and refreshes the
@@ -121,5 +133,8 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
 /// Reads state.kinematics.parent_to_body.
 void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces,
                                  Eigen::VectorXd& joint_forces);
+/// The same for the tree bodies of `range` alone (their forces and coordinates).
+void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces,
+                                 BodyRange range);
 
 }  // namespace limber

@@ -70,8 +70,6 @@ void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, cons
   if (!(gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0))) return;  // also skips a NaN
   row.gap = gap, row.direction = direction;
   state.controls.rows.push_back(row);
-  std::vector<std::int32_t>& islands = state.controls.islands;
-  if (std::find(islands.begin(), islands.end(), row.island) == islands.end()) islands.push_back(row.island);
 }
 
 // A serial joint's axis ranges: each axis's coordinate is its tree body's q (0 at rest).
@@ -89,11 +87,10 @@ void find_serial_limit_rows(FeatherstoneState& state, double dt) {
 }
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with their half rows, prepare_constraints).
+// gaps and directions (their inverse masses come with their half rows, prepare_group).
 void find_limit_rows(FeatherstoneState& state, double dt) {
   std::vector<JointLimitRow>& rows = state.controls.rows;
   rows.clear();
-  state.controls.islands.clear();
   const JointControls& controls = state.joint_controls;
   for (std::size_t k = 0; k < controls.joints.size(); ++k) {
     const Joint& joint = controls.joints[k];
@@ -160,55 +157,49 @@ Eigen::Matrix3d inverse_block(FeatherstoneState& state, std::size_t island, int 
 // most kActiveSetIterations rounds.
 constexpr int kActiveSetIterations = 8;
 
-// The limit rows' block of the Delassus matrix per island with rows (their blocks' half rows on
+// The Delassus matrix of each of the group's islands with limit rows (their blocks' half rows on
 // their paths: A_ij = Σ_k Y_i,k Y_j,k / D_k over the coordinates the paths share).
-void form_limit_delassus(FeatherstoneState& state) {
+void form_limit_delassus(FeatherstoneState& state, const ConstraintGroup& group) {
   JointSpaceContactScratch& s = state.contact;
-  const std::vector<JointLimitRow>& rows = state.controls.rows;
-  const std::size_t contacts = state.contacts.size();
-  s.limit_row_begin.assign(1, 0), s.limit_row.clear();
-  s.limit_matrix_begin.assign(1, 0), s.limit_matrix.clear();
-  s.response.setZero();  // scratch: D⁻¹ Y_j on its path, zero elsewhere
-  for (const std::int32_t island : state.controls.islands) {
-    const auto first = s.limit_row.size();
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-      if (rows[k].island == island) s.limit_row.push_back(static_cast<int>(k));
-    }
-    const std::size_t m = s.limit_row.size() - first;
-    s.limit_row_begin.push_back(static_cast<int>(s.limit_row.size()));
-    const std::size_t at = s.limit_matrix.size();
-    s.limit_matrix.resize(at + m * m);  // within what compile reserved, unless the rows grew past it
+  for (int t = group.first_limit; t < group.last_limit; ++t) {
+    const LimitIsland& limit = s.limit_islands[static_cast<std::size_t>(t)];
+    const auto m = static_cast<std::size_t>(limit.rows);
+    // s.response: D⁻¹ Y_j on its path, zero elsewhere on the island.
+    const auto [first, last] = island_velocities(state, static_cast<std::size_t>(limit.island));
+    s.response.segment(first, last - first).setZero();
     for (std::size_t j = 0; j < m; ++j) {
-      const std::size_t g = contacts + static_cast<std::size_t>(s.limit_row[first + j]);
-      for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+      const std::size_t g = static_cast<std::size_t>(limit.first_block) + j;
+      for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) {
         const int k = s.half_coordinate[static_cast<std::size_t>(e)];
         s.response[k] = s.half_value[static_cast<std::size_t>(e)][0] / s.factor.pivot(k);
       }
       for (std::size_t i = 0; i < m; ++i) {
-        const std::size_t h = contacts + static_cast<std::size_t>(s.limit_row[first + i]);
+        const std::size_t h = static_cast<std::size_t>(limit.first_block) + i;
         double entry = 0;
-        for (int e = s.half_begin[h]; e < s.half_begin[h + 1]; ++e) {
+        for (int e = s.row_begin[h]; e < s.half_end[h]; ++e) {
           entry += s.half_value[static_cast<std::size_t>(e)][0] * s.response[s.half_coordinate[static_cast<std::size_t>(e)]];
         }
-        s.limit_matrix[at + j * m + i] = entry;
+        s.limit_matrix[limit.matrix + j * m + i] = entry;
       }
-      for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) s.response[s.half_coordinate[static_cast<std::size_t>(e)]] = 0;
+      for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) s.response[s.half_coordinate[static_cast<std::size_t>(e)]] = 0;
     }
-    s.limit_matrix_begin.push_back(static_cast<int>(s.limit_matrix.size()));
   }
 }
 
-// The limit rows of the t-th island with rows into the solve's scratch (values J_l x + Y_lᵀ y,
-// targets, impulses so far, held flags); returns how many, 0 when none needs a change.
-int gather_island_rows(FeatherstoneState& state, std::size_t t, double dt, bool position, const Eigen::VectorXd& x, double tolerance) {
-  JointSpaceContactScratch& s = state.contact;
-  const int first = s.limit_row_begin[t], m = s.limit_row_begin[t + 1] - first;
-  s.reserve_limit_rows(m);  // past what compile reserved (an island of more than 256 rows) it allocates
+namespace {
+
+// An island's limit rows into its solve's scratch (values J_l x + Y_lᵀ y, targets, impulses so
+// far, held flags); returns how many, 0 when none needs a change.
+int gather_island_rows(FeatherstoneState& state, const LimitIsland& limit, IslandSolveScratch& scratch, double dt, bool position,
+                       const Eigen::VectorXd& x, double tolerance) {
+  const JointSpaceContactScratch& s = state.contact;
+  const int m = limit.rows;
+  scratch.reserve_limit_rows(m);  // past what compile reserved (an island of more than 256 rows) it allocates
   bool needed = false;
   for (int i = 0; i < m; ++i) {
-    const auto k = static_cast<std::size_t>(s.limit_row[static_cast<std::size_t>(first + i)]);
-    const JointLimitRow& row = state.controls.rows[k];
-    const double value = joint_dot(row.direction, x, row.offset, row.dofs) + lagging_motion(s, state.contacts.size() + k)[0];
+    const auto g = static_cast<std::size_t>(limit.first_block + i);
+    const JointLimitRow& row = state.controls.rows[static_cast<std::size_t>(s.block_source[g])];
+    const double value = joint_dot(row.direction, x, row.offset, row.dofs) + lagging_motion(s, g)[0];
     const double accumulated = position ? row.push : row.impulse;
     // Position: a violation in full (it is never the Model's, always the solver's), and a row
     // inside its limit not pushed past it. Velocity: a limit not yet reached lets the joint arrive
@@ -216,32 +207,32 @@ int gather_island_rows(FeatherstoneState& state, std::size_t t, double dt, bool 
     const double target = position ? -row.gap : (row.gap > 0 ? -row.gap / dt : 0.0);
     const bool active = row.inverse_mass > 0 && (value < target - tolerance || accumulated > 0);
     needed = needed || (active && std::abs(target - value) > tolerance + (position ? 1e-5 * std::abs(target) : 0.0));
-    s.limit_value[i] = value, s.limit_target[i] = target, s.limit_accumulated[i] = accumulated;
-    s.limit_active[static_cast<std::size_t>(i)] = active;
+    scratch.limit_value[i] = value, scratch.limit_target[i] = target, scratch.limit_accumulated[i] = accumulated;
+    scratch.limit_active[static_cast<std::size_t>(i)] = active;
   }
   return needed ? m : 0;
 }
 
-// The limit rows, together per island: velocity level (values direction·v, targets
-// −max(C, 0)/Δt) or position level (values direction·δ of the push-out's displacement, targets
-// the violation to push out, or −C for a row inside its limit); x is v or the displacement, with
-// the impulses so far in state.contact.lagging. Returns whether it changed any.
-bool solve_limit_rows(FeatherstoneState& state, double dt, bool position, const Eigen::VectorXd& x) {
+}  // namespace
+
+bool solve_limit_rows(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool position, const Eigen::VectorXd& x) {
   JointSpaceContactScratch& s = state.contact;
   const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
   bool changed_any = false;
-  for (std::size_t t = 0; t + 1 < s.limit_row_begin.size(); ++t) {
-    const int m = gather_island_rows(state, t, dt, position, x, tolerance);
+  for (int t = group.first_limit; t < group.last_limit; ++t) {
+    const LimitIsland& limit = s.limit_islands[static_cast<std::size_t>(t)];
+    IslandSolveScratch& scratch = s.island_scratch[static_cast<std::size_t>(limit.island)];
+    const int m = gather_island_rows(state, limit, scratch, dt, position, x, tolerance);
     if (m == 0) continue;
-    const Eigen::Map<const Eigen::MatrixXd> delassus(s.limit_matrix.data() + s.limit_matrix_begin[t], m, m);
-    s.active_set.solve(delassus, s.limit_value.head(m), s.limit_target.head(m), s.limit_accumulated.head(m), s.limit_active, tolerance,
-                       s.limit_change.head(m), kActiveSetIterations);
+    const Eigen::Map<const Eigen::MatrixXd> delassus(s.limit_matrix.data() + limit.matrix, m, m);
+    scratch.active_set.solve(delassus, scratch.limit_value.head(m), scratch.limit_target.head(m), scratch.limit_accumulated.head(m),
+                             scratch.limit_active, tolerance, scratch.limit_change.head(m), kActiveSetIterations);
     for (int i = 0; i < m; ++i) {
-      if (s.limit_change[i] == 0) continue;
-      const auto k = static_cast<std::size_t>(s.limit_row[static_cast<std::size_t>(s.limit_row_begin[t] + i)]);
-      JointLimitRow& row = state.controls.rows[k];
-      (position ? row.push : row.impulse) += s.limit_change[i];
-      respond(s, state.contacts.size() + k, Eigen::Vector3d(s.limit_change[i], 0, 0));
+      if (scratch.limit_change[i] == 0) continue;
+      const auto g = static_cast<std::size_t>(limit.first_block + i);
+      JointLimitRow& row = state.controls.rows[static_cast<std::size_t>(s.block_source[g])];
+      (position ? row.push : row.impulse) += scratch.limit_change[i];
+      respond(s, g, Eigen::Vector3d(scratch.limit_change[i], 0, 0));
       changed_any = true;
     }
   }
@@ -523,8 +514,13 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
 }
 
 void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces) {
+  joint_forces_of_body_forces(state, body_forces, joint_forces, {0, state.tree.body_count()});
+}
+
+void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces,
+                                 BodyRange range) {
   const ArticulatedTree& tree = state.tree;
-  for (int i = tree.body_count() - 1; i >= 0; --i) {
+  for (int i = range.last - 1; i >= range.first; --i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
     const int offset = tree.velocity_offset(i);

@@ -9,14 +9,14 @@
 namespace limber::joint_space {
 
 // The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with their half rows, prepare_constraints).
+// gaps and directions (their inverse masses come with their half rows, prepare_group).
 void find_limit_rows(FeatherstoneState& state, double dt);
-// The limit rows' Delassus matrix per island (joint_space_limits.cpp, "Holding rows"), from their
-// half rows. Needs them (prepare_constraints).
-void form_limit_delassus(FeatherstoneState& state);
-// One pass over the islands' rows, each island's together (joint_space_limits.cpp, "Holding
+// The Delassus matrix of each of the group's islands with limit rows (joint_space_limits.cpp,
+// "Holding rows"), from their half rows. Needs them (prepare_group).
+void form_limit_delassus(FeatherstoneState& state, const ConstraintGroup& group);
+// One pass over the group's limit rows, each island's together (joint_space_limits.cpp, "Holding
 // rows"): on the velocities x = v, or (`position`) the push-out's displacement x, with the
 // impulses so far in state.contact.lagging. True when it changed any.
-bool solve_limit_rows(FeatherstoneState& state, double dt, bool position, const Eigen::VectorXd& x);
+bool solve_limit_rows(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool position, const Eigen::VectorXd& x);
 
 }  // namespace limber::joint_space

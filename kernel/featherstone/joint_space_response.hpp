@@ -37,26 +37,19 @@ inline void add_joint_vector(const Eigen::Vector3d& x, Eigen::VectorXd& v, int o
 // J_g of the impulses not yet in x: Y_gᵀ y (JointSpaceContactScratch::lagging).
 inline Eigen::Vector3d lagging_motion(const JointSpaceContactScratch& s, std::size_t g) {
   Eigen::Vector3d motion = Eigen::Vector3d::Zero();
-  for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+  for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) {
     motion += s.half_value[static_cast<std::size_t>(e)] * s.lagging[s.half_coordinate[static_cast<std::size_t>(e)]];
   }
   return motion;
 }
 
 // The impulse ι on block g's rows: y += D⁻¹ Y_g ι, on its path alone; its motion
-// H⁻¹ J_gᵀ ι = L⁻¹ D⁻¹ Y_g ι joins x at settle().
+// H⁻¹ J_gᵀ ι = L⁻¹ D⁻¹ Y_g ι joins x when the passes settle (joint_space_contacts.cpp).
 inline void respond(JointSpaceContactScratch& s, std::size_t g, const Eigen::Vector3d& impulse) {
-  for (int e = s.half_begin[g]; e < s.half_begin[g + 1]; ++e) {
+  for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) {
     const int k = s.half_coordinate[static_cast<std::size_t>(e)];
     s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(impulse) / s.factor.pivot(k);
   }
-}
-
-// x += L⁻¹ y: the impulses so far joined to x (one forward pass); y = 0.
-inline void settle(JointSpaceContactScratch& s, Eigen::VectorXd& x) {
-  s.factor.solve_lower(s.lagging);
-  x += s.lagging;
-  s.lagging.setZero();
 }
 
 // Approach speeds below this are left to the push-out (an impulse for them would cost a pass

@@ -110,9 +110,11 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
   mirror_rigid_bodies(state);
 }
 
-void mirror_rigid_bodies(FeatherstoneState& state) {
+void mirror_rigid_bodies(FeatherstoneState& state) { mirror_rigid_bodies(state, {0, state.tree.body_count()}); }
+
+void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range) {
   RigidBodyState& y = state.bodies.state;
-  for (int i = 0; i < state.tree.body_count(); ++i) {
+  for (int i = range.first; i < range.last; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const std::int32_t b = state.scene_body[index];
     if (b < 0) continue;  // a serial joint's frame

@@ -24,7 +24,8 @@ namespace limber {
 ///                (kernel/collision/rigid_contacts.hpp; a ball it moves back to where its path
 ///                first hit something goes into its floating joint's q, take_moved_balls),
 ///                answered by impulses through the joint-space inertia and a position push-out
-///                (joint_space_contacts.hpp), with the joint limits' rows;
+///                (joint_space_contacts.hpp), with the joint limits' rows: each group of islands
+///                the contacts join a task, on options.threads;
 ///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
 /// divergence is reported in the result (also state.last_report). Allocates nothing.
@@ -38,6 +39,8 @@ inline StepReport step(FeatherstoneState& state) { return step(state, state.sett
 void refresh_rigid_bodies(FeatherstoneState& state);
 /// The same from state.kinematics as it stands (its poses and velocities already those of (q, v)).
 void mirror_rigid_bodies(FeatherstoneState& state);
+/// The same for the tree bodies of `range` alone.
+void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range);
 
 /// After detect_rigid_contacts moved a ball (continuous collision): every ball's floating joint
 /// takes its rigid body's position (its origin is the centre of mass), then refresh_rigid_bodies.

@@ -18,7 +18,7 @@ struct MethodCapabilities {
   /// Lagrange, prismatic) joints through virtual links (serial_links.hpp); Featherstone exactly.
   std::array<bool, 6> joints;
   bool single_precision;  ///< a float state (WorldOptions::single_precision)
-  bool threads;           ///< steps on more than one thread (VerletOptions::threads)
+  bool threads;           ///< steps on more than one thread (VerletOptions::threads, FeatherstoneOptions::threads)
   bool gears;             ///< Model::gears (velocity constraints between joints)
   bool holds;             ///< points held to the world and moved while stepping (World::pin, move_pin)
   bool spheres;           ///< bodies shaped as spheres (capsules of length 0: MuJoCo's sphere geoms)
@@ -36,7 +36,7 @@ inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
     {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true,   false},
     {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false,  false},
     {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true,   true},
-    {Method::featherstone, {true, true, true, false, true, true},               false, false,  false, false, true,   true},
+    {Method::featherstone, {true, true, true, false, true, true},               false, true,   false, false, true,   true},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
                   kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&

@@ -5,6 +5,7 @@
 // featherstone_state.hpp); kernel/methods/method.hpp compiles a Model under WorldOptions.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string_view>
@@ -48,6 +49,9 @@ enum class SweepDirection : std::uint8_t {
 /// Most threads VerletOptions::threads may ask for (a guard: asking for 1e5 threads failed to
 /// start them and ended the program).
 inline constexpr int kMaxThreads = 256;
+/// Islands of trees (a ragdoll is one) from which automatic threads (threads = 0) start for the
+/// particles' joint trees and Featherstone's contacts: an island is a task.
+inline constexpr std::size_t kParallelMinimumTreeIslands = 8;
 /// Most Newton steps of the direct solver per time step (a guard, as kMaxIterations).
 inline constexpr int kMaxNewtonIterations = 1000;
 
@@ -168,6 +172,14 @@ struct FeatherstoneOptions {
   /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
   /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
   Integrator integrator = Integrator::rk4;
+  /// Threads for the contacts and limits, the calling one included, in [0, kMaxThreads]: each
+  /// group of islands the step's contacts join is a task (joint_space_contacts.hpp, "Groups"),
+  /// the same bits for any count. 1 (the default) starts none; 0 takes the hardware's when the
+  /// tree has kParallelMinimumTreeIslands islands or more.
+  int threads = 1;
+  Threading threading = Threading::workers;  ///< how the groups are split across threads
+  /// Threading::tasks: the engine's task system (or tbb_task_system(arena)); limber starts no thread.
+  TaskSystem tasks{};
   /// Time the step's stages into StepReport::profile (step_status.hpp): a few steady_clock reads
   /// a step, the same bits as without; false leaves the profile all zeros and reads no clock.
   bool profile = false;

@@ -24,28 +24,6 @@
 
 namespace limber {
 
-/// Owns a BlockRunner; copying a state gives the copy its own runner (threads are not shared).
-class RunnerHandle {
- public:
-  RunnerHandle() = default;
-  RunnerHandle(const RunnerHandle& other) { *this = other; }
-  RunnerHandle& operator=(const RunnerHandle& other) {
-    if (this != &other) {
-      runner_ = other.runner_ ? std::make_unique<BlockRunner>(other.runner_->threading(), other.runner_->threads(), other.runner_->tasks())
-                              : nullptr;
-    }
-    return *this;
-  }
-  RunnerHandle(RunnerHandle&&) noexcept = default;
-  RunnerHandle& operator=(RunnerHandle&&) noexcept = default;
-  void reset(Threading threading, int threads, TaskSystem tasks = {}) { runner_ = std::make_unique<BlockRunner>(threading, threads, tasks); }
-  BlockRunner& operator*() const { return *runner_; }
-  BlockRunner* operator->() const { return runner_.get(); }
-
- private:
-  std::unique_ptr<BlockRunner> runner_;
-};
-
 /// A counter that threads add to (relaxed: only the total is read, after the stage) and that a
 /// copied state copies.
 struct SharedCounter {

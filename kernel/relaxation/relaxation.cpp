@@ -30,8 +30,6 @@ using coloured::kParticlesPerTask;
 // for the second core from ~12k slots; chains of 10^4 links (5k per colour) ran 1.6x slower
 // on two threads, 10^5 links 1.9x faster.
 constexpr std::uint32_t kDefaultParallelMinimumSlots = 16384;
-// Tree components (a ragdoll is one) from which automatic threads start for the joint trees.
-constexpr std::size_t kParallelMinimumTreeIslands = 8;
 
 // Fills the batches with the constraints of `islands` (state.awake_islands when stepping).
 template <typename Scalar>

@@ -74,4 +74,27 @@ class BlockRunner {
   std::unique_ptr<Shared> shared_;
 };
 
+/// Owns a BlockRunner; copying a state gives the copy its own runner (threads are not shared).
+class RunnerHandle {
+ public:
+  RunnerHandle() = default;
+  RunnerHandle(const RunnerHandle& other) { *this = other; }
+  RunnerHandle& operator=(const RunnerHandle& other) {
+    if (this != &other) {
+      runner_ = other.runner_ ? std::make_unique<BlockRunner>(other.runner_->threading(), other.runner_->threads(), other.runner_->tasks())
+                              : nullptr;
+    }
+    return *this;
+  }
+  RunnerHandle(RunnerHandle&&) noexcept = default;
+  RunnerHandle& operator=(RunnerHandle&&) noexcept = default;
+  void reset(Threading threading, int threads, TaskSystem tasks = {}) { runner_ = std::make_unique<BlockRunner>(threading, threads, tasks); }
+  BlockRunner& operator*() const { return *runner_; }
+  BlockRunner* operator->() const { return runner_.get(); }
+  BlockRunner* get() const { return runner_.get(); }  ///< null: none (one thread)
+
+ private:
+  std::unique_ptr<BlockRunner> runner_;
+};
+
 }  // namespace limber

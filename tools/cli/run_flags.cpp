@@ -112,10 +112,11 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
   run.add_option("--pinned", flags.pinned, "Sweep the constraints at pinned particles first or last")
       ->check(CLI::IsMember({"first", "last"}))
       ->capture_default_str();
-  run.add_option("--threads", flags.threads, "Threads for relaxation; 0: the hardware's, where they pay off")
+  run.add_option("--threads", flags.threads,
+                 "Threads for relaxation, or for featherstone's contact groups; 0: the hardware's, where they pay off")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
-  run.add_option("--threading", flags.threading, "How a colour is split: workers (long-lived) or parallel-for")
+  run.add_option("--threading", flags.threading, "How a colour or the contact groups are split: workers (long-lived) or parallel-for")
       ->check(CLI::IsMember({"workers", "parallel-for"}))
       ->capture_default_str();
   run.add_option("--layout", flags.layout, "Particle storage for relaxation: auto, soa, aos or aosoa")
@@ -130,10 +131,11 @@ void add_run_flags(CLI::App& run, RunFlags& flags) {
                "Time each stage of the step and print, after the summary, where the time went (a few clock reads a substep)");
   for (const char* name : {"--iterations", "--projection", "--substeps", "--tolerance", "--budget-us", "--over-relaxation",
                            "--solver", "--sweep", "--pinned",
-                           "--threads", "--threading", "--layout", "--ordering", "--scalar", "--newton-iterations",
+                           "--layout", "--ordering", "--scalar", "--newton-iterations",
                            "--compliance", "--warm-start", "--long-range-attachments", "--joint-solve"}) {
     flags.verlet_only_options.push_back(run.get_option(name));
   }
+  flags.thread_options = {run.get_option("--threads"), run.get_option("--threading")};
 }
 
 namespace {
@@ -161,6 +163,7 @@ Integrator integrator_of(const std::string& flag) {
 // The SpringOptions the flags ask for.
 SpringOptions spring_options(const RunFlags& flags, const SpringSettings& scene) {
   refuse_verlet_flags(flags);
+  refuse({flags.thread_options.begin(), flags.thread_options.end()}, flags, "the Verlet methods and featherstone");
   refuse({flags.stabilization_option, flags.constraint_solver_option}, flags, "lagrange");
   SpringOptions options;
   options.defaults = scene;
@@ -181,6 +184,7 @@ SpringOptions spring_options(const RunFlags& flags, const SpringSettings& scene)
 // The LagrangeOptions the flags ask for.
 LagrangeOptions lagrange_options(const RunFlags& flags) {
   refuse_verlet_flags(flags);
+  refuse({flags.thread_options.begin(), flags.thread_options.end()}, flags, "the Verlet methods and featherstone");
   refuse({flags.stiffness_option, flags.damping_option, flags.linear_solver_option}, flags, "the spring methods");
   LagrangeOptions options;
   const std::string integrator = flags.integrator_option->count() ? flags.integrator : "semi-implicit";
@@ -204,6 +208,8 @@ FeatherstoneOptions featherstone_options(const RunFlags& flags) {
     throw InputError("--integrator " + integrator + ": featherstone takes semi-implicit or rk4");
   }
   options.integrator = integrator_of(integrator);
+  options.threads = flags.threads;
+  options.threading = flags.threading == "parallel-for" ? Threading::parallel_for : Threading::workers;
   return options;
 }
 

@@ -57,6 +57,7 @@ struct RunFlags {
       *integrator_option, *linear_solver_option, *stabilization_option, *constraint_solver_option, *newton_iterations_option,
       *compliance_option, *warm_start_option, *projection_option, *substeps_option;
   std::vector<CLI::Option*> verlet_only_options;  ///< flags that only the Verlet methods take
+  std::vector<CLI::Option*> thread_options;       ///< --threads, --threading: the Verlet methods and featherstone
 
   bool springs() const { return method == "springs-explicit" || method == "springs-implicit"; }
   bool lagrange() const { return method == "lagrange"; }

@@ -1,0 +1,70 @@
+// The Featherstone method on threads (FeatherstoneOptions::threads; joint_space_contacts.hpp,
+// "Groups"): the islands the contacts join are solved as one task, apart from the others, so the
+// state is the same bits on one thread or two, whichever way the groups are split, and a step
+// on threads allocates nothing.
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "limber/kernel/featherstone/compile.hpp"
+#include "limber/kernel/featherstone/step.hpp"
+#include "tests/support/allocation_counter.hpp"
+#include "tests/support/models.hpp"
+
+namespace limber {
+namespace {
+
+// What a run of the pile saw: the most groups in a step, the most islands in one group.
+struct Grouping {
+  std::size_t most_groups = 0;
+  int most_islands = 0;
+};
+
+Grouping step_pile(FeatherstoneState& state, int steps) {
+  Grouping seen;
+  for (int s = 0; s < steps; ++s) {
+    EXPECT_EQ(step(state).status, StepStatus::ok) << "step " << s;
+    seen.most_groups = std::max(seen.most_groups, state.contact.groups.size());
+    for (const ConstraintGroup& group : state.contact.groups) seen.most_islands = std::max(seen.most_islands, group.last_island - group.first_island);
+  }
+  return seen;
+}
+
+TEST(FeatherstoneThreads, TheSameBitsOnOneThreadOrTwo) {
+  // Ragdolls falling down stairs onto each other: groups of one ragdoll and groups that contacts
+  // join (the pile), limits and drives.
+  const Model pile = testing::load_shipped_scene("ragdoll_pile.json");
+  constexpr int kSteps = 240;
+  FeatherstoneState one = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 1});
+  const Grouping seen = step_pile(one, kSteps);
+  EXPECT_GE(seen.most_groups, 2u) << "the groups are what the threads share";
+  EXPECT_GE(seen.most_islands, 2) << "some contact joined two ragdolls";
+  for (const Threading threading : {Threading::workers, Threading::parallel_for}) {
+    FeatherstoneState two = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2, .threading = threading});
+    ASSERT_NE(two.runner.get(), nullptr);
+    EXPECT_EQ(two.runner->threads(), 2);
+    step_pile(two, kSteps);
+    EXPECT_TRUE(two.q == one.q) << "threading " << static_cast<int>(threading);
+    EXPECT_TRUE(two.v == one.v) << "threading " << static_cast<int>(threading);
+  }
+}
+
+TEST(FeatherstoneThreads, AStepOnTwoThreadsAllocatesNothing) {
+  const Model pile = testing::load_shipped_scene("ragdoll_pile.json");
+  FeatherstoneState state = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2});
+  step_pile(state, 120);  // the ragdolls reach the stairs and each other
+  const long before = testing::allocation_count();
+  step_pile(state, 60);
+  EXPECT_EQ(testing::allocation_count() - before, 0);
+}
+
+TEST(FeatherstoneThreads, OneThreadStartsNoneAndTooManyAreRefused) {
+  const Model pile = testing::load_shipped_scene("ragdoll_pile.json");
+  EXPECT_EQ(compile_featherstone(pile, {.threads = 1}).runner.get(), nullptr);
+  EXPECT_THROW(compile_featherstone(pile, {.threads = kMaxThreads + 1}), std::invalid_argument);
+  EXPECT_THROW(compile_featherstone(pile, {.threads = -1}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace limber
