@@ -316,6 +316,27 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
       state.serial_axes.push_back({j, a, node, tree.velocity_offset(node)});
     }
   }
+  // Each island's joints and serial axes, in order (counted, then placed).
+  const std::size_t islands = state.islands.size();
+  const auto island_of_joint = [&](std::size_t j) { return state.island_of_body[state.scene_body[static_cast<std::size_t>(state.tree_joint[j].body)]]; };
+  state.island_joint_begin.assign(islands + 1, 0), state.island_axis_begin.assign(islands + 1, 0);
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    if (state.tree_joint[j].dofs > 0) ++state.island_joint_begin[island_of_joint(j) + 1];
+  }
+  for (const TreeSerialAxis& axis : state.serial_axes) ++state.island_axis_begin[island_of_joint(static_cast<std::size_t>(axis.joint)) + 1];
+  for (std::size_t k = 0; k < islands; ++k) {
+    state.island_joint_begin[k + 1] += state.island_joint_begin[k], state.island_axis_begin[k + 1] += state.island_axis_begin[k];
+  }
+  state.island_joint.resize(static_cast<std::size_t>(state.island_joint_begin[islands]));
+  state.island_axis.resize(static_cast<std::size_t>(state.island_axis_begin[islands]));
+  std::vector<std::int32_t> next_joint(state.island_joint_begin.begin(), state.island_joint_begin.end() - 1);
+  std::vector<std::int32_t> next_axis(state.island_axis_begin.begin(), state.island_axis_begin.end() - 1);
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    if (state.tree_joint[j].dofs > 0) state.island_joint[static_cast<std::size_t>(next_joint[island_of_joint(j)]++)] = static_cast<std::int32_t>(j);
+  }
+  for (std::size_t a = 0; a < state.serial_axes.size(); ++a) {
+    state.island_axis[static_cast<std::size_t>(next_axis[island_of_joint(static_cast<std::size_t>(state.serial_axes[a].joint))]++)] = static_cast<std::int32_t>(a);
+  }
 }
 
 // Scratch, sized once: step() never allocates.
@@ -344,6 +365,7 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
     friction = friction || joint.friction > 0;
     for (const SerialAxis& axis : joint.serial_axes) friction = friction || axis.friction > 0;
   }
+  state.joint_friction = friction;
   if (factor_entries <= kEagerFactorEntries) {
     contact.factor.assign(tree);
     if (friction) contact.inertia.assign(tree), contact.held.assign(tree);
@@ -398,8 +420,8 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.integration.resize(tree);
   state.joint_forces.setZero(nv);
   state.actuation.setZero(nv);
-  state.saved_positions = state.q;
   state.drag_force.assign(tree_size, SpatialVector::Zero());
+  state.awake_islands.reserve(state.islands.size());
   JointSpaceContactScratch& contact = state.contact;
   contact.articulated.resize(tree);
   contact.zero_velocities.setZero(nv);

@@ -148,8 +148,16 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
   require_size(q.size(), tree.position_count(), "forward_kinematics: q");
   require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  propagate_velocities(tree, q.data(), v, workspace, {0, tree.body_count()});
-  compose_world_transforms(tree, workspace, {0, tree.body_count()});
+  forward_kinematics(tree, q, v, workspace, {0, tree.body_count()});
+}
+
+void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range) {
+  require_size(q.size(), tree.position_count(), "forward_kinematics: q");
+  require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
+  if (!workspace.fits(tree)) throw std::invalid_argument("forward_kinematics: the workspace is not sized for this tree");
+  propagate_velocities(tree, q.data(), v, workspace, range);
+  compose_world_transforms(tree, workspace, range);
 }
 
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
@@ -258,9 +266,14 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
+  forward_dynamics(tree, q, v, joint_forces, gravity, workspace, joint_accelerations, {0, tree.body_count()});
+}
+
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range) {
   require_size(q.size(), tree.position_count(), "forward_dynamics: q");
-  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, nullptr, gravity, workspace, joint_accelerations,
-                             {0, tree.body_count()});
+  articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, nullptr, gravity, workspace, joint_accelerations, range);
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

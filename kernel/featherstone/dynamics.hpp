@@ -61,6 +61,9 @@ void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vecto
 /// (v_i, body coordinates). q: nq, v: nv.
 void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
+/// The same for the bodies of `range` alone (the workspace sized for the tree), the same bits.
+void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                        const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range);
 
 /// The bodies' velocities alone (workspace.velocity, v: nv) at the poses workspace already holds
 /// (body_poses or forward_kinematics of the current q): forward_kinematics without recomputing
@@ -78,6 +81,11 @@ void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
+/// The same for the bodies of `range` alone: v̇ on their coordinates (joint_accelerations of size
+/// nv), the workspace's entries of their bodies and coordinates; the same bits.
+void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
+                      const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range);
 
 /// forward_dynamics of (H + diag(armature)) v̇ = τ − C: `armature` (nv, ≥ 0) is added to the
 /// diagonal of each joint's D_i = S_iᵀ I^A_i S_i, which adds it to H's diagonal (a rotor's

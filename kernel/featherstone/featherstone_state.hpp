@@ -212,8 +212,10 @@ struct FeatherstoneState : RigidScene {
   Eigen::VectorXd q;  ///< nq: joint positions (articulated_tree.hpp's layout)
   Eigen::VectorXd v;  ///< nv: joint velocities
   FeatherstoneOptions options;
-  /// The constraint groups' threads (FeatherstoneOptions::threads; one: none).
+  /// The threads of the islands' integration and of the contact groups (FeatherstoneOptions::threads; one: none).
   RunnerHandle runner;
+  bool joint_friction = false;              ///< some joint or serial axis has friction (its islands integrate on the calling thread)
+  std::vector<std::int32_t> awake_islands;  ///< the islands a step integrates (scratch; capacity: every island)
 
   // Tree body i ↔ rigid-scene body b.
   std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last); −1: a joint frame
@@ -245,6 +247,10 @@ struct FeatherstoneState : RigidScene {
   std::vector<TreeJoint> tree_joint;
   /// Every serial joint's axes, joint by joint, in order.
   std::vector<TreeSerialAxis> serial_axes;
+  /// Island k's Model joints with coordinates (tree_joint's dofs > 0) are
+  /// island_joint[island_joint_begin[k] … island_joint_begin[k + 1]), in joint order; its serial
+  /// axes (indices into serial_axes) island_axis[island_axis_begin[k] …], likewise.
+  std::vector<std::int32_t> island_joint_begin, island_joint, island_axis_begin, island_axis;
   JointControlScratch controls;
 
   /// forward_kinematics of the current (q, v): world_to_body and the bodies' spatial velocities.
@@ -253,7 +259,6 @@ struct FeatherstoneState : RigidScene {
   JointSpaceContactScratch contact;
   Eigen::VectorXd joint_forces;  ///< nv: Settings::drag, the loads and the actuation as joint forces, held over a step
   Eigen::VectorXd actuation;     ///< nv: generalized forces for the next step (apply_joint_force), zeroed after it
-  Eigen::VectorXd saved_positions;  ///< nq: q of sleeping islands, restored after integrating
   std::vector<SpatialVector> drag_force;  ///< per tree body (scratch)
   StepReport last_report;
 };

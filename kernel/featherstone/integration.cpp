@@ -28,10 +28,11 @@ Eigen::Vector3d inverse_right_jacobian_times(const Eigen::Vector3d& theta, const
   return omega + 0.5 * theta_cross_omega + beta * theta.cross(theta_cross_omega);
 }
 
-// Θ̇ at the stage q₀ ⊕ Θ with velocity v (see integration.hpp), into `rate`.
+// Θ̇ at the stage q₀ ⊕ Θ with velocity v (see integration.hpp), into `rate`, for the bodies of
+// `range`.
 void displacement_rate(const ArticulatedTree& tree, const Eigen::VectorXd& displacement, const Eigen::VectorXd& v,
-                       Eigen::VectorXd& rate) {
-  for (int i = 0; i < tree.body_count(); ++i) {
+                       Eigen::VectorXd& rate, BodyRange range) {
+  for (int i = range.first; i < range.last; ++i) {
     const int offset = tree.velocity_offset(i);
     switch (tree.body(i).joint) {
       case ArticulatedJoint::revolute:
@@ -104,47 +105,55 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses) {
   if (!workspace.fits(tree)) workspace.resize(tree);
+  integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, {0, tree.body_count()});
+}
+
+void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
+               const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
+  if (!workspace.fits(tree)) throw std::invalid_argument("integrate: the workspace is not sized for this tree");
   FeatherstoneIntegratorWorkspace& w = workspace;
+  // The range's coordinates: element by element, the same bits as over the whole vectors.
+  const auto [first_velocity, last_velocity] = tree.velocity_span(range.first, range.last);
+  const auto [first_position, last_position] = tree.position_span(range.first, range.last);
+  const auto velocities = [&, first = first_velocity, count = last_velocity - first_velocity](Eigen::VectorXd& x) { return x.segment(first, count); };
+  const auto positions = [&, first = first_position, count = last_position - first_position](Eigen::VectorXd& x) { return x.segment(first, count); };
   // v̇ at the step's start, at the poses given when there are.
-  const auto start_dynamics = [&](const Eigen::VectorXd& start_q, const Eigen::VectorXd& start_v) {
-    if (poses) {
-      forward_dynamics(tree, *poses, start_v, joint_forces, nullptr, gravity, w.dynamics, w.accelerations);
+  const auto dynamics = [&](const Eigen::VectorXd& stage_q, const Eigen::VectorXd& stage_v, const DynamicsWorkspace* stage_poses) {
+    if (stage_poses) {
+      forward_dynamics(tree, *stage_poses, stage_v, joint_forces, nullptr, gravity, w.dynamics, w.accelerations, range);
     } else {
-      forward_dynamics(tree, start_q, start_v, joint_forces, gravity, w.dynamics, w.accelerations);
+      forward_dynamics(tree, stage_q, stage_v, joint_forces, gravity, w.dynamics, w.accelerations, range);
     }
   };
   switch (integrator) {
     case Integrator::semi_implicit_euler:
-      start_dynamics(q, v);
-      v += h * w.accelerations;
-      w.stage_displacement = h * v;
-      displace_positions(tree, q, w.stage_displacement, q);
+      dynamics(q, v, poses);
+      velocities(v) += h * velocities(w.accelerations);
+      velocities(w.stage_displacement) = h * velocities(v);
+      displace_positions(tree, q, w.stage_displacement, q, range);
       return;
     case Integrator::rk4: {
       // Stage s at (q₀ ⊕ Θ_s, v₀ + c_s h a_{s−1}); weights b = (1, 2, 2, 1)/6, nodes c = (0, ½, ½, 1).
       constexpr double kWeights[4] = {1.0 / 6, 2.0 / 6, 2.0 / 6, 1.0 / 6};
       constexpr double kNextNodes[3] = {0.5, 0.5, 1.0};
-      w.start_positions = q, w.start_velocities = v;
-      w.stage_positions = q, w.stage_velocities = v;
-      w.stage_displacement.setZero();
-      w.acceleration_sum.setZero(), w.displacement_rate_sum.setZero();
+      positions(w.start_positions) = positions(q), velocities(w.start_velocities) = velocities(v);
+      positions(w.stage_positions) = positions(q), velocities(w.stage_velocities) = velocities(v);
+      velocities(w.stage_displacement).setZero();
+      velocities(w.acceleration_sum).setZero(), velocities(w.displacement_rate_sum).setZero();
       for (int s = 0; s < 4; ++s) {
-        if (s == 0) {
-          start_dynamics(w.stage_positions, w.stage_velocities);
-        } else {
-          forward_dynamics(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w.dynamics, w.accelerations);
-        }
-        displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate);
-        w.acceleration_sum += kWeights[s] * w.accelerations;
-        w.displacement_rate_sum += kWeights[s] * w.stage_rate;
+        dynamics(w.stage_positions, w.stage_velocities, s == 0 ? poses : nullptr);
+        displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate, range);
+        velocities(w.acceleration_sum) += kWeights[s] * velocities(w.accelerations);
+        velocities(w.displacement_rate_sum) += kWeights[s] * velocities(w.stage_rate);
         if (s == 3) break;
-        w.stage_displacement = (kNextNodes[s] * h) * w.stage_rate;
-        w.stage_velocities = w.start_velocities + (kNextNodes[s] * h) * w.accelerations;
-        displace_positions(tree, w.start_positions, w.stage_displacement, w.stage_positions);
+        velocities(w.stage_displacement) = (kNextNodes[s] * h) * velocities(w.stage_rate);
+        velocities(w.stage_velocities) = velocities(w.start_velocities) + (kNextNodes[s] * h) * velocities(w.accelerations);
+        displace_positions(tree, w.start_positions, w.stage_displacement, w.stage_positions, range);
       }
-      v = w.start_velocities + h * w.acceleration_sum;
-      w.stage_displacement = h * w.displacement_rate_sum;
-      displace_positions(tree, w.start_positions, w.stage_displacement, q);
+      velocities(v) = velocities(w.start_velocities) + h * velocities(w.acceleration_sum);
+      velocities(w.stage_displacement) = h * velocities(w.displacement_rate_sum);
+      displace_positions(tree, w.start_positions, w.stage_displacement, q, range);
       return;
     }
     case Integrator::euler:

@@ -59,6 +59,11 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses = nullptr);
+/// The same for the bodies of `range` alone (their coordinates of q and v; the workspace sized
+/// for the tree), the same bits.
+void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
+               const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
 
 /// T = Σ ½ v_iᵀ I_i v_i over the bodies, J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

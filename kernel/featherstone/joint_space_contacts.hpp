@@ -121,11 +121,16 @@ FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
 
 /// The joint forces (nv) of a step of h seconds from (q, v) into state.controls.forces: `loads`
 /// (nv, the applied loads and drag as joint forces) plus the drives' stable-PD forces and the
-/// joints' friction (see above), read from state.joint_controls. Returns false, writing nothing,
-/// when no awake island has a drive or friction. Reads the poses in state.kinematics, which must
-/// be those of q (as they are between steps).
+/// joints' friction (see above), read from state.joint_controls, island by island (an awake
+/// island without either takes the loads). Returns whether any awake island has a drive or
+/// friction. Reads the poses in state.kinematics, which must be those of q (as they are between
+/// steps).
 /// Allocates nothing.
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h);
+/// The same for island `island` alone (its coordinates of the forces; false, writing nothing, when
+/// it has no drive or friction). Islands may run on different threads unless the scene has joint
+/// friction (FeatherstoneState::joint_friction), whose factors they share.
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island);
 
 /// τ = Σ J_iᵀ f_i: the joint forces (nv) equivalent to spatial forces f_i on the tree bodies
 /// (body coordinates, at the body's origin; `body_forces`, one per tree body, consumed: zeroed),

@@ -385,18 +385,29 @@ namespace {
 // Whether a drive pulls at all.
 bool acting(const std::optional<JointDrive>& drive) { return drive && (drive->stiffness > 0 || drive->damping > 0); }
 
+// Calls visit(k) for each Model joint k with coordinates of island `island`, and visit_axis(a)
+// for each of its serial axes a (indices into state.serial_axes).
+template <typename VisitJoint, typename VisitAxis>
+void for_each_island_joint(const FeatherstoneState& state, std::size_t island, VisitJoint&& visit, VisitAxis&& visit_axis) {
+  for (std::int32_t n = state.island_joint_begin[island]; n < state.island_joint_begin[island + 1]; ++n) {
+    visit(static_cast<std::size_t>(state.island_joint[static_cast<std::size_t>(n)]));
+  }
+  for (std::int32_t n = state.island_axis_begin[island]; n < state.island_axis_begin[island + 1]; ++n) {
+    visit_axis(state.serial_axes[static_cast<std::size_t>(state.island_axis[static_cast<std::size_t>(n)])]);
+  }
+}
+
 // The drives' force k·(target − x) + c·target_velocity and gain k·h + c on each driven velocity
-// (x, target and rates in the Model's coordinates, carried onto v), a serial joint's axes each
-// on its own velocity. Needs state.kinematics at the current (q, v).
-void gather_drive_forces(FeatherstoneState& state, double h) {
+// of island `island` (x, target and rates in the Model's coordinates, carried onto v), a serial
+// joint's axes each on its own velocity. Needs state.kinematics at the current (q, v).
+void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
-  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+  for_each_island_joint(state, island, [&](std::size_t k) {
     const Joint& joint = controls.joints[k];
     const TreeJoint& held = state.tree_joint[k];
-    if (!joint.drive || held.dofs == 0 || !awake(state, held)) continue;
+    if (!acting(joint.drive)) return;
     const JointDrive& drive = *joint.drive;
-    if (!(drive.stiffness > 0 || drive.damping > 0)) continue;
     c.drive_gain.segment(held.offset, held.dofs).setConstant(drive.stiffness * h + drive.damping);
     if (joint.type == JointType::spherical) {
       const MeasuredJoint measured = measure_joint(state, k);
@@ -415,28 +426,27 @@ void gather_drive_forces(FeatherstoneState& state, double h) {
       if (joint.type == JointType::revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
       c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
     }
-  }
-  // A serial joint's axes: each its own spring and damper on its own velocity.
-  for (const TreeSerialAxis& node : state.serial_axes) {
+  }, [&](const TreeSerialAxis& node) {
+    // A serial joint's axes: each its own spring and damper on its own velocity.
     const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
-    if (!acting(axis.drive) || !awake(state, state.tree_joint[static_cast<std::size_t>(node.joint)])) continue;
+    if (!acting(axis.drive)) return;
     const JointDrive& drive = *axis.drive;
     double error = drive.target - state.q[state.tree.position_offset(node.body)];
     if (!axis.slide) error = std::remainder(error, 2 * std::numbers::pi);
     c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
     c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
-  }
+  });
 }
 
-// Joint friction's blocks, per joint and per serial axis, then their impulses (solve_friction):
-// the impulse j that stops each one's predicted velocity through (H + h·G)⁻¹, or (sliding)
-// friction·h against the velocity it then has.
-void gather_friction(FeatherstoneState& state, double h) {
+// Joint friction's blocks of island `island`, per joint and per serial axis, then their impulses
+// (solve_friction): the impulse j that stops each one's predicted velocity through (H + h·G)⁻¹,
+// or (sliding) friction·h against the velocity it then has.
+void gather_friction(FeatherstoneState& state, double h, std::size_t island) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
-  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+  for_each_island_joint(state, island, [&](std::size_t k) {
     const TreeJoint& held = state.tree_joint[k];
-    if (!(controls.joints[k].friction > 0) || held.dofs == 0 || !awake(state, held)) continue;
+    if (!(controls.joints[k].friction > 0)) return;
     JointFrictionBlock block;
     block.island = island_of(state, held);
     block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
@@ -449,68 +459,86 @@ void gather_friction(FeatherstoneState& state, double h) {
     }
     for (int m = 0; m < held.dofs; ++m) block.rate[m] = c.predicted[held.offset + m];
     c.friction.push_back(block);
-    if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
-  }
-  for (const TreeSerialAxis& node : state.serial_axes) {
+  }, [&](const TreeSerialAxis& node) {
     const double bound = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)].friction;
     const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
-    if (!(bound > 0) || !awake(state, held)) continue;
+    if (!(bound > 0)) return;
     JointFrictionBlock block;
     block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
     block.bound = bound * h;
     block.mass(0, 0) = 1 / inverse_block(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
     block.rate[0] = c.predicted[node.offset];
     c.friction.push_back(block);
-    if (std::find(c.islands.begin(), c.islands.end(), block.island) == c.islands.end()) c.islands.push_back(block.island);
-  }
+  });
+  if (!c.friction.empty()) c.islands.push_back(static_cast<std::int32_t>(island));
   solve_friction(state);
 }
 
 }  // namespace
 
-bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h) {
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
   bool drives = false, friction = false;
-  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+  for_each_island_joint(state, island, [&](std::size_t k) {
     const Joint& joint = controls.joints[k];
-    const TreeJoint& held = state.tree_joint[k];
-    if (held.dofs == 0 || !awake(state, held)) continue;
     drives = drives || acting(joint.drive);
     friction = friction || joint.friction > 0;
-    for (const SerialAxis& axis : joint.serial_axes) drives = drives || acting(axis.drive), friction = friction || axis.friction > 0;
-  }
+  }, [&](const TreeSerialAxis& node) {
+    const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+    drives = drives || acting(axis.drive), friction = friction || axis.friction > 0;
+  });
   if (!drives && !friction) return false;
 
-  c.drive_force.setZero(), c.drive_gain.setZero();
-  if (drives) gather_drive_forces(state, h);
+  // The island's coordinates: element by element, the same bits as over the whole vectors.
+  const BodyRange bodies{state.island_begin[island], state.island_begin[island + 1]};
+  const auto [first, last] = island_velocities(state, island);
+  const auto on_island = [first = first, count = last - first](auto& x) { return x.segment(first, count); };
+  on_island(c.drive_force).setZero(), on_island(c.drive_gain).setZero();
+  if (drives) gather_drive_forces(state, h, island);
   // Stable PD (Tan, Liu & Turk 2011): (H + h·G) v̇ = τ − C + F − G·v, G = diag(k·h + c), whose
   // v + h·v̇ is the velocity the drives' force F − G·(v + h·v̇) leaves at the step's end.
-  c.armature = h * c.drive_gain;
-  c.explicit_force = loads + c.drive_force - c.drive_gain.cwiseProduct(state.v);
+  on_island(c.armature) = h * on_island(c.drive_gain);
+  on_island(c.explicit_force) = on_island(loads) + on_island(c.drive_force) - on_island(c.drive_gain).cwiseProduct(on_island(state.v));
   JointSpaceContactScratch& s = state.contact;
-  forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated, c.acceleration);
-  c.predicted = state.v + h * c.acceleration;
+  forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
+                   c.acceleration, bodies);
+  on_island(c.predicted) = on_island(state.v) + h * on_island(c.acceleration);
 
   c.friction.clear();
   c.islands.clear();
   if (friction) {
     // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
-    // add their penalties to it per island: factor_held_rows).
+    // add their penalties to it: factor_held_rows). The factors are shared by the islands:
+    // friction runs on the calling thread (step.cpp).
     if (s.held.size() != state.tree.velocity_count()) s.inertia.assign(state.tree), s.held.assign(state.tree);  // a large tree's first use
     if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);
-    mass_matrix(state.tree, state.kinematics, s.composite, s.inertia);
-    for (int i = 0; i < state.tree.velocity_count(); ++i) {
+    mass_matrix(state.tree, state.kinematics, s.composite, s.inertia, bodies);
+    for (int i = first; i < last; ++i) {
       if (c.armature[i] != 0) s.inertia.add_inertia(i, i, c.armature[i]);
     }
-    s.factor = s.inertia;  // the same sizes: no allocation
-    if (s.factor.factor() < 0) gather_friction(state, h);  // else the state is non-finite: the step's status says so
+    s.factor.copy_inertia(s.inertia, first, last);
+    if (s.factor.factor(first, last) < 0) gather_friction(state, h, island);  // else the state is non-finite: the step's status says so
   }
 
   // The forces held over the step: the loads, the drives' at the predicted velocity, friction's j/h.
-  c.forces = loads + c.drive_force - c.drive_gain.cwiseProduct(c.predicted);
+  on_island(c.forces) = on_island(loads) + on_island(c.drive_force) - on_island(c.drive_gain).cwiseProduct(on_island(c.predicted));
   for (const JointFrictionBlock& block : c.friction) add_joint_vector(block.impulse / h, c.forces, block.offset, block.dofs);
   return true;
+}
+
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h) {
+  bool any = false;
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (state.islands[k].sleeping) continue;
+    if (joint_control_forces(state, loads, h, k)) {
+      any = true;
+    } else {
+      const auto [first, last] = island_velocities(state, k);
+      state.controls.forces.segment(first, last - first) = loads.segment(first, last - first);
+    }
+  }
+  return any;
 }
 
 void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces) {

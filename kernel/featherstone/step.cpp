@@ -12,18 +12,17 @@ namespace {
 
 // Settings::drag (thesis 2.1.5, 2.1.6; in the limb's own frame, z its axis) at the step's start,
 // and the applied loads (RigidScene::applied_force, applied_torque), as joint forces
-// τ = Σ J_iᵀ f_i (held over the step, so RK4 is first order in the drag).
-void body_load_joint_forces(FeatherstoneState& state, bool drag_on) {
+// τ = Σ J_iᵀ f_i (held over the step, so RK4 is first order in the drag), on the bodies of `bodies`.
+void body_load_joint_forces(FeatherstoneState& state, bool drag_on, BodyRange bodies) {
   const DragSettings& drag = state.settings.drag;
   const RigidBodyState& y = state.bodies.state;
-  for (int i = 0; i < state.tree.body_count(); ++i) {
+  for (int i = bodies.first; i < bodies.last; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const std::int32_t b = state.scene_body[index];
     if (b < 0) {  // a serial joint's massless frame: no load
       state.drag_force[index].setZero();
       continue;
     }
-    if (state.islands[state.island_of_body[b]].sleeping) continue;
     Eigen::Vector3d force = state.applied_force[b], torque = state.applied_torque[b];
     if (drag_on) {
       const Eigen::Matrix3d rotation = (y.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
@@ -35,20 +34,20 @@ void body_load_joint_forces(FeatherstoneState& state, bool drag_on) {
     state.drag_force[index].head<3>() = world_to_body.rotation * (torque + (y.position[b] - world_to_body.translation).cross(force));
     state.drag_force[index].tail<3>() = world_to_body.rotation * force;
   }
-  joint_forces_of_body_forces(state, state.drag_force, state.joint_forces);
+  joint_forces_of_body_forces(state, state.drag_force, state.joint_forces, bodies);
 }
 
 // How many substeps keep every body's turn under kLargestTurn a substep: the explicit
 // integrators follow a body-frame vector turning at Ω only while hΩ is small (RK4: stable below
 // 2.8, dissipating (hΩ)⁶/144 of it per step), and friction at a thin limb's rim can spin it about
-// its axis at v/r — hundreds of rad/s. Ω is the fastest body's or joint's angular speed at the
-// step's start; at most kMostSubsteps.
+// its axis at v/r — hundreds of rad/s. Ω is the island's fastest body's or joint's angular speed
+// at the step's start; at most kMostSubsteps.
 constexpr double kLargestTurn = 0.5;  // rad
 constexpr int kMostSubsteps = 32;
-int turn_substeps(const FeatherstoneState& state, double dt) {
+int turn_substeps(const FeatherstoneState& state, double dt, BodyRange bodies) {
   double fastest = 0;
-  for (const SpatialVector& velocity : state.kinematics.velocity) fastest = std::max(fastest, velocity.head<3>().norm());
-  for (int i = 0; i < state.tree.body_count(); ++i) {
+  for (int i = bodies.first; i < bodies.last; ++i) {
+    fastest = std::max(fastest, state.kinematics.velocity[static_cast<std::size_t>(i)].head<3>().norm());
     const ArticulatedJoint joint = state.tree.body(i).joint;
     if (joint == ArticulatedJoint::spherical || joint == ArticulatedJoint::floating) {
       fastest = std::max(fastest, state.v.segment<3>(state.tree.velocity_offset(i)).norm());
@@ -58,49 +57,83 @@ int turn_substeps(const FeatherstoneState& state, double dt) {
   return static_cast<int>(std::min(std::ceil(fastest * dt / kLargestTurn), double(kMostSubsteps)));
 }
 
-// Integrates the awake islands; sleeping ones keep q and v = 0.
-void integrate_awake_islands(FeatherstoneState& state, double dt) {
-  bool any_awake = false, any_asleep = false;
-  for (const RigidIsland& island : state.islands) (island.sleeping ? any_asleep : any_awake) = true;
-  if (!any_awake) return;
-  if (any_asleep) state.saved_positions = state.q;
+// Integrates awake island k (step.hpp, 1–3): its loads, substeps, drives and friction, integrator,
+// damping, and its rigid bodies refreshed. Touches only its bodies' and coordinates' entries.
+void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool loads) {
+  const BodyRange bodies{state.island_begin[k], state.island_begin[k + 1]};
+  const auto [first, last] = island_velocities(state, k);
+  const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
   const bool drag = !state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0);
-  bool loads = false;
-  for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
-  if (drag || loads) body_load_joint_forces(state, drag);
-  if (!state.actuation.isZero(0)) state.joint_forces += state.actuation;  // zeroed at the last step's end
-  const int substeps = turn_substeps(state, dt);
+  if (drag || loads) body_load_joint_forces(state, drag, bodies);
+  if (!on_island(state.actuation).isZero(0)) on_island(state.joint_forces) += on_island(state.actuation);  // zeroed at the last step's end
+  const int substeps = turn_substeps(state, dt, bodies);
   const double h = dt / substeps;
-  for (int k = 0; k < substeps; ++k) {
+  for (int s = 0; s < substeps; ++s) {
     // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), and
     // the integrator's first pass, at the poses of q: state.kinematics' at the step's start, found
     // again after a substep.
-    if (k > 0) body_poses(state.tree, state.q, state.kinematics);
-    const bool controlled = joint_control_forces(state, state.joint_forces, h);
+    if (s > 0) body_poses(state.tree, state.q, state.kinematics, bodies);
+    const bool controlled = joint_control_forces(state, state.joint_forces, h, k);
     if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
       // The stable PD's dynamics already are this step's: (H + h·G) v̇ = τ − C + F − G·v gives
       // v⁺ = v + h·v̇ with H v̇ = τ − C + F − G·v⁺, the velocity semi-implicit Euler ends with
       // under the forces held: the integrator's own ABA would find the same v̇ again. (Friction's
       // held joints are within its penalty's 1/kPenalty in the predicted velocity; the integrator
       // takes them exactly.)
-      state.v = state.controls.predicted;
-      state.integration.stage_displacement = h * state.v;
-      displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q);
+      on_island(state.v) = on_island(state.controls.predicted);
+      on_island(state.integration.stage_displacement) = h * on_island(state.v);
+      displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
       continue;
     }
     integrate(state.tree, state.q, state.v, controlled ? state.controls.forces : state.joint_forces, state.settings.gravity, h,
-              state.options.integrator, state.integration, &state.kinematics);
+              state.options.integrator, state.integration, &state.kinematics, bodies);
   }
-  if (any_asleep) {
-    for (std::size_t k = 0; k < state.islands.size(); ++k) {
-      if (!state.islands[k].sleeping) continue;
-      const auto [first_position, last_position] = island_positions(state, k);
-      state.q.segment(first_position, last_position - first_position) = state.saved_positions.segment(first_position, last_position - first_position);
-      const auto [first_velocity, last_velocity] = island_velocities(state, k);
-      state.v.segment(first_velocity, last_velocity - first_velocity).setZero();
-    }
+  if (state.settings.damping > 0) on_island(state.v) *= std::exp(-state.settings.damping * dt);
+  forward_kinematics(state.tree, state.q, state.v, state.kinematics, bodies);
+  mirror_rigid_bodies(state, bodies);
+}
+
+// An awake island as a task (BlockRunner::BlockFunction).
+struct IslandTask {
+  FeatherstoneState* state;
+  double dt;
+  bool loads;
+};
+double run_island(const void* context, std::size_t n) {
+  const IslandTask& task = *static_cast<const IslandTask*>(context);
+  FeatherstoneState& state = *task.state;
+  integrate_island(state, static_cast<std::size_t>(state.awake_islands[n]), task.dt, task.loads);
+  return 0;
+}
+
+// Integrates the awake islands, each a task on the state's threads when it has them (not with
+// joint friction, whose factors the islands share); sleeping ones keep q and v = 0.
+void integrate_awake_islands(FeatherstoneState& state, double dt) {
+  state.awake_islands.clear();
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) state.awake_islands.push_back(static_cast<std::int32_t>(k));
   }
-  if (state.settings.damping > 0) state.v *= std::exp(-state.settings.damping * dt);
+  bool loads = false;
+  for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
+  const IslandTask task{&state, dt, loads};
+  BlockRunner* runner = state.runner.get();
+  if (runner == nullptr || runner->threads() < 2 || state.awake_islands.size() < 2 || state.joint_friction) {
+    for (std::size_t n = 0; n < state.awake_islands.size(); ++n) run_island(&task, n);
+    return;
+  }
+  runner->begin();
+  runner->run(state.awake_islands.size(), &run_island, &task);
+  runner->end();
+}
+
+// Islands put to sleep had their rigid momenta zeroed: so are their joint velocities and their
+// bodies' spatial velocities in state.kinematics, which no step refreshes while they sleep.
+void rest_sleeping_islands(FeatherstoneState& state) {
+  zero_sleeping_velocities(state);
+  for (std::size_t k = 0; k < state.islands.size(); ++k) {
+    if (!state.islands[k].sleeping) continue;
+    for (int i = state.island_begin[k]; i < state.island_begin[k + 1]; ++i) state.kinematics.velocity[static_cast<std::size_t>(i)].setZero();
+  }
 }
 
 }  // namespace
@@ -147,7 +180,6 @@ StepReport step(FeatherstoneState& state, double dt) {
     StageClock clock(state.options.profile);
     remember_step_start(state);
     integrate_awake_islands(state, dt);
-    refresh_rigid_bodies(state);
     report.profile.integrate = clock.lap();
     if (detect_rigid_contacts(state)) take_moved_balls(state);
     report.profile.detect = clock.lap();
@@ -158,7 +190,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
     state.actuation.setZero();
-    zero_sleeping_velocities(state);  // islands put to sleep had their rigid momenta zeroed
+    rest_sleeping_islands(state);
     if (state.options.profile) count_rigid_step(state, report);
   });
 }

@@ -6,20 +6,22 @@
 namespace limber {
 
 /// Advances `state` by dt seconds:
-///  1. integrate  the awake islands' (q, v) with the articulated-body algorithm (Featherstone
+///  1. integrate  each awake island's (q, v) with the articulated-body algorithm (Featherstone
 ///                2008, Table 7.1) by options.integrator (integration.hpp): RK4 or semi-implicit
 ///                Euler, gravity Settings::gravity, Settings::drag as joint forces held over the
 ///                step (Jᵀ of each body's drag at the step's start). In substeps when a body or
-///                joint turns fast: as many as keep its turn below 0.5 rad a substep (at most 32;
-///                friction at a thin limb's rim spins it about its axis at v/r, which the explicit
-///                integrators follow only while hΩ is small). Sleeping islands keep their q and
-///                v = 0 (the core's algorithms run over the whole tree, so their dynamics are
-///                computed and dropped, not skipped). Joint drives (stable PD) and joint friction
-///                are found at each substep's start and held over it as joint forces
-///                (joint_control_forces, joint_space_contacts.hpp);
+///                joint of the island turns fast: as many as keep its turn below 0.5 rad a
+///                substep (at most 32; friction at a thin limb's rim spins it about its axis at
+///                v/r, which the explicit integrators follow only while hΩ is small); the other
+///                islands take one step. Sleeping islands are skipped: they keep their q and
+///                v = 0. Joint drives (stable PD) and joint friction are found at each substep's
+///                start and held over it as joint forces (joint_control_forces,
+///                joint_space_contacts.hpp);
 ///  2. damp       v ← v·exp(−damping·dt) (Settings::damping: speed decays as exp(−damping·t),
 ///                whatever Δt, as in the other methods);
-///  3. refresh    the rigid bodies from (q, v) (refresh_rigid_bodies);
+///  3. refresh    the island's rigid bodies from (q, v) (forward kinematics). Steps 1–3 are a
+///                task per island on options.threads (unless a joint has friction, whose factors
+///                the islands share: then on the calling thread);
 ///  4. collide    contacts with the planes and the ball found on the rigid bodies
 ///                (kernel/collision/rigid_contacts.hpp; a ball it moves back to where its path
 ///                first hit something goes into its floating joint's q, take_moved_balls),

@@ -17,6 +17,7 @@
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/integration.hpp"
+#include "limber/kernel/featherstone/joint_space_factor.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "tests/featherstone/random_trees.hpp"
@@ -210,6 +211,68 @@ TEST(Dynamics, ArticulatedBodyAlgorithmSolvesTheMassMatrixEquation) {
       const Eigen::VectorXd reference = factor.solve(tau - bias);
       EXPECT_LT(relative_error(accelerations, reference), 1e-9) << "tree " << trees << ", " << tree.body_count() << " bodies";
     }
+  }
+}
+
+// A forest of `count` random trees (floating, branching, chains) in one ArticulatedTree, and each
+// tree's body range: the islands of the Featherstone method.
+ArticulatedTree random_forest(std::mt19937& rng, int count, std::vector<BodyRange>& ranges) {
+  ArticulatedTree forest;
+  const std::vector<RandomTreeOptions> kinds = random_tree_kinds();
+  for (int t = 0; t < count; ++t) {
+    const ArticulatedTree tree = random_tree(rng, kinds[static_cast<std::size_t>(t) % kinds.size()]);
+    const int first = forest.body_count();
+    for (ArticulatedBody body : tree.bodies()) {
+      if (body.parent >= 0) body.parent += first;
+      forest.add_body(body);
+    }
+    ranges.push_back({first, forest.body_count()});
+  }
+  return forest;
+}
+
+TEST(Dynamics, EachIslandAloneGivesTheBitsOfTheWholeForest) {
+  // The range overloads (kinematics, ABA, CRBA into the factor, both integrators) on each tree of
+  // a forest give exactly what the whole-forest call gives on its bodies and coordinates.
+  std::mt19937 rng(31);
+  std::vector<BodyRange> ranges;
+  const ArticulatedTree forest = random_forest(rng, 5, ranges);
+  const Eigen::VectorXd q = random_positions(rng, forest);
+  const Eigen::VectorXd v = random_vector(rng, forest.velocity_count(), 2);
+  const Eigen::VectorXd tau = random_vector(rng, forest.velocity_count(), 5);
+  DynamicsWorkspace whole, apart;
+  whole.resize(forest), apart.resize(forest);
+  forward_kinematics(forest, q, v, whole);
+  for (const BodyRange range : ranges) forward_kinematics(forest, q, v, apart, range);
+  for (int i = 0; i < forest.body_count(); ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    EXPECT_TRUE(whole.velocity[index] == apart.velocity[index]) << "body " << i;
+    EXPECT_TRUE(whole.world_to_body[index].rotation == apart.world_to_body[index].rotation) << "body " << i;
+  }
+  Eigen::VectorXd whole_acceleration, apart_acceleration = Eigen::VectorXd::Zero(forest.velocity_count());
+  forward_dynamics(forest, whole, v, tau, nullptr, kGravity, whole, whole_acceleration);
+  for (const BodyRange range : ranges) forward_dynamics(forest, apart, v, tau, nullptr, kGravity, apart, apart_acceleration, range);
+  EXPECT_TRUE(whole_acceleration == apart_acceleration);
+  JointSpaceFactor whole_factor, apart_factor;
+  whole_factor.assign(forest), apart_factor.assign(forest);
+  mass_matrix(forest, whole, whole, whole_factor);
+  EXPECT_LT(whole_factor.factor(), 0);
+  for (const BodyRange range : ranges) {
+    mass_matrix(forest, apart, apart, apart_factor, range);
+    const auto [first, last] = forest.velocity_span(range.first, range.last);
+    EXPECT_LT(apart_factor.factor(first, last), 0);
+  }
+  for (int i = 0; i < forest.velocity_count(); ++i) EXPECT_EQ(whole_factor.pivot(i), apart_factor.pivot(i)) << "coordinate " << i;
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
+    FeatherstoneIntegratorWorkspace whole_steps, apart_steps;
+    whole_steps.resize(forest), apart_steps.resize(forest);
+    Eigen::VectorXd whole_q = q, whole_v = v, apart_q = q, apart_v = v;
+    for (int s = 0; s < 3; ++s) {
+      integrate(forest, whole_q, whole_v, tau, kGravity, 0.01, integrator, whole_steps);
+      for (const BodyRange range : ranges) integrate(forest, apart_q, apart_v, tau, kGravity, 0.01, integrator, apart_steps, nullptr, range);
+    }
+    EXPECT_TRUE(whole_q == apart_q) << integrator_name(integrator);
+    EXPECT_TRUE(whole_v == apart_v) << integrator_name(integrator);
   }
 }
 

@@ -1,7 +1,8 @@
-// The Featherstone method on threads (FeatherstoneOptions::threads; joint_space_contacts.hpp,
-// "Groups"): the islands the contacts join are solved as one task, apart from the others, so the
-// state is the same bits on one thread or two, whichever way the groups are split, and a step
-// on threads allocates nothing.
+// The Featherstone method on threads (FeatherstoneOptions::threads; step.hpp;
+// joint_space_contacts.hpp, "Groups"): each island is integrated as a task, and the islands the
+// contacts join are solved as one task, apart from the others, so the
+// state is the same bits on one thread or two, whichever way the islands and groups are split,
+// and a step on threads allocates nothing.
 #include <string>
 #include <vector>
 
@@ -31,32 +32,46 @@ Grouping step_pile(FeatherstoneState& state, int steps) {
   return seen;
 }
 
+// The ragdoll pile (ragdolls falling down stairs onto each other: groups of one ragdoll and groups
+// that contacts join, limits), as shipped (joint friction: the islands integrate on the calling
+// thread) and with drives in place of the friction (the islands integrate as tasks too).
+std::vector<Model> piles() {
+  const Model shipped = testing::load_shipped_scene("ragdoll_pile.json");
+  Model driven = shipped;
+  for (Joint& joint : driven.joints) {
+    joint.friction = 0;
+    joint.drive = JointDrive{.stiffness = 5, .damping = 0.5};
+  }
+  return {shipped, driven};
+}
+
 TEST(FeatherstoneThreads, TheSameBitsOnOneThreadOrTwo) {
-  // Ragdolls falling down stairs onto each other: groups of one ragdoll and groups that contacts
-  // join (the pile), limits and drives.
-  const Model pile = testing::load_shipped_scene("ragdoll_pile.json");
   constexpr int kSteps = 240;
-  FeatherstoneState one = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 1});
-  const Grouping seen = step_pile(one, kSteps);
-  EXPECT_GE(seen.most_groups, 2u) << "the groups are what the threads share";
-  EXPECT_GE(seen.most_islands, 2) << "some contact joined two ragdolls";
-  for (const Threading threading : {Threading::workers, Threading::parallel_for}) {
-    FeatherstoneState two = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2, .threading = threading});
-    ASSERT_NE(two.runner.get(), nullptr);
-    EXPECT_EQ(two.runner->threads(), 2);
-    step_pile(two, kSteps);
-    EXPECT_TRUE(two.q == one.q) << "threading " << static_cast<int>(threading);
-    EXPECT_TRUE(two.v == one.v) << "threading " << static_cast<int>(threading);
+  for (const Model& pile : piles()) {
+    FeatherstoneState one = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 1});
+    const Grouping seen = step_pile(one, kSteps);
+    EXPECT_GE(seen.most_groups, 2u) << "the groups are what the threads share";
+    EXPECT_GE(seen.most_islands, 2) << "some contact joined two ragdolls";
+    for (const Threading threading : {Threading::workers, Threading::parallel_for}) {
+      FeatherstoneState two = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2, .threading = threading});
+      ASSERT_NE(two.runner.get(), nullptr);
+      EXPECT_EQ(two.runner->threads(), 2);
+      EXPECT_EQ(two.joint_friction, one.joint_friction);
+      step_pile(two, kSteps);
+      EXPECT_TRUE(two.q == one.q) << "threading " << static_cast<int>(threading) << ", friction " << one.joint_friction;
+      EXPECT_TRUE(two.v == one.v) << "threading " << static_cast<int>(threading) << ", friction " << one.joint_friction;
+    }
   }
 }
 
 TEST(FeatherstoneThreads, AStepOnTwoThreadsAllocatesNothing) {
-  const Model pile = testing::load_shipped_scene("ragdoll_pile.json");
-  FeatherstoneState state = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2});
-  step_pile(state, 120);  // the ragdolls reach the stairs and each other
-  const long before = testing::allocation_count();
-  step_pile(state, 60);
-  EXPECT_EQ(testing::allocation_count() - before, 0);
+  for (const Model& pile : piles()) {
+    FeatherstoneState state = compile_featherstone(pile, {.integrator = Integrator::semi_implicit_euler, .threads = 2});
+    step_pile(state, 120);  // the ragdolls reach the stairs and each other
+    const long before = testing::allocation_count();
+    step_pile(state, 60);
+    EXPECT_EQ(testing::allocation_count() - before, 0) << "friction " << state.joint_friction;
+  }
 }
 
 TEST(FeatherstoneThreads, OneThreadStartsNoneAndTooManyAreRefused) {
