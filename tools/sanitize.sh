@@ -16,7 +16,8 @@
 #                          threads and runs the tests in them that do (the block runner's
 #                          workers, parallel_for and task systems; the coloured relaxation; the
 #                          threaded Verlet steps; the narrowphase on threads; the World on an
-#                          engine's task system; the CLI's --threads). Extra arguments go to
+#                          engine's task system; the CLI's --threads; Featherstone's islands
+#                          and contact groups). Extra arguments go to
 #                          every program (a --gtest_filter=... replaces the list below).
 #
 # Both build -O2 -gline-tables-only with NDEBUG (the release build's code paths; at -O1 xsimd's
@@ -110,6 +111,7 @@ else
     'allocation_tests Allocation.JointRowsAllocateNothing:Allocation.EveryRelaxationPathAllocatesNothing:Allocation.TheRattleRuleAllocatesNothing'
     'world_tests World.ADefaultWorldStartsNoThread:World.OnAnEnginesTaskSystemStepsTheSerialBits'
     'cli_tests Cli.EverySolverPathGivesTheSameSummaryOfAChain:Cli.ThePileGivesTheSameTrajectoryBitsForOneOrTwoThreadsAndScalarLanes'
+    'featherstone_tests FeatherstoneThreads.*'
   )
   programs=()
   for entry in "${threaded[@]}"; do programs+=("${entry%% *}"); done
