@@ -525,9 +525,10 @@ TEST(World, ADefaultWorldStartsNoThread) {
 }
 
 TEST(World, OnAnEnginesTaskSystemStepsTheSerialBits) {
-  // WorldOptions::particles.threading = Threading::tasks: the colour sweeps run on the engine's
-  // scheduler (here two threads of the test's own, and a oneTBB arena) and every body ends each
-  // step where the serial World puts it, bit for bit. (tools/sanitize.sh thread runs this.)
+  // Threading::tasks: the particles' colour sweeps, and Featherstone's islands and contact groups
+  // (the ragdoll and the ball), run on the engine's scheduler (here two threads of the test's
+  // own, and a oneTBB arena) and every body ends each step where the serial World puts it, bit
+  // for bit. (tools/sanitize.sh thread runs this.)
   const Scene ragdoll = testing::shipped_scene("ragdoll.json");
   const auto poses_after = [&](const WorldOptions& options) {
     World world(ragdoll.model, options);
@@ -542,8 +543,6 @@ TEST(World, OnAnEnginesTaskSystemStepsTheSerialBits) {
     }
     return coordinates;
   };
-  const WorldOptions serial = world_options(Method::particles, ragdoll.methods);
-  const std::vector<double> expected = poses_after(serial);
   TaskSystem two_threads;
   two_threads.enqueue = [](TaskSystem::Work work, std::size_t count, void* work_context, void*) -> void* {
     std::thread second(work, count / 2, count, work_context);
@@ -553,11 +552,16 @@ TEST(World, OnAnEnginesTaskSystemStepsTheSerialBits) {
   };
   two_threads.finish = [](void*, void*) {};
   tbb::task_arena arena(2);
-  for (const TaskSystem& tasks : {two_threads, tbb_task_system(arena)}) {
-    WorldOptions options = serial;
-    options.particles.threading = Threading::tasks, options.particles.tasks = tasks, options.particles.threads = 2;
-    options.particles.parallel_minimum_slots = 1;
-    EXPECT_EQ(poses_after(options), expected);
+  for (const Method method : {Method::particles, Method::featherstone}) {
+    const WorldOptions serial = world_options(method, ragdoll.methods);
+    const std::vector<double> expected = poses_after(serial);
+    for (const TaskSystem& tasks : {two_threads, tbb_task_system(arena)}) {
+      WorldOptions options = serial;
+      options.particles.threading = Threading::tasks, options.particles.tasks = tasks, options.particles.threads = 2;
+      options.particles.parallel_minimum_slots = 1;
+      options.featherstone.threading = Threading::tasks, options.featherstone.tasks = tasks, options.featherstone.threads = 2;
+      EXPECT_EQ(poses_after(options), expected) << method_name(method);
+    }
   }
 }
 
