@@ -423,15 +423,8 @@ void solve_groups(FeatherstoneState& state, double dt, bool push) {
   if (!form_groups(state)) return;
   JointSpaceContactScratch& s = state.contact;
   if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
-  BlockRunner* runner = state.runner.get();
-  if (runner == nullptr || runner->threads() < 2 || s.groups.size() < 2) {
-    for (const ConstraintGroup& group : s.groups) solve_group(state, group, dt, push);
-    return;
-  }
   const GroupTask task{&state, dt, push};
-  runner->begin();
-  runner->run(s.groups.size(), &run_group, &task);
-  runner->end();
+  run_stage(state.runner.get(), s.groups.size(), &run_group, &task);
 }
 
 }  // namespace

@@ -116,14 +116,7 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   bool loads = false;
   for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
   const IslandTask task{&state, dt, loads};
-  BlockRunner* runner = state.runner.get();
-  if (runner == nullptr || runner->threads() < 2 || state.awake_islands.size() < 2 || state.joint_friction) {
-    for (std::size_t n = 0; n < state.awake_islands.size(); ++n) run_island(&task, n);
-    return;
-  }
-  runner->begin();
-  runner->run(state.awake_islands.size(), &run_island, &task);
-  runner->end();
+  run_stage(state.joint_friction ? nullptr : state.runner.get(), state.awake_islands.size(), &run_island, &task);
 }
 
 // Islands put to sleep had their rigid momenta zeroed: so are their joint velocities and their

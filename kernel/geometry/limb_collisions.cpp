@@ -468,11 +468,7 @@ void LimbCollisions::run_narrowphase(const Narrowphase& pass, std::vector<LimbCo
   }
   Narrowphase stage = pass;
   stage.blocks = blocks_.data();
-  // Wakes the helpers for this stage unless the caller already has them awake.
-  const bool wake = !runner->active();
-  if (wake) runner->begin();
-  runner->run(count, &Narrowphase::run, &stage);
-  if (wake) runner->end();
+  run_stage(runner, count, &Narrowphase::run, &stage);
   for (std::size_t index = 0; index < count; ++index) {
     const Block& block = blocks_[index];
     out.insert(out.end(), block.contacts.begin(), block.contacts.end());

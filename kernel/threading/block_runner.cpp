@@ -215,6 +215,19 @@ double BlockRunner::run_tasks(std::size_t count, BlockFunction function, const v
   return largest;
 }
 
+double run_stage(BlockRunner* runner, std::size_t count, BlockRunner::BlockFunction function, const void* context) {
+  if (runner == nullptr || runner->threads() < 2 || count < 2) {
+    double largest = 0;
+    for (std::size_t block = 0; block < count; ++block) largest = std::max(largest, function(context, block));
+    return largest;
+  }
+  const bool wake = !runner->active();
+  if (wake) runner->begin();
+  const double largest = runner->run(count, function, context);
+  if (wake) runner->end();
+  return largest;
+}
+
 double BlockRunner::run(std::size_t count, BlockFunction function, const void* context) {
   if (threading_ == Threading::serial || count <= 1) return run_serial(count, function, context);
   if (threading_ == Threading::tasks) return run_tasks(count, function, context);

@@ -74,6 +74,12 @@ class BlockRunner {
   std::unique_ptr<Shared> shared_;
 };
 
+/// A stage of `count` independent blocks on `runner`'s threads, its helpers woken for the stage
+/// unless they are awake already; on the calling thread, in block order, when `runner` is null,
+/// has one thread, or the stage has fewer than two blocks. Returns the largest value, as
+/// BlockRunner::run.
+double run_stage(BlockRunner* runner, std::size_t count, BlockRunner::BlockFunction function, const void* context);
+
 /// Owns a BlockRunner; copying a state gives the copy its own runner (threads are not shared).
 class RunnerHandle {
  public:
