@@ -81,6 +81,7 @@ void DynamicsWorkspace::resize(const ArticulatedTree& tree) {
   acceleration.assign(n, SpatialVector::Zero());
   bias_force.assign(n, SpatialVector::Zero());
   articulated_inertia.assign(n, SpatialMatrix::Zero());
+  composite_inertia.assign(n, SpatialInertia{});
   projected_inertia.setZero(6, tree.velocity_count());
   joint_inertia_inverse.setZero(6, tree.velocity_count());
   joint_bias.setZero(tree.velocity_count());
@@ -346,13 +347,13 @@ namespace {
 template <typename Store>
 void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTransform>& parent_to_body, DynamicsWorkspace& w,
                        BodyRange range, Store&& store) {
-  // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ.
-  for (int i = range.first; i < range.last; ++i) w.articulated_inertia[static_cast<std::size_t>(i)] = tree.body(i).inertia.matrix();
+  // Composite inertias, inward: I^c_λ += λX_i* I^c_i ⁱX_λ, each a rigid body's (m, h, Ī).
+  for (int i = range.first; i < range.last; ++i) w.composite_inertia[static_cast<std::size_t>(i)] = tree.body(i).inertia;
   for (int i = range.last - 1; i >= range.first; --i) {
     const int parent = tree.body(i).parent;
     if (parent < 0) continue;
     const auto index = static_cast<std::size_t>(i);
-    w.articulated_inertia[static_cast<std::size_t>(parent)] += parent_to_body[index].transpose_apply_inertia(w.articulated_inertia[index]);
+    w.composite_inertia[static_cast<std::size_t>(parent)] += w.composite_inertia[index].transformed_by(parent_to_body[index]);
   }
   // For each joint's column of unit motions: F = I^c_i S_i, H_ii = S_iᵀ F; then F is carried
   // inward to each ancestor j, H_ji = S_jᵀ F (= H_ijᵀ).
@@ -364,7 +365,7 @@ void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTra
     for (int c = 0; c < k; ++c) {
       double unit[6] = {0, 0, 0, 0, 0, 0};
       unit[c] = 1;
-      SpatialVector f = w.articulated_inertia[static_cast<std::size_t>(i)] * joint_velocity(body, unit);
+      SpatialVector f = w.composite_inertia[static_cast<std::size_t>(i)] * joint_velocity(body, unit);
       project_force(body, f, projected);
       for (int r = 0; r <= c; ++r) store(column + r, column + c, projected[r] + (r == c ? body.armature : 0.0));
       for (int j = i; tree.body(j).parent >= 0;) {

@@ -35,7 +35,8 @@ struct DynamicsWorkspace {
   std::vector<SpatialVector> bias_acceleration;     ///< c_i = v_i × v_J (c_J = 0 for these joints)
   std::vector<SpatialVector> acceleration;          ///< a_i + ⁱX_0 a₀ (ABA, RNEA; see gravity above)
   std::vector<SpatialVector> bias_force;            ///< ABA: p^A_i; RNEA: the joint force f_i
-  std::vector<SpatialMatrix> articulated_inertia;   ///< ABA: I^A_i; CRBA: the composite I^c_i
+  std::vector<SpatialMatrix> articulated_inertia;   ///< ABA: I^A_i
+  std::vector<SpatialInertia> composite_inertia;    ///< CRBA: the composite I^c_i, a rigid body's
   /// ABA's U_i = I^A_i S_i in the columns of body i's velocities (6 × nv).
   Eigen::Matrix<double, 6, Eigen::Dynamic> projected_inertia;
   /// ABA's D_i⁻¹ = (S_iᵀ U_i)⁻¹ (k_i × k_i) in the top rows of body i's velocity columns (6 × nv).

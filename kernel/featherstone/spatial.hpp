@@ -204,6 +204,25 @@ struct SpatialInertia {
     return out;
   }
 
+  /// The sum of two bodies' inertias in one frame: a rigid body's again (the composite of a subtree).
+  SpatialInertia& operator+=(const SpatialInertia& other) {
+    mass += other.mass, first_moment += other.first_moment, rotational_inertia += other.rotational_inertia;
+    return *this;
+  }
+
+  /// ᴮX_Aᵀ I ᴮX_A for this inertia I in B coordinates, b_from_a = ᴮX_A = (E, r): the same body's
+  /// inertia in A (Table 2.5), m, h' = Eᵀh + m r, Ī' = EᵀĪE − r×(Eᵀh)× − h'× r× — what
+  /// PluckerTransform::transpose_apply_inertia gives for matrix(), without its 6×6 blocks.
+  SpatialInertia transformed_by(const PluckerTransform& b_from_a) const {
+    const Eigen::Matrix3d& e = b_from_a.rotation;
+    const Eigen::Vector3d& r = b_from_a.translation;
+    const Eigen::Vector3d rotated_moment = e.transpose() * first_moment;
+    const Eigen::Vector3d moment = rotated_moment + mass * r;
+    const Eigen::Matrix3d rx = skew(r);
+    const Eigen::Matrix3d turned = e.transpose() * rotational_inertia * e - rx * skew(rotated_moment) - skew(moment) * rx;
+    return {mass, moment, 0.5 * (turned + turned.transpose())};  // symmetric in exact arithmetic; kept so under round-off
+  }
+
   /// The 6×6 form [ Ī  h× ; h×ᵀ  m 1 ].
   SpatialMatrix matrix() const {
     SpatialMatrix out;

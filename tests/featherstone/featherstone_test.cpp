@@ -63,8 +63,10 @@ TEST(SpatialAlgebra, PluckerOperationsMatchTheirSixBySixMatrices) {
     EXPECT_LT((x.inverse_apply_motion(m) - xm.inverse() * m).norm(), 1e-13);
     EXPECT_LT((x.inverse().motion_matrix() - xm.inverse()).norm(), 1e-13);
     EXPECT_LT(((x * y).motion_matrix() - xm * y.motion_matrix()).norm(), 1e-13);
-    const SpatialMatrix inertia = random_inertia(rng).matrix();
+    const SpatialInertia body = random_inertia(rng);
+    const SpatialMatrix inertia = body.matrix();
     EXPECT_LT((x.transpose_apply_inertia(inertia) - xm.transpose() * inertia * xm).norm(), 1e-13);
+    EXPECT_LT((body.transformed_by(x).matrix() - xm.transpose() * inertia * xm).norm(), 1e-13);
   }
 }
 
