@@ -316,7 +316,11 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
       state.serial_axes.push_back({j, a, node, tree.velocity_offset(node)});
     }
   }
-  // Each island's joints and serial axes, in order (counted, then placed).
+}
+
+// Each island's joints and serial axes, in order (counted, then placed): what an island's drives
+// and friction read (joint_control_forces).
+void index_island_joints(FeatherstoneState& state, const Model& model) {
   const std::size_t islands = state.islands.size();
   const auto island_of_joint = [&](std::size_t j) { return state.island_of_body[state.scene_body[static_cast<std::size_t>(state.tree_joint[j].body)]]; };
   state.island_joint_begin.assign(islands + 1, 0), state.island_axis_begin.assign(islands + 1, 0);
@@ -441,7 +445,7 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
 
 }
 
-// The contact groups' threads (FeatherstoneOptions::threads): none for one.
+// The threads of the islands and the contact groups (FeatherstoneOptions::threads): none for one.
 void start_threads(FeatherstoneState& state) {
   const FeatherstoneOptions& options = state.options;
   if (options.threads < 0 || options.threads > kMaxThreads) {
@@ -470,6 +474,7 @@ FeatherstoneState compile_featherstone(const Model& model, const FeatherstoneOpt
   set_velocities(state, model, nodes, frames);
   set_joint_anchors(state, model, frames);
   place_tree_joints(state, model);
+  index_island_joints(state, model);
   size_scratch(state, model);
   start_threads(state);
   refresh_rigid_bodies(state);

@@ -201,7 +201,7 @@ struct JointControlScratch {
   Eigen::VectorXd forces;         ///< nv: the loads plus the drives' and friction's forces, held over the step
   std::vector<JointFrictionBlock> friction;  ///< capacity: one per joint
   std::vector<JointLimitRow> rows;           ///< capacity: three per joint
-  std::vector<std::int32_t> islands;         ///< the islands with rows (or friction); capacity: every island
+  std::vector<std::int32_t> islands;         ///< the island whose joint friction is being solved (joint_control_forces); capacity: every island
   /// Per tree body: the penalty added to its joint's block of H + h·G (top-left dofs × dofs) to
   /// hold its friction (JointSpaceContactScratch::held).
   std::vector<Eigen::Matrix3d> penalty;
