@@ -505,8 +505,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
                    c.acceleration, bodies);
   on_island(c.predicted) = on_island(state.v) + h * on_island(c.acceleration);
 
-  c.friction.clear();
-  c.islands.clear();
+  if (state.joint_friction) c.friction.clear(), c.islands.clear();  // shared: such scenes integrate on one thread
   if (friction) {
     // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
     // add their penalties to it: factor_held_rows). The factors are shared by the islands:
