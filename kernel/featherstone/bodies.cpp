@@ -14,7 +14,7 @@ void move_world_anchor(FeatherstoneState&, const Model&, std::size_t, const Eige
 
 void sleep_body(FeatherstoneState& state, std::size_t body) {
   rest_island(state, state.island_of_body[body]);
-  zero_sleeping_velocities(state);
+  rest_sleeping_islands(state);
 }
 
 bool teleport_body(FeatherstoneState& state, std::size_t body, const Pose& pose, const Motion& motion) {

@@ -119,8 +119,8 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   run_stage(state.joint_friction ? nullptr : state.runner.get(), state.awake_islands.size(), &run_island, &task);
 }
 
-// Islands put to sleep had their rigid momenta zeroed: so are their joint velocities and their
-// bodies' spatial velocities in state.kinematics, which no step refreshes while they sleep.
+}  // namespace
+
 void rest_sleeping_islands(FeatherstoneState& state) {
   zero_sleeping_velocities(state);
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
@@ -128,8 +128,6 @@ void rest_sleeping_islands(FeatherstoneState& state) {
     for (int i = state.island_begin[k]; i < state.island_begin[k + 1]; ++i) state.kinematics.velocity[static_cast<std::size_t>(i)].setZero();
   }
 }
-
-}  // namespace
 
 void refresh_rigid_bodies(FeatherstoneState& state) {
   forward_kinematics(state.tree, state.q, state.v, state.kinematics);

@@ -44,6 +44,10 @@ void mirror_rigid_bodies(FeatherstoneState& state);
 /// The same for the tree bodies of `range` alone.
 void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range);
 
+/// Islands put to sleep had their rigid momenta zeroed: so are their joint velocities and their
+/// bodies' spatial velocities in state.kinematics, which no step refreshes while they sleep.
+void rest_sleeping_islands(FeatherstoneState& state);
+
 /// After detect_rigid_contacts moved a ball (continuous collision): every ball's floating joint
 /// takes its rigid body's position (its origin is the centre of mass), then refresh_rigid_bodies.
 void take_moved_balls(FeatherstoneState& state);
