@@ -96,12 +96,14 @@ class ArticulatedTree {
   /// q for the zero configuration: angles and displacements 0, quaternions (1, 0, 0, 0).
   Eigen::VectorXd neutral_positions() const;
 
-  /// Where bodies first … last − 1 have their coordinates in v and in q: [begin, end).
-  std::pair<int, int> velocity_span(int first, int last) const {
-    return {velocity_offset(first), last < body_count() ? velocity_offset(last) : velocity_count_};
+  /// Every body: the whole tree as a BodyRange.
+  BodyRange all_bodies() const { return {0, body_count()}; }
+  /// Where the bodies of `bodies` have their coordinates in v and in q: [begin, end).
+  std::pair<int, int> velocity_span(BodyRange bodies) const {
+    return {velocity_offset(bodies.first), bodies.last < body_count() ? velocity_offset(bodies.last) : velocity_count_};
   }
-  std::pair<int, int> position_span(int first, int last) const {
-    return {position_offset(first), last < body_count() ? position_offset(last) : position_count_};
+  std::pair<int, int> position_span(BodyRange bodies) const {
+    return {position_offset(bodies.first), bodies.last < body_count() ? position_offset(bodies.last) : position_count_};
   }
 
  private:

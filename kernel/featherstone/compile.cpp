@@ -322,7 +322,7 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
 // and friction read (joint_control_forces).
 void index_island_joints(FeatherstoneState& state, const Model& model) {
   const std::size_t islands = state.islands.size();
-  const auto island_of_joint = [&](std::size_t j) { return state.island_of_body[state.scene_body[static_cast<std::size_t>(state.tree_joint[j].body)]]; };
+  const auto island_of_joint = [&](std::size_t j) { return island_of(state, state.tree_joint[j]); };
   state.island_joint_begin.assign(islands + 1, 0), state.island_axis_begin.assign(islands + 1, 0);
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
     if (state.tree_joint[j].dofs > 0) ++state.island_joint_begin[island_of_joint(j) + 1];
@@ -384,7 +384,7 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
     const TreeJoint& held = state.tree_joint[k];
     std::size_t rows = joint.limits.any() && held.dofs > 0 ? (joint.type == JointType::spherical ? 3 : 2) : 0;
     for (const SerialAxis& axis : joint.serial_axes) rows += axis.range ? 2 : 0;
-    if (rows > 0) rows_of_island[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]] += rows;
+    if (rows > 0) rows_of_island[island_of(state, held)] += rows;
   }
   std::size_t limit_rows = 0, limit_entries = 0;
   for (const std::size_t rows : rows_of_island) limit_rows += rows, limit_entries += rows * rows;
@@ -440,7 +440,6 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   controls.explicit_force.setZero(nv), controls.acceleration.setZero(nv), controls.predicted.setZero(nv), controls.forces.setZero(nv);
   controls.friction.reserve(model.joints.size() + state.serial_axes.size());
   controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());  // what find_limit_rows may add
-  controls.islands.reserve(state.islands.size());
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
 
 }

@@ -131,7 +131,7 @@ void compose_world_transforms(const ArticulatedTree& tree, DynamicsWorkspace& w,
 
 void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace) {
   if (!workspace.fits(tree)) workspace.resize(tree);
-  body_poses(tree, q, workspace, {0, tree.body_count()});
+  body_poses(tree, q, workspace, tree.all_bodies());
 }
 
 void body_poses(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q, DynamicsWorkspace& workspace, BodyRange range) {
@@ -149,7 +149,7 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
   require_size(q.size(), tree.position_count(), "forward_kinematics: q");
   require_size(v.size(), tree.velocity_count(), "forward_kinematics: v");
   if (!workspace.fits(tree)) workspace.resize(tree);
-  forward_kinematics(tree, q, v, workspace, {0, tree.body_count()});
+  forward_kinematics(tree, q, v, workspace, tree.all_bodies());
 }
 
 void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -162,7 +162,7 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 }
 
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
-  body_velocities(tree, v, workspace, {0, tree.body_count()});
+  body_velocities(tree, v, workspace, tree.all_bodies());
 }
 
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range) {
@@ -267,7 +267,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
-  forward_dynamics(tree, q, v, joint_forces, gravity, workspace, joint_accelerations, {0, tree.body_count()});
+  forward_dynamics(tree, q, v, joint_forces, gravity, workspace, joint_accelerations, tree.all_bodies());
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -284,13 +284,13 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
   require_size(q.size(), tree.position_count(), "forward_dynamics: q");
   require_size(armature.size(), tree.velocity_count(), "forward_dynamics: armature");
   articulated_body_algorithm(tree, q.data(), nullptr, v, joint_forces, armature.data(), gravity, workspace, joint_accelerations,
-                             {0, tree.body_count()});
+                             tree.all_bodies());
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
                       const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
-  forward_dynamics(tree, poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, {0, tree.body_count()});
+  forward_dynamics(tree, poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, tree.all_bodies());
 }
 
 void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
@@ -313,7 +313,7 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 
   // Outward: a_i = ⁱX_λ a_λ + S_i v̇_i + c_i; f_i = I_i a_i + v_i ×* I_i v_i (the net force the
   // body needs, by the Newton–Euler equation).
-  propagate_velocities(tree, q.data(), v, w, {0, n});
+  propagate_velocities(tree, q.data(), v, w, tree.all_bodies());
   const SpatialVector a0 = base_acceleration(gravity);
   for (int i = 0; i < n; ++i) {
     const ArticulatedBody& body = tree.body(i);
@@ -387,7 +387,7 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   const int nv = tree.velocity_count();
   joint_space_inertia.setZero(nv, nv);
   body_poses(tree, q, workspace);
-  composite_inertia(tree, workspace.parent_to_body, workspace, {0, tree.body_count()}, [&](int row, int column, double value) {
+  composite_inertia(tree, workspace.parent_to_body, workspace, tree.all_bodies(), [&](int row, int column, double value) {
     joint_space_inertia(row, column) = value;
     joint_space_inertia(column, row) = value;
   });
@@ -398,13 +398,13 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   require_size(q.size(), tree.position_count(), "mass_matrix: q");
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
   body_poses(tree, q, workspace);
-  composite_inertia(tree, workspace.parent_to_body, workspace, {0, tree.body_count()},
+  composite_inertia(tree, workspace.parent_to_body, workspace, tree.all_bodies(),
                     [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
 }
 
 void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor) {
   if (!workspace.fits(tree)) workspace.resize(tree);
-  mass_matrix(tree, poses, workspace, factor, {0, tree.body_count()});
+  mass_matrix(tree, poses, workspace, factor, tree.all_bodies());
 }
 
 void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor,

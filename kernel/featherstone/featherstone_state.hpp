@@ -180,7 +180,7 @@ struct JointLimitRow {
 
 /// A joint's friction over a step (joint_space_contacts.hpp, "Drives and friction").
 struct JointFrictionBlock {
-  std::int32_t island = 0, body = 0;
+  std::int32_t body = 0;
   int offset = 0, dofs = 1;
   double bound = 0;                                   ///< friction·h, N·m·s or N·s
   Eigen::Matrix3d mass = Eigen::Matrix3d::Zero();     ///< its block of (H + h·G)⁻¹, inverted (top-left dofs × dofs)
@@ -199,9 +199,8 @@ struct JointControlScratch {
   Eigen::VectorXd acceleration;   ///< nv
   Eigen::VectorXd predicted;      ///< nv: v + h·v̇, the velocity the step would end with
   Eigen::VectorXd forces;         ///< nv: the loads plus the drives' and friction's forces, held over the step
-  std::vector<JointFrictionBlock> friction;  ///< capacity: one per joint
+  std::vector<JointFrictionBlock> friction;  ///< the island's whose friction is being solved; capacity: one per joint
   std::vector<JointLimitRow> rows;           ///< capacity: three per joint
-  std::vector<std::int32_t> islands;         ///< the island whose joint friction is being solved (joint_control_forces); capacity: every island
   /// Per tree body: the penalty added to its joint's block of H + h·G (top-left dofs × dofs) to
   /// hold its friction (JointSpaceContactScratch::held).
   std::vector<Eigen::Matrix3d> penalty;
@@ -264,13 +263,18 @@ struct FeatherstoneState : RigidScene {
 };
 
 /// Where island k's tree bodies' coordinates lie: [first, last) in v (velocities) or q (positions).
+/// The island of a Model joint (held: where the tree holds it; its child's island).
+inline std::size_t island_of(const FeatherstoneState& state, const TreeJoint& held) {
+  return state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]];
+}
+
+/// Island k's tree bodies.
+inline BodyRange island_bodies(const FeatherstoneState& state, std::size_t k) { return {state.island_begin[k], state.island_begin[k + 1]}; }
 inline std::pair<int, int> island_velocities(const FeatherstoneState& state, std::size_t k) {
-  const int begin = state.island_begin[k], end = state.island_begin[k + 1];
-  return {state.tree.velocity_offset(begin), end < state.tree.body_count() ? state.tree.velocity_offset(end) : state.tree.velocity_count()};
+  return state.tree.velocity_span(island_bodies(state, k));
 }
 inline std::pair<int, int> island_positions(const FeatherstoneState& state, std::size_t k) {
-  const int begin = state.island_begin[k], end = state.island_begin[k + 1];
-  return {state.tree.position_offset(begin), end < state.tree.body_count() ? state.tree.position_offset(end) : state.tree.position_count()};
+  return state.tree.position_span(island_bodies(state, k));
 }
 
 /// Sleeping islands rest: their joint velocities are zero (as their bodies' momenta are).

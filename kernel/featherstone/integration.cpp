@@ -68,7 +68,7 @@ bool FeatherstoneIntegratorWorkspace::fits(const ArticulatedTree& tree) const {
 
 void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& displacement, Eigen::Ref<Eigen::VectorXd> out) {
-  displace_positions(tree, q, displacement, out, {0, tree.body_count()});
+  displace_positions(tree, q, displacement, out, tree.all_bodies());
 }
 
 void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
@@ -105,7 +105,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses) {
   if (!workspace.fits(tree)) workspace.resize(tree);
-  integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, {0, tree.body_count()});
+  integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, tree.all_bodies());
 }
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
@@ -114,8 +114,8 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   if (!workspace.fits(tree)) throw std::invalid_argument("integrate: the workspace is not sized for this tree");
   FeatherstoneIntegratorWorkspace& w = workspace;
   // The range's coordinates: element by element, the same bits as over the whole vectors.
-  const auto [first_velocity, last_velocity] = tree.velocity_span(range.first, range.last);
-  const auto [first_position, last_position] = tree.position_span(range.first, range.last);
+  const auto [first_velocity, last_velocity] = tree.velocity_span(range);
+  const auto [first_position, last_position] = tree.position_span(range);
   const auto velocities = [&, first = first_velocity, count = last_velocity - first_velocity](Eigen::VectorXd& x) { return x.segment(first, count); };
   const auto positions = [&, first = first_position, count = last_position - first_position](Eigen::VectorXd& x) { return x.segment(first, count); };
   // v̇ at the step's start, at the poses given when there are.

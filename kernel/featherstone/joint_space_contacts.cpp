@@ -107,7 +107,7 @@ template <typename Visit>
 void for_each_island(const FeatherstoneState& state, const ConstraintGroup& group, Visit&& visit) {
   for (int n = group.first_island; n < group.last_island; ++n) {
     const auto k = static_cast<std::size_t>(state.contact.group_island[static_cast<std::size_t>(n)]);
-    visit(k, BodyRange{state.island_begin[k], state.island_begin[k + 1]});
+    visit(k, island_bodies(state, k));
   }
 }
 
@@ -405,26 +405,13 @@ bool form_groups(FeatherstoneState& state) {
   return true;
 }
 
-// A group as a task (BlockRunner::BlockFunction).
-struct GroupTask {
-  FeatherstoneState* state;
-  double dt;
-  bool push;
-};
-double run_group(const void* context, std::size_t g) {
-  const GroupTask& task = *static_cast<const GroupTask*>(context);
-  solve_group(*task.state, task.state->contact.groups[g], task.dt, task.push);
-  return 0;
-}
-
 // Every group, on the state's threads when it has them and more than one group.
 void solve_groups(FeatherstoneState& state, double dt, bool push) {
   find_limit_rows(state, dt);
   if (!form_groups(state)) return;
   JointSpaceContactScratch& s = state.contact;
   if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
-  const GroupTask task{&state, dt, push};
-  run_stage(state.runner.get(), s.groups.size(), &run_group, &task);
+  run_stage(state.runner.get(), s.groups.size(), [&](std::size_t g) { solve_group(state, s.groups[g], dt, push); });
 }
 
 }  // namespace

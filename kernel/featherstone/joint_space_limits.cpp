@@ -55,14 +55,7 @@ double tree_coordinate(const FeatherstoneState& state, const TreeJoint& held) {
 }
 
 // Whether joint k's island is awake.
-bool awake(const FeatherstoneState& state, const TreeJoint& held) {
-  return !state.islands[state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]].sleeping;
-}
-
-// Joint k's island (held: where the tree holds it).
-std::int32_t island_of(const FeatherstoneState& state, const TreeJoint& held) {
-  return static_cast<std::int32_t>(state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]]);
-}
+bool awake(const FeatherstoneState& state, const TreeJoint& held) { return !state.islands[island_of(state, held)].sleeping; }
 
 // Adds `row` with C = gap ≥ 0 and ∂C/∂v = direction when it may act within the step.
 void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, const Eigen::Vector3d& direction, double dt) {
@@ -79,7 +72,7 @@ void find_serial_limit_rows(FeatherstoneState& state, double dt) {
     const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
     if (!axis.range || !awake(state, held)) continue;
     JointLimitRow row;
-    row.island = island_of(state, held), row.body = node.body, row.offset = node.offset, row.dofs = 1;
+    row.island = static_cast<std::int32_t>(island_of(state, held)), row.body = node.body, row.offset = node.offset, row.dofs = 1;
     const double x = state.q[state.tree.position_offset(node.body)];
     add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt);
     add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt);
@@ -97,7 +90,7 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     const TreeJoint& held = state.tree_joint[k];
     if (!joint.limits.any() || held.dofs == 0 || !awake(state, held)) continue;
     JointLimitRow row;
-    row.island = island_of(state, held);
+    row.island = static_cast<std::int32_t>(island_of(state, held));
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
     const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt); };
     if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
@@ -281,86 +274,79 @@ void respond_held(FeatherstoneState& state, std::size_t island) {
 }
 
 
-// Joint friction, together per island: a stuck joint is held at rest by a penalty on its block of
-// H + h·G (kPenalty times its block of (H + h·G)⁻¹ inverted; the island's coordinates factored
-// again as LᵀDL, factor_held_rows), which is exactly the response to the joint impulses that hold
+// Joint friction of island k (its blocks in state.controls.friction), together: a stuck joint is
+// held at rest by a penalty on its block of H + h·G (kPenalty times its block of (H + h·G)⁻¹
+// inverted; the island's coordinates factored again as LᵀDL, factor_held_rows), which is exactly the response to the joint impulses that hold
 // it and leaves it within 1/kPenalty of rest, refined once; a sliding one takes the impulse
 // friction·h against the velocity it ends with; a stuck joint whose impulse would pass its bound
 // slides, a sliding one that friction would turn back sticks. Adds the responses to the
 // predicted velocities; the impulses stay in the blocks. Needs state.contact.inertia and factor
 // holding H + h·G at the step's start (the drives' armature, state.controls.armature).
-void solve_friction(FeatherstoneState& state) {
+void solve_friction(FeatherstoneState& state, std::size_t k) {
   JointControlScratch& c = state.controls;
   JointSpaceContactScratch& s = state.contact;
-  for (const std::int32_t island : c.islands) {
-    const auto k = static_cast<std::size_t>(island);
-    bool moving = false;
+  bool moving = false;
+  for (JointFrictionBlock& block : c.friction) {
+    block.stuck = true, block.impulse.setZero();
+    moving = moving || block.rate.norm() > 0;
+  }
+  if (!moving) return;  // nothing to hold
+  for (int iteration = 0;; ++iteration) {
+    clear_penalties(state, k);
     for (JointFrictionBlock& block : c.friction) {
-      if (block.island != island) continue;
-      block.stuck = true, block.impulse.setZero();
-      moving = moving || block.rate.norm() > 0;
+      block.held = block.stuck;
+      if (block.held) {
+        c.penalty[static_cast<std::size_t>(block.body)] += kPenalty * block.mass;
+        add_joint_vector(-kPenalty * (block.mass * block.rate), s.joint_impulse, block.offset, block.dofs);
+      } else {
+        add_joint_vector(block.impulse, s.joint_impulse, block.offset, block.dofs);
+      }
     }
-    if (!moving) continue;  // nothing to hold
-    for (int iteration = 0;; ++iteration) {
-      clear_penalties(state, k);
-      for (JointFrictionBlock& block : c.friction) {
-        if (block.island != island) continue;
-        block.held = block.stuck;
-        if (block.held) {
-          c.penalty[static_cast<std::size_t>(block.body)] += kPenalty * block.mass;
-          add_joint_vector(-kPenalty * (block.mass * block.rate), s.joint_impulse, block.offset, block.dofs);
-        } else {
-          add_joint_vector(block.impulse, s.joint_impulse, block.offset, block.dofs);
-        }
+    respond_held(state, k);
+    bool changed = false;
+    for (JointFrictionBlock& block : c.friction) {
+      Eigen::Vector3d after = block.rate;
+      for (int m = 0; m < block.dofs; ++m) after[m] += s.joint_change[block.offset + m];
+      if (block.held) {
+        block.impulse = -kPenalty * (block.mass * after);  // what the penalty applied
+        if (block.impulse.norm() > block.bound) block.stuck = false, changed = true;
+      } else if (after.dot(block.impulse) > 0) {
+        block.stuck = true, changed = true;  // friction would turn it back: it sticks
+      } else if (block.dofs == 3 && after.norm() > 0) {
+        // Against the sliding velocity it ends with (maximal dissipation).
+        const Eigen::Vector3d against = -block.bound / after.norm() * after;
+        if ((against - block.impulse).norm() > 1e-6 * block.bound) block.impulse = against, changed = true;
       }
-      respond_held(state, k);
-      bool changed = false;
-      for (JointFrictionBlock& block : c.friction) {
-        if (block.island != island) continue;
-        Eigen::Vector3d after = block.rate;
-        for (int m = 0; m < block.dofs; ++m) after[m] += s.joint_change[block.offset + m];
-        if (block.held) {
-          block.impulse = -kPenalty * (block.mass * after);  // what the penalty applied
-          if (block.impulse.norm() > block.bound) block.stuck = false, changed = true;
-        } else if (after.dot(block.impulse) > 0) {
-          block.stuck = true, changed = true;  // friction would turn it back: it sticks
-        } else if (block.dofs == 3 && after.norm() > 0) {
-          // Against the sliding velocity it ends with (maximal dissipation).
-          const Eigen::Vector3d against = -block.bound / after.norm() * after;
-          if ((against - block.impulse).norm() > 1e-6 * block.bound) block.impulse = against, changed = true;
-        }
-      }
-      if (changed && iteration + 1 < kActiveSetIterations) {
-        // The next round: a joint that slips slides at the bound along the impulse it needed.
-        for (JointFrictionBlock& block : c.friction) {
-          if (block.island == island && block.held && !block.stuck) block.impulse *= block.bound / block.impulse.norm();
-        }
-        continue;
-      }
-      const auto [first, last] = island_velocities(state, k);
-      c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
-      // One refinement of the held joints with the same factorization (as for the rows).
-      for (JointFrictionBlock& block : c.friction) {
-        if (block.island != island || !(block.held && block.stuck)) continue;
-        Eigen::Vector3d after = Eigen::Vector3d::Zero();
-        for (int m = 0; m < block.dofs; ++m) after[m] = c.predicted[block.offset + m];
-        block.rate = after;  // now the residual
-        add_joint_vector(-kPenalty * (block.mass * after), s.joint_impulse, block.offset, block.dofs);
-      }
-      solve_held(state, k);
-      for (JointFrictionBlock& block : c.friction) {
-        if (block.island != island) continue;
-        if (block.held && block.stuck) {
-          Eigen::Vector3d residual = block.rate;
-          for (int m = 0; m < block.dofs; ++m) residual[m] += s.joint_change[block.offset + m];
-          block.impulse -= kPenalty * (block.mass * residual);
-        }
-        const double size = block.impulse.norm();  // past the bound only when the rounds ran out
-        if (size > block.bound) block.impulse *= block.bound / size;
-      }
-      c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
-      break;
     }
+    if (changed && iteration + 1 < kActiveSetIterations) {
+      // The next round: a joint that slips slides at the bound along the impulse it needed.
+      for (JointFrictionBlock& block : c.friction) {
+        if (block.held && !block.stuck) block.impulse *= block.bound / block.impulse.norm();
+      }
+      continue;
+    }
+    const auto [first, last] = island_velocities(state, k);
+    c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
+    // One refinement of the held joints with the same factorization (as for the rows).
+    for (JointFrictionBlock& block : c.friction) {
+      if (!(block.held && block.stuck)) continue;
+      Eigen::Vector3d after = Eigen::Vector3d::Zero();
+      for (int m = 0; m < block.dofs; ++m) after[m] = c.predicted[block.offset + m];
+      block.rate = after;  // now the residual
+      add_joint_vector(-kPenalty * (block.mass * after), s.joint_impulse, block.offset, block.dofs);
+    }
+    solve_held(state, k);
+    for (JointFrictionBlock& block : c.friction) {
+      if (block.held && block.stuck) {
+        Eigen::Vector3d residual = block.rate;
+        for (int m = 0; m < block.dofs; ++m) residual[m] += s.joint_change[block.offset + m];
+        block.impulse -= kPenalty * (block.mass * residual);
+      }
+      const double size = block.impulse.norm();  // past the bound only when the rounds ran out
+      if (size > block.bound) block.impulse *= block.bound / size;
+    }
+    c.predicted.segment(first, last - first) += s.joint_change.segment(first, last - first);
+    break;
   }
 }
 
@@ -448,10 +434,9 @@ void gather_friction(FeatherstoneState& state, double h, std::size_t island) {
     const TreeJoint& held = state.tree_joint[k];
     if (!(controls.joints[k].friction > 0)) return;
     JointFrictionBlock block;
-    block.island = island_of(state, held);
     block.body = held.body, block.offset = held.offset, block.dofs = held.dofs;
     block.bound = controls.joints[k].friction * h;
-    const Eigen::Matrix3d response = inverse_block(state, static_cast<std::size_t>(block.island), held.offset, held.dofs);
+    const Eigen::Matrix3d response = inverse_block(state, island, held.offset, held.dofs);
     if (held.dofs == 1) {
       block.mass(0, 0) = 1 / response(0, 0);
     } else {
@@ -461,17 +446,15 @@ void gather_friction(FeatherstoneState& state, double h, std::size_t island) {
     c.friction.push_back(block);
   }, [&](const TreeSerialAxis& node) {
     const double bound = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)].friction;
-    const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
     if (!(bound > 0)) return;
     JointFrictionBlock block;
-    block.island = island_of(state, held), block.body = node.body, block.offset = node.offset, block.dofs = 1;
+    block.body = node.body, block.offset = node.offset, block.dofs = 1;
     block.bound = bound * h;
-    block.mass(0, 0) = 1 / inverse_block(state, static_cast<std::size_t>(block.island), node.offset, 1)(0, 0);
+    block.mass(0, 0) = 1 / inverse_block(state, island, node.offset, 1)(0, 0);
     block.rate[0] = c.predicted[node.offset];
     c.friction.push_back(block);
   });
-  if (!c.friction.empty()) c.islands.push_back(static_cast<std::int32_t>(island));
-  solve_friction(state);
+  solve_friction(state, island);
 }
 
 }  // namespace
@@ -491,7 +474,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   if (!drives && !friction) return false;
 
   // The island's coordinates: element by element, the same bits as over the whole vectors.
-  const BodyRange bodies{state.island_begin[island], state.island_begin[island + 1]};
+  const BodyRange bodies = island_bodies(state, island);
   const auto [first, last] = island_velocities(state, island);
   const auto on_island = [first = first, count = last - first](auto& x) { return x.segment(first, count); };
   on_island(c.drive_force).setZero(), on_island(c.drive_gain).setZero();
@@ -505,7 +488,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
                    c.acceleration, bodies);
   on_island(c.predicted) = on_island(state.v) + h * on_island(c.acceleration);
 
-  if (state.joint_friction) c.friction.clear(), c.islands.clear();  // shared: such scenes integrate on one thread
+  if (state.joint_friction) c.friction.clear();  // shared: such scenes integrate on one thread
   if (friction) {
     // Friction's impulses go through (H + h·G)⁻¹, the same system as the drives' (its held joints
     // add their penalties to it: factor_held_rows). The factors are shared by the islands:
@@ -541,7 +524,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
 }
 
 void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces) {
-  joint_forces_of_body_forces(state, body_forces, joint_forces, {0, state.tree.body_count()});
+  joint_forces_of_body_forces(state, body_forces, joint_forces, state.tree.all_bodies());
 }
 
 void joint_forces_of_body_forces(const FeatherstoneState& state, std::vector<SpatialVector>& body_forces, Eigen::VectorXd& joint_forces,

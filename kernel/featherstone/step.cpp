@@ -60,7 +60,7 @@ int turn_substeps(const FeatherstoneState& state, double dt, BodyRange bodies) {
 // Integrates awake island k (step.hpp, 1–3): its loads, substeps, drives and friction, integrator,
 // damping, and its rigid bodies refreshed. Touches only its bodies' and coordinates' entries.
 void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool loads) {
-  const BodyRange bodies{state.island_begin[k], state.island_begin[k + 1]};
+  const BodyRange bodies = island_bodies(state, k);
   const auto [first, last] = island_velocities(state, k);
   const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
   const bool drag = !state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0);
@@ -93,19 +93,6 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
   mirror_rigid_bodies(state, bodies);
 }
 
-// An awake island as a task (BlockRunner::BlockFunction).
-struct IslandTask {
-  FeatherstoneState* state;
-  double dt;
-  bool loads;
-};
-double run_island(const void* context, std::size_t n) {
-  const IslandTask& task = *static_cast<const IslandTask*>(context);
-  FeatherstoneState& state = *task.state;
-  integrate_island(state, static_cast<std::size_t>(state.awake_islands[n]), task.dt, task.loads);
-  return 0;
-}
-
 // Integrates the awake islands, each a task on the state's threads when it has them (not with
 // joint friction, whose factors the islands share); sleeping ones keep q and v = 0.
 void integrate_awake_islands(FeatherstoneState& state, double dt) {
@@ -115,8 +102,8 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   }
   bool loads = false;
   for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);
-  const IslandTask task{&state, dt, loads};
-  run_stage(state.joint_friction ? nullptr : state.runner.get(), state.awake_islands.size(), &run_island, &task);
+  run_stage(state.joint_friction ? nullptr : state.runner.get(), state.awake_islands.size(),
+            [&](std::size_t n) { integrate_island(state, static_cast<std::size_t>(state.awake_islands[n]), dt, loads); });
 }
 
 }  // namespace
@@ -134,7 +121,7 @@ void refresh_rigid_bodies(FeatherstoneState& state) {
   mirror_rigid_bodies(state);
 }
 
-void mirror_rigid_bodies(FeatherstoneState& state) { mirror_rigid_bodies(state, {0, state.tree.body_count()}); }
+void mirror_rigid_bodies(FeatherstoneState& state) { mirror_rigid_bodies(state, state.tree.all_bodies()); }
 
 void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range) {
   RigidBodyState& y = state.bodies.state;

@@ -80,6 +80,18 @@ class BlockRunner {
 /// BlockRunner::run.
 double run_stage(BlockRunner* runner, std::size_t count, BlockRunner::BlockFunction function, const void* context);
 
+/// run_stage of a callable: block(n) runs block n (the callable outlives the call).
+template <typename Block>
+void run_stage(BlockRunner* runner, std::size_t count, const Block& block) {
+  run_stage(
+      runner, count,
+      [](const void* context, std::size_t n) {
+        (*static_cast<const Block*>(context))(n);
+        return 0.0;
+      },
+      &block);
+}
+
 /// Owns a BlockRunner; copying a state gives the copy its own runner (threads are not shared).
 class RunnerHandle {
  public:
