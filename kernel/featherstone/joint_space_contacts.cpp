@@ -161,7 +161,8 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
 
 // The joint velocities that keep every body's motion in its own frame as closely as the joints
 // allow at the pose the push-out moved the group's islands to, in the kinetic-energy metric:
-// v = H⁻¹ Σ J_iᵀ I_i v_i, by the inward pass and ABA with v = 0, g = 0. An H-orthogonal projection
+// v = H⁻¹ (Σ J_iᵀ I_i v_i + A v) with the armature's momentum A v (H includes A), by the inward
+// pass and ABA with v = 0, g = 0. An H-orthogonal projection
 // of motions whose energy is the old one, so it never adds kinetic energy — where keeping v
 // would: v holds relative velocities in the child frames the push-out turned, and a limb spinning
 // fast about its axis relative to its parent would swing that spin onto its neighbours.
@@ -179,6 +180,9 @@ void displace_group(FeatherstoneState& state, const ConstraintGroup& group) {
     displace_positions(tree, state.q, s.displacement, state.q, bodies);
     body_poses(tree, state.q, state.kinematics, bodies);
     joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
+    for (int i = bodies.first; i < bodies.last; ++i) {  // the armature's momentum, A v (H includes A)
+      if (tree.body(i).armature != 0) s.generalized_momentum[tree.velocity_offset(i)] += tree.body(i).armature * state.v[tree.velocity_offset(i)];
+    }
     forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated,
                      state.v, bodies);
   });

@@ -60,9 +60,11 @@
 // then q ← q ⊕ δ (displace_positions) on the group's islands. No velocity bias (Baumgarte) is added; but v holds
 // relative velocities in the child frames the push-out turned, so v is re-projected: the
 // velocities that keep every body's motion in its own frame as closely as the joints allow at
-// the new pose, in the kinetic-energy metric, v = H⁻¹ Σ J_iᵀ I_i v_i (one inward pass and one
-// ABA): an H-orthogonal projection, which never adds kinetic energy — keeping v instead would
-// swing a limb's fast spin about its axis onto its neighbours. The rigid bodies are refreshed.
+// the new pose, in the kinetic-energy metric, v = H⁻¹ (Σ J_iᵀ I_i v_i + A v) with the
+// armature's momentum A v (one inward pass and one ABA): an H-orthogonal projection, which never
+// adds kinetic energy — keeping v instead would swing a limb's fast spin about its axis onto its
+// neighbours. (Until this design A v was left out: each push-out slowed the joints with armature
+// by about a/(a + their inertia).) The rigid bodies are refreshed.
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
