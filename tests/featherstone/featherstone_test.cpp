@@ -33,6 +33,7 @@ using testing::random_rotation;
 using testing::random_tree;
 using testing::random_tree_kinds;
 using testing::random_vector;
+using testing::uniform;
 using testing::RandomTreeOptions;
 using testing::uniform_vector;
 
@@ -297,11 +298,20 @@ TEST(Dynamics, InverseDynamicsUndoesForwardDynamics) {
 }
 
 TEST(Dynamics, MassMatrixGivesTheKineticEnergy) {
+  // T = ½ vᵀHv, with the armature (a rotor's reflected inertia on a revolute or prismatic
+  // coordinate, in H's diagonal) in every other tree.
   std::mt19937 rng(12);
   DynamicsWorkspace workspace;
   Eigen::MatrixXd inertia;
   for (int trial = 0; trial < 20; ++trial) {
-    const ArticulatedTree tree = random_tree(rng, {.bodies = 9, .branching = true, .floating_base = trial % 2 == 0});
+    const ArticulatedTree random = random_tree(rng, {.bodies = 9, .branching = true, .floating_base = trial % 2 == 0});
+    ArticulatedTree tree;
+    for (int i = 0; i < random.body_count(); ++i) {
+      ArticulatedBody body = random.body(i);
+      const bool one_axis = body.joint == ArticulatedJoint::revolute || body.joint == ArticulatedJoint::prismatic;
+      if (one_axis && trial % 4 < 2) body.armature = uniform(rng, 0.1, 1);
+      tree.add_body(body);
+    }
     const Eigen::VectorXd q = random_positions(rng, tree);
     const Eigen::VectorXd v = random_vector(rng, tree.velocity_count(), 2);
     mass_matrix(tree, q, workspace, inertia);
