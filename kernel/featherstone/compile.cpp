@@ -428,7 +428,6 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.awake_islands.reserve(state.islands.size());
   JointSpaceContactScratch& contact = state.contact;
   contact.articulated.resize(tree);
-  contact.zero_velocities.setZero(nv);
   contact.body_momentum.assign(tree_size, SpatialVector::Zero());
   contact.generalized_momentum.setZero(nv);
   contact.joint_change.setZero(nv), contact.displacement.setZero(nv);

@@ -92,12 +92,11 @@ struct IslandSolveScratch {
 /// "Responses"), group after group: a contact's block has three rows (the world x, y, z of its
 /// points' relative velocity), a limit row's block one (its first column; the other two are zero).
 struct JointSpaceContactScratch {
-  /// Articulated-body inertias (ABA's U_i, D_i⁻¹): the joint friction's (with the drives' armature) and the push-out's re-projection's.
+  /// Articulated-body inertias (ABA's U_i, D_i⁻¹) of the drives' pass (with their armature).
   DynamicsWorkspace articulated;
-  Eigen::VectorXd zero_velocities;             ///< nv
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
-  std::vector<SpatialVector> body_momentum;      ///< per tree body: I_i v_i before the push-out, body coordinates
+  std::vector<SpatialVector> body_momentum;      ///< per tree body: the push-out's re-projection, I_i v_i before it less after, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
   // The blocks' responses through the factor (joint_space_contacts.hpp, "Responses").

@@ -160,16 +160,25 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
 }
 
 // The joint velocities that keep every body's motion in its own frame as closely as the joints
-// allow at the pose the push-out moved the group's islands to, in the kinetic-energy metric:
-// v = H⁻¹ (Σ J_iᵀ I_i v_i + A v) with the armature's momentum A v (H includes A), by the inward
-// pass and ABA with v = 0, g = 0. An H-orthogonal projection
-// of motions whose energy is the old one, so it never adds kinetic energy — where keeping v
-// would: v holds relative velocities in the child frames the push-out turned, and a limb spinning
-// fast about its axis relative to its parent would swing that spin onto its neighbours.
+// allow at the pose the push-out moved the group's islands to, in the kinetic-energy metric: the
+// H-orthogonal projection v* = H⁻¹ (Σ J_iᵀ I_i v_i + A v) of the old motions v_i and armature
+// momenta A v (H includes A), so it never adds kinetic energy. Keeping v would not do: v holds
+// relative velocities in the child frames the push-out turned, and a limb spinning fast about its
+// axis relative to its parent would swing that spin onto its neighbours.
+// It is taken as a correction of v through H's factor at the new pose (the CRBA and LᵀDL of
+// prepare_group, again): v* = v + H⁻¹ Σ J_iᵀ I_i (v_i − v_i(v)), v_i(v) the motions v gives at the
+// new pose (A v cancels) — cheaper than the articulated-body pass with v = 0, g = 0 it replaces.
+// The factor at the pose detection saw (tried) does not serve: light limbs beside a heavy trunk
+// make H ill-conditioned enough that after a push-out of 5 mrad it missed the correction by three
+// times its size (humanoid.json hit by the ball).
+// Leaves the group's body velocities in state.kinematics those of v* (v not finite when H was not
+// positive definite: the step's status says so).
 void displace_group(FeatherstoneState& state, const ConstraintGroup& group) {
   JointSpaceContactScratch& s = state.contact;
   const ArticulatedTree& tree = state.tree;
-  for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
+  for_each_island(state, group, [&](std::size_t k, BodyRange bodies) {
+    const auto [first, last] = island_velocities(state, k);
+    const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
     // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v; the
     // poses are those detection saw).
     body_velocities(tree, state.v, state.kinematics, bodies);
@@ -179,17 +188,26 @@ void displace_group(FeatherstoneState& state, const ConstraintGroup& group) {
     }
     displace_positions(tree, state.q, s.displacement, state.q, bodies);
     body_poses(tree, state.q, state.kinematics, bodies);
-    joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
-    for (int i = bodies.first; i < bodies.last; ++i) {  // the armature's momentum, A v (H includes A)
-      if (tree.body(i).armature != 0) s.generalized_momentum[tree.velocity_offset(i)] += tree.body(i).armature * state.v[tree.velocity_offset(i)];
+    mass_matrix(tree, state.kinematics, s.composite, s.factor, bodies);
+    if (!(s.factor.factor(first, last) < 0)) {
+      on_island(state.v).setConstant(std::numeric_limits<double>::quiet_NaN());
+      return;
     }
-    forward_dynamics(tree, state.kinematics, s.zero_velocities, s.generalized_momentum, nullptr, Eigen::Vector3d::Zero(), s.articulated,
-                     state.v, bodies);
+    body_velocities(tree, state.v, state.kinematics, bodies);
+    for (int i = bodies.first; i < bodies.last; ++i) {
+      const auto index = static_cast<std::size_t>(i);
+      s.body_momentum[index] -= tree.body(i).inertia * state.kinematics.velocity[index];
+    }
+    joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
+    s.factor.solve(s.generalized_momentum, first, last);
+    on_island(state.v) += on_island(s.generalized_momentum);
+    body_velocities(tree, state.v, state.kinematics, bodies);
   });
 }
 
 // The position pass (joint_space_contacts.hpp, "Penetration") over the group.
-void push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
+// Returns whether it moved the group (then state.kinematics holds its new poses and velocities).
+bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
   JointSpaceContactScratch& s = state.contact;
   for_each_island(state, group, [&](std::size_t k, BodyRange) {
     const auto [first, last] = island_velocities(state, k);
@@ -218,9 +236,10 @@ void push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
     if (solve_limit_rows(state, group, dt, /*position=*/true, s.displacement)) moved = pushed = true;
     if (!pushed) break;
   }
-  if (!moved) return;
+  if (!moved) return false;
   settle(state, group, s.displacement);
   displace_group(state, group);
+  return true;
 }
 
 // The group's blocks — its contacts, then its limit rows — their rows and half rows through the
@@ -263,21 +282,17 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
   return true;
 }
 
-// The passes leave state.kinematics' poses those of q (the push-out's body_poses when it moved
-// q): the rigid bodies need only the new velocities.
-void mirror_new_velocities(FeatherstoneState& state, const ConstraintGroup& group) {
-  for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
-    body_velocities(state.tree, state.v, state.kinematics, bodies);
-    mirror_rigid_bodies(state, bodies);
-  });
-}
-
-// One group, whole: its impulses, then (`push`) its push-out.
+// One group, whole: its impulses, then (`push`) its push-out, and its rigid bodies refreshed. The
+// passes leave state.kinematics' poses those of q (the push-out's, with its velocities, when it
+// moved q): the rigid bodies need only the new velocities.
 void solve_group(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool push) {
   if (!prepare_group(state, group, dt)) return;
   impulse_passes(state, group, dt);
-  if (push) push_out(state, group, dt);
-  mirror_new_velocities(state, group);
+  const bool moved = push && push_out(state, group, dt);
+  for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
+    if (!moved) body_velocities(state.tree, state.v, state.kinematics, bodies);
+    mirror_rigid_bodies(state, bodies);
+  });
 }
 
 // --- Groups --------------------------------------------------------------------------------------

@@ -57,14 +57,17 @@
 // Settings::contact_recovery_speed·Δt (an initial overlap is not flung out); projected
 // Gauss–Seidel over the contacts on the linearized map from a joint-space displacement
 // δ = H⁻¹Jᵀλ (λ ≥ 0, accumulated per contact) to the contact points' motion, the same passes;
-// then q ← q ⊕ δ (displace_positions) on the group's islands. No velocity bias (Baumgarte) is added; but v holds
-// relative velocities in the child frames the push-out turned, so v is re-projected: the
-// velocities that keep every body's motion in its own frame as closely as the joints allow at
-// the new pose, in the kinetic-energy metric, v = H⁻¹ (Σ J_iᵀ I_i v_i + A v) with the
-// armature's momentum A v (one inward pass and one ABA): an H-orthogonal projection, which never
-// adds kinetic energy — keeping v instead would swing a limb's fast spin about its axis onto its
-// neighbours. (Until this design A v was left out: each push-out slowed the joints with armature
-// by about a/(a + their inertia).) The rigid bodies are refreshed.
+// then q ← q ⊕ δ (displace_positions) on the group's islands. No velocity bias (Baumgarte) is
+// added; but v holds relative velocities in the child frames the push-out turned, so v is
+// re-projected: the velocities that keep every body's motion in its own frame as closely as the
+// joints allow at the new pose, in the kinetic-energy metric, v = H⁻¹ (Σ J_iᵀ I_i v_i + A v) with
+// the armature's momentum A v: an H-orthogonal projection, which never adds kinetic energy —
+// keeping v instead would swing a limb's fast spin about its axis onto its neighbours, and can add
+// kinetic energy (up to 60 % in one step of the tests' scenes). It is taken as a correction of v
+// through H's factor at the new pose (the CRBA and LᵀDL again, on the islands the push-out moved):
+// an inward pass and a back-substitution. (Until this design an ABA with v = 0, g = 0 gave it, and
+// before that it left A v out: each push-out slowed the joints with armature by about
+// a/(a + their inertia).) The rigid bodies are refreshed.
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
