@@ -96,7 +96,7 @@ Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g, std::vecto
     s.half_coordinate[entry] = k;
     s.half_value[entry] = y;
     ++entry;
-    diagonal.noalias() += y * y.transpose() / s.factor.pivot(k);
+    diagonal.noalias() += (y * s.factor.inverse_pivot(k)) * y.transpose();
   }
   s.half_end[g] = static_cast<int>(entry);
   return diagonal;

@@ -43,6 +43,7 @@ void JointSpaceFactor::assign(const std::vector<int>& dof_parent) {
   begin_[static_cast<std::size_t>(n)] = static_cast<int>(ancestor_.size());
   entries_.assign(ancestor_.size(), 0.0);
   pivot_.assign(static_cast<std::size_t>(n), 0.0);
+  inverse_pivot_.assign(static_cast<std::size_t>(n), 0.0);
 }
 
 double JointSpaceFactor::lower(int i, int j) const {
@@ -102,11 +103,13 @@ int JointSpaceFactor::factor(int first, int last) {
   for (int k = last - 1; k >= first; --k) {
     const double d = pivot_[static_cast<std::size_t>(k)];
     if (!(d > 0) && bad < 0) bad = k;
+    const double inverse = 1 / d;  // one division a coordinate; the solves and responses multiply
+    inverse_pivot_[static_cast<std::size_t>(k)] = inverse;
     const int begin = begin_[static_cast<std::size_t>(k)], end = begin_[static_cast<std::size_t>(k) + 1];
     for (int e = begin; e < end; ++e) {
       const auto i = static_cast<std::size_t>(ancestor_[static_cast<std::size_t>(e)]);
       const double h_ki = entries_[static_cast<std::size_t>(e)];
-      const double l_ki = h_ki / d;
+      const double l_ki = h_ki * inverse;
       pivot_[i] -= l_ki * h_ki;
       // i's ancestors are k's after e, in the same order, at the start of i's row.
       double* row_i = entries_.data() + begin_[i];
@@ -168,7 +171,7 @@ void JointSpaceFactor::solve_lower(Eigen::Ref<Eigen::VectorXd> x, int first, int
 
 void JointSpaceFactor::solve(Eigen::Ref<Eigen::VectorXd> x, int first, int last) const {
   transposed_lower_solve(begin_, ancestor_, entries_, x, first, last);
-  for (int i = first; i < last; ++i) x[i] /= pivot_[static_cast<std::size_t>(i)];
+  for (int i = first; i < last; ++i) x[i] *= inverse_pivot_[static_cast<std::size_t>(i)];
   lower_solve(begin_, ancestor_, entries_, x, first, last);
 }
 

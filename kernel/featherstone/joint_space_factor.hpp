@@ -92,6 +92,8 @@ class JointSpaceFactor {
 
   /// D_i, the pivots (> 0 once factored).
   double pivot(int i) const { return pivot_[static_cast<std::size_t>(i)]; }
+  /// 1 / D_i, once factored.
+  double inverse_pivot(int i) const { return inverse_pivot_[static_cast<std::size_t>(i)]; }
   /// L_ij for j an ancestor of i (j = λ(i), λ(λ(i)), …); 0 for any other j < i.
   double lower(int i, int j) const;
 
@@ -103,6 +105,7 @@ class JointSpaceFactor {
   std::vector<int> ancestor_;    // the ancestors j of each coordinate i, nearest first
   std::vector<double> entries_;  // H_ij, then L_ij, for those (i, j)
   std::vector<double> pivot_;    // H_ii, then D_i
+  std::vector<double> inverse_pivot_;  // 1 / D_i
 };
 
 }  // namespace limber

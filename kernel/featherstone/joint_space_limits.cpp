@@ -164,7 +164,7 @@ void form_limit_delassus(FeatherstoneState& state, const ConstraintGroup& group)
       const std::size_t g = static_cast<std::size_t>(limit.first_block) + j;
       for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) {
         const int k = s.half_coordinate[static_cast<std::size_t>(e)];
-        s.response[k] = s.half_value[static_cast<std::size_t>(e)][0] / s.factor.pivot(k);
+        s.response[k] = s.half_value[static_cast<std::size_t>(e)][0] * s.factor.inverse_pivot(k);
       }
       for (std::size_t i = 0; i < m; ++i) {
         const std::size_t h = static_cast<std::size_t>(limit.first_block) + i;

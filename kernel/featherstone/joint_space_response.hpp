@@ -48,7 +48,7 @@ inline Eigen::Vector3d lagging_motion(const JointSpaceContactScratch& s, std::si
 inline void respond(JointSpaceContactScratch& s, std::size_t g, const Eigen::Vector3d& impulse) {
   for (int e = s.row_begin[g]; e < s.half_end[g]; ++e) {
     const int k = s.half_coordinate[static_cast<std::size_t>(e)];
-    s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(impulse) / s.factor.pivot(k);
+    s.lagging[k] += s.half_value[static_cast<std::size_t>(e)].dot(impulse) * s.factor.inverse_pivot(k);
   }
 }
 
