@@ -126,6 +126,7 @@ struct JointSpaceContactScratch {
   std::vector<int> half_coordinate;
   std::vector<Eigen::Vector3d> half_value;
   std::vector<Eigen::Matrix3d> contact_matrix;   ///< per block (a contact's): K = Y_cᵀ D⁻¹ Y_c, world impulse at p → relative velocity at p
+  std::vector<Eigen::Vector3d> free_motion;      ///< per block (a contact's): J_c v before the impulses, m/s (v holds still until they settle)
   std::vector<double> push;                      ///< per block (a contact's): accumulated push-out "impulse", kg·m
   /// nv: y = D⁻¹ Σ_g Y_g λ_g of the impulses not yet in x (v, or the push-out's displacement),
   /// which moves x by L⁻¹ y (settle); J_g of it is Y_gᵀ y.

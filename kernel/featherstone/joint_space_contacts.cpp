@@ -134,7 +134,7 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
       const Eigen::Matrix3d& k = s.contact_matrix[g];
       const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = block_motion(s, g, state.v) + lagging_motion(s, g);
+      const Eigen::Vector3d relative = s.free_motion[g] + lagging_motion(s, g);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
       if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
@@ -270,7 +270,8 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
     RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
     contact_rows(state, g, contact);
     s.contact_matrix[g] = half_rows(s, g, path);
-    record_approach(contact, -block_motion(s, g, state.v).dot(contact.normal), state.settings, dt);
+    s.free_motion[g] = block_motion(s, g, state.v);
+    record_approach(contact, -s.free_motion[g].dot(contact.normal), state.settings, dt);
   }
   for (int block = group.first_row_block; block < group.last_block; ++block) {
     const auto g = static_cast<std::size_t>(block);
@@ -420,7 +421,7 @@ bool form_groups(FeatherstoneState& state) {
   const auto entries = static_cast<std::size_t>(s.row_begin[blocks]);
   s.row_coordinate.resize(entries), s.row_value.resize(entries);
   s.half_coordinate.resize(entries), s.half_value.resize(entries);
-  s.half_end.resize(blocks), s.contact_matrix.resize(blocks), s.push.resize(blocks);
+  s.half_end.resize(blocks), s.contact_matrix.resize(blocks), s.free_motion.resize(blocks), s.push.resize(blocks);
   return true;
 }
 
