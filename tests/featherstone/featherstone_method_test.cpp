@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
 #include <string>
 
@@ -472,6 +473,59 @@ TEST(FeatherstoneContacts, ThePushOutsReprojectionIsTheKineticEnergyProjection) 
     EXPECT_LT(worst, 1e-3) << model->name;
     EXPECT_LT(worst_gain, 1e-12) << model->name;
     RecordProperty(model->name + "_reprojection", number(worst) + ", gain " + number(worst_gain) + " over " + std::to_string(moved) + " push-outs");
+  }
+}
+
+// A 3-link chain (ball joints) lying along a slope on ground with friction μ = 0.5: the slope is
+// the ground with gravity tilted by θ from its normal. Returns the change of its centre of mass's
+// speed down the slope (m/s) and its travel down it (m) over `seconds`, after 0.5 s to settle;
+// `height`, the centre's rise (m), shows it stayed on the ground.
+struct SlopeRun {
+  double speed_gain = 0, travel = 0, height = 0;
+};
+SlopeRun chain_on_slope(double degrees, Integrator integrator, double seconds) {
+  const double theta = degrees * std::numbers::pi / 180;
+  Model model = make_chain_model({.links = 3, .link_length = 0.2, .link_mass = 1, .anchor = Vector3(0, 0, 0.02),
+                                  .direction = Vector3(1, 0, 0), .pinned = false});
+  for (Body& body : model.bodies) body.shape.radius = 0.02;
+  model.ground = Ground{0, 0, 0.5};
+  model.settings.gravity = 9.81 * Vector3(std::sin(theta), 0, -std::cos(theta));
+  model.settings.sleep.enabled = false;
+  FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
+  const double dt = model.settings.time_step;
+  const auto run = [&](double duration) {
+    for (int s = 0; s < std::lround(duration / dt); ++s) EXPECT_EQ(step(state).status, StepStatus::ok);
+  };
+  run(0.5);
+  const Observation start = observe(state);
+  run(seconds);
+  const Observation end = observe(state);
+  return {(end.linear_momentum.x() - start.linear_momentum.x()) / 3, end.body_centre_of_mass.x() - start.body_centre_of_mass.x(),
+          end.body_centre_of_mass.z() - start.body_centre_of_mass.z()};
+}
+
+TEST(FeatherstoneContacts, CoulombsLawHoldsOnASlopeAboveTheFrictionAngle) {
+  // Above the friction angle (atan 0.5 = 26.6°) the chain slides down with its links together at
+  // a = g (sin θ − μ cos θ): the friction the impulses give is Coulomb's μ N.
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
+    const double theta = 35 * std::numbers::pi / 180, expected = 9.81 * (std::sin(theta) - 0.5 * std::cos(theta));
+    const SlopeRun run = chain_on_slope(35, integrator, 1.0);
+    EXPECT_NEAR(run.speed_gain, expected, 0.01 * expected) << integrator_name(integrator);
+    EXPECT_NEAR(run.height, 0, 1e-4) << integrator_name(integrator);
+    RecordProperty(std::string("acceleration_") + integrator_name(integrator), number(run.speed_gain) + " against " + number(expected));
+  }
+}
+
+TEST(FeatherstoneContacts, DISABLED_KnownFailureStaticFrictionHoldsOnASlopeBelowTheFrictionAngle) {
+  // Below the friction angle (20°) the chain should stay. It creeps down at g sin θ Δt² a step
+  // (semi-implicit Euler: 14 mm in 1 s at 1/240 s; RK4 half of it): the step moves the bodies
+  // before the contacts are found, and the impulses then stop the slip in v but not in q. Taking
+  // that slip back in the push-out (tried) held this chain but made a thrown thin chain diverge
+  // and the ragdoll stack settle worse.
+  for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
+    const SlopeRun run = chain_on_slope(20, integrator, 1.0);
+    EXPECT_LT(std::abs(run.travel), 1e-4) << integrator_name(integrator);
+    EXPECT_NEAR(run.height, 0, 1e-4) << integrator_name(integrator);
   }
 }
 
