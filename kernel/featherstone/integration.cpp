@@ -166,15 +166,17 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace) {
   forward_kinematics(tree, q, v, workspace);
-  return kinetic_energy(tree, v, workspace, tree.all_bodies());
-}
-
-double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, const DynamicsWorkspace& workspace,
-                      BodyRange range) {
-  double energy = 0;
-  for (int i = range.first; i < range.last; ++i) {
+  double energy = armature_energy(tree, v);
+  for (int i = 0; i < tree.body_count(); ++i) {
     const SpatialVector& velocity = workspace.velocity[static_cast<std::size_t>(i)];
     energy += 0.5 * velocity.dot(tree.body(i).inertia * velocity);
+  }
+  return energy;
+}
+
+double armature_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v) {
+  double energy = 0;
+  for (int i = 0; i < tree.body_count(); ++i) {
     const double armature = tree.body(i).armature;  // 0 unless a revolute or prismatic joint
     if (armature != 0) energy += 0.5 * armature * v[tree.velocity_offset(i)] * v[tree.velocity_offset(i)];
   }

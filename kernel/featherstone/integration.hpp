@@ -65,13 +65,12 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
 
-/// T = ½ vᵀHv = Σ ½ v_iᵀ I_i v_i + Σ ½ a_k v_k²: the bodies' and the armature's (the rotors'
-/// reflected inertia a_k on coordinate k), J.
+/// T = ½ vᵀHv = Σ ½ v_iᵀ I_i v_i + armature_energy: the bodies' and the rotors', J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
-/// The same over the bodies of `range`, from the body velocities in `workspace` (those of v).
-double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, const DynamicsWorkspace& workspace,
-                      BodyRange range);
+/// Σ ½ a_k v_k²: the kinetic energy of the armature (the rotors' reflected inertia a_k on
+/// revolute or prismatic coordinate k, which no body holds), J.
+double armature_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v);
 
 /// V = −Σ m_i g·c_i, c_i the world position of body i's centre of mass; J (zero at the world
 /// origin).

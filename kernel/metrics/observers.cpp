@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "limber/kernel/featherstone/integration.hpp"
 #include "limber/kernel/springs/spring_forces.hpp"
 
 namespace limber {
@@ -171,10 +172,7 @@ void measure_serial_axes(const FeatherstoneState& state, JointMeasures& measures
 
 Observation observe(const FeatherstoneState& state) {
   Observation out = observe_rigid_scene(state, state.joint_controls);
-  for (int i = 0; i < state.tree.body_count(); ++i) {  // the armature's ½ a v² (the rotors the bodies do not hold)
-    const double armature = state.tree.body(i).armature, rate = armature != 0 ? state.v[state.tree.velocity_offset(i)] : 0.0;
-    out.kinetic_energy += 0.5 * armature * rate * rate;
-  }
+  out.kinetic_energy += armature_energy(state.tree, state.v);  // the rotors, which the rigid bodies do not hold
   measure_serial_axes(state, out.joints);
   const RigidBodyState& y = state.bodies.state;
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
