@@ -262,7 +262,6 @@ struct FeatherstoneState : RigidScene {
   StepReport last_report;
 };
 
-/// Where island k's tree bodies' coordinates lie: [first, last) in v (velocities) or q (positions).
 /// The island of a Model joint (held: where the tree holds it; its child's island).
 inline std::size_t island_of(const FeatherstoneState& state, const TreeJoint& held) {
   return state.island_of_body[state.scene_body[static_cast<std::size_t>(held.body)]];
@@ -270,6 +269,7 @@ inline std::size_t island_of(const FeatherstoneState& state, const TreeJoint& he
 
 /// Island k's tree bodies.
 inline BodyRange island_bodies(const FeatherstoneState& state, std::size_t k) { return {state.island_begin[k], state.island_begin[k + 1]}; }
+/// Where island k's tree bodies' coordinates lie: [first, last) in v (velocities) or q (positions).
 inline std::pair<int, int> island_velocities(const FeatherstoneState& state, std::size_t k) {
   return state.tree.velocity_span(island_bodies(state, k));
 }

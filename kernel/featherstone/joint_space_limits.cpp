@@ -276,8 +276,9 @@ void respond_held(FeatherstoneState& state, std::size_t island) {
 
 // Joint friction of island k (its blocks in state.controls.friction), together: a stuck joint is
 // held at rest by a penalty on its block of H + h·G (kPenalty times its block of (H + h·G)⁻¹
-// inverted; the island's coordinates factored again as LᵀDL, factor_held_rows), which is exactly the response to the joint impulses that hold
-// it and leaves it within 1/kPenalty of rest, refined once; a sliding one takes the impulse
+// inverted; the island's coordinates factored again as LᵀDL, factor_held_rows), which is exactly
+// the response to the joint impulses that hold it and leaves it within 1/kPenalty of rest, refined
+// once; a sliding one takes the impulse
 // friction·h against the velocity it ends with; a stuck joint whose impulse would pass its bound
 // slides, a sliding one that friction would turn back sticks. Adds the responses to the
 // predicted velocities; the impulses stay in the blocks. Needs state.contact.inertia and factor

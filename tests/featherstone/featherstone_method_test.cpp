@@ -403,6 +403,15 @@ TEST(FeatherstoneContacts, DroppedCapsuleBouncesToAQuarterOfItsHeightWithRestitu
   RecordProperty("apex_lowest", number(apex) + ", " + number(lowest));
 }
 
+// A step's stages up to its contacts, run by hand so a test can look between them: the move (the
+// integrator over the whole tree; no drives or loads in these scenes) and detection.
+void move_then_detect(FeatherstoneState& state, double dt) {
+  remember_step_start(state);
+  integrate(state.tree, state.q, state.v, state.joint_forces, state.settings.gravity, dt, state.options.integrator, state.integration);
+  refresh_rigid_bodies(state);
+  if (detect_rigid_contacts(state)) take_moved_balls(state);
+}
+
 // The push-out's re-projection against the projection it approximates, after a step's impulses
 // left v_imp at pose q and the push-out moved q to q': the v* minimizing the change of every
 // body's motion in its own frame, Σ ‖J_i(q') v − J_i(q) v_imp‖²_{I_i} + ‖v − v_imp‖²_A, from
@@ -453,10 +462,7 @@ TEST(FeatherstoneContacts, ThePushOutsReprojectionIsTheKineticEnergyProjection) 
     int moved = 0;
     double worst = 0, worst_gain = -1;
     for (int s = 0; s < std::lround(1.5 / dt); ++s) {
-      remember_step_start(state);
-      integrate(state.tree, state.q, state.v, state.joint_forces, model->settings.gravity, dt, state.options.integrator, state.integration);
-      refresh_rigid_bodies(state);
-      if (detect_rigid_contacts(state)) take_moved_balls(state);
+      move_then_detect(state, dt);
       FeatherstoneState impulses_only = state;
       apply_joint_space_impulses(impulses_only, dt);
       const Eigen::VectorXd q = state.q;
@@ -551,10 +557,7 @@ TEST(FeatherstoneContacts, ImpulsesNeverAddEnergy) {
     int contact_steps = 0;
     double worst = 0;  // largest relative gain across the impulses
     for (int s = 0; s < std::lround(2 / dt); ++s) {
-      remember_step_start(state);
-      integrate(state.tree, state.q, state.v, state.joint_forces, model->settings.gravity, dt, state.options.integrator, state.integration);
-      refresh_rigid_bodies(state);
-      if (detect_rigid_contacts(state)) take_moved_balls(state);
+      move_then_detect(state, dt);
       const double before = observe(state).kinetic_energy;
       apply_joint_space_impulses(state, dt);
       const double after = observe(state).kinetic_energy;
