@@ -54,6 +54,7 @@ struct ConstraintGroup {
   int first_island = 0, last_island = 0;
   int first_block = 0, first_row_block = 0, last_block = 0;
   int first_limit = 0, last_limit = 0;
+  bool pushed = false;  ///< its push-out moved it (before the move: its displacement waits for advance_positions)
 };
 
 /// An island's limit rows, solved together (joint_space_limits.cpp, "Holding rows"): blocks
@@ -96,6 +97,8 @@ struct JointSpaceContactScratch {
   DynamicsWorkspace articulated;
   Eigen::VectorXd joint_change;                ///< nv: the joints' change, H⁻¹ Jᵀ j
   Eigen::VectorXd displacement;                ///< nv: the push-out, a tangent vector laid out like v
+  /// nv: before the move, v before the constraints and after them (resolve_joint_space_contacts)
+  Eigen::VectorXd free_velocity, constrained_velocity;
   std::vector<SpatialVector> body_momentum;      ///< per tree body: the push-out's re-projection, I_i v_i before it less after, body coordinates
   Eigen::VectorXd generalized_momentum;          ///< nv: Σ J_iᵀ of those momenta
   Eigen::VectorXd joint_impulse;                 ///< nv: generalized impulses on the joints for the response (consumed)
@@ -215,6 +218,7 @@ struct FeatherstoneState : RigidScene {
   RunnerHandle runner;
   bool joint_friction = false;              ///< some joint or serial axis has friction (its islands integrate on the calling thread)
   std::vector<std::int32_t> awake_islands;  ///< the islands a step integrates (scratch; capacity: every island)
+  std::vector<double> last_substep;         ///< per island: its last substep this step, s (the move after the constraints takes it)
 
   // Tree body i ↔ rigid-scene body b.
   std::vector<std::int32_t> scene_body;  ///< per tree body: the rigid-scene body (Model body index; the ball last); −1: a joint frame

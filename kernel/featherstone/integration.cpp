@@ -108,6 +108,19 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, tree.all_bodies());
 }
 
+void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
+  if (!workspace.fits(tree)) throw std::invalid_argument("accelerate: the workspace is not sized for this tree");
+  if (poses) {
+    forward_dynamics(tree, *poses, v, joint_forces, nullptr, gravity, workspace.dynamics, workspace.accelerations, range);
+  } else {
+    forward_dynamics(tree, q, v, joint_forces, gravity, workspace.dynamics, workspace.accelerations, range);
+  }
+  const auto [first, last] = tree.velocity_span(range);
+  v.segment(first, last - first) += h * workspace.accelerations.segment(first, last - first);
+}
+
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
@@ -128,8 +141,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   };
   switch (integrator) {
     case Integrator::semi_implicit_euler:
-      dynamics(q, v, poses);
-      velocities(v) += h * velocities(w.accelerations);
+      accelerate(tree, q, v, joint_forces, gravity, h, workspace, poses, range);
       velocities(w.stage_displacement) = h * velocities(v);
       displace_positions(tree, q, w.stage_displacement, q, range);
       return;

@@ -65,6 +65,14 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
 
+/// Semi-implicit Euler's velocity update alone, v ← v + h v̇(q, v) (integrate's first half; q
+/// is not moved), on the bodies of `range` (their coordinates of v; the workspace sized for the
+/// tree): the velocity a step solves its constraints on before the positions move with it
+/// (kernel/featherstone/step.hpp). `poses` as for integrate.
+void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
+
 /// T = ½ vᵀHv = Σ ½ v_iᵀ I_i v_i + armature_energy: the bodies' and the rotors', J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);

@@ -126,6 +126,7 @@ void settle(FeatherstoneState& state, const ConstraintGroup& group, Eigen::Vecto
 // rows'.
 void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
   JointSpaceContactScratch& s = state.contact;
+  const bool before_move = constraints_before_move(state);
   for (int g = group.first_row_block; g < group.last_block; ++g) state.controls.rows[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])].impulse = 0;
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
     bool applied = false;  // a pass that applies nothing leaves nothing for the next
@@ -137,8 +138,11 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
       const Eigen::Vector3d relative = s.free_motion[g] + lagging_motion(s, g);
       const double normal_speed = relative.dot(normal);
       const double normal_inverse_mass = normal.dot(k * normal);
-      if (normal_speed >= -kSlowestApproach || !(normal_inverse_mass > 0)) continue;
-      const double normal_impulse = -(1 + contact.restitution) * normal_speed / normal_inverse_mass;
+      // Before the move, a contact still apart by a gap may approach by it this step.
+      const double reach = before_move ? std::max(-contact.depth, 0.0) / dt : 0.0;
+      if (normal_speed >= -reach - kSlowestApproach || !(normal_inverse_mass > 0)) continue;
+      const double target = contact.restitution > 0 ? -contact.restitution * normal_speed : -reach;
+      const double normal_impulse = (target - normal_speed) / normal_inverse_mass;
       Eigen::Vector3d impulse = normal_impulse * normal;
       const Eigen::Vector3d after = relative + k * impulse;
       const Eigen::Vector3d sliding = after - after.dot(normal) * normal;
@@ -159,9 +163,9 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
   settle(state, group, state.v);
 }
 
-// The joint velocities that keep every body's motion in its own frame as closely as the joints
-// allow at the pose the push-out moved the group's islands to, in the kinetic-energy metric: the
-// H-orthogonal projection v* = H⁻¹ (Σ J_iᵀ I_i v_i + A v) of the old motions v_i and armature
+// Island k (its tree bodies `bodies`) moved by the push-out's displacement, then the joint
+// velocities that keep every body's motion in its own frame as closely as the joints allow at its
+// new pose, in the kinetic-energy metric: the H-orthogonal projection v* = H⁻¹ (Σ J_iᵀ I_i v_i + A v) of the old motions v_i and armature
 // momenta A v (H includes A), so it never adds kinetic energy. Keeping v would not do: v holds
 // relative velocities in the child frames the push-out turned, and a limb spinning fast about its
 // axis relative to its parent would swing that spin onto its neighbours.
@@ -171,44 +175,45 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
 // The factor at the pose detection saw (tried) does not serve: light limbs beside a heavy trunk
 // make H ill-conditioned enough that after a push-out of 5 mrad it missed the correction by three
 // times its size (humanoid.json hit by the ball).
-// Leaves the group's body velocities in state.kinematics those of v* (v not finite when H was not
-// positive definite: the step's status says so).
-void displace_group(FeatherstoneState& state, const ConstraintGroup& group) {
+// Leaves the island's poses and body velocities in state.kinematics those of (q, v*) (v not finite
+// when H was not positive definite: the step's status says so).
+void displace_island(FeatherstoneState& state, std::size_t k, BodyRange bodies) {
   JointSpaceContactScratch& s = state.contact;
   const ArticulatedTree& tree = state.tree;
-  for_each_island(state, group, [&](std::size_t k, BodyRange bodies) {
-    const auto [first, last] = island_velocities(state, k);
-    const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
-    // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v; the
-    // poses are those detection saw).
-    body_velocities(tree, state.v, state.kinematics, bodies);
-    for (int i = bodies.first; i < bodies.last; ++i) {
-      const auto index = static_cast<std::size_t>(i);
-      s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];
-    }
-    displace_positions(tree, state.q, s.displacement, state.q, bodies);
-    body_poses(tree, state.q, state.kinematics, bodies);
-    mass_matrix(tree, state.kinematics, s.composite, s.factor, bodies);
-    if (!(s.factor.factor(first, last) < 0)) {
-      on_island(state.v).setConstant(std::numeric_limits<double>::quiet_NaN());
-      return;
-    }
-    body_velocities(tree, state.v, state.kinematics, bodies);
-    for (int i = bodies.first; i < bodies.last; ++i) {
-      const auto index = static_cast<std::size_t>(i);
-      s.body_momentum[index] -= tree.body(i).inertia * state.kinematics.velocity[index];
-    }
-    joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
-    s.factor.solve(s.generalized_momentum, first, last);
-    on_island(state.v) += on_island(s.generalized_momentum);
-    body_velocities(tree, state.v, state.kinematics, bodies);
-  });
+  const auto [first, last] = island_velocities(state, k);
+  const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
+  // Every body's momentum in its own frame, I_i v_i, before the push-out (the impulses' v, at the
+  // poses before it: detection's, or before the move those h·v moved to).
+  body_velocities(tree, state.v, state.kinematics, bodies);
+  for (int i = bodies.first; i < bodies.last; ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    s.body_momentum[index] = tree.body(i).inertia * state.kinematics.velocity[index];
+  }
+  displace_positions(tree, state.q, s.displacement, state.q, bodies);
+  body_poses(tree, state.q, state.kinematics, bodies);
+  mass_matrix(tree, state.kinematics, s.composite, s.factor, bodies);
+  if (!(s.factor.factor(first, last) < 0)) {
+    on_island(state.v).setConstant(std::numeric_limits<double>::quiet_NaN());
+    return;
+  }
+  body_velocities(tree, state.v, state.kinematics, bodies);
+  for (int i = bodies.first; i < bodies.last; ++i) {
+    const auto index = static_cast<std::size_t>(i);
+    s.body_momentum[index] -= tree.body(i).inertia * state.kinematics.velocity[index];
+  }
+  joint_forces_of_body_forces(state, s.body_momentum, s.generalized_momentum, bodies);
+  s.factor.solve(s.generalized_momentum, first, last);
+  on_island(state.v) += on_island(s.generalized_momentum);
+  body_velocities(tree, state.v, state.kinematics, bodies);
 }
 
 // The position pass (joint_space_contacts.hpp, "Penetration") over the group.
-// Returns whether it moved the group (then state.kinematics holds its new poses and velocities).
+// Returns whether it moved the group: then, after the move, state.kinematics holds its new poses
+// and velocities; before the move (constraints_before_move) the displacement waits in
+// s.displacement for advance_positions.
 bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
   JointSpaceContactScratch& s = state.contact;
+  const bool before_move = constraints_before_move(state);
   for_each_island(state, group, [&](std::size_t k, BodyRange) {
     const auto [first, last] = island_velocities(state, k);
     s.displacement.segment(first, last - first).setZero();
@@ -221,7 +226,12 @@ bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
     for (int block = group.first_block; block < group.first_row_block; ++block) {
       const auto g = static_cast<std::size_t>(block);
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
-      const double target = push_out_distance(contact, state.settings, dt);
+      // Before the move the depth is all the last steps': once past twice the slop, back to the
+      // slop at the recovery speed (the band keeps a resting contact, which the passes' tolerance
+      // lets sink by ~10⁻⁷ m a step, from being pushed and re-projected every step).
+      const double target = !before_move                   ? push_out_distance(contact, state.settings, dt)
+                            : contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, state.settings.contact_recovery_speed * dt)
+                                                               : 0.0;
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[g] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
       const double done = lagging_motion(s, g).dot(contact.normal);  // the displacement is all in y until settled
@@ -238,7 +248,7 @@ bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
   }
   if (!moved) return false;
   settle(state, group, s.displacement);
-  displace_group(state, group);
+  if (!before_move) for_each_island(state, group, [&](std::size_t k, BodyRange bodies) { displace_island(state, k, bodies); });
   return true;
 }
 
@@ -286,10 +296,15 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
 // One group, whole: its impulses, then (`push`) its push-out, and its rigid bodies refreshed. The
 // passes leave state.kinematics' poses those of q (the push-out's, with its velocities, when it
 // moved q): the rigid bodies need only the new velocities.
-void solve_group(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool push) {
+void solve_group(FeatherstoneState& state, ConstraintGroup& group, double dt, bool push) {
+  group.pushed = false;
   if (!prepare_group(state, group, dt)) return;
   impulse_passes(state, group, dt);
   const bool moved = push && push_out(state, group, dt);
+  if (constraints_before_move(state)) {
+    group.pushed = moved;
+    return;  // advance_positions moves the group's islands and refreshes their rigid bodies
+  }
   for_each_island(state, group, [&](std::size_t, BodyRange bodies) {
     if (!moved) body_velocities(state.tree, state.v, state.kinematics, bodies);
     mirror_rigid_bodies(state, bodies);
@@ -425,11 +440,15 @@ bool form_groups(FeatherstoneState& state) {
   return true;
 }
 
-// Every group, on the state's threads when it has them and more than one group.
-void solve_groups(FeatherstoneState& state, double dt, bool push) {
-  find_limit_rows(state, dt);
-  if (!form_groups(state)) return;
+// Every group, on the state's threads when it has them and more than one group; the limit rows
+// those that may act within the step at v or at `also`.
+void solve_groups(FeatherstoneState& state, double dt, bool push, const Eigen::VectorXd* also = nullptr) {
+  find_limit_rows(state, dt, also);
   JointSpaceContactScratch& s = state.contact;
+  if (!form_groups(state)) {
+    s.groups.clear();  // advance_positions reads no island's group
+    return;
+  }
   if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
   run_stage(state.runner.get(), s.groups.size(), [&](std::size_t g) { solve_group(state, s.groups[g], dt, push); });
 }
@@ -438,6 +457,40 @@ void solve_groups(FeatherstoneState& state, double dt, bool push) {
 
 void apply_joint_space_impulses(FeatherstoneState& state, double dt) { solve_groups(state, dt, /*push=*/false); }
 
-void resolve_joint_space_contacts(FeatherstoneState& state, double dt) { solve_groups(state, dt, /*push=*/true); }
+void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
+  if (!constraints_before_move(state)) {
+    solve_groups(state, dt, /*push=*/true);
+    return;
+  }
+  // Before the move no push-out follows the positions: a limit the rows left out because v did
+  // not approach it, which the impulses then drive the joint through, would be crossed by the
+  // move. So when the constrained velocity reaches rows the free one did not, the step is solved
+  // again from the free velocity with those rows too (an impact's step; rarely twice a second).
+  JointSpaceContactScratch& s = state.contact;
+  s.free_velocity = state.v;
+  solve_groups(state, dt, /*push=*/true);
+  const auto rows = static_cast<int>(state.controls.rows.size());
+  if (rows == 0 && state.contacts.empty()) return;
+  if (find_limit_rows(state, dt, &s.free_velocity, /*count_only=*/true) == rows) return;
+  s.constrained_velocity = state.v;
+  state.v = s.free_velocity;
+  solve_groups(state, dt, /*push=*/true, &s.constrained_velocity);
+}
+
+void advance_positions(FeatherstoneState& state, std::size_t island) {
+  JointSpaceContactScratch& s = state.contact;
+  const BodyRange bodies = island_bodies(state, island);
+  const auto [first, last] = island_velocities(state, island);
+  state.integration.stage_displacement.segment(first, last - first) = state.last_substep[island] * state.v.segment(first, last - first);
+  displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
+  const std::int32_t group = s.groups.empty() ? -1 : s.island_group[island];
+  if (group >= 0 && s.groups[static_cast<std::size_t>(group)].pushed) {
+    body_poses(state.tree, state.q, state.kinematics, bodies);
+    displace_island(state, island, bodies);
+  } else {
+    forward_kinematics(state.tree, state.q, state.v, state.kinematics, bodies);
+  }
+  mirror_rigid_bodies(state, bodies);
+}
 
 }  // namespace limber

@@ -8,6 +8,16 @@
 // (detect_rigid_contacts, kernel/collision/rigid_contacts.hpp): body a touches body b (b: a
 // plane, or another body) at p with normal n from b to a. Their response:
 //
+// When. Under RK4 the step keeps the thesis's loop (figure 2.5): move, then collide — the
+// contacts are found after the integrator moved the bodies and answered at the new pose. Under
+// semi-implicit Euler they are solved before the move, as MuJoCo's step (mj_step: constraint
+// forces in the velocity update) and Box2D's solve them ("Before the move", below). The thesis's
+// loop moves a resting body by gΔt² into the ground every step, and its push-out and re-projection
+// took it back every step (a CRBA each); the slip a step moved on a slope was stopped in v but
+// not taken back from q, so static friction crept (14 mm/s on a 20° slope at 1/240 s); and a
+// landing limb overlapped by up to a step's travel before anything answered it (11.4 mm on the
+// ragdoll's side landing). Before the move none of the three happens.
+//
 // Responses. Once a step, the composite-rigid-body algorithm writes H into the sparsity of its
 // tree and it is factored as LᵀDL (joint_space_factor.hpp; MuJoCo's mj_crb and mj_factorM). A
 // contact's rows J_c (3 × nv: the world x, y, z of the relative velocity of its points, a's minus
@@ -44,9 +54,11 @@
 //
 // Impulses. Sequential impulses as in the rigid methods (rigid_contacts.hpp; Catto 2005), a
 // fixed number of passes (RigidScene::contact_iterations): in each pass, a contact approaching
-// (v_n = n·(v_a(p) − v_b(p)) < 0) gets the normal impulse j_n = −(1 + e)·v_n / (nᵀKn) — Newton's
-// restitution on the approach it has at that moment, e set to 0 for contacts that approached
-// slower than 2|g|Δt before the first pass (resting contacts stay at rest) — and then, along the
+// (v_n = n·(v_a(p) − v_b(p)) < 0; before the move, faster than its gap closes in the step,
+// v_n < −gap/Δt) gets the normal impulse j_n = −(1 + e)·v_n / (nᵀKn) — Newton's restitution on
+// the approach it has at that moment, e set to 0 for contacts that approached slower than 2|g|Δt
+// before the first pass (resting contacts stay at rest); with e = 0 before the move, the impulse
+// that leaves v_n = −gap/Δt — and then, along the
 // direction t of the sliding velocity that leaves, the impulse that stops sliding,
 // −(t·v)/(tᵀKt), clamped to Coulomb's μ·j_n. Each is an impulse along one direction of at most
 // (1 + e) times the one that stops motion along it, which changes the kinetic energy ½vᵀHv by
@@ -68,6 +80,23 @@
 // an inward pass and a back-substitution. (Until this design an ABA with v = 0, g = 0 gave it, and
 // before that it left A v out: each push-out slowed the joints with armature by about
 // a/(a + their inertia).) The rigid bodies are refreshed.
+//
+// Before the move (semi-implicit Euler; step.hpp). The step finds the contacts at its start pose,
+// closer than kSpeculativeDistance (2 cm; RigidScene::contact_margin) — a gap's depth negative —
+// and sweeps the balls' paths of the last step (rigid_contacts.hpp). Then each island's velocity
+// update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before), the
+// constraints on that v at the start pose as above — a contact still apart may close its gap in
+// the step and no more (Catto's speculative contacts); a bouncing one (e > 0) bounces from where
+// it is, as in Box2D — and only then q ← q ⊕ h·v. What overlap is left (a landing faster than the
+// margin per step, the passes' tolerance) the push-out takes at the start pose as a displacement
+// that no velocity keeps (split impulses, Catto's and Bullet's), once past 2·kRestingSlop
+// (0.2 mm) back to kRestingSlop (0.1 mm), at the recovery speed; it joins h·v in the move and, when it
+// moved anything, v is re-projected at the new pose as above. A limit row's push-out holds what
+// is left of its gap after h·v moves it (C + h·row·v), and drift below 10⁻³·kRestingSlop is left
+// to the next push. Rows are chosen by v before the impulses; when the impulses drive a joint at
+// a limit the rows left out, the step is solved again from the free velocity with that row too
+// (an impact's step): no push-out after the move would take it back. So a resting humanoid is
+// pushed out in 4 % of its steps (nearly every step before), and humanoid.xml's step is 1.2× faster.
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
@@ -116,6 +145,17 @@ namespace limber {
 /// the step's. Leaves (q, v), state.kinematics and the rigid bodies consistent. Allocates
 /// nothing once the scratch has met the step's groups (compile reserves for a group per island).
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt);
+
+/// Whether the step solves the contacts and limits on the velocity update, before the positions
+/// move (semi-implicit Euler: "Before the move" above), or after the move (RK4: the thesis's loop).
+inline bool constraints_before_move(const FeatherstoneState& state) {
+  return state.options.integrator == Integrator::semi_implicit_euler;
+}
+
+/// Before the move: island `island`'s positions move by its last substep times its constrained
+/// velocity, q ← q ⊕ h·v, then by its group's push-out (with the re-projection of v), and its
+/// rigid bodies are refreshed. Touches only its bodies' and coordinates' entries.
+void advance_positions(FeatherstoneState& state, std::size_t island);
 
 /// Applies only the impulses of resolve_joint_space_contacts (no push-out) and refreshes the
 /// rigid bodies: for tests of the impulses' energy.

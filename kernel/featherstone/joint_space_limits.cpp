@@ -57,16 +57,30 @@ double tree_coordinate(const FeatherstoneState& state, const TreeJoint& held) {
 // Whether joint k's island is awake.
 bool awake(const FeatherstoneState& state, const TreeJoint& held) { return !state.islands[island_of(state, held)].sleeping; }
 
-// Adds `row` with C = gap ≥ 0 and ∂C/∂v = direction when it may act within the step.
-void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, const Eigen::Vector3d& direction, double dt) {
-  const double rate = joint_dot(direction, state.v, row.offset, row.dofs);
-  if (!(gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0))) return;  // also skips a NaN
+// What find_limit_rows does with the rows it finds.
+struct LimitRowSearch {
+  const Eigen::VectorXd* also = nullptr;  // a second velocity a row may act within the step at
+  bool count_only = false;                // count them, keep state.controls.rows
+  int count = 0;
+};
+
+// Adds `row` with C = gap ≥ 0 and ∂C/∂v = direction when it may act within the step (at v, or at
+// search.also).
+void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, const Eigen::Vector3d& direction, double dt,
+                   LimitRowSearch& search) {
+  const auto reaches = [&](const Eigen::VectorXd& v) {
+    const double rate = joint_dot(direction, v, row.offset, row.dofs);
+    return gap < kLimitMargin + 2 * dt * std::max(-rate, 0.0);  // false for a NaN
+  };
+  if (!reaches(state.v) && !(search.also && reaches(*search.also))) return;
+  ++search.count;
+  if (search.count_only) return;
   row.gap = gap, row.direction = direction;
   state.controls.rows.push_back(row);
 }
 
 // A serial joint's axis ranges: each axis's coordinate is its tree body's q (0 at rest).
-void find_serial_limit_rows(FeatherstoneState& state, double dt) {
+void find_serial_limit_rows(FeatherstoneState& state, double dt, LimitRowSearch& search) {
   for (const TreeSerialAxis& node : state.serial_axes) {
     const SerialAxis& axis = state.joint_controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
     const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
@@ -74,16 +88,17 @@ void find_serial_limit_rows(FeatherstoneState& state, double dt) {
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held)), row.body = node.body, row.offset = node.offset, row.dofs = 1;
     const double x = state.q[state.tree.position_offset(node.body)];
-    add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt);
-    add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt);
+    add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt, search);
+    add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt, search);
   }
 }
 
-// The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with their half rows, prepare_group).
-void find_limit_rows(FeatherstoneState& state, double dt) {
-  std::vector<JointLimitRow>& rows = state.controls.rows;
-  rows.clear();
+// The rows of every limit that is violated or may be within the step, at the current (q, v) (or
+// at `also`): gaps and directions (their inverse masses come with their half rows, prepare_group).
+// Returns how many; `count_only` leaves state.controls.rows as they are.
+int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* also, bool count_only) {
+  LimitRowSearch search{also, count_only};
+  if (!count_only) state.controls.rows.clear();
   const JointControls& controls = state.joint_controls;
   for (std::size_t k = 0; k < controls.joints.size(); ++k) {
     const Joint& joint = controls.joints[k];
@@ -92,7 +107,7 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held));
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
-    const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt); };
+    const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt, search); };
     if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
       if (!joint.limits.range) continue;
       const double x = tree_coordinate(state, held);
@@ -121,7 +136,8 @@ void find_limit_rows(FeatherstoneState& state, double dt) {
       add(joint.limits.twist->max - q.twist, -gradient);
     }
   }
-  find_serial_limit_rows(state, dt);
+  find_serial_limit_rows(state, dt, search);
+  return search.count;
 }
 
 // The block of H⁻¹ for the `dofs` (≤ 3) velocities of one joint from `offset` (island
@@ -186,6 +202,7 @@ namespace {
 int gather_island_rows(FeatherstoneState& state, const LimitIsland& limit, IslandSolveScratch& scratch, double dt, bool position,
                        const Eigen::VectorXd& x, double tolerance) {
   const JointSpaceContactScratch& s = state.contact;
+  const bool before_move = constraints_before_move(state);
   const int m = limit.rows;
   scratch.reserve_limit_rows(m);  // past what compile reserved (an island of more than 256 rows) it allocates
   bool needed = false;
@@ -197,7 +214,11 @@ int gather_island_rows(FeatherstoneState& state, const LimitIsland& limit, Islan
     // Position: a violation in full (it is never the Model's, always the solver's), and a row
     // inside its limit not pushed past it. Velocity: a limit not yet reached lets the joint arrive
     // at it by the step's end.
-    const double target = position ? -row.gap : (row.gap > 0 ? -row.gap / dt : 0.0);
+    // Before the move (constraints_before_move), the positions move by h·v as well: the push-out
+    // keeps what is left of the gap after that motion, C + h·(row·v) (not pushed past it twice).
+    const double gap = position && before_move ? row.gap + state.last_substep[static_cast<std::size_t>(row.island)] * joint_dot(row.direction, state.v, row.offset, row.dofs)
+                                               : row.gap;
+    const double target = position ? -gap : (gap > 0 ? -gap / dt : 0.0);
     const bool active = row.inverse_mass > 0 && (value < target - tolerance || accumulated > 0);
     needed = needed || (active && std::abs(target - value) > tolerance + (position ? 1e-5 * std::abs(target) : 0.0));
     scratch.limit_value[i] = value, scratch.limit_target[i] = target, scratch.limit_accumulated[i] = accumulated;
@@ -210,7 +231,10 @@ int gather_island_rows(FeatherstoneState& state, const LimitIsland& limit, Islan
 
 bool solve_limit_rows(FeatherstoneState& state, const ConstraintGroup& group, double dt, bool position, const Eigen::VectorXd& x) {
   JointSpaceContactScratch& s = state.contact;
-  const double tolerance = position ? 1e-9 : kSlowestApproach;  // rad or m; rad/s or m/s
+  // rad or m; rad/s or m/s. Before the move, the velocity solve's own tolerance moves a held row
+  // by up to Δt·kSlowestApproach a step: the push-out leaves such drift until it is kRestingSlop's
+  // thousandth, instead of pushing (and re-projecting) every step.
+  const double tolerance = !position ? kSlowestApproach : constraints_before_move(state) ? 1e-3 * kRestingSlop : 1e-9;
   bool changed_any = false;
   for (int t = group.first_limit; t < group.last_limit; ++t) {
     const LimitIsland& limit = s.limit_islands[static_cast<std::size_t>(t)];

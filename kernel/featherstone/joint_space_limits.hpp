@@ -8,9 +8,10 @@
 
 namespace limber::joint_space {
 
-// The rows of every limit that is violated or may be within the step, at the current (q, v):
-// gaps and directions (their inverse masses come with their half rows, prepare_group).
-void find_limit_rows(FeatherstoneState& state, double dt);
+// The rows of every limit that is violated or may be within the step, at the current (q, v) or
+// at the velocities `also`: gaps and directions (their inverse masses come with their half rows,
+// prepare_group). Returns how many; `count_only` counts them and leaves state.controls.rows.
+int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* also = nullptr, bool count_only = false);
 // The Delassus matrix of each of the group's islands with limit rows (joint_space_limits.cpp,
 // "Holding rows"), from their half rows. Needs them (prepare_group).
 void form_limit_delassus(FeatherstoneState& state, const ConstraintGroup& group);

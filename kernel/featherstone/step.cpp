@@ -58,8 +58,12 @@ int turn_substeps(const FeatherstoneState& state, double dt, BodyRange bodies) {
 }
 
 // Integrates awake island k (step.hpp, 1–3): its loads, substeps, drives and friction, integrator,
-// damping, and its rigid bodies refreshed. Touches only its bodies' and coordinates' entries.
+// damping, and its rigid bodies refreshed. When the step solves its constraints before the move
+// (constraints_before_move), its last substep is the velocity update alone, and the positions and
+// the rigid bodies wait for the constraints (advance_positions). Touches only its bodies' and
+// coordinates' entries.
 void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool loads) {
+  const bool before_move = constraints_before_move(state);
   const BodyRange bodies = island_bodies(state, k);
   const auto [first, last] = island_velocities(state, k);
   const auto on_island = [first = first, count = last - first](Eigen::VectorXd& x) { return x.segment(first, count); };
@@ -68,7 +72,9 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
   if (!on_island(state.actuation).isZero(0)) on_island(state.joint_forces) += on_island(state.actuation);  // zeroed at the last step's end
   const int substeps = turn_substeps(state, dt, bodies);
   const double h = dt / substeps;
+  state.last_substep[k] = h;
   for (int s = 0; s < substeps; ++s) {
+    const bool velocity_only = before_move && s == substeps - 1;
     // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), and
     // the integrator's first pass, at the poses of q: state.kinematics' at the step's start, found
     // again after a substep.
@@ -81,20 +87,50 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
       // held joints are within its penalty's 1/kPenalty in the predicted velocity; the integrator
       // takes them exactly.)
       on_island(state.v) = on_island(state.controls.predicted);
+      if (velocity_only) continue;
       on_island(state.integration.stage_displacement) = h * on_island(state.v);
       displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
       continue;
     }
-    integrate(state.tree, state.q, state.v, controlled ? state.controls.forces : state.joint_forces, state.settings.gravity, h,
-              state.options.integrator, state.integration, &state.kinematics, bodies);
+    const Eigen::VectorXd& forces = controlled ? state.controls.forces : state.joint_forces;
+    if (velocity_only) {
+      accelerate(state.tree, state.q, state.v, forces, state.settings.gravity, h, state.integration, &state.kinematics, bodies);
+    } else {
+      integrate(state.tree, state.q, state.v, forces, state.settings.gravity, h, state.options.integrator, state.integration,
+                &state.kinematics, bodies);
+    }
   }
   if (state.settings.damping > 0) on_island(state.v) *= std::exp(-state.settings.damping * dt);
+  if (before_move) return;  // state.kinematics keeps the poses of q, which the constraints' rows are taken at
   forward_kinematics(state.tree, state.q, state.v, state.kinematics, bodies);
   mirror_rigid_bodies(state, bodies);
 }
 
-// Integrates the awake islands, each a task on the state's threads when it has them (not with
-// joint friction, whose factors the islands share); sleeping ones keep q and v = 0.
+// The constraints before the move: detection at the step's start, the velocity update, the
+// constraints on it, then the positions (step.hpp).
+void step_constraints_before_move(FeatherstoneState& state, double dt, StepReport& report, StageClock& clock) {
+  if (detect_rigid_contacts(state)) take_moved_balls(state);  // sweeps the balls' paths of the last step
+  remember_step_start(state);
+  report.profile.detect = clock.lap();
+  integrate_awake_islands(state, dt);
+  report.profile.integrate = clock.lap();
+  resolve_joint_space_contacts(state, dt);
+  run_stage(state.runner.get(), state.awake_islands.size(),
+            [&](std::size_t n) { advance_positions(state, static_cast<std::size_t>(state.awake_islands[n])); });
+}
+
+// The thesis's loop (figure 2.5): move, then collide.
+void step_constraints_after_move(FeatherstoneState& state, double dt, StepReport& report, StageClock& clock) {
+  remember_step_start(state);
+  integrate_awake_islands(state, dt);
+  report.profile.integrate = clock.lap();
+  if (detect_rigid_contacts(state)) take_moved_balls(state);
+  report.profile.detect = clock.lap();
+  resolve_joint_space_contacts(state, dt);
+}
+
+}  // namespace
+
 void integrate_awake_islands(FeatherstoneState& state, double dt) {
   state.awake_islands.clear();
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
@@ -105,8 +141,6 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   run_stage(state.joint_friction ? nullptr : state.runner.get(), state.awake_islands.size(),
             [&](std::size_t n) { integrate_island(state, static_cast<std::size_t>(state.awake_islands[n]), dt, loads); });
 }
-
-}  // namespace
 
 void rest_sleeping_islands(FeatherstoneState& state) {
   zero_sleeping_velocities(state);
@@ -156,12 +190,11 @@ void take_moved_balls(FeatherstoneState& state) {
 StepReport step(FeatherstoneState& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
     StageClock clock(state.options.profile);
-    remember_step_start(state);
-    integrate_awake_islands(state, dt);
-    report.profile.integrate = clock.lap();
-    if (detect_rigid_contacts(state)) take_moved_balls(state);
-    report.profile.detect = clock.lap();
-    resolve_joint_space_contacts(state, dt);
+    if (constraints_before_move(state)) {
+      step_constraints_before_move(state, dt, report, clock);
+    } else {
+      step_constraints_after_move(state, dt, report, clock);
+    }
     report.contacts = static_cast<int>(state.contacts.size());
     state.time += dt;
     report.status = update_sleep(state, dt);

@@ -29,12 +29,25 @@ namespace limber {
 ///                (joint_space_contacts.hpp), with the joint limits' rows: each group of islands
 ///                the contacts join a task, on options.threads;
 ///  5. sleep      still islands fall asleep (their v is zeroed); divergence is detected.
+/// That is RK4's order, the thesis's loop (move, then collide). Under semi-implicit Euler the
+/// constraints come before the move (joint_space_contacts.hpp, "Before the move"): 4 collide
+/// (speculative contacts, at the step's start pose) first; then 1–2, the last substep's velocity
+/// update alone; the contacts and limits on that velocity; then each awake island moves,
+/// q ← q ⊕ h·v plus the push-out (advance_positions), and 3 refreshes its rigid bodies (a task
+/// per island); then 5.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a
 /// divergence is reported in the result (also state.last_report). Allocates nothing.
 StepReport step(FeatherstoneState& state, double dt);
 
 /// step() with the scene's own time step.
 inline StepReport step(FeatherstoneState& state) { return step(state, state.settings.time_step); }
+
+/// The step's stages 1–3 for every awake island (listed in state.awake_islands), each a task on
+/// the state's threads when it has them (not with joint friction, whose factors the islands
+/// share); sleeping ones keep q and v = 0. Before the move (constraints_before_move,
+/// joint_space_contacts.hpp) its last substep is the velocity update alone, and the positions wait
+/// for advance_positions.
+void integrate_awake_islands(FeatherstoneState& state, double dt);
 
 /// Recomputes the rigid bodies (positions, orientations, momenta) and state.kinematics (poses
 /// and spatial velocities of the tree bodies) from (q, v) by forward kinematics.

@@ -170,7 +170,11 @@ struct FeatherstoneOptions {
   /// or the humanoid's short neck spinning between two spherical joints after the ball's impact
   /// (Ω ≈ 100 rad/s), diverges within a few dozen steps at Δt = 1/240 s (measured on every
   /// humanoid.json body and ball speed, and on stick_in_box.json). RK4 damps such motion
-  /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8).
+  /// slightly instead (|amplification| = 1 − (hΩ)⁶/144 + …, stable while hΩ < 2.8); the step
+  /// splits into substeps where a body turns fast (step.hpp). The integrator also sets when the
+  /// contacts and limits are solved: under RK4 after the move (the thesis's loop), under
+  /// semi-implicit Euler before it, on the velocity update (MuJoCo's order; joint_space_contacts.hpp,
+  /// "Before the move"), where static friction holds and a landing limb does not overlap.
   Integrator integrator = Integrator::rk4;
   /// Threads for the contacts and limits, the calling one included, in [0, kMaxThreads]: each
   /// group of islands the step's contacts join is a task (joint_space_contacts.hpp, "Groups"),
