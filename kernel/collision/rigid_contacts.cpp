@@ -37,7 +37,7 @@ void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_inde
     const Eigen::Vector3d u = end_disk ? Eigen::Vector3d(axis / length) : Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d lowest = centre + end_support(plane.normal, u, radius, end_disk).offset;
     const double depth = plane.offset - plane.normal.dot(lowest);
-    if (depth <= -state.contact_margin) continue;
+    if (depth <= -state.limb_segments[b].reach) continue;
     const double restitution = std::max(plane.restitution, state.shapes.restitution[b]);
     state.contacts.push_back({static_cast<std::int32_t>(b), -1, lowest + 0.5 * depth * plane.normal, plane.normal, depth,
                               restitution, plane.friction});
@@ -68,10 +68,25 @@ void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body
   y.angular_momentum[b] = state.bodies.world_inertia(y, b) * body.angular_velocity;
 }
 
+// Each body's speculative reach (RigidScene::speculative_time) into its limb segment, m.
+void find_speculative_reach(RigidScene& state) {
+  const double t = state.speculative_time;
+  const RigidBodyState& y = state.bodies.state;
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    double reach = 0;
+    if (t > 0) {
+      const double arm = 0.5 * state.shapes.length[b] + state.shapes.radius[b] + state.shapes.centre_offset[b].norm();
+      const double speed = state.bodies.linear_velocity(y, b).norm() + state.bodies.angular_velocity(y, b).norm() * arm;
+      reach = std::min(t * (speed + state.settings.gravity.norm() * t), kMostSpeculativeReach);  // also when not finite
+    }
+    state.limb_segments[b].reach = reach;
+  }
+}
+
 // The collision world's contacts (limb–limb, ball–ball, and limbs and balls against static colliders)
-// among the bodies as they are now, closer than state.contact_margin (0: touching or overlapping,
-// as a rigid method that moves before it collides answers a contact only once it overlaps). An
-// awake limb that touches a sleeping one wakes its island.
+// among the bodies as they are now, touching or overlapping, or (speculative_time) closer than
+// their reaches: a rigid method that moves before it collides answers a contact only once it
+// overlaps. An awake limb that touches a sleeping one wakes its island.
 void add_collision_world_contacts(RigidScene& state) {
   const std::size_t body_count = state.bodies.size();
   for (std::size_t b = 0; b < body_count; ++b) {
@@ -84,7 +99,7 @@ void add_collision_world_contacts(RigidScene& state) {
     segment.radius = state.shapes.radius[b];
     state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
   }
-  state.collisions.find(state.limb_segments, state.limb_awake, state.contact_margin, state.limb_contacts);
+  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts);
   for (const LimbContact& contact : state.limb_contacts) {
     const auto a = static_cast<std::int32_t>(contact.first);
     RigidContact rigid{a, -1, contact.point, contact.normal, -contact.separation, contact.restitution, contact.friction};
@@ -110,7 +125,7 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
     if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
     const auto [head, tail] = head_and_tail(state, b);
     const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
-    if (contact.separation >= state.contact_margin) continue;
+    if (contact.separation >= state.limb_segments[ball].reach + state.limb_segments[b].reach) continue;
     state.islands[state.island_of_body[b]].wake();
     state.ball_touching = state.ball_touching || contact.separation < 0;
     const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
@@ -190,6 +205,7 @@ void remember_step_start(RigidScene& state) { state.step_start_position = state.
 bool detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
+  find_speculative_reach(state);
   bool moved = false;
   if (state.ball_begin < state.bodies.size()) find_ball_candidates(state);
   for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) {

@@ -5,7 +5,7 @@
 //
 // Detection runs after the bodies moved (the thesis's loop, figure 2.5: move, then collide; the
 // Featherstone method under semi-implicit Euler runs it at the step's start instead, with
-// RigidScene::contact_margin for speculative contacts, and remember_step_start after it, so the
+// RigidScene::speculative_time for speculative contacts, and remember_step_start after it, so the
 // ball's path swept is the last step's):
 // - a cylinder's end disk touches a plane at its lowest rim point, a capsule's end cap and the
 //   ball at their lowest sphere point — up to two contacts per limb and plane;
@@ -47,8 +47,8 @@ namespace limber {
 /// detect_rigid_contacts sweeps the ball along. Every rigid method's step calls it first.
 void remember_step_start(RigidScene& scene);
 
-/// Finds the contacts of the awake bodies at the current state into scene.contacts (those closer
-/// than scene.contact_margin too, with a negative depth: speculative contacts), wakes the
+/// Finds the contacts of the awake bodies at the current state into scene.contacts (and with
+/// scene.speculative_time the gaps they may close, with a negative depth), wakes the
 /// islands the ball or an awake limb touches and sets scene.ball_touching. Limb–limb contacts
 /// have a = the lower body index, b = the other, normal from b to a and restitution 0. First
 /// moves the ball back along its path to where it hit a limb or a static collider (above);

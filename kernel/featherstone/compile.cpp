@@ -6,8 +6,6 @@
 #include <thread>
 #include <vector>
 
-#include "limber/kernel/featherstone/joint_space_contacts.hpp"
-#include "limber/kernel/featherstone/joint_space_response.hpp"
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/numerics/tree_elimination.hpp"
@@ -428,7 +426,6 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.actuation.setZero(nv);
   state.drag_force.assign(tree_size, SpatialVector::Zero());
   state.awake_islands.reserve(state.islands.size());
-  if (constraints_before_move(state)) state.contact_margin = joint_space::kSpeculativeDistance;
   state.last_substep.assign(state.islands.size(), 0.0);
   JointSpaceContactScratch& contact = state.contact;
   contact.articulated.resize(tree);

@@ -226,11 +226,12 @@ bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
     for (int block = group.first_block; block < group.first_row_block; ++block) {
       const auto g = static_cast<std::size_t>(block);
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
-      // Before the move the depth is all the last steps': once past twice the slop, back to the
-      // slop at the recovery speed (the band keeps a resting contact, which the passes' tolerance
-      // lets sink by ~10⁻⁷ m a step, from being pushed and re-projected every step).
-      const double target = !before_move                   ? push_out_distance(contact, state.settings, dt)
-                            : contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, state.settings.contact_recovery_speed * dt)
+      // Before the move the depth is the last steps': once past twice the slop, back to the slop,
+      // as after the move a step's approach in full and an older overlap at the recovery speed
+      // (the band keeps a resting contact, which the passes' tolerance lets sink by ~10⁻⁷ m a
+      // step, from being pushed and re-projected every step).
+      const double target = !before_move                       ? push_out_distance(contact, state.settings, dt)
+                            : contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, push_out_distance(contact, state.settings, dt))
                                                                : 0.0;
       const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[g] * contact.normal);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;

@@ -82,7 +82,9 @@
 // a/(a + their inertia).) The rigid bodies are refreshed.
 //
 // Before the move (semi-implicit Euler; step.hpp). The step finds the contacts at its start pose,
-// closer than kSpeculativeDistance (2 cm; RigidScene::contact_margin) — a gap's depth negative —
+// across the gaps the step may close (RigidScene::speculative_time: each body reaches
+// Δt·(|v| + |ω|·arm + |g|Δt), at most 5 cm; a resting body a quarter of a millimetre at 1/200 s,
+// so a speculative contact does not join islands that rest apart) — a gap's depth negative —
 // and sweeps the balls' paths of the last step (rigid_contacts.hpp). Then each island's velocity
 // update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before), the
 // constraints on that v at the start pose as above — a contact still apart may close its gap in

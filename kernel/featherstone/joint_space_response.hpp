@@ -62,9 +62,5 @@ constexpr double kPushTolerance = 0.01;
 // in, m: the velocity solve keeps it from growing, and pushing out its round-off every step would
 // cost a re-projection every step.
 constexpr double kRestingSlop = 1e-4;
-// Before the move, contacts are found while closer than this (RigidScene::contact_margin), m:
-// a gap the step's approach would close is held at its far side (Catto's speculative contacts),
-// instead of overlapping by up to a step's travel until the push-out takes it back.
-constexpr double kSpeculativeDistance = 0.02;
 
 }  // namespace limber::joint_space

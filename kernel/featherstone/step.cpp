@@ -109,6 +109,7 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
 // The constraints before the move: detection at the step's start, the velocity update, the
 // constraints on it, then the positions (step.hpp).
 void step_constraints_before_move(FeatherstoneState& state, double dt, StepReport& report, StageClock& clock) {
+  state.speculative_time = dt;  // gaps the step may close are contacts too
   if (detect_rigid_contacts(state)) take_moved_balls(state);  // sweeps the balls' paths of the last step
   remember_step_start(state);
   report.profile.detect = clock.lap();

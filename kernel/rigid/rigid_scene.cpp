@@ -115,9 +115,9 @@ RigidScene compile_rigid_scene(const Model& model) {
   // Every limb end against every plane, plus each ball against every limb; with the collision
   // world, room for a limb pair and two static contacts per body (more grows it once).
   std::size_t contacts = 2 * body_count * scene.planes.size() + model.balls.size() * limb_count;
+  scene.limb_segments.resize(body_count);  // their speculative reaches too (detect_rigid_contacts)
   if (scene.collisions.active()) {
     contacts += 3 * body_count;
-    scene.limb_segments.resize(body_count);
     scene.limb_awake.resize(body_count);
     scene.limb_contacts.reserve(3 * body_count);
   }

@@ -38,8 +38,11 @@ struct RigidIsland : IslandSleep {
   std::vector<std::uint32_t> bodies;
 };
 
+/// The farthest a body reaches for speculative contacts in a step (RigidScene::speculative_time), m.
+inline constexpr double kMostSpeculativeReach = 0.05;
+
 /// A contact found this step: body `a` touches body `b` (−1: a plane, immovable), normal from b
-/// to a, depth ≥ 0 (m; > −RigidScene::contact_margin when that is not 0: a gap's is negative).
+/// to a, depth ≥ 0 (m; with RigidScene::speculative_time, a gap's is negative).
 struct RigidContact {
   std::int32_t a = 0, b = -1;
   Eigen::Vector3d point = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::UnitZ();
@@ -87,9 +90,11 @@ struct RigidScene {
   std::uint32_t ball_begin = 0;  ///< the balls are bodies ball_begin… (Model::balls, in order), after the limbs
   Settings settings;
   int contact_iterations = 8;  ///< passes of sequential impulses over a step's contacts
-  /// m, ≥ 0: contacts are found while the surfaces are closer than this, a gap's depth negative
-  /// (speculative contacts, for a method that solves them before the bodies move); 0: overlaps only.
-  double contact_margin = 0;
+  /// s, ≥ 0: contacts are also found across a gap the two bodies may close in this time, with a
+  /// negative depth (speculative contacts, for a method that solves them before the bodies move):
+  /// each body reaches t·(|v| + |ω|·(its farthest point from its centre of mass) + |g|·t), at
+  /// most kMostSpeculativeReach, its velocity the one detection sees. 0: overlaps only.
+  double speculative_time = 0;
 
   double time = 0;                     ///< s
   /// Per body: its centre of mass at the start of the step being taken, m, world
