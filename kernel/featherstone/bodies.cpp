@@ -31,6 +31,9 @@ bool teleport_body(FeatherstoneState& state, std::size_t body, const Pose& pose,
   state.v.segment<3>(v) = to_child * motion.angular;
   state.v.segment<3>(v + 3) = to_child * (motion.linear + motion.angular.cross(centre - position));
   refresh_rigid_bodies(state);
+  // A teleport is no path: a ball's continuous collision, which sweeps the last step's path when
+  // the contacts come before the move, starts from here.
+  state.step_start_position[body] = state.bodies.state.position[body];
   return true;
 }
 
