@@ -94,12 +94,12 @@
 // keeps (split impulses, Catto's and Bullet's), once past 2·kRestingSlop (0.2 mm) back to
 // kRestingSlop (0.1 mm): a step's approach in full and older overlap at the recovery speed, as
 // after the move. It joins h·v in the move and, when it moved anything, v is re-projected at the
-// new pose as above. A limit row's push-out holds what
-// is left of its gap after h·v moves it (C + h·row·v), and drift below 10⁻³·kRestingSlop is left
-// to the next push. Rows are chosen by v before the impulses; when the impulses drive a joint at
-// a limit the rows left out, the step is solved again from the free velocity with that row too
-// (an impact's step): no push-out after the move would take it back. So a resting humanoid is
-// pushed out in 10 % of its steps (nearly every step before), and humanoid.xml's step is 1.26× faster.
+// new pose as above. A limit row's push-out holds what is left of its gap after h·v moves it
+// (C + h·row·v), and drift below 10⁻³·kRestingSlop is left to the next push. Rows are chosen by v
+// before the impulses; when the impulses drive a joint at a limit the rows left out, the step is
+// solved again from the free velocity with that row too (an impact's step): no push-out after
+// the move would take it back. So a resting humanoid is pushed out in 10 % of its steps (nearly
+// every step before), and humanoid.xml's step is 1.26× faster.
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
