@@ -17,6 +17,7 @@
 #include <variant>
 #include <vector>
 
+#include "limber/kernel/featherstone/joint_space_contacts.hpp"
 #include "limber/kernel/metrics/divergence.hpp"
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
@@ -245,9 +246,10 @@ void method_lines(std::ostream& out, const Model& model, const RunFlags&, const 
                 state.tree.velocity_count(), state.tree.position_count(), state.floating_roots.size(),
                 state.floating_roots.size() == 1 ? "" : "s", roots.empty() ? "" : ": ", roots.c_str());
   const int threads = state.runner.get() ? state.runner->threads() : 1;
-  out << format("contacts    impulses through H's factor (limits held on their Delassus matrix), %d passes, then a position push-out; "
+  out << format("contacts    %s, impulses through H's factor (limits held on their Delassus matrix), %d passes, then a position push-out; "
                 "each group of islands the contacts join a task, on %d thread%s\n",
-                state.contact_iterations, threads, threads == 1 ? "" : "s");
+                constraints_before_move(state) ? "before the move (speculative)" : "after the move", state.contact_iterations, threads,
+                threads == 1 ? "" : "s");
   out << format("run         %ld steps of %.6g s = %.4g s simulated in %.4g s wall (%.0f steps/s)\n", record.steps_done,
                 model.settings.time_step, state.time, record.wall_seconds,
                 record.wall_seconds > 0 ? record.steps_done / record.wall_seconds : 0.0);
