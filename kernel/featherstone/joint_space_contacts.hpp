@@ -99,7 +99,7 @@
 // before the impulses; when the impulses drive a joint at a limit the rows left out, the step is
 // solved again from the free velocity with that row too (an impact's step): no push-out after
 // the move would take it back. So a resting humanoid is pushed out in 10 % of its steps (nearly
-// every step before), and humanoid.xml's step is 1.26× faster.
+// every step before), and humanoid.xml's step is 1.29× faster.
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
