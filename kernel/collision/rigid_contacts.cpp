@@ -76,7 +76,10 @@ void find_speculative_reach(RigidScene& state) {
     double reach = 0;
     if (t > 0) {
       const double arm = 0.5 * state.shapes.length[b] + state.shapes.radius[b] + state.shapes.centre_offset[b].norm();
-      const double speed = state.bodies.linear_velocity(y, b).norm() + state.bodies.angular_velocity(y, b).norm() * arm;
+      // |ω| = |I⁻¹·(q⁻¹ L)| ≤ |L| / I_min (I diagonal in the body's principal frame): a bound,
+      // without forming the world inverse inertia or turning L.
+      const double spin = y.angular_momentum[b].norm() * state.bodies.body_inverse_inertia[b].diagonal().maxCoeff();
+      const double speed = state.bodies.linear_velocity(y, b).norm() + spin * arm;
       reach = std::min(t * (speed + state.settings.gravity.norm() * t), kMostSpeculativeReach);  // also when not finite
     }
     state.limb_segments[b].reach = reach;
