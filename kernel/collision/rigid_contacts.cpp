@@ -76,9 +76,10 @@ void find_speculative_reach(RigidScene& state) {
     double reach = 0;
     if (t > 0) {
       const double arm = 0.5 * state.shapes.length[b] + state.shapes.radius[b] + state.shapes.centre_offset[b].norm();
-      // |ω| = |I⁻¹·(q⁻¹ L)| ≤ |L| / I_min (I diagonal in the body's principal frame): a bound,
-      // without forming the world inverse inertia or turning L.
-      const double spin = y.angular_momentum[b].norm() * state.bodies.body_inverse_inertia[b].diagonal().maxCoeff();
+      // |ω| = |I⁻¹·(q⁻¹ L)| in the body's principal frame, without forming the world inverse
+      // inertia. (The bound |L|/I_min, tried, reached far past a spinning capsule's gaps: 4 % fewer
+      // steps/s on 22_humanoids.xml.)
+      const double spin = (state.bodies.body_inverse_inertia[b] * (y.orientation[b].conjugate() * y.angular_momentum[b])).norm();
       const double speed = state.bodies.linear_velocity(y, b).norm() + spin * arm;
       reach = std::min(t * (speed + state.settings.gravity.norm() * t), kMostSpeculativeReach);  // also when not finite
     }
