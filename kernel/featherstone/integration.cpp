@@ -108,15 +108,26 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, tree.all_bodies());
 }
 
-void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
-                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
-  if (!workspace.fits(tree)) throw std::invalid_argument("accelerate: the workspace is not sized for this tree");
+namespace {
+
+// v̇(q, v) into workspace.accelerations on `range`, at `poses` when given (those of q).
+void find_accelerations(const ArticulatedTree& tree, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                        const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity,
+                        FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
   if (poses) {
     forward_dynamics(tree, *poses, v, joint_forces, nullptr, gravity, workspace.dynamics, workspace.accelerations, range);
   } else {
     forward_dynamics(tree, q, v, joint_forces, gravity, workspace.dynamics, workspace.accelerations, range);
   }
+}
+
+}  // namespace
+
+void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
+                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
+                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
+  if (!workspace.fits(tree)) throw std::invalid_argument("accelerate: the workspace is not sized for this tree");
+  find_accelerations(tree, q, v, joint_forces, gravity, workspace, poses, range);
   const auto [first, last] = tree.velocity_span(range);
   v.segment(first, last - first) += h * workspace.accelerations.segment(first, last - first);
 }
@@ -131,14 +142,6 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   const auto [first_position, last_position] = tree.position_span(range);
   const auto velocities = [&, first = first_velocity, count = last_velocity - first_velocity](Eigen::VectorXd& x) { return x.segment(first, count); };
   const auto positions = [&, first = first_position, count = last_position - first_position](Eigen::VectorXd& x) { return x.segment(first, count); };
-  // v̇ at the step's start, at the poses given when there are.
-  const auto dynamics = [&](const Eigen::VectorXd& stage_q, const Eigen::VectorXd& stage_v, const DynamicsWorkspace* stage_poses) {
-    if (stage_poses) {
-      forward_dynamics(tree, *stage_poses, stage_v, joint_forces, nullptr, gravity, w.dynamics, w.accelerations, range);
-    } else {
-      forward_dynamics(tree, stage_q, stage_v, joint_forces, gravity, w.dynamics, w.accelerations, range);
-    }
-  };
   switch (integrator) {
     case Integrator::semi_implicit_euler:
       accelerate(tree, q, v, joint_forces, gravity, h, workspace, poses, range);
@@ -154,7 +157,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
       velocities(w.stage_displacement).setZero();
       velocities(w.acceleration_sum).setZero(), velocities(w.displacement_rate_sum).setZero();
       for (int s = 0; s < 4; ++s) {
-        dynamics(w.stage_positions, w.stage_velocities, s == 0 ? poses : nullptr);
+        find_accelerations(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w, s == 0 ? poses : nullptr, range);
         displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate, range);
         velocities(w.acceleration_sum) += kWeights[s] * velocities(w.accelerations);
         velocities(w.displacement_rate_sum) += kWeights[s] * velocities(w.stage_rate);

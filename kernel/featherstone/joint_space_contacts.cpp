@@ -165,8 +165,9 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
 
 // Island k (its tree bodies `bodies`) moved by the push-out's displacement, then the joint
 // velocities that keep every body's motion in its own frame as closely as the joints allow at its
-// new pose, in the kinetic-energy metric: the H-orthogonal projection v* = H⁻¹ (Σ J_iᵀ I_i v_i + A v) of the old motions v_i and armature
-// momenta A v (H includes A), so it never adds kinetic energy. Keeping v would not do: v holds
+// new pose, in the kinetic-energy metric: the H-orthogonal projection
+// v* = H⁻¹ (Σ J_iᵀ I_i v_i + A v) of the old motions v_i and armature momenta A v (H includes A),
+// so it never adds kinetic energy. Keeping v would not do: v holds
 // relative velocities in the child frames the push-out turned, and a limb spinning fast about its
 // axis relative to its parent would swing that spin onto its neighbours.
 // It is taken as a correction of v through H's factor at the new pose (the CRBA and LᵀDL of
