@@ -102,6 +102,31 @@ void BM_HumanoidArticulatedBodyPass(benchmark::State& bench) {
   }
 }
 
+// The articulated-body pass's answer the other way (MuJoCo's, and the step's for an island a
+// contact touches before the move): the poses, the bias forces by recursive Newton–Euler, H by the
+// composite-rigid-body algorithm, its LᵀDL factor and one solve; the factor then serves the
+// contacts.
+void BM_HumanoidBiasForcesAndFactorSolve(benchmark::State& bench) {
+  const ArticulatedTree tree = humanoid_tree();
+  if (tree.body_count() == 0) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
+  const int nv = tree.velocity_count();
+  const Eigen::VectorXd q = tree.neutral_positions(), v = Eigen::VectorXd::Constant(nv, 0.1);
+  DynamicsWorkspace poses, workspace;
+  poses.resize(tree), workspace.resize(tree);
+  JointSpaceFactor factor;
+  factor.assign(tree);
+  Eigen::VectorXd accelerations = Eigen::VectorXd::Zero(nv);
+  for (auto _ : bench) {
+    body_poses(tree, q, poses);
+    bias_forces(tree, poses, v, Eigen::Vector3d(0, 0, -9.81), workspace, accelerations, tree.all_bodies());
+    mass_matrix(tree, poses, workspace, factor);
+    factor.factor(0, nv);
+    accelerations = -accelerations;  // τ = 0
+    factor.solve(accelerations, 0, nv);
+    benchmark::DoNotOptimize(accelerations.data());
+  }
+}
+
 void BM_HumanoidFactorAndDelassus(benchmark::State& bench) {
   const ArticulatedTree tree = humanoid_tree();
   if (tree.body_count() == 0) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
@@ -180,6 +205,7 @@ void BM_ChainPass(benchmark::State& bench) {
 BENCHMARK(BM_ChainStep)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ChainPass)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidArticulatedBodyPass)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HumanoidBiasForcesAndFactorSolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidFactorAndDelassus)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodyRevoluteChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodySphericalChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);

@@ -375,6 +375,7 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
     if (friction) contact.inertia.assign(tree), contact.held.assign(tree);
   }
   contact.composite.resize(tree);
+  contact.touched.assign(state.islands.size(), 0), contact.factored.assign(state.islands.size(), 0);
   contact.response.setZero(nv);
   // Limit rows: two for a hinge's or slide's range or a serial axis's, three for a ball's cone
   // and twist; per island.

@@ -2,6 +2,7 @@
 // Algorithms", 2008):
 //   forward_dynamics  v̇ = H⁻¹(τ − C)  by the articulated-body algorithm, O(n)   (Table 7.1)
 //   inverse_dynamics  τ = H v̇ + C     by recursive Newton–Euler, O(n)        (Table 5.1)
+//   bias_forces       C               the same with v̇ = 0
 //   mass_matrix       H               by the composite-rigid-body algorithm  (Table 6.2)
 // where H(q) is the joint-space inertia matrix and C(q, v) the bias forces (Coriolis,
 // centrifugal and gravity). Coordinates, joint types and frames: articulated_tree.hpp; spatial
@@ -115,6 +116,15 @@ void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& pose
 void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                       const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_accelerations,
                       const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& joint_forces);
+
+/// The bias forces C(q, v) (nv: Coriolis, centrifugal and gravity; what inverse_dynamics gives for
+/// v̇ = 0) on the coordinates of the bodies of `range`, written to `forces` (sized nv), at the
+/// poses `poses` holds (body_poses or forward_kinematics of the current q; it may be `workspace`
+/// itself). With H from mass_matrix, H⁻¹(τ − C) is forward_dynamics' v̇ (MuJoCo's mj_rne, then
+/// mj_solveM). O(n); allocates nothing. Leaves the workspace's velocity, bias_acceleration and
+/// acceleration meaningful on the range.
+void bias_forces(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
+                 const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& forces, BodyRange range);
 
 /// The composite-rigid-body algorithm (Table 6.2): the joint-space inertia matrix H(q) (nv × nv,
 /// symmetric positive definite, written to `joint_space_inertia`, resized), dense. O(n·depth) work.

@@ -105,7 +105,13 @@ struct JointSpaceContactScratch {
   // The blocks' responses through the factor (joint_space_contacts.hpp, "Responses").
   // The factors hold O(Σ depth) entries: compile sizes them for a small tree, a large tree's
   // first step that needs them does (compile.cpp, size_constraint_scratch).
-  JointSpaceFactor factor;                       ///< H's LᵀDL at the constraints' configuration (or the friction's H + h·G)
+  JointSpaceFactor factor;                       ///< H's LᵀDL at the constraints' configuration (before the move H + h·G; or the friction's H + h·G)
+  /// Per island, before the move: a contact touches it this step, so its velocity update goes
+  /// through the factor (factored_forward_dynamics) instead of the articulated-body algorithm.
+  std::vector<char> touched;
+  /// Per island: `factor` holds its H + h·G at the constraints' poses, from its velocity update
+  /// this step (the constraints take it as it is).
+  std::vector<char> factored;
   JointSpaceFactor inertia;                      ///< with joint friction: H + h·G, not factored
   JointSpaceFactor held;                         ///< with joint friction: H + h·G with the held joints' penalties, factored per island
   DynamicsWorkspace composite;                   ///< the composite-rigid-body algorithm's scratch

@@ -122,6 +122,20 @@ void settle(FeatherstoneState& state, const ConstraintGroup& group, Eigen::Vecto
   });
 }
 
+// H + diag(armature) (armature: nv, or null) of island k at state.kinematics' poses into the
+// factor, factored; s.factored[k] says whether it was positive definite.
+void factor_island(FeatherstoneState& state, std::size_t k, BodyRange bodies, const double* armature) {
+  JointSpaceContactScratch& s = state.contact;
+  mass_matrix(state.tree, state.kinematics, s.composite, s.factor, bodies);
+  const auto [first, last] = island_velocities(state, k);
+  if (armature) {
+    for (int i = first; i < last; ++i) {
+      if (armature[i] != 0) s.factor.add_inertia(i, i, armature[i]);
+    }
+  }
+  s.factored[k] = s.factor.factor(first, last) < 0;
+}
+
 // Sequential impulses (joint_space_contacts.hpp, "Impulses"), the group's contacts' and limit
 // rows'.
 void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
@@ -206,6 +220,7 @@ void displace_island(FeatherstoneState& state, std::size_t k, BodyRange bodies) 
   s.factor.solve(s.generalized_momentum, first, last);
   on_island(state.v) += on_island(s.generalized_momentum);
   body_velocities(tree, state.v, state.kinematics, bodies);
+  s.factored[k] = 0;  // the factor holds H at the new pose
 }
 
 // The position pass (joint_space_contacts.hpp, "Penetration") over the group.
@@ -262,9 +277,9 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
   JointSpaceContactScratch& s = state.contact;
   bool factored = true;
   for_each_island(state, group, [&](std::size_t k, BodyRange bodies) {
-    mass_matrix(state.tree, state.kinematics, s.composite, s.factor, bodies);  // at the poses detection saw
-    const auto [first, last] = island_velocities(state, k);
-    factored = s.factor.factor(first, last) < 0 && factored;
+    if (s.factored[k]) return;  // the velocity update's, at these poses
+    factor_island(state, k, bodies, constraints_before_move(state) ? state.controls.armature.data() : nullptr);
+    factored = s.factored[k] && factored;
   });
   if (!factored) {
     // H is positive definite at any finite pose; it is not only once the state has gone
@@ -457,7 +472,10 @@ void solve_groups(FeatherstoneState& state, double dt, bool push, const Eigen::V
 
 }  // namespace
 
-void apply_joint_space_impulses(FeatherstoneState& state, double dt) { solve_groups(state, dt, /*push=*/false); }
+void apply_joint_space_impulses(FeatherstoneState& state, double dt) {
+  std::fill(state.contact.factored.begin(), state.contact.factored.end(), 0);
+  solve_groups(state, dt, /*push=*/false);
+}
 
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
   if (!constraints_before_move(state)) {
@@ -477,6 +495,22 @@ void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
   s.constrained_velocity = state.v;
   state.v = s.free_velocity;
   solve_groups(state, dt, /*push=*/true, &s.constrained_velocity);
+}
+
+void factored_forward_dynamics(FeatherstoneState& state, std::size_t island, const Eigen::VectorXd& joint_forces, const double* armature,
+                               Eigen::VectorXd& accelerations) {
+  JointSpaceContactScratch& s = state.contact;
+  const BodyRange bodies = island_bodies(state, island);
+  const auto [first, last] = island_velocities(state, island);
+  factor_island(state, island, bodies, armature);
+  bias_forces(state.tree, state.kinematics, state.v, state.settings.gravity, s.composite, accelerations, bodies);
+  auto on_island = accelerations.segment(first, last - first);
+  on_island = joint_forces.segment(first, last - first) - on_island;
+  if (!s.factored[island]) {
+    on_island.setConstant(std::numeric_limits<double>::quiet_NaN());  // the step's status reports it
+    return;
+  }
+  s.factor.solve(accelerations, first, last);
 }
 
 void advance_positions(FeatherstoneState& state, std::size_t island) {

@@ -19,7 +19,8 @@
 // ragdoll's side landing). Before the move none of the three happens.
 //
 // Responses. Once a step, the composite-rigid-body algorithm writes H into the sparsity of its
-// tree and it is factored as LᵀDL (joint_space_factor.hpp; MuJoCo's mj_crb and mj_factorM). A
+// tree and it is factored as LᵀDL (joint_space_factor.hpp; MuJoCo's mj_crb and mj_factorM) —
+// before the move, by the velocity update of an island a contact touches (below). A
 // contact's rows J_c (3 × nv: the world x, y, z of the relative velocity of its points, a's minus
 // b's) are the generalized impulses of unit world impulses at p, carried from each body to the
 // root (τ_k = S_kᵀ f on every joint k on the way, Table 5.1's inward pass): non-zero only on the
@@ -86,7 +87,11 @@
 // Δt·(|v| + |ω|·arm + |g|Δt), at most 5 cm; a resting body a quarter of a millimetre at 1/200 s,
 // so a speculative contact does not join islands that rest apart) — a gap's depth negative —
 // and sweeps the balls' paths of the last step (rigid_contacts.hpp). Then each island's velocity
-// update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before), the
+// update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before) — for an
+// island a contact touches, MuJoCo's way: H + h·G by the composite-rigid-body algorithm (G the
+// drives' gains, below), its factor, the bias forces by recursive Newton–Euler and one solve
+// (factored_forward_dynamics), the factor the constraints then take, where the articulated-body
+// algorithm and a second CRBA and factor in the constraints cost the humanoid 9 % more a step —, the
 // constraints on that v at the start pose as above — a contact still apart may close its gap in
 // the step and no more (Catto's speculative contacts); a bouncing one (e > 0) bounces from where
 // it is, as in Box2D — and only then q ← q ⊕ h·v. What overlap is left (a landing the reach missed,
@@ -100,6 +105,12 @@
 // solved again from the free velocity with that row too (an impact's step): no push-out after
 // the move would take it back. So a resting humanoid is pushed out in 10 % of its steps (nearly
 // every step before), and humanoid.xml's step is 1.29× faster.
+// The constraints before the move are solved against H + h·G, not H (islands without a drive
+// have G = 0): the stable PD's drive force is taken at the velocity the step ends with, and the
+// impulses change that velocity, so the drive answers them within the step as an implicit
+// spring-damper (until this design the drives' force was held at the velocity before the
+// impulses, and a driven joint the contacts stopped pushed on at the force of its unhindered
+// motion).
 //
 // Joint limits. Each limit is an inequality C ≥ 0 on one joint coordinate x (the Model's, as
 // kernel/model/joint_coordinates.hpp measures it): x − min ≥ 0, max − x ≥ 0, or for a spherical
@@ -129,7 +140,8 @@
 // controllers", IEEE CG&A): its force k·(target − x − h·ẋ⁺) + c·(target_velocity − ẋ⁺) is
 // taken at the velocity ẋ⁺ the step ends with, found with the dynamics, which adds the
 // armature h·(k·h + c) to the driven coordinates' D_i in the articulated-body algorithm — one
-// ABA, O(n), unconditionally stable in k and c. Friction then gives each joint the impulse j that
+// ABA, O(n), unconditionally stable in k and c (or to H's diagonal in the factor, for an island
+// a contact touches before the move). Friction then gives each joint the impulse j that
 // stops its predicted velocity through that same inertia, clamped to |j| ≤ friction·h (per DOF;
 // a spherical joint's 3-vector by its norm, against the velocity it slides at), an island's
 // joints together (stuck joints held by a penalty on their block of H + h·G, refactored;
@@ -160,6 +172,17 @@ inline bool constraints_before_move(const FeatherstoneState& state) {
 /// rigid bodies are refreshed. Touches only its bodies' and coordinates' entries.
 void advance_positions(FeatherstoneState& state, std::size_t island);
 
+/// v̇ = (H + diag(armature))⁻¹ (τ − C(q, v)) on island `island`'s coordinates of `accelerations`
+/// (nv), τ = joint_forces (nv), armature nv values or null, at the poses in state.kinematics: the
+/// mass matrix by the composite-rigid-body algorithm, its LᵀDL factor, the bias forces by
+/// recursive Newton–Euler (MuJoCo's mj_crb, mj_factorM, mj_rne, mj_solveM) — forward_dynamics'
+/// answer to round-off. Before the move, for an island a contact touches: the factor it leaves
+/// in state.contact.factor is the one the constraints are then solved against
+/// (state.contact.factored), so the step factors H once. v̇ not finite when H + diag(armature)
+/// was not positive definite (a state gone non-finite). Allocates nothing.
+void factored_forward_dynamics(FeatherstoneState& state, std::size_t island, const Eigen::VectorXd& joint_forces, const double* armature,
+                               Eigen::VectorXd& accelerations);
+
 /// Applies only the impulses of resolve_joint_space_contacts (no push-out) and refreshes the
 /// rigid bodies: for tests of the impulses' energy.
 void apply_joint_space_impulses(FeatherstoneState& state, double dt);
@@ -176,9 +199,11 @@ FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
 /// Allocates nothing.
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h);
 /// The same for island `island` alone (its coordinates of the forces; false, writing nothing, when
-/// it has no drive or friction). Islands may run on different threads unless the scene has joint
-/// friction (FeatherstoneState::joint_friction), whose factors they share.
-bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island);
+/// it has no drive or friction). Islands may run on different threads
+/// unless the scene has joint friction (FeatherstoneState::joint_friction), whose factors they
+/// share. `through_factor`: the drives' dynamics by factored_forward_dynamics (which leaves the
+/// island's H + h·G factored for the constraints) instead of the articulated-body algorithm.
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island, bool through_factor);
 
 /// τ = Σ J_iᵀ f_i: the joint forces (nv) equivalent to spatial forces f_i on the tree bodies
 /// (body coordinates, at the body's origin; `body_forces`, one per tree body, consumed: zeroed),

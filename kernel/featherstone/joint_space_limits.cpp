@@ -484,7 +484,7 @@ void gather_friction(FeatherstoneState& state, double h, std::size_t island) {
 
 }  // namespace
 
-bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island) {
+bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island, bool through_factor) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
   bool drives = false, friction = false;
@@ -509,8 +509,12 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   on_island(c.armature) = h * on_island(c.drive_gain);
   on_island(c.explicit_force) = on_island(loads) + on_island(c.drive_force) - on_island(c.drive_gain).cwiseProduct(on_island(state.v));
   JointSpaceContactScratch& s = state.contact;
-  forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
-                   c.acceleration, bodies);
+  if (through_factor) {
+    factored_forward_dynamics(state, island, c.explicit_force, c.armature.data(), c.acceleration);
+  } else {
+    forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
+                     c.acceleration, bodies);
+  }
   on_island(c.predicted) = on_island(state.v) + h * on_island(c.acceleration);
 
   if (state.joint_friction) c.friction.clear();  // shared: such scenes integrate on one thread
@@ -538,7 +542,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   bool any = false;
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     if (state.islands[k].sleeping) continue;
-    if (joint_control_forces(state, loads, h, k)) {
+    if (joint_control_forces(state, loads, h, k, /*through_factor=*/false)) {
       any = true;
     } else {
       const auto [first, last] = island_velocities(state, k);

@@ -70,6 +70,9 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
   const bool drag = !state.settings.drag.linear.isZero(0) || !state.settings.drag.angular.isZero(0);
   if (drag || loads) body_load_joint_forces(state, drag, bodies);
   if (!on_island(state.actuation).isZero(0)) on_island(state.joint_forces) += on_island(state.actuation);  // zeroed at the last step's end
+  // An island a contact touches has its velocity update through H's factor, which the constraints
+  // then take (factored_forward_dynamics); joint friction keeps its own factors.
+  const bool through_factor = before_move && state.contact.touched[k] && !state.joint_friction;
   const int substeps = turn_substeps(state, dt, bodies);
   const double h = dt / substeps;
   state.last_substep[k] = h;
@@ -79,7 +82,7 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
     // the integrator's first pass, at the poses of q: state.kinematics' at the step's start, found
     // again after a substep.
     if (s > 0) body_poses(state.tree, state.q, state.kinematics, bodies);
-    const bool controlled = joint_control_forces(state, state.joint_forces, h, k);
+    const bool controlled = joint_control_forces(state, state.joint_forces, h, k, velocity_only && through_factor);
     if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
       // The stable PD's dynamics already are this step's: (H + h·G) v̇ = τ − C + F − G·v gives
       // v⁺ = v + h·v̇ with H v̇ = τ − C + F − G·v⁺, the velocity semi-implicit Euler ends with
@@ -93,7 +96,10 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
       continue;
     }
     const Eigen::VectorXd& forces = controlled ? state.controls.forces : state.joint_forces;
-    if (velocity_only) {
+    if (velocity_only && through_factor) {
+      factored_forward_dynamics(state, k, forces, nullptr, state.integration.accelerations);
+      on_island(state.v) += h * on_island(state.integration.accelerations);
+    } else if (velocity_only) {
       accelerate(state.tree, state.q, state.v, forces, state.settings.gravity, h, state.integration, &state.kinematics, bodies);
     } else {
       integrate(state.tree, state.q, state.v, forces, state.settings.gravity, h, state.options.integrator, state.integration,
@@ -136,6 +142,17 @@ void integrate_awake_islands(FeatherstoneState& state, double dt) {
   state.awake_islands.clear();
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     if (!state.islands[k].sleeping) state.awake_islands.push_back(static_cast<std::int32_t>(k));
+  }
+  JointSpaceContactScratch& s = state.contact;
+  std::fill(s.touched.begin(), s.touched.end(), 0), std::fill(s.factored.begin(), s.factored.end(), 0);
+  if (constraints_before_move(state)) {
+    state.controls.armature.setZero();  // h·G, which the constraints add to H: the drives' islands set theirs
+    for (const RigidContact& contact : state.contacts) {
+      s.touched[state.island_of_body[contact.a]] = 1;
+      if (contact.b >= 0) s.touched[state.island_of_body[contact.b]] = 1;
+    }
+    // A large tree's first step with a contact sizes the factor here, not in the islands' tasks.
+    if (!state.contacts.empty() && s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);
   }
   bool loads = false;
   for (std::size_t b = 0; b < state.applied_force.size(); ++b) loads = loads || !state.applied_force[b].isZero(0) || !state.applied_torque[b].isZero(0);

@@ -32,7 +32,8 @@ namespace limber {
 /// That is RK4's order, the thesis's loop (move, then collide). Under semi-implicit Euler the
 /// constraints come before the move (joint_space_contacts.hpp, "Before the move"): 4 collide
 /// (speculative contacts, at the step's start pose) first; then 1–2, the last substep's velocity
-/// update alone; the contacts and limits on that velocity; then each awake island moves,
+/// update alone (for an island a contact touches, through H's factor, which the constraints then
+/// take: factored_forward_dynamics); the contacts and limits on that velocity; then each awake island moves,
 /// q ← q ⊕ h·v plus the push-out (advance_positions), and 3 refreshes its rigid bodies (a task
 /// per island); then 5.
 /// The joints cannot open: every body's pose is computed from q. Never throws; a bad Δt or a

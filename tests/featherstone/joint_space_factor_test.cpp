@@ -174,6 +174,41 @@ TEST(JointSpaceFactor, TheSparseMassMatrixIsTheDenseOnesEntriesAndSolvesAsTheArt
   }
 }
 
+TEST(JointSpaceFactor, TheBiasForcesThroughTheFactorGiveTheArticulatedBodyAlgorithmsAccelerations) {
+  // Before the move a touched island's velocity update is (H + diag(a))⁻¹(τ − C): the mass matrix
+  // and the bias forces by recursive Newton–Euler at the poses the step holds, then the factor's
+  // solve — MuJoCo's way, where the articulated-body algorithm (with the drives' armature a on
+  // its D_i) gave it.
+  std::mt19937 rng(49);
+  DynamicsWorkspace poses, workspace, articulated;
+  Eigen::VectorXd bias, accelerations, expected, reference;
+  for (const RandomTreeOptions& kind : random_tree_kinds()) {
+    for (int trial = 0; trial < 10; ++trial) {
+      const ArticulatedTree tree = random_tree(rng, kind);
+      const int n = tree.velocity_count();
+      if (n == 0) continue;
+      const Eigen::VectorXd q = random_positions(rng, tree), v = random_vector(rng, n, 3), tau = random_vector(rng, n, 5);
+      const Eigen::VectorXd armature = random_vector(rng, n, 1).cwiseAbs();
+      const Eigen::Vector3d gravity = random_vector(rng, 3, 10);
+      poses.resize(tree), workspace.resize(tree);
+      body_poses(tree, q, poses);
+      JointSpaceFactor factor;
+      factor.assign(tree);
+      mass_matrix(tree, poses, workspace, factor);
+      for (int i = 0; i < n; ++i) factor.add_inertia(i, i, armature[i]);
+      ASSERT_LT(factor.factor(), 0);
+      bias.setZero(n);
+      bias_forces(tree, poses, v, gravity, workspace, bias, tree.all_bodies());
+      inverse_dynamics(tree, q, v, Eigen::VectorXd::Zero(n), gravity, articulated, reference);
+      EXPECT_LT((bias - reference).norm(), 1e-12 * (reference.norm() + 1)) << tree.body_count() << " bodies";
+      accelerations = tau - bias;
+      factor.solve(accelerations);
+      forward_dynamics(tree, q, v, tau, armature, gravity, articulated, expected);
+      EXPECT_LT((accelerations - expected).norm(), 1e-10 * (expected.norm() + 1)) << tree.body_count() << " bodies";
+    }
+  }
+}
+
 TEST(JointSpaceFactor, ASubtreesRangeFactorsAndSolvesAsTheWholeTree) {
   // Two trees side by side (islands): each one's coordinates factored and solved alone give the
   // bits of the whole.
