@@ -17,16 +17,32 @@ bool awake(const RigidScene& state, std::int32_t body) {
   return body >= 0 && !state.islands[state.island_of_body[body]].sleeping;
 }
 
-// The limb's axis end points (head: +length/2 along its axis) in world.
+// The limb's axis end points (head: +length/2 along its axis) in world: world_point of (0, 0, ±length/2)
+// with the body's turn from its Model frame formed once.
 std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& state, std::size_t b) {
-  const double half = 0.5 * state.shapes.length[b];
-  return {world_point(state, b, Eigen::Vector3d(0, 0, half)), world_point(state, b, Eigen::Vector3d(0, 0, -half))};
+  const Eigen::Matrix3d turn = (state.bodies.state.orientation[b] * state.shapes.principal_frame[b].conjugate()).toRotationMatrix();
+  const Eigen::Vector3d centre = state.bodies.state.position[b] - turn * state.shapes.centre_offset[b];
+  const Eigen::Vector3d half_axis = (0.5 * state.shapes.length[b]) * turn.col(2);
+  return {centre + half_axis, centre - half_axis};
+}
+
+// Every body's limb segment (its axis end points and radius; a ball's a point) as it is now.
+void find_limb_segments(RigidScene& state) {
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    LimbSegment& segment = state.limb_segments[b];
+    if (state.shapes.is_ball[b]) {
+      segment.head = segment.tail = state.bodies.state.position[b];
+    } else {
+      std::tie(segment.head, segment.tail) = head_and_tail(state, b);
+    }
+    segment.radius = state.shapes.radius[b];
+  }
 }
 
 void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_index) {
   const Plane& plane = state.planes[plane_index];
   const double radius = state.shapes.radius[b];
-  const auto [head, tail] = head_and_tail(state, b);
+  const Eigen::Vector3d head = state.limb_segments[b].head, tail = state.limb_segments[b].tail;
   const bool disk = state.shapes.shape[b] == ShapeType::cylinder && !state.shapes.is_ball[b];
   const Eigen::Vector3d axis = head - tail;
   const double length = axis.norm();
@@ -92,17 +108,7 @@ void find_speculative_reach(RigidScene& state) {
 // their reaches: a rigid method that moves before it collides answers a contact only once it
 // overlaps. An awake limb that touches a sleeping one wakes its island.
 void add_collision_world_contacts(RigidScene& state) {
-  const std::size_t body_count = state.bodies.size();
-  for (std::size_t b = 0; b < body_count; ++b) {
-    LimbSegment& segment = state.limb_segments[b];
-    if (state.shapes.is_ball[b]) {
-      segment.head = segment.tail = state.bodies.state.position[b];
-    } else {
-      std::tie(segment.head, segment.tail) = head_and_tail(state, b);
-    }
-    segment.radius = state.shapes.radius[b];
-    state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
-  }
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
   state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts);
   for (const LimbContact& contact : state.limb_contacts) {
     const auto a = static_cast<std::int32_t>(contact.first);
@@ -216,6 +222,7 @@ bool detect_rigid_contacts(RigidScene& state) {
     moved = sweep_ball(state, ball) || moved;
     add_ball_contacts(state, ball);
   }
+  find_limb_segments(state);  // after the balls' sweeps moved them
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
