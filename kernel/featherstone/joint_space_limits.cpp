@@ -173,6 +173,7 @@ void form_limit_delassus(FeatherstoneState& state, const ConstraintGroup& group)
   for (int t = group.first_limit; t < group.last_limit; ++t) {
     const LimitIsland& limit = s.limit_islands[static_cast<std::size_t>(t)];
     const auto m = static_cast<std::size_t>(limit.rows);
+    s.island_scratch[static_cast<std::size_t>(limit.island)].active_set.forget();
     // s.response: D⁻¹ Y_j on its path, zero elsewhere on the island.
     const auto [first, last] = island_velocities(state, static_cast<std::size_t>(limit.island));
     s.response.segment(first, last - first).setZero();

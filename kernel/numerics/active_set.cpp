@@ -6,22 +6,36 @@
 namespace limber {
 
 void ActiveSet::reserve(int m) {
-  if (factor_.rows() < m) factor_.resize(m, m), right_.resize(m);
-  held_.reserve(static_cast<std::size_t>(m));
+  if (factor_.rows() < m) factor_.resize(m, m), right_.resize(m), factored_known_ = false;
+  held_.reserve(static_cast<std::size_t>(m)), factored_.reserve(static_cast<std::size_t>(m));
 }
 
 void ActiveSet::solve_held(const Eigen::Ref<const Eigen::MatrixXd>& a, const Eigen::Ref<const Eigen::VectorXd>& value,
                            const Eigen::Ref<const Eigen::VectorXd>& target, Eigen::Ref<Eigen::VectorXd> change) {
   const int n = static_cast<int>(held_.size());
   if (n == 0) return;
-  double largest = 0;
-  for (const int i : held_) largest = std::max(largest, a(i, i));
-  const double ridge = 1e-12 * largest;
   // Right-hand side (t − x)_H − A_HR Δλ_R, with Δλ_R in `change`.
   for (int k = 0; k < n; ++k) {
     const int i = held_[static_cast<std::size_t>(k)];
     right_[k] = target[i] - value[i] - a.row(i).dot(change);  // the held rows' change is 0 here
   }
+  if (!factored_known_ || factored_ != held_) factor_held(a);
+  for (int r = 0; r < n; ++r) {
+    for (int k = 0; k < r; ++k) right_[r] -= factor_(r, k) * right_[k];
+    right_[r] /= factor_(r, r);
+  }
+  for (int r = n - 1; r >= 0; --r) {
+    for (int k = r + 1; k < n; ++k) right_[r] -= factor_(k, r) * right_[k];
+    right_[r] /= factor_(r, r);
+  }
+  for (int k = 0; k < n; ++k) change[held_[static_cast<std::size_t>(k)]] = right_[k];
+}
+
+void ActiveSet::factor_held(const Eigen::Ref<const Eigen::MatrixXd>& a) {
+  const int n = static_cast<int>(held_.size());
+  double largest = 0;
+  for (const int i : held_) largest = std::max(largest, a(i, i));
+  const double ridge = 1e-12 * largest;
   // A_HH + ridge = L Lᵀ, in place in factor_'s lower triangle.
   for (int c = 0; c < n; ++c) {
     const int j = held_[static_cast<std::size_t>(c)];
@@ -35,15 +49,7 @@ void ActiveSet::solve_held(const Eigen::Ref<const Eigen::MatrixXd>& a, const Eig
       factor_(r, c) = entry / diagonal;
     }
   }
-  for (int r = 0; r < n; ++r) {
-    for (int k = 0; k < r; ++k) right_[r] -= factor_(r, k) * right_[k];
-    right_[r] /= factor_(r, r);
-  }
-  for (int r = n - 1; r >= 0; --r) {
-    for (int k = r + 1; k < n; ++k) right_[r] -= factor_(k, r) * right_[k];
-    right_[r] /= factor_(r, r);
-  }
-  for (int k = 0; k < n; ++k) change[held_[static_cast<std::size_t>(k)]] = right_[k];
+  factored_ = held_, factored_known_ = true;
 }
 
 int ActiveSet::solve(const Eigen::Ref<const Eigen::MatrixXd>& a, const Eigen::Ref<const Eigen::VectorXd>& value,

@@ -36,18 +36,26 @@ class ActiveSet {
   /// values' units). At most `rounds` solves; returns how many it took. A_HH is factored with a
   /// ridge of 10⁻¹² times its largest diagonal entry, so dependent rows held together (a joint
   /// locked at both ends) share the impulse instead of failing.
+  /// Successive solves on one matrix reuse A_HH's factor while the same rows are held (the passes
+  /// of a step: its limits' Delassus matrix is formed once): call forget() whenever `a` changes.
   int solve(const Eigen::Ref<const Eigen::MatrixXd>& a, const Eigen::Ref<const Eigen::VectorXd>& value,
             const Eigen::Ref<const Eigen::VectorXd>& target, const Eigen::Ref<const Eigen::VectorXd>& accumulated,
             std::vector<char>& active, double tolerance, Eigen::Ref<Eigen::VectorXd> change, int rounds = 8);
+  /// The next solve's matrix is a new one: its held rows are factored again.
+  void forget() { factored_known_ = false; }
 
  private:
   // Δλ_H for the rows in held_ (the rest at −λ), by Cholesky of A_HH in factor_.
   void solve_held(const Eigen::Ref<const Eigen::MatrixXd>& a, const Eigen::Ref<const Eigen::VectorXd>& value,
                   const Eigen::Ref<const Eigen::VectorXd>& target, Eigen::Ref<Eigen::VectorXd> change);
+  // A_HH + ridge = L Lᵀ for the rows in held_, into factor_.
+  void factor_held(const Eigen::Ref<const Eigen::MatrixXd>& a);
 
   Eigen::MatrixXd factor_;    // L of A_HH, top-left
   Eigen::VectorXd right_;     // its right-hand side, then Δλ_H
   std::vector<int> held_;     // the held rows, in order
+  std::vector<int> factored_; // the held rows whose A_HH factor_ holds, when factored_known_
+  bool factored_known_ = false;
 };
 
 }  // namespace limber

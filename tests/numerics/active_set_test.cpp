@@ -81,6 +81,7 @@ TEST(ActiveSet, SolvesTheComplementarityProblemOfRandomDelassusMatrices) {
     std::vector<char> active(static_cast<std::size_t>(m), 0);
     for (int i = 0; i < m; ++i) active[static_cast<std::size_t>(i)] = p.accumulated[i] > 0 || p.value[i] < p.target[i];
     Eigen::VectorXd change(m);
+    solver.forget();  // a new matrix
     solver.solve(p.a, p.value, p.target, p.accumulated, active, 0.0, change, /*rounds=*/64);
     const Eigen::VectorXd impulse = p.accumulated + change, after = p.value + p.a * change;
     for (int i = 0; i < m; ++i) {
@@ -89,6 +90,30 @@ TEST(ActiveSet, SolvesTheComplementarityProblemOfRandomDelassusMatrices) {
       EXPECT_LE(impulse[i] * std::abs(after[i] - p.target[i]), 1e-9) << "trial " << trial << " row " << i;
     }
     EXPECT_LE((change - every_active_set(p)).lpNorm<Eigen::Infinity>(), 1e-9) << "trial " << trial;
+  }
+}
+
+TEST(ActiveSet, ReusesItsFactorOnTheSameMatrixUntilForgotten) {
+  // A step's passes solve one Delassus matrix again and again: the held rows' factor carries over
+  // between them, and forget() drops it when the matrix changes. Each answer equals a fresh
+  // solver's, bit for bit.
+  std::mt19937 random(11);
+  ActiveSet reused;
+  for (int trial = 0; trial < 50; ++trial) {
+    const int m = 1 + trial % 6;
+    const Problem first = random_problem(random, m);
+    reused.forget();
+    for (int pass = 0; pass < 3; ++pass) {
+      Problem p = first;
+      if (pass > 0) p.value = first.value + 0.1 * pass * Eigen::VectorXd::Ones(m), p.target = first.target;
+      std::vector<char> held(static_cast<std::size_t>(m), 1), fresh_held = held;
+      Eigen::VectorXd change(m), expected(m);
+      reused.solve(p.a, p.value, p.target, p.accumulated, held, 0.0, change, 64);
+      ActiveSet fresh;
+      fresh.solve(p.a, p.value, p.target, p.accumulated, fresh_held, 0.0, expected, 64);
+      EXPECT_EQ(change, expected) << "trial " << trial << " pass " << pass;
+      EXPECT_EQ(held, fresh_held) << "trial " << trial << " pass " << pass;
+    }
   }
 }
 
