@@ -202,11 +202,29 @@ void BM_ChainPass(benchmark::State& bench) {
   bench.counters["links"] = static_cast<double>(bench.range(0));
 }
 
+// A whole step of humanoid.xml lying on the floor after its fall (2 s of 0.005 s steps first):
+// its contacts, limits and drives, under semi-implicit Euler (MuJoCo's integrator), for a profile
+// of the step without the observers (perf record build/bench/featherstone_bench
+// --benchmark_filter=HumanoidLyingStep).
+void BM_HumanoidLyingStep(benchmark::State& bench) {
+  const std::filesystem::path file = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+  if (!std::filesystem::exists(file)) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
+  FeatherstoneState state = compile_featherstone(load_scene_file(file).model, {.integrator = Integrator::semi_implicit_euler});
+  for (int n = 0; n < 400; ++n) step(state);
+  for (auto _ : bench) {
+    benchmark::DoNotOptimize(step(state).status);
+    benchmark::ClobberMemory();
+  }
+  bench.counters["contacts"] = static_cast<double>(state.contacts.size());
+  bench.counters["awake"] = state.islands[0].sleeping ? 0 : 1;
+}
+
 BENCHMARK(BM_ChainStep)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ChainPass)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidArticulatedBodyPass)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidBiasForcesAndFactorSolve)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidFactorAndDelassus)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HumanoidLyingStep)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodyRevoluteChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_ArticulatedBodySphericalChain)->RangeMultiplier(10)->Range(10, 100000)->Unit(benchmark::kMicrosecond);
 

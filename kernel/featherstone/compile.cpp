@@ -143,7 +143,7 @@ void build_tree(FeatherstoneState& state, const Model& model, const std::vector<
   std::vector<Eigen::Vector3d>& origin = frames.origin;
   rotation.resize(tree_size), origin.resize(tree_size);
   state.scene_body.resize(tree_size), state.model_joint.resize(tree_size);
-  state.centre_of_mass.resize(tree_size), state.principal_frame.resize(tree_size);
+  state.centre_of_mass.resize(tree_size), state.principal_frame.resize(tree_size), state.centre_inertia.resize(tree_size);
   state.tree_body.assign(state.bodies.size(), -1);
   for (std::size_t i = 0; i < tree_size; ++i) {
     const TreeNode& node = nodes[i];
@@ -155,7 +155,7 @@ void build_tree(FeatherstoneState& state, const Model& model, const std::vector<
       // A serial joint's frame: at its axis's point, with the axes of the chain's child (the last node).
       const auto child = static_cast<std::size_t>(nodes[i + model.joints[node.joint].serial_axes.size() - 1 - node.axis].body);
       rotation[i] = model_rotation[child], origin[i] = serial->point;
-      state.centre_of_mass[i].setZero(), state.principal_frame[i].setIdentity();
+      state.centre_of_mass[i].setZero(), state.principal_frame[i].setIdentity(), state.centre_inertia[i].setZero();
       body.name = serial->name;
       body.joint_frame = true;
       body.inertia = SpatialInertia::from_mass_properties(0, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero());
@@ -185,6 +185,7 @@ void build_tree(FeatherstoneState& state, const Model& model, const std::vector<
       const Eigen::Matrix3d principal = state.principal_frame[i].toRotationMatrix();
       Eigen::Matrix3d inertia = principal * state.bodies.body_inertia[b] * principal.transpose();
       inertia = 0.5 * (inertia + inertia.transpose()).eval();
+      state.centre_inertia[i] = inertia;
       body.inertia = SpatialInertia::from_mass_properties(state.bodies.mass[b], state.centre_of_mass[i], inertia);
     }
     if (node.joint < 0) {

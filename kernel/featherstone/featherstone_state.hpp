@@ -235,6 +235,9 @@ struct FeatherstoneState : RigidScene {
   std::vector<Eigen::Vector3d> centre_of_mass;
   /// Per tree body: rotation from the rigid body's (principal) frame to the tree body's frame.
   std::vector<Eigen::Quaterniond> principal_frame;
+  /// Per tree body: its rigid body's inertia about its centre of mass in the tree body's axes
+  /// (P·I·Pᵀ, P the principal frame), kg·m²: the mirror's angular momentum without the world inertia.
+  std::vector<Eigen::Matrix3d> centre_inertia;
   /// Tree bodies of island k are [island_begin[k], island_begin[k + 1]) (islands of the rigid
   /// scene, in its order; each is one subtree).
   std::vector<std::int32_t> island_begin;

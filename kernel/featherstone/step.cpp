@@ -188,9 +188,8 @@ void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range) {
     y.position[b] = world_to_body.translation + rotation * centre;
     // v_i = (ω, v_O) in the body's frame: the centre of mass moves at v_O + ω × c.
     const SpatialVector& velocity = state.kinematics.velocity[index];
-    const Eigen::Vector3d omega = rotation * velocity.head<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * (rotation * (velocity.tail<3>() + velocity.head<3>().cross(centre)));
-    y.angular_momentum[b] = state.bodies.world_inertia(y, b) * omega;
+    y.angular_momentum[b] = rotation * (state.centre_inertia[index] * velocity.head<3>());  // R I Rᵀ ω in the tree body's axes
   }
 }
 
