@@ -20,17 +20,6 @@ int joint_position_count(ArticulatedJoint type) {
   return 0;
 }
 
-int joint_velocity_count(ArticulatedJoint type) {
-  switch (type) {
-    case ArticulatedJoint::revolute:
-    case ArticulatedJoint::prismatic: return 1;
-    case ArticulatedJoint::spherical: return 3;
-    case ArticulatedJoint::fixed: return 0;
-    case ArticulatedJoint::floating: return 6;
-  }
-  return 0;
-}
-
 const char* articulated_joint_name(ArticulatedJoint type) {
   switch (type) {
     case ArticulatedJoint::revolute: return "revolute";

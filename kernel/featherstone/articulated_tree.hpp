@@ -46,7 +46,16 @@ enum class ArticulatedJoint : std::uint8_t { revolute, prismatic, spherical, fix
 
 /// Position and velocity coordinates of a joint type: (1, 1), (1, 1), (4, 3), (0, 0), (7, 6).
 int joint_position_count(ArticulatedJoint type);
-int joint_velocity_count(ArticulatedJoint type);
+inline int joint_velocity_count(ArticulatedJoint type) {  // inline: every tree pass asks, per body
+  switch (type) {
+    case ArticulatedJoint::revolute:
+    case ArticulatedJoint::prismatic: return 1;
+    case ArticulatedJoint::spherical: return 3;
+    case ArticulatedJoint::fixed: return 0;
+    case ArticulatedJoint::floating: return 6;
+  }
+  return 0;
+}
 const char* articulated_joint_name(ArticulatedJoint type);
 
 /// One body and the joint that connects it to its parent.

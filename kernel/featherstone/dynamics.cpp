@@ -16,7 +16,7 @@ namespace limber {
 namespace {
 
 // v_J = S q̇ for body i's slice of v (`joint_velocities` points at it).
-SpatialVector joint_velocity(const ArticulatedBody& body, const double* joint_velocities) {
+inline SpatialVector joint_velocity(const ArticulatedBody& body, const double* joint_velocities) {
   SpatialVector out = SpatialVector::Zero();
   switch (body.joint) {
     case ArticulatedJoint::revolute: out.head<3>() = body.joint_axis * joint_velocities[0]; break;
@@ -29,7 +29,7 @@ SpatialVector joint_velocity(const ArticulatedBody& body, const double* joint_ve
 }
 
 // Sᵀ f into `out` (k values).
-void project_force(const ArticulatedBody& body, const SpatialVector& f, double* out) {
+inline void project_force(const ArticulatedBody& body, const SpatialVector& f, double* out) {
   switch (body.joint) {
     case ArticulatedJoint::revolute: out[0] = body.joint_axis.dot(f.head<3>()); break;
     case ArticulatedJoint::prismatic: out[0] = body.joint_axis.dot(f.tail<3>()); break;
@@ -364,7 +364,9 @@ namespace {
 // The composite-rigid-body algorithm (Table 6.2): calls store(row, column, H_row,column) once for
 // each entry with `row` an earlier coordinate of the column's own joint or of an ancestor's, or
 // the column itself (the upper triangle of H by block, as ancestors come first; the armature on
-// the diagonal included). Every other entry of H is zero.
+// the diagonal included). Every other entry of H is zero. A column's entries come together: the
+// diagonal first, then its rows nearest first, up the path to the root (the factor's order,
+// JointSpaceFactor::inertia_path).
 // The poses are `parent_to_body` (ⁱX_λ per body); the bodies those of `range`.
 template <typename Store>
 void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTransform>& parent_to_body, DynamicsWorkspace& w,
@@ -389,16 +391,31 @@ void composite_inertia(const ArticulatedTree& tree, const std::vector<PluckerTra
       unit[c] = 1;
       SpatialVector f = w.composite_inertia[static_cast<std::size_t>(i)] * joint_velocity(body, unit);
       project_force(body, f, projected);
-      for (int r = 0; r <= c; ++r) store(column + r, column + c, projected[r] + (r == c ? body.armature : 0.0));
+      store(column + c, column + c, projected[c] + body.armature);
+      for (int r = c - 1; r >= 0; --r) store(column + r, column + c, projected[r]);
       for (int j = i; tree.body(j).parent >= 0;) {
         f = parent_to_body[static_cast<std::size_t>(j)].transpose_apply_force(f);
         j = tree.body(j).parent;
         project_force(tree.body(j), f, projected);
-        for (int r = 0; r < joint_velocity_count(tree.body(j).joint); ++r) store(tree.velocity_offset(j) + r, column + c, projected[r]);
+        for (int r = joint_velocity_count(tree.body(j).joint) - 1; r >= 0; --r) store(tree.velocity_offset(j) + r, column + c, projected[r]);
       }
     }
   }
 }
+
+// composite_inertia's store into a factor's slots: a column's diagonal, then its path in order.
+struct PathStore {
+  JointSpaceFactor& factor;
+  double* next = nullptr;
+  void operator()(int row, int column, double value) {
+    if (row == column) {
+      factor.set_inertia(column, column, value);
+      next = factor.inertia_path(column);
+    } else {
+      *next++ = value;
+    }
+  }
+};
 
 }  // namespace
 
@@ -420,8 +437,7 @@ void mass_matrix(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::Vect
   require_size(q.size(), tree.position_count(), "mass_matrix: q");
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
   body_poses(tree, q, workspace);
-  composite_inertia(tree, workspace.parent_to_body, workspace, tree.all_bodies(),
-                    [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+  composite_inertia(tree, workspace.parent_to_body, workspace, tree.all_bodies(), PathStore{factor});
 }
 
 void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, DynamicsWorkspace& workspace, JointSpaceFactor& factor) {
@@ -434,8 +450,7 @@ void mass_matrix(const ArticulatedTree& tree, const DynamicsWorkspace& poses, Dy
   require_size(factor.size(), tree.velocity_count(), "mass_matrix: the factor's coordinates");
   if (!poses.fits(tree)) throw std::invalid_argument("mass_matrix: the poses are not of this tree");
   if (!workspace.fits(tree)) throw std::invalid_argument("mass_matrix: the workspace is not sized for this tree");
-  composite_inertia(tree, poses.parent_to_body, workspace, range,
-                    [&](int row, int column, double value) { factor.set_inertia(column, row, value); });
+  composite_inertia(tree, poses.parent_to_body, workspace, range, PathStore{factor});
 }
 
 }  // namespace limber

@@ -54,6 +54,10 @@ class JointSpaceFactor {
   /// H_ij = H_ji = value for j = i or an ancestor of i (the sparse mass_matrix writes H this
   /// way); then factor() factors what was set. Throws std::invalid_argument for any other j.
   void set_inertia(int i, int j, double value);
+  /// The slots of H_ij for i's ancestors j, nearest first (λ(i), λ(λ(i)), …; as many as i has),
+  /// before factor(): what set_inertia(i, j) writes, laid out as the composite-rigid-body
+  /// algorithm stores a column (mass_matrix). H_ii is set_inertia(i, i).
+  double* inertia_path(int i) { return entries_.data() + begin_[static_cast<std::size_t>(i)]; }
   /// H_ij += value, as set_inertia (a penalty on a joint's coordinates: a held row).
   void add_inertia(int i, int j, double value);
   /// H on coordinates first…last − 1 (whole subtrees, as solve's range) copied from `from`, a

@@ -212,15 +212,23 @@ struct SpatialInertia {
 
   /// ᴮX_Aᵀ I ᴮX_A for this inertia I in B coordinates, b_from_a = ᴮX_A = (E, r): the same body's
   /// inertia in A (Table 2.5), m, h' = Eᵀh + m r, Ī' = EᵀĪE − r×(Eᵀh)× − h'× r× — what
-  /// PluckerTransform::transpose_apply_inertia gives for matrix(), without its 6×6 blocks.
+  /// PluckerTransform::transpose_apply_inertia gives for matrix(), without its 6×6 blocks. With
+  /// y = Eᵀh and a×b× + b×a× = b aᵀ + a bᵀ − 2(a·b)1, r×r× = r rᵀ − |r|²1, the correction is
+  /// (2 r·y + m|r|²)1 − y rᵀ − r yᵀ − m r rᵀ: symmetric as written, EᵀĪE symmetrized.
   SpatialInertia transformed_by(const PluckerTransform& b_from_a) const {
     const Eigen::Matrix3d& e = b_from_a.rotation;
     const Eigen::Vector3d& r = b_from_a.translation;
     const Eigen::Vector3d rotated_moment = e.transpose() * first_moment;
-    const Eigen::Vector3d moment = rotated_moment + mass * r;
-    const Eigen::Matrix3d rx = skew(r);
-    const Eigen::Matrix3d turned = e.transpose() * rotational_inertia * e - rx * skew(rotated_moment) - skew(moment) * rx;
-    return {mass, moment, 0.5 * (turned + turned.transpose())};  // symmetric in exact arithmetic; kept so under round-off
+    const Eigen::Matrix3d turned = e.transpose() * rotational_inertia * e;
+    const Eigen::Vector3d lever = rotated_moment + 0.5 * mass * r;  // y r + r y + m r r = lever rᵀ + r leverᵀ
+    const double trace = 2 * r.dot(rotated_moment) + mass * r.squaredNorm();
+    Eigen::Matrix3d out;
+    for (int a = 0; a < 3; ++a) {
+      for (int b = a; b < 3; ++b) {
+        out(a, b) = out(b, a) = 0.5 * (turned(a, b) + turned(b, a)) - lever[a] * r[b] - r[a] * lever[b] + (a == b ? trace : 0.0);
+      }
+    }
+    return {mass, rotated_moment + mass * r, out};
   }
 
   /// The 6×6 form [ Ī  h× ; h×ᵀ  m 1 ].
