@@ -128,8 +128,29 @@ void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::Ve
                 FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
   if (!workspace.fits(tree)) throw std::invalid_argument("accelerate: the workspace is not sized for this tree");
   find_accelerations(tree, q, v, joint_forces, gravity, workspace, poses, range);
+  semi_implicit_velocity(tree, v, workspace.accelerations, h, range);
+}
+
+void semi_implicit_velocity(const ArticulatedTree& tree, Eigen::VectorXd& v, const Eigen::VectorXd& accelerations, double h,
+                            BodyRange range) {
   const auto [first, last] = tree.velocity_span(range);
-  v.segment(first, last - first) += h * workspace.accelerations.segment(first, last - first);
+  for (int i = range.first; i < range.last; ++i) {
+    if (tree.body(i).joint != ArticulatedJoint::floating) continue;
+    const int offset = tree.velocity_offset(i);
+    const Eigen::Vector3d omega = v.segment<3>(offset), linear = v.segment<3>(offset + 3);
+    v.segment<3>(offset + 3) += h * omega.cross(linear);  // v̇ + ω × v, with h·v̇ added below
+  }
+  v.segment(first, last - first) += h * accelerations.segment(first, last - first);
+}
+
+void turn_floating_velocities(const ArticulatedTree& tree, const Eigen::VectorXd& displacement, Eigen::VectorXd& v, BodyRange range) {
+  for (int i = range.first; i < range.last; ++i) {
+    if (tree.body(i).joint != ArticulatedJoint::floating) continue;
+    const int offset = tree.velocity_offset(i);
+    const Eigen::Quaterniond back = rotation_exponential(displacement.segment<3>(offset)).conjugate();
+    v.segment<3>(offset) = back * Eigen::Vector3d(v.segment<3>(offset));
+    v.segment<3>(offset + 3) = back * Eigen::Vector3d(v.segment<3>(offset + 3));
+  }
 }
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
@@ -147,6 +168,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
       accelerate(tree, q, v, joint_forces, gravity, h, workspace, poses, range);
       velocities(w.stage_displacement) = h * velocities(v);
       displace_positions(tree, q, w.stage_displacement, q, range);
+      turn_floating_velocities(tree, w.stage_displacement, v, range);
       return;
     case Integrator::rk4: {
       // Stage s at (q₀ ⊕ Θ_s, v₀ + c_s h a_{s−1}); weights b = (1, 2, 2, 1)/6, nodes c = (0, ½, ½, 1).

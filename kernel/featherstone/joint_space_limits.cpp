@@ -516,7 +516,8 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
     forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
                      c.acceleration, bodies);
   }
-  on_island(c.predicted) = on_island(state.v) + h * on_island(c.acceleration);
+  on_island(c.predicted) = on_island(state.v);
+  semi_implicit_velocity(state.tree, c.predicted, c.acceleration, h, bodies);
 
   if (state.joint_friction) c.friction.clear();  // shared: such scenes integrate on one thread
   if (friction) {

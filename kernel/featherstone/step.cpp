@@ -93,12 +93,13 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
       if (velocity_only) continue;
       on_island(state.integration.stage_displacement) = h * on_island(state.v);
       displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
+      turn_floating_velocities(state.tree, state.integration.stage_displacement, state.v, bodies);
       continue;
     }
     const Eigen::VectorXd& forces = controlled ? state.controls.forces : state.joint_forces;
     if (velocity_only && through_factor) {
       factored_forward_dynamics(state, k, forces, nullptr, state.integration.accelerations);
-      on_island(state.v) += h * on_island(state.integration.accelerations);
+      semi_implicit_velocity(state.tree, state.v, state.integration.accelerations, h, bodies);
     } else if (velocity_only) {
       accelerate(state.tree, state.q, state.v, forces, state.settings.gravity, h, state.integration, &state.kinematics, bodies);
     } else {
