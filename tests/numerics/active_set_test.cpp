@@ -105,7 +105,7 @@ TEST(ActiveSet, ReusesItsFactorOnTheSameMatrixUntilForgotten) {
     reused.forget();
     for (int pass = 0; pass < 3; ++pass) {
       Problem p = first;
-      if (pass > 0) p.value = first.value + 0.1 * pass * Eigen::VectorXd::Ones(m), p.target = first.target;
+      if (pass > 0) p.value = first.value + 0.1 * pass * Eigen::VectorXd::Ones(m);  // the next pass's values, the same matrix
       std::vector<char> held(static_cast<std::size_t>(m), 1), fresh_held = held;
       Eigen::VectorXd change(m), expected(m);
       reused.solve(p.a, p.value, p.target, p.accumulated, held, 0.0, change, 64);
