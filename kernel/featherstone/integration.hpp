@@ -67,8 +67,8 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
                Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
 
 /// Semi-implicit Euler's velocity update alone, v ← v + h v̇(q, v) (semi_implicit_velocity;
-/// integrate's first half; q is not moved), on the bodies of `range` (their coordinates of v; the workspace sized for the
-/// tree): the velocity a step solves its constraints on before the positions move with it
+/// integrate's first half; q is not moved), on the bodies of `range` (their coordinates of v;
+/// the workspace sized for the tree): the velocity a step solves its constraints on before the positions move with it
 /// (kernel/featherstone/step.hpp). `poses` as for integrate.
 void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                 const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,

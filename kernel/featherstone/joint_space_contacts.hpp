@@ -87,11 +87,11 @@
 // Δt·(|v| + |ω|·arm + |g|Δt), at most 5 cm; a resting body a quarter of a millimetre at 1/200 s,
 // so a speculative contact does not join islands that rest apart) — a gap's depth negative —
 // and sweeps the balls' paths of the last step (rigid_contacts.hpp). Then each island's velocity
-// update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before) — for an
-// island a contact touches, MuJoCo's way: H + h·G by the composite-rigid-body algorithm (G the
-// drives' gains, below), its factor, the bias forces by recursive Newton–Euler and one solve
-// (factored_forward_dynamics), the factor the constraints then take, where the articulated-body
-// algorithm and a second CRBA and factor in the constraints cost the humanoid 9 % more a step —, the
+// update v ← v + h·v̇(q, v) (its last substep's; the earlier substeps move q as before; for an
+// island a contact touches, MuJoCo's way: H + h·G by the composite-rigid-body algorithm, G the
+// drives' gains below, its factor, the bias forces by recursive Newton–Euler and one solve,
+// factored_forward_dynamics, whose factor the constraints then take: an articulated-body pass
+// beside the constraints' own CRBA and factor cost humanoid.xml 9–11 % more a step), the
 // constraints on that v at the start pose as above — a contact still apart may close its gap in
 // the step and no more (Catto's speculative contacts); a bouncing one (e > 0) bounces from where
 // it is, as in Box2D — and only then q ← q ⊕ h·v. What overlap is left (a landing the reach missed,
@@ -199,9 +199,8 @@ FramePose model_frame_pose(const FeatherstoneState& state, std::size_t body);
 /// Allocates nothing.
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h);
 /// The same for island `island` alone (its coordinates of the forces; false, writing nothing, when
-/// it has no drive or friction). Islands may run on different threads
-/// unless the scene has joint friction (FeatherstoneState::joint_friction), whose factors they
-/// share. `through_factor`: the drives' dynamics by factored_forward_dynamics (which leaves the
+/// it has no drive or friction). Islands may run on different threads unless the scene has joint
+/// friction (FeatherstoneState::joint_friction), whose factors they share. `through_factor`: the drives' dynamics by factored_forward_dynamics (which leaves the
 /// island's H + h·G factored for the constraints) instead of the articulated-body algorithm.
 bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads, double h, std::size_t island, bool through_factor);
 
