@@ -143,7 +143,11 @@ void semi_implicit_velocity(const ArticulatedTree& tree, Eigen::VectorXd& v, con
   v.segment(first, last - first) += h * accelerations.segment(first, last - first);
 }
 
-void turn_floating_velocities(const ArticulatedTree& tree, const Eigen::VectorXd& displacement, Eigen::VectorXd& v, BodyRange range) {
+void semi_implicit_move(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v, double h, Eigen::VectorXd& displacement,
+                        BodyRange range) {
+  const auto [first, last] = tree.velocity_span(range);
+  displacement.segment(first, last - first) = h * v.segment(first, last - first);
+  displace_positions(tree, q, displacement, q, range);
   for (int i = range.first; i < range.last; ++i) {
     if (tree.body(i).joint != ArticulatedJoint::floating) continue;
     const int offset = tree.velocity_offset(i);
@@ -166,9 +170,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   switch (integrator) {
     case Integrator::semi_implicit_euler:
       accelerate(tree, q, v, joint_forces, gravity, h, workspace, poses, range);
-      velocities(w.stage_displacement) = h * velocities(v);
-      displace_positions(tree, q, w.stage_displacement, q, range);
-      turn_floating_velocities(tree, w.stage_displacement, v, range);
+      semi_implicit_move(tree, q, v, h, w.stage_displacement, range);
       return;
     case Integrator::rk4: {
       // Stage s at (q₀ ⊕ Θ_s, v₀ + c_s h a_{s−1}); weights b = (1, 2, 2, 1)/6, nodes c = (0, ½, ½, 1).

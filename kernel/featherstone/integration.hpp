@@ -81,15 +81,16 @@ void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::Ve
 /// explicit, scales the velocity by √(1 + (hω)²) a step: a body spinning at 40 rad/s in flight
 /// at 1/200 s gained 2 % of its speed a step, e⁴ of its kinetic energy a second (humanoid100.xml
 /// diverged). With the world-fixed axes the translation is integrated as a free particle's, and
-/// turn_floating_velocities carries the velocity into the turned frame after the move.
+/// semi_implicit_move carries the velocity into the turned frame.
 void semi_implicit_velocity(const ArticulatedTree& tree, Eigen::VectorXd& v, const Eigen::VectorXd& accelerations, double h,
                             BodyRange range);
 
-/// After q ← q ⊕ δ (semi-implicit Euler's move), each floating joint's velocity in its turned
-/// frame, v ← exp(θ)ᵀ v (θ: its δ's rotation vector): the world velocity it had, kept. Other
-/// joints' velocities are relative to frames that turn with their parents: unchanged. On the
-/// bodies of `range`.
-void turn_floating_velocities(const ArticulatedTree& tree, const Eigen::VectorXd& displacement, Eigen::VectorXd& v, BodyRange range);
+/// Semi-implicit Euler's move on the bodies of `range`: q ← q ⊕ h·v, then each floating joint's
+/// velocity in its turned frame, v ← exp(θ)ᵀ v (θ = h·ω, its turn): the world velocity it had,
+/// kept. Other joints' velocities are relative to frames that turn with their parents: unchanged.
+/// `displacement` (nv) is scratch, h·v on the range's coordinates afterwards.
+void semi_implicit_move(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v, double h, Eigen::VectorXd& displacement,
+                        BodyRange range);
 
 /// T = ½ vᵀHv = Σ ½ v_iᵀ I_i v_i + armature_energy: the bodies' and the rotors', J.
 double kinetic_energy(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,

@@ -516,10 +516,7 @@ void factored_forward_dynamics(FeatherstoneState& state, std::size_t island, con
 void advance_positions(FeatherstoneState& state, std::size_t island) {
   JointSpaceContactScratch& s = state.contact;
   const BodyRange bodies = island_bodies(state, island);
-  const auto [first, last] = island_velocities(state, island);
-  state.integration.stage_displacement.segment(first, last - first) = state.last_substep[island] * state.v.segment(first, last - first);
-  displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
-  turn_floating_velocities(state.tree, state.integration.stage_displacement, state.v, bodies);
+  semi_implicit_move(state.tree, state.q, state.v, state.last_substep[island], state.integration.stage_displacement, bodies);
   const std::int32_t group = s.groups.empty() ? -1 : s.island_group[island];
   if (group >= 0 && s.groups[static_cast<std::size_t>(group)].pushed) {
     body_poses(state.tree, state.q, state.kinematics, bodies);

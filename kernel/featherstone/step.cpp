@@ -90,10 +90,7 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
       // held joints are within its penalty's 1/kPenalty in the predicted velocity; the integrator
       // takes them exactly.)
       on_island(state.v) = on_island(state.controls.predicted);
-      if (velocity_only) continue;
-      on_island(state.integration.stage_displacement) = h * on_island(state.v);
-      displace_positions(state.tree, state.q, state.integration.stage_displacement, state.q, bodies);
-      turn_floating_velocities(state.tree, state.integration.stage_displacement, state.v, bodies);
+      if (!velocity_only) semi_implicit_move(state.tree, state.q, state.v, h, state.integration.stage_displacement, bodies);
       continue;
     }
     const Eigen::VectorXd& forces = controlled ? state.controls.forces : state.joint_forces;
