@@ -46,4 +46,11 @@ struct Observation {
   double energy() const { return kinetic_energy + potential_energy; }
 };
 
+/// What an observation measures. `divergence`: only what check_divergence (divergence.hpp)
+/// reads after every step — energy, momentum, the centre of mass, joint gaps and link stretch,
+/// each the same bits as `full`'s; the joints' limits and drives (Observation::joints), the
+/// islands and sleeping are left at their defaults. Their angles (a twist's atan2, a drive's
+/// remainder per axis) cost a humanoid crowd's step more than the rest of the check.
+enum class ObservationScope { full, divergence };
+
 }  // namespace limber

@@ -10,7 +10,7 @@
 namespace limber {
 
 template <typename Scalar>
-Observation observe(const VerletState<Scalar>& state) {
+Observation observe(const VerletState<Scalar>& state, ObservationScope scope) {
   Observation out;
   out.time = state.time;
   const auto& particles = state.particles;
@@ -59,6 +59,7 @@ Observation observe(const VerletState<Scalar>& state) {
     }
   }
   if (body_mass > 0) out.body_centre_of_mass /= body_mass;
+  if (scope == ObservationScope::divergence) return out;
 
   // A limb without a frame has no roll: its Model frame's convention, the shortest turn from z
   // onto its axis (Body::orientation), which only its axis — all a swing reads — depends on.
@@ -84,7 +85,7 @@ namespace {
 
 // What every rigid-body method reports alike: momentum, kinetic energy ½ m v² + ½ ω·L, gravity's
 // potential energy, the limbs' centre of mass, sleeping. Joint gaps are the method's to add.
-Observation observe_rigid_scene(const RigidScene& scene, const JointControls& scene_controls) {
+Observation observe_rigid_scene(const RigidScene& scene, const JointControls& scene_controls, ObservationScope scope) {
   Observation out;
   out.time = scene.time;
   const RigidBodyBuffer& bodies = scene.bodies;
@@ -102,6 +103,7 @@ Observation observe_rigid_scene(const RigidScene& scene, const JointControls& sc
     }
   }
   if (body_mass > 0) out.body_centre_of_mass /= body_mass;
+  if (scope == ObservationScope::divergence) return out;
   // The Model body frame: a Model point p is at x + q·principal⁻¹·(p − centre_offset).
   out.joints = measure_joints(scene_controls, [&](std::size_t b) -> FramePose {
     const Eigen::Quaterniond orientation = (y.orientation[b] * scene.shapes.principal_frame[b].conjugate()).normalized();
@@ -131,15 +133,15 @@ void add_joint_gaps(Observation& out, const JointAnchors& joints, Gap&& gap) {
 
 }  // namespace
 
-Observation observe(const SpringState& state) {
-  Observation out = observe_rigid_scene(state, state.joint_controls);
+Observation observe(const SpringState& state, ObservationScope scope) {
+  Observation out = observe_rigid_scene(state, state.joint_controls, scope);
   add_joint_gaps(out, state.springs, [&](std::size_t j) { return joint_separation(state.springs, state.bodies.state, j).norm(); });
   out.potential_energy += spring_energy(state);
   return out;
 }
 
-Observation observe(const LagrangeState& state) {
-  Observation out = observe_rigid_scene(state, state.joint_controls);
+Observation observe(const LagrangeState& state, ObservationScope scope) {
+  Observation out = observe_rigid_scene(state, state.joint_controls, scope);
   // The gap is what a joint's position rows leave open (a prismatic joint slides along its axis).
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
     return position_error(state.constraints.rows[j], constraint_error(state.constraints, state.joints, state.bodies.state, j));
@@ -170,10 +172,10 @@ void measure_serial_axes(const FeatherstoneState& state, JointMeasures& measures
 
 }  // namespace
 
-Observation observe(const FeatherstoneState& state) {
-  Observation out = observe_rigid_scene(state, state.joint_controls);
+Observation observe(const FeatherstoneState& state, ObservationScope scope) {
+  Observation out = observe_rigid_scene(state, state.joint_controls, scope);
   out.kinetic_energy += armature_energy(state.tree, state.v);  // the rotors, which the rigid bodies do not hold
-  measure_serial_axes(state, out.joints);
+  if (scope == ObservationScope::full) measure_serial_axes(state, out.joints);
   const RigidBodyState& y = state.bodies.state;
   add_joint_gaps(out, state.joints, [&](std::size_t j) {
     // A serial joint is its chain of tree bodies: the child's frame is where the chain puts it.
@@ -263,7 +265,7 @@ template void limb_segments<float>(const VerletState<float>&, std::vector<LimbSe
 template void limb_segments<double>(const VerletState<double>&, std::vector<LimbSegment>&);
 template void limb_segments<float>(const VerletState<float>&, const Model&, std::vector<LimbSegment>&);
 template void limb_segments<double>(const VerletState<double>&, const Model&, std::vector<LimbSegment>&);
-template Observation observe<float>(const VerletState<float>&);
-template Observation observe<double>(const VerletState<double>&);
+template Observation observe<float>(const VerletState<float>&, ObservationScope);
+template Observation observe<double>(const VerletState<double>&, ObservationScope);
 
 }  // namespace limber

@@ -15,21 +15,24 @@
 
 namespace limber {
 
+/// The particle method's observation: joint gaps between the particles or anchor points a joint
+/// holds together, relative to its reference length; each limb's stretch; the particles' momentum,
+/// kinetic energy from their velocities and gravity's potential energy.
 template <typename Scalar>
-Observation observe(const VerletState<Scalar>& state);
+Observation observe(const VerletState<Scalar>& state, ObservationScope scope = ObservationScope::full);
 
 /// The same quantities for the stiff-spring method: joint gaps between the springs' anchor
 /// points (relative to the same lengths as the Verlet method's), no stretch (limbs are rigid),
 /// kinetic energy ½ m v² + ½ ω·L, and potential energy including the springs' ½ k |d|².
-Observation observe(const SpringState& state);
+Observation observe(const SpringState& state, ObservationScope scope = ObservationScope::full);
 
 /// The same for the Lagrange method: joint gaps |C| between the joints' anchor points.
-Observation observe(const LagrangeState& state);
+Observation observe(const LagrangeState& state, ObservationScope scope = ObservationScope::full);
 
 /// The same for the Featherstone method, from the rigid bodies it refreshes from (q, v): joint
 /// gaps between the joints' world anchor points (a prismatic joint's along its slide not
 /// counted), which reduced coordinates keep at 0 to rounding.
-Observation observe(const FeatherstoneState& state);
+Observation observe(const FeatherstoneState& state, ObservationScope scope = ObservationScope::full);
 
 /// Each Model body's limb as collision sees it now (head → tail and radius; kernel/geometry/
 /// limb_collisions.hpp), then the ball's (head = tail = its centre) when there is one, into
@@ -51,7 +54,7 @@ void limb_segments(const VerletState<Scalar>& state, std::vector<LimbSegment>& s
 /// capsule or end rim of a cylinder. The first of equal depths, in that order.
 Penetration deepest_penetration(const Model& model, LimbCollisions& collisions, std::span<const LimbSegment> segments);
 
-extern template Observation observe<float>(const VerletState<float>&);
-extern template Observation observe<double>(const VerletState<double>&);
+extern template Observation observe<float>(const VerletState<float>&, ObservationScope);
+extern template Observation observe<double>(const VerletState<double>&, ObservationScope);
 
 }  // namespace limber

@@ -60,7 +60,7 @@ World::World(Model model, WorldOptions options)
   for (std::size_t k = 0; k < model_.balls.size(); ++k) internals_->balls.add(serial_);
   internals_->controls.assign(model_.actuators.size(), 0.0);
   reset_loads();
-  internals_->divergence = divergence_bounds(model_, observe_state());
+  internals_->divergence = divergence_bounds(model_, observe_state(ObservationScope::divergence));
 }
 
 World::World(const Scene& scene, Method method) : World(scene.model, world_options(method, scene.methods)) {}
@@ -78,12 +78,12 @@ double World::time() const {
   return std::visit([](const auto& state) { return state.time; }, internals_->state);
 }
 
-Observation World::observe_state() const {
-  return std::visit([](const auto& state) { return limber::observe(state); }, internals_->state);
+Observation World::observe_state(ObservationScope scope) const {
+  return std::visit([&](const auto& state) { return limber::observe(state, scope); }, internals_->state);
 }
 
 Observation World::observe() const {
-  Observation out = observe_state();
+  Observation out = observe_state(ObservationScope::full);
   if (out.widest_joint >= 0) out.widest_joint = static_cast<int>(model_joint_of(model_, static_cast<std::size_t>(out.widest_joint)));
   std::optional<WorldInternals::PenetrationGauge>& gauge = internals_->penetration_gauge;
   if (!gauge) gauge.emplace(WorldInternals::PenetrationGauge{LimbCollisions(model_), {}});
@@ -191,7 +191,7 @@ StepStatus World::step(double dt) {
       },
       state);
   // After the step, in this order: the shared divergence check, the drives' release.
-  if (report.status == StepStatus::ok && options_.divergence_check) report.status = check_divergence(observe_state(), internals_->divergence);
+  if (report.status == StepStatus::ok && options_.divergence_check) report.status = check_divergence(observe_state(ObservationScope::divergence), internals_->divergence);
   internals_->report = report;
   if (release_drives_after_impact(state)) release_drives();
   for (std::size_t b = 0; b < load_force_.size(); ++b) load_force_[b].setZero(), load_torque_[b].setZero();
@@ -368,7 +368,7 @@ void World::teleport(BodyId body, const Pose& pose, const Motion& motion) {
   if (!moved) {
     refuse("teleport", "moves only a body whose coordinates are its own (a floating root); '" + model_.bodies[b].name + "' hangs from a joint");
   }
-  internals_->divergence.start_energy = observe_state().energy();  // a teleport may put energy in: measure from here
+  internals_->divergence.start_energy = observe_state(ObservationScope::divergence).energy();  // a teleport may put energy in: measure from here
 }
 
 // --- Structure
@@ -555,7 +555,7 @@ void World::recompile(const Model& edited, const std::vector<std::int64_t>& old_
   internals_->penetration_gauge.reset();  // measured against the edited Model's pairs and colliders
   model_ = edited;
   reset_loads();
-  internals_->divergence = divergence_bounds(model_, observe_state());
+  internals_->divergence = divergence_bounds(model_, observe_state(ObservationScope::divergence));
 }
 
 }  // namespace limber

@@ -283,8 +283,8 @@ class World {
   std::optional<JointDrive> current_drive(std::size_t joint) const;
   void release_drives();
   static constexpr std::uint32_t kNewJoint = ~0u;
-  // observe() but the penetration: what the divergence check reads after every step.
-  Observation observe_state() const;
+  // observe() but the penetration; ObservationScope::divergence: what the divergence check reads after every step.
+  Observation observe_state(ObservationScope scope) const;
   [[noreturn]] void refuse(std::string_view call, std::string_view why) const;
   [[noreturn]] void refuse_joint_space(std::string_view call) const;  ///< a method without joint coordinates
   void check_vector(const Eigen::Vector3d& v, std::string_view call) const;

@@ -121,7 +121,7 @@ void World::set_joint_state(const Eigen::VectorXd& positions, const Eigen::Vecto
     throw WorldError(std::string("set_joint_state: ") + error.what());
   }
   wake_all();
-  internals_->divergence = divergence_bounds(model_, observe_state());  // a teleport: measure from here
+  internals_->divergence = divergence_bounds(model_, observe_state(ObservationScope::divergence));  // a teleport: measure from here
 }
 
 }  // namespace limber

@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include "limber/kernel/metrics/divergence.hpp"
+#include "limber/kernel/metrics/observers.hpp"
 #include "limber/kernel/world/world.hpp"
+#include "limber/kernel/world/world_internals.hpp"
 #include "tests/support/models.hpp"
 
 namespace limber {
@@ -98,6 +100,32 @@ TEST(Divergence, ALinkStretchedPastAWholeLinkIsReported) {
   EXPECT_EQ(check_divergence(stretched, bounds), StepStatus::diverged_joint_gap);
   stretched.max_link_stretch = std::nan("");
   EXPECT_EQ(check_divergence(stretched, bounds), StepStatus::diverged_non_finite);
+}
+
+// The check after every step observes only what it reads (ObservationScope::divergence), and
+// reads what a full observation would have given it: on a ragdoll with limits, in flight
+// and after landing, under every method.
+TEST(Divergence, TheChecksObservationIsAFullObservationsEnergyMomentumAndGaps) {
+  const Scene scene = testing::shipped_scene("ragdoll.json");
+  for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
+    World world(scene.model, world_options(method, scene.methods));
+    for (int s = 0; s < 240; ++s) {
+      ASSERT_EQ(world.step(), StepStatus::ok) << method_name(method);
+      if (s % 60 != 0) continue;
+      std::visit(
+          [&](const auto& state) {
+            const Observation full = observe(state), checked = observe(state, ObservationScope::divergence);
+            EXPECT_EQ(checked.kinetic_energy, full.kinetic_energy) << method_name(method);
+            EXPECT_EQ(checked.potential_energy, full.potential_energy) << method_name(method);
+            EXPECT_EQ(checked.linear_momentum, full.linear_momentum) << method_name(method);
+            EXPECT_EQ(checked.body_centre_of_mass, full.body_centre_of_mass) << method_name(method);
+            EXPECT_EQ(checked.max_joint_gap, full.max_joint_gap) << method_name(method);
+            EXPECT_EQ(checked.max_link_stretch, full.max_link_stretch) << method_name(method);
+            EXPECT_GT(full.joints.limited_joints, 0) << method_name(method) << ": the scene has limits to measure";
+          },
+          world.internals().state);
+    }
+  }
 }
 
 }  // namespace
