@@ -103,9 +103,9 @@ void BM_HumanoidArticulatedBodyPass(benchmark::State& bench) {
 }
 
 // The articulated-body pass's answer the other way (MuJoCo's, and the step's for an island a
-// contact touches before the move): the poses, the bias forces by recursive Newton–Euler, H by the
-// composite-rigid-body algorithm, its LᵀDL factor and one solve; the factor then serves the
-// contacts.
+// contact touches before the move): the poses and body velocities, the bias forces by recursive
+// Newton–Euler, H by the composite-rigid-body algorithm, its LᵀDL factor and one solve; the
+// factor then serves the contacts.
 void BM_HumanoidBiasForcesAndFactorSolve(benchmark::State& bench) {
   const ArticulatedTree tree = humanoid_tree();
   if (tree.body_count() == 0) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
@@ -117,8 +117,8 @@ void BM_HumanoidBiasForcesAndFactorSolve(benchmark::State& bench) {
   factor.assign(tree);
   Eigen::VectorXd accelerations = Eigen::VectorXd::Zero(nv);
   for (auto _ : bench) {
-    body_poses(tree, q, poses);
-    bias_forces(tree, poses, v, Eigen::Vector3d(0, 0, -9.81), workspace, accelerations, tree.all_bodies());
+    forward_kinematics(tree, q, v, poses);
+    bias_forces(tree, poses, Eigen::Vector3d(0, 0, -9.81), workspace, accelerations, tree.all_bodies());
     mass_matrix(tree, poses, workspace, factor);
     factor.factor(0, nv);
     accelerations = -accelerations;  // τ = 0

@@ -303,25 +303,26 @@ void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& pose
 namespace {
 
 // Table 5.1 for the bodies of `range`: the joint forces τ on their coordinates (joint_forces sized
-// nv) that give accelerations v̇ (nv, or null: v̇ = 0, the bias forces C); the poses from q (nq),
-// or, q null, those `poses` holds.
-void recursive_newton_euler(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* poses,
+// nv) that give accelerations v̇ (nv, or null: v̇ = 0, the bias forces C). The poses ⁱX_λ, body
+// velocities v_i and bias accelerations c_i from q and v into w; or, `motion` not null, those it
+// holds (forward_kinematics of the current q and v).
+void recursive_newton_euler(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* motion,
                             const Eigen::Ref<const Eigen::VectorXd>& v, const double* joint_accelerations, const Eigen::Vector3d& gravity,
                             DynamicsWorkspace& w, Eigen::VectorXd& joint_forces, BodyRange range) {
-  const auto first = static_cast<std::ptrdiff_t>(range.first), last = static_cast<std::ptrdiff_t>(range.last);
-  if (!q && poses != &w) std::copy(poses->parent_to_body.begin() + first, poses->parent_to_body.begin() + last, w.parent_to_body.begin() + first);
+  if (!motion) propagate_velocities(tree, q, v, w, range);
+  const DynamicsWorkspace& known = motion ? *motion : w;
   // Outward: a_i = ⁱX_λ a_λ + S_i v̇_i + c_i; f_i = I_i a_i + v_i ×* I_i v_i (the net force the
   // body needs, by the Newton–Euler equation).
-  propagate_velocities(tree, q, v, w, range);
   const SpatialVector a0 = base_acceleration(gravity);
   for (int i = range.first; i < range.last; ++i) {
     const ArticulatedBody& body = tree.body(i);
     const auto index = static_cast<std::size_t>(i);
     const SpatialVector& parent_acceleration = body.parent >= 0 ? w.acceleration[static_cast<std::size_t>(body.parent)] : a0;
-    w.acceleration[index] = w.parent_to_body[index].apply_motion(parent_acceleration);
+    w.acceleration[index] = known.parent_to_body[index].apply_motion(parent_acceleration);
     if (joint_accelerations) w.acceleration[index] += joint_velocity(body, joint_accelerations + tree.velocity_offset(i));
-    w.acceleration[index] += w.bias_acceleration[index];
-    w.bias_force[index] = body.inertia * w.acceleration[index] + cross_force(w.velocity[index], body.inertia * w.velocity[index]);
+    w.acceleration[index] += known.bias_acceleration[index];
+    const SpatialVector& velocity = known.velocity[index];
+    w.bias_force[index] = body.inertia * w.acceleration[index] + cross_force(velocity, body.inertia * velocity);
   }
   // Inward: τ_i = S_iᵀ f_i (plus the armature's a·v̇_i); the joint transmits f_i to the parent,
   // f_λ += λX_i* f_i.
@@ -332,7 +333,7 @@ void recursive_newton_euler(const ArticulatedTree& tree, const double* q, const 
     project_force(body, w.bias_force[index], joint_forces.data() + offset);
     if (joint_accelerations && body.armature > 0) joint_forces[offset] += body.armature * joint_accelerations[offset];
     if (body.parent >= 0) {
-      w.bias_force[static_cast<std::size_t>(body.parent)] += w.parent_to_body[index].transpose_apply_force(w.bias_force[index]);
+      w.bias_force[static_cast<std::size_t>(body.parent)] += known.parent_to_body[index].transpose_apply_force(w.bias_force[index]);
     }
   }
 }
@@ -350,13 +351,12 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
   recursive_newton_euler(tree, q.data(), nullptr, v, joint_accelerations.data(), gravity, workspace, joint_forces, tree.all_bodies());
 }
 
-void bias_forces(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                 const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& forces, BodyRange range) {
-  require_size(v.size(), tree.velocity_count(), "bias_forces: v");
+void bias_forces(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Vector3d& gravity,
+                 DynamicsWorkspace& workspace, Eigen::VectorXd& forces, BodyRange range) {
   require_size(forces.size(), tree.velocity_count(), "bias_forces: the forces");
-  if (!poses.fits(tree)) throw std::invalid_argument("bias_forces: the poses are not of this tree");
+  if (!kinematics.fits(tree)) throw std::invalid_argument("bias_forces: the kinematics are not of this tree");
   if (!workspace.fits(tree)) throw std::invalid_argument("bias_forces: the workspace is not sized for this tree");
-  recursive_newton_euler(tree, nullptr, &poses, v, nullptr, gravity, workspace, forces, range);
+  recursive_newton_euler(tree, nullptr, &kinematics, Eigen::VectorXd(), nullptr, gravity, workspace, forces, range);
 }
 
 namespace {

@@ -119,12 +119,14 @@ void inverse_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
 
 /// The bias forces C(q, v) (nv: Coriolis, centrifugal and gravity; what inverse_dynamics gives for
 /// v̇ = 0) on the coordinates of the bodies of `range`, written to `forces` (sized nv), at the
-/// poses `poses` holds (body_poses or forward_kinematics of the current q; it may be `workspace`
-/// itself). With H from mass_matrix, H⁻¹(τ − C) is forward_dynamics' v̇ (MuJoCo's mj_rne, then
-/// mj_solveM). O(n); allocates nothing. Leaves the workspace's velocity, bias_acceleration and
-/// acceleration meaningful on the range.
-void bias_forces(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                 const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace, Eigen::VectorXd& forces, BodyRange range);
+/// poses and velocities `kinematics` holds: forward_kinematics of the current q and v (its
+/// parent_to_body, velocity and bias_acceleration on the range), which it does not find again
+/// (MuJoCo's mj_rne on mj_kinematics' and mj_comVel's results). With H from mass_matrix,
+/// H⁻¹(τ − C) is forward_dynamics' v̇ (MuJoCo's mj_rne, then mj_solveM). O(n); allocates nothing.
+/// Leaves the workspace's acceleration and bias_force meaningful on the range; `kinematics` may
+/// be `workspace` itself.
+void bias_forces(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Vector3d& gravity,
+                 DynamicsWorkspace& workspace, Eigen::VectorXd& forces, BodyRange range);
 
 /// The composite-rigid-body algorithm (Table 6.2): the joint-space inertia matrix H(q) (nv × nv,
 /// symmetric positive definite, written to `joint_space_inertia`, resized), dense. O(n·depth) work.

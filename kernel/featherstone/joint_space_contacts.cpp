@@ -503,7 +503,7 @@ void factored_forward_dynamics(FeatherstoneState& state, std::size_t island, con
   const BodyRange bodies = island_bodies(state, island);
   const auto [first, last] = island_velocities(state, island);
   factor_island(state, island, bodies, armature);
-  bias_forces(state.tree, state.kinematics, state.v, state.settings.gravity, s.composite, accelerations, bodies);
+  bias_forces(state.tree, state.kinematics, state.settings.gravity, s.composite, accelerations, bodies);
   auto on_island = accelerations.segment(first, last - first);
   on_island = joint_forces.segment(first, last - first) - on_island;
   if (!s.factored[island]) {

@@ -173,7 +173,8 @@ inline bool constraints_before_move(const FeatherstoneState& state) {
 void advance_positions(FeatherstoneState& state, std::size_t island);
 
 /// v̇ = (H + diag(armature))⁻¹ (τ − C(q, v)) on island `island`'s coordinates of `accelerations`
-/// (nv), τ = joint_forces (nv), armature nv values or null, at the poses in state.kinematics: the
+/// (nv), τ = joint_forces (nv), armature nv values or null, at the poses and velocities in
+/// state.kinematics (forward_kinematics of the current q and v, as between steps): the
 /// mass matrix by the composite-rigid-body algorithm, its LᵀDL factor, the bias forces by
 /// recursive Newton–Euler (MuJoCo's mj_crb, mj_factorM, mj_rne, mj_solveM) — forward_dynamics'
 /// answer to round-off. Before the move, for an island a contact touches: the factor it leaves

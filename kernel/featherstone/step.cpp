@@ -79,9 +79,9 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
   for (int s = 0; s < substeps; ++s) {
     const bool velocity_only = before_move && s == substeps - 1;
     // Drives and joint friction, as forces held over the substep (joint_space_contacts.hpp), and
-    // the integrator's first pass, at the poses of q: state.kinematics' at the step's start, found
-    // again after a substep.
-    if (s > 0) body_poses(state.tree, state.q, state.kinematics, bodies);
+    // the integrator's first pass, at the poses and velocities of (q, v): state.kinematics' at the
+    // step's start, found again after a substep (the bias forces through the factor read them).
+    if (s > 0) forward_kinematics(state.tree, state.q, state.v, state.kinematics, bodies);
     const bool controlled = joint_control_forces(state, state.joint_forces, h, k, velocity_only && through_factor);
     if (controlled && state.options.integrator == Integrator::semi_implicit_euler && state.controls.friction.empty()) {
       // The stable PD's dynamics already are this step's: (H + h·G) v̇ = τ − C + F − G·v gives
@@ -162,7 +162,10 @@ void rest_sleeping_islands(FeatherstoneState& state) {
   zero_sleeping_velocities(state);
   for (std::size_t k = 0; k < state.islands.size(); ++k) {
     if (!state.islands[k].sleeping) continue;
-    for (int i = state.island_begin[k]; i < state.island_begin[k + 1]; ++i) state.kinematics.velocity[static_cast<std::size_t>(i)].setZero();
+    for (int i = state.island_begin[k]; i < state.island_begin[k + 1]; ++i) {
+      state.kinematics.velocity[static_cast<std::size_t>(i)].setZero();
+      state.kinematics.bias_acceleration[static_cast<std::size_t>(i)].setZero();  // v_i × S_i q̇_i
+    }
   }
 }
 

@@ -176,9 +176,10 @@ TEST(JointSpaceFactor, TheSparseMassMatrixIsTheDenseOnesEntriesAndSolvesAsTheArt
 
 TEST(JointSpaceFactor, TheBiasForcesThroughTheFactorGiveTheArticulatedBodyAlgorithmsAccelerations) {
   // Before the move a touched island's velocity update is (H + diag(a))⁻¹(τ − C): the mass matrix
-  // and the bias forces by recursive Newton–Euler at the poses the step holds, then the factor's
-  // solve — MuJoCo's way, where the articulated-body algorithm (with the drives' armature a on
-  // its D_i) gave it.
+  // and the bias forces by recursive Newton–Euler at the poses and velocities the step holds
+  // (forward_kinematics', which the step keeps between steps), then the factor's solve —
+  // MuJoCo's way, where the articulated-body algorithm (with the drives' armature a on its D_i)
+  // gave it.
   std::mt19937 rng(49);
   DynamicsWorkspace poses, workspace, articulated;
   Eigen::VectorXd bias, accelerations, expected, reference;
@@ -191,14 +192,14 @@ TEST(JointSpaceFactor, TheBiasForcesThroughTheFactorGiveTheArticulatedBodyAlgori
       const Eigen::VectorXd armature = random_vector(rng, n, 1).cwiseAbs();
       const Eigen::Vector3d gravity = random_vector(rng, 3, 10);
       poses.resize(tree), workspace.resize(tree);
-      body_poses(tree, q, poses);
+      forward_kinematics(tree, q, v, poses);
       JointSpaceFactor factor;
       factor.assign(tree);
       mass_matrix(tree, poses, workspace, factor);
       for (int i = 0; i < n; ++i) factor.add_inertia(i, i, armature[i]);
       ASSERT_LT(factor.factor(), 0);
       bias.setZero(n);
-      bias_forces(tree, poses, v, gravity, workspace, bias, tree.all_bodies());
+      bias_forces(tree, poses, gravity, workspace, bias, tree.all_bodies());
       inverse_dynamics(tree, q, v, Eigen::VectorXd::Zero(n), gravity, articulated, reference);
       EXPECT_LT((bias - reference).norm(), 1e-12 * (reference.norm() + 1)) << tree.body_count() << " bodies";
       accelerations = tau - bias;
