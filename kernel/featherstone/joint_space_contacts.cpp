@@ -17,9 +17,12 @@ using namespace joint_space;
 // --- Contacts ------------------------------------------------------------------------------------
 
 // Contact block g's rows J_c (joint_space_contacts.hpp, "Responses"), from row_begin[g]: for each
-// of its tree bodies, the generalized impulses of unit world impulses along x, y, z at its point —
-// the spatial impulses carried from the body to the root, τ_k = S_kᵀ f on every joint k on the
-// way (Table 5.1's inward pass) — b's negated.
+// of its tree bodies, the generalized impulses τ_k = S_kᵀ f of unit world impulses along x, y, z
+// at its point, on every joint k on the way to the root — b's negated. Each row is taken in
+// world coordinates, where a unit impulse e at p is the wrench (p × e, e) and a joint turning
+// about the world axis u through o takes u·((p − o) × e) = e·(u × (p − o)): the geometric
+// Jacobian's column, one cross product a coordinate instead of three wrenches carried joint by
+// joint (Sᵀ of Table 5.1's inward pass).
 void contact_rows(FeatherstoneState& state, std::size_t g, const RigidContact& contact) {
   JointSpaceContactScratch& s = state.contact;
   const ArticulatedTree& tree = state.tree;
@@ -27,29 +30,29 @@ void contact_rows(FeatherstoneState& state, std::size_t g, const RigidContact& c
   for (const std::int32_t scene_body : {contact.a, contact.b}) {
     if (scene_body < 0) continue;  // a plane
     const double sign = scene_body == contact.a ? 1.0 : -1.0;
-    int i = state.tree_body[scene_body];
-    const PluckerTransform& world_to_body = state.kinematics.world_to_body[static_cast<std::size_t>(i)];
-    SpatialVector f[3];
-    for (int axis = 0; axis < 3; ++axis) {
-      const Eigen::Vector3d impulse = sign * Eigen::Vector3d::Unit(axis);
-      f[axis] << world_to_body.rotation * (contact.point - world_to_body.translation).cross(impulse), world_to_body.rotation * impulse;
-    }
-    for (;;) {
+    for (int i = state.tree_body[scene_body]; i >= 0; i = tree.body(i).parent) {
       const ArticulatedBody& body = tree.body(i);
-      with_degrees_of_freedom(body.joint, [&](auto dofs) {
-        constexpr int k = decltype(dofs)::value;
-        if constexpr (k > 0) {
-          Eigen::Matrix<double, k, 1> on_joint[3];
-          for (int axis = 0; axis < 3; ++axis) on_joint[axis] = project_on_joint<k>(body, f[axis]);
-          for (int r = 0; r < k; ++r, ++entry) {
-            s.row_coordinate[entry] = tree.velocity_offset(i) + r;
-            s.row_value[entry] = Eigen::Vector3d(on_joint[0][r], on_joint[1][r], on_joint[2][r]);
-          }
-        }
-      });
-      if (body.parent < 0) break;
-      for (SpatialVector& force : f) force = state.kinematics.parent_to_body[static_cast<std::size_t>(i)].transpose_apply_force(force);
-      i = body.parent;
+      const PluckerTransform& world_to_body = state.kinematics.world_to_body[static_cast<std::size_t>(i)];
+      const Eigen::Matrix3d& rotation = world_to_body.rotation;  // row m: the body's axis m in world coordinates
+      const Eigen::Vector3d arm = contact.point - world_to_body.translation;
+      int coordinate = tree.velocity_offset(i);
+      const auto put = [&](const Eigen::Vector3d& value) {
+        s.row_coordinate[entry] = coordinate++;
+        s.row_value[entry] = sign * value;
+        ++entry;
+      };
+      switch (body.joint) {
+        case ArticulatedJoint::revolute: put((rotation.transpose() * body.joint_axis).cross(arm)); break;
+        case ArticulatedJoint::prismatic: put(rotation.transpose() * body.joint_axis); break;
+        case ArticulatedJoint::spherical:
+          for (int m = 0; m < 3; ++m) put(rotation.row(m).transpose().cross(arm));
+          break;
+        case ArticulatedJoint::floating:
+          for (int m = 0; m < 3; ++m) put(rotation.row(m).transpose().cross(arm));
+          for (int m = 0; m < 3; ++m) put(rotation.row(m).transpose());
+          break;
+        case ArticulatedJoint::fixed: break;
+      }
     }
   }
 }

@@ -684,6 +684,53 @@ TEST(FeatherstoneContacts, ATouchedIslandsVelocityUpdateIsTheArticulatedBodyPass
   EXPECT_LT((touched.v - alone.v).norm(), 1e-10 * alone.v.norm());
 }
 
+TEST(FeatherstoneContacts, AContactsRowsGiveItsPointsRelativeVelocity) {
+  // A contact's rows J_c are taken in world coordinates, one cross product a joint: J_c v must be
+  // the relative velocity of the two material points at the contact, found here from the tree's
+  // body velocities (forward_kinematics) for every contact humanoid.json's fall and ragdoll
+  // pile's tumble give, limb on ground and limb on limb. The solver records the approach speed
+  // it read from J_c v before its impulses.
+  for (const char* scene : {"humanoid.json", "ragdoll_pile.json"}) {
+    Model model = load_shipped_scene(scene);
+    model.settings.sleep.enabled = false;
+    FeatherstoneState state = compile_featherstone(model, {.integrator = Integrator::semi_implicit_euler});
+    const double dt = model.settings.time_step;
+    DynamicsWorkspace motion;
+    const auto point_velocity = [&](std::int32_t scene_body, const Eigen::Vector3d& p) -> Eigen::Vector3d {
+      if (scene_body < 0) return Eigen::Vector3d::Zero();
+      const auto i = static_cast<std::size_t>(state.tree_body[static_cast<std::size_t>(scene_body)]);
+      const PluckerTransform& world_to_body = motion.world_to_body[i];
+      const Eigen::Matrix3d to_world = world_to_body.rotation.transpose();
+      const Eigen::Vector3d omega = to_world * motion.velocity[i].head<3>(), origin = to_world * motion.velocity[i].tail<3>();
+      return origin + omega.cross(p - world_to_body.translation);
+    };
+    int checked = 0, between_limbs = 0;
+    for (int s = 0; s < std::lround(1.5 / dt); ++s) {
+      state.speculative_time = dt;
+      if (detect_rigid_contacts(state)) take_moved_balls(state);
+      remember_step_start(state);
+      integrate_awake_islands(state, dt);
+      forward_kinematics(state.tree, state.q, state.v, motion);
+      std::vector<double> approach;
+      for (const RigidContact& contact : state.contacts) {
+        approach.push_back(-(point_velocity(contact.a, contact.point) - point_velocity(contact.b, contact.point)).dot(contact.normal));
+      }
+      resolve_joint_space_contacts(state, dt);
+      for (std::size_t c = 0; c < approach.size(); ++c) {
+        if (!(approach[c] > 0.01)) continue;  // the solver keeps max(approach, 0)
+        EXPECT_NEAR(state.contacts[c].approach_speed, approach[c], 1e-12 * (1 + approach[c])) << scene << ", step " << s;
+        ++checked, between_limbs += state.contacts[c].b >= 0;
+      }
+      for (const std::int32_t k : state.awake_islands) advance_positions(state, static_cast<std::size_t>(k));
+      state.time += dt;
+      ASSERT_EQ(update_sleep(state, dt), StepStatus::ok) << scene << " at " << s;
+    }
+    EXPECT_GT(checked, 20) << scene;
+    if (std::string(scene) == "ragdoll_pile.json") EXPECT_GT(between_limbs, 5);
+    RecordProperty(std::string(scene) + "_checked", std::to_string(checked) + " contacts, " + std::to_string(between_limbs) + " between limbs");
+  }
+}
+
 TEST(FeatherstoneContacts, ABallTeleportedAcrossALimbLandsWhereItWasPut) {
   // With the contacts before the move (semi-implicit Euler), detection sweeps the ball's path of
   // the last step at the next one's start: a teleport between steps is not a path, and a ball put
