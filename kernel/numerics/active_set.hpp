@@ -52,6 +52,7 @@ class ActiveSet {
   void factor_held(const Eigen::Ref<const Eigen::MatrixXd>& a);
 
   Eigen::MatrixXd factor_;    // L of A_HH, top-left
+  Eigen::VectorXd inverse_diagonal_;  // 1 / L_rr: the solves multiply (a division's latency chains them)
   Eigen::VectorXd right_;     // its right-hand side, then Δλ_H
   std::vector<int> held_;     // the held rows, in order
   std::vector<int> factored_; // the held rows whose A_HH factor_ holds, when factored_known_
