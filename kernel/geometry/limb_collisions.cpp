@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -299,6 +300,9 @@ LimbCollisions::LimbCollisions(const Model& model)
     std::sort(excluded_.begin(), excluded_.end());
     excluded_.erase(std::unique(excluded_.begin(), excluded_.end()), excluded_.end());
   }
+  excluded_begin_.assign(segments + 1, 0);
+  for (const CandidatePair& pair : excluded_) ++excluded_begin_[pair.first + 1];
+  std::partial_sum(excluded_begin_.begin(), excluded_begin_.end(), excluded_begin_.begin());
   limb_pairs_ = some_pair_tested(false) || some_pair_tested(true);
   active_ = limb_pairs_ || !statics_.empty();
   all_awake_.assign(segments, 1);
@@ -352,7 +356,12 @@ bool LimbCollisions::some_pair_tested(bool balls) {
 }
 
 bool LimbCollisions::excluded(std::uint32_t first, std::uint32_t second) const {
-  return std::binary_search(excluded_.begin(), excluded_.end(), CandidatePair{first, second});
+  // A segment's few exclusions, scanned: a search over all of them missed the cache per pair.
+  const auto [low, high] = std::minmax(first, second);
+  for (std::uint32_t k = excluded_begin_[low]; k < excluded_begin_[low + 1]; ++k) {
+    if (excluded_[k].second == high) return true;
+  }
+  return false;
 }
 
 bool LimbCollisions::pair_tested(std::uint32_t first, std::uint32_t second) const {

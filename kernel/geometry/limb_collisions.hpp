@@ -206,6 +206,7 @@ class LimbCollisions {
   std::vector<CollisionFilter> filters_;    // per segment (a ball: the default filter)
   std::vector<double> restitution_;         // per segment: a ball's, 0 for a limb
   std::vector<CandidatePair> excluded_;     // sorted: joined, or overlapping at the Model's poses
+  std::vector<std::uint32_t> excluded_begin_;  // segment s's exclusions with later segments: excluded_[excluded_begin_[s], excluded_begin_[s + 1])
   StaticTree statics_;
   SweepAndPrune broadphase_;
   std::vector<Aabb> boxes_;                 // per segment, this call's
