@@ -22,9 +22,11 @@
 // tree and it is factored as LᵀDL (joint_space_factor.hpp; MuJoCo's mj_crb and mj_factorM) —
 // before the move, by the velocity update of an island a contact touches (below). A
 // contact's rows J_c (3 × nv: the world x, y, z of the relative velocity of its points, a's minus
-// b's) are the generalized impulses of unit world impulses at p, carried from each body to the
-// root (τ_k = S_kᵀ f on every joint k on the way, Table 5.1's inward pass): non-zero only on the
-// two bodies' paths, and so are its half rows Y_c = L⁻ᵀ J_cᵀ (MuJoCo's half-solve). Its
+// b's) are the generalized impulses of unit world impulses at p on every joint k from each body
+// to the root (τ_k = S_kᵀ f, Table 5.1's inward pass), each taken in world coordinates as the
+// geometric Jacobian's column (u × (p − o) for a hinge about the world axis u through o):
+// non-zero only on the two bodies' paths, and so are its half rows Y_c = L⁻ᵀ J_cᵀ (MuJoCo's
+// half-solve). Its
 // collision matrix is K_c = J_c H⁻¹ J_cᵀ = Y_cᵀ D⁻¹ Y_c (3×3, world: the change of the relative
 // velocity per unit impulse +J on a and −J on b; its normal-normal entry is the contact's
 // effective inverse mass 1/(J_n H⁻¹ J_nᵀ)). A limit row (below) is a row on its joint's
