@@ -173,28 +173,28 @@ void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::
 
 namespace {
 
-// Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal; the poses from
-// q (nq), or, q null, those `poses` holds; for the bodies of `range` (joint_accelerations sized nv,
-// written on their coordinates).
-void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* poses,
+// Table 7.1, with `armature` (nv, or nullptr: none) added to each D_i's diagonal; the poses ⁱX_λ,
+// body velocities v_i and bias accelerations c_i from q (nq) and v into the workspace, or, q null,
+// those `motion` holds (forward_kinematics of the current q and v); for the bodies of `range`
+// (joint_accelerations sized nv, written on their coordinates).
+void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, const DynamicsWorkspace* motion,
                                 const Eigen::Ref<const Eigen::VectorXd>& v, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
                                 const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
                                 Eigen::VectorXd& joint_accelerations, BodyRange range) {
-  require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
+  if (!motion) require_size(v.size(), tree.velocity_count(), "forward_dynamics: v");
   require_size(joint_forces.size(), tree.velocity_count(), "forward_dynamics: joint forces");
   if (!workspace.fits(tree)) workspace.resize(tree);
   if (joint_accelerations.size() != tree.velocity_count()) joint_accelerations.resize(tree.velocity_count());
   DynamicsWorkspace& w = workspace;
-  const auto first = static_cast<std::ptrdiff_t>(range.first), last = static_cast<std::ptrdiff_t>(range.last);
 
   // Pass 1 (outward): velocities, bias accelerations; I^A_i = I_i, p^A_i = v_i ×* I_i v_i.
-  if (!q && poses != &w) std::copy(poses->parent_to_body.begin() + first, poses->parent_to_body.begin() + last, w.parent_to_body.begin() + first);
-  propagate_velocities(tree, q, v, w, range);
+  if (!motion) propagate_velocities(tree, q, v, w, range);
+  const DynamicsWorkspace& known = motion ? *motion : w;
   for (int i = range.first; i < range.last; ++i) {
     const auto index = static_cast<std::size_t>(i);
     const SpatialInertia& inertia = tree.body(i).inertia;
     w.articulated_inertia[index] = inertia.matrix();
-    w.bias_force[index] = cross_force(w.velocity[index], inertia * w.velocity[index]);
+    w.bias_force[index] = cross_force(known.velocity[index], inertia * known.velocity[index]);
   }
 
   // Pass 2 (inward): U_i = I^A_i S_i, D_i = S_iᵀ U_i, u_i = τ_i − S_iᵀ p^A_i; the body's
@@ -212,7 +212,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
       constexpr int k = decltype(dofs)::value;
       if constexpr (k == 0) {
         ia_through_joint = ia;
-        pa_through_joint = pa + ia * w.bias_acceleration[index];
+        pa_through_joint = pa + ia * known.bias_acceleration[index];
       } else {
         const Eigen::Matrix<double, 6, k> s = motion_subspace<k>(body);
         const Eigen::Matrix<double, 6, k> u_matrix = ia * s;
@@ -230,13 +230,13 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
         if (body.parent < 0) return;
         const Eigen::Matrix<double, 6, k> u_d_inverse = u_matrix * d_inverse;
         ia_through_joint.noalias() = ia - u_d_inverse * u_matrix.transpose();
-        pa_through_joint.noalias() = pa + ia_through_joint * w.bias_acceleration[index] + u_d_inverse * u;
+        pa_through_joint.noalias() = pa + ia_through_joint * known.bias_acceleration[index] + u_d_inverse * u;
       }
     });
     if (body.parent < 0) continue;
     const auto parent = static_cast<std::size_t>(body.parent);
-    w.articulated_inertia[parent] += w.parent_to_body[index].transpose_apply_inertia(ia_through_joint);
-    w.bias_force[parent] += w.parent_to_body[index].transpose_apply_force(pa_through_joint);
+    w.articulated_inertia[parent] += known.parent_to_body[index].transpose_apply_inertia(ia_through_joint);
+    w.bias_force[parent] += known.parent_to_body[index].transpose_apply_force(pa_through_joint);
   }
 
   // Pass 3 (outward): a' = ⁱX_λ a_λ + c_i, v̇_i = D_i⁻¹ (u_i − U_iᵀ a'), a_i = a' + S_i v̇_i.
@@ -246,7 +246,7 @@ void articulated_body_algorithm(const ArticulatedTree& tree, const double* q, co
     const auto index = static_cast<std::size_t>(i);
     const int offset = tree.velocity_offset(i);
     const SpatialVector& parent_acceleration = body.parent >= 0 ? w.acceleration[static_cast<std::size_t>(body.parent)] : a0;
-    const SpatialVector a = w.parent_to_body[index].apply_motion(parent_acceleration) + w.bias_acceleration[index];
+    const SpatialVector a = known.parent_to_body[index].apply_motion(parent_acceleration) + known.bias_acceleration[index];
     with_degrees_of_freedom(body.joint, [&](auto dofs) {
       constexpr int k = decltype(dofs)::value;
       if constexpr (k == 0) {
@@ -287,17 +287,18 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                              tree.all_bodies());
 }
 
-void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
-                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations) {
-  forward_dynamics(tree, poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, tree.all_bodies());
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
+                      Eigen::VectorXd& joint_accelerations) {
+  forward_dynamics(tree, kinematics, joint_forces, armature, gravity, workspace, joint_accelerations, tree.all_bodies());
 }
 
-void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
-                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range) {
-  if (!poses.fits(tree)) throw std::invalid_argument("forward_dynamics: the poses are not of this tree");
-  articulated_body_algorithm(tree, nullptr, &poses, v, joint_forces, armature, gravity, workspace, joint_accelerations, range);
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
+                      Eigen::VectorXd& joint_accelerations, BodyRange range) {
+  if (!kinematics.fits(tree)) throw std::invalid_argument("forward_dynamics: the kinematics are not of this tree");
+  articulated_body_algorithm(tree, nullptr, &kinematics, Eigen::VectorXd(), joint_forces, armature, gravity, workspace, joint_accelerations,
+                             range);
 }
 
 namespace {

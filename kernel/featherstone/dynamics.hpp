@@ -99,16 +99,17 @@ void forward_dynamics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen:
                       const Eigen::Ref<const Eigen::VectorXd>& armature, const Eigen::Vector3d& gravity,
                       DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
 
-/// The same at the poses `poses` holds (body_poses or forward_kinematics of the current q; it may
-/// be `workspace` itself), without recomputing them, the same bits; `armature` nv values or null.
-void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
-                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations);
+/// The same at the poses and velocities `kinematics` holds: forward_kinematics of the current q
+/// and v (its parent_to_body, velocity and bias_acceleration; it may be `workspace` itself),
+/// without finding them again, the same bits; `armature` nv values or null.
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
+                      Eigen::VectorXd& joint_accelerations);
 /// The same for the bodies of `range` alone: v̇ on their coordinates (joint_accelerations of size
 /// nv), the workspace's entries of their bodies and coordinates; the same bits.
-void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& poses, const Eigen::Ref<const Eigen::VectorXd>& v,
-                      const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const double* armature, const Eigen::Vector3d& gravity,
-                      DynamicsWorkspace& workspace, Eigen::VectorXd& joint_accelerations, BodyRange range);
+void forward_dynamics(const ArticulatedTree& tree, const DynamicsWorkspace& kinematics, const Eigen::Ref<const Eigen::VectorXd>& joint_forces,
+                      const double* armature, const Eigen::Vector3d& gravity, DynamicsWorkspace& workspace,
+                      Eigen::VectorXd& joint_accelerations, BodyRange range);
 
 /// Recursive Newton–Euler (Table 5.1): the joint forces τ (nv, written to `joint_forces`,
 /// resized) that give accelerations v̇ (nv) at q, v under gravity g. With v̇ = 0 it is the bias

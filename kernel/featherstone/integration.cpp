@@ -103,19 +103,19 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses) {
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics) {
   if (!workspace.fits(tree)) workspace.resize(tree);
-  integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, poses, tree.all_bodies());
+  integrate(tree, q, v, joint_forces, gravity, h, integrator, workspace, kinematics, tree.all_bodies());
 }
 
 namespace {
 
-// v̇(q, v) into workspace.accelerations on `range`, at `poses` when given (those of q).
+// v̇(q, v) into workspace.accelerations on `range`, from `kinematics` when given (forward_kinematics of q and v).
 void find_accelerations(const ArticulatedTree& tree, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                         const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity,
-                        FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
-  if (poses) {
-    forward_dynamics(tree, *poses, v, joint_forces, nullptr, gravity, workspace.dynamics, workspace.accelerations, range);
+                        FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics, BodyRange range) {
+  if (kinematics) {
+    forward_dynamics(tree, *kinematics, joint_forces, nullptr, gravity, workspace.dynamics, workspace.accelerations, range);
   } else {
     forward_dynamics(tree, q, v, joint_forces, gravity, workspace.dynamics, workspace.accelerations, range);
   }
@@ -125,9 +125,9 @@ void find_accelerations(const ArticulatedTree& tree, const Eigen::VectorXd& q, c
 
 void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                 const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
+                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics, BodyRange range) {
   if (!workspace.fits(tree)) throw std::invalid_argument("accelerate: the workspace is not sized for this tree");
-  find_accelerations(tree, q, v, joint_forces, gravity, workspace, poses, range);
+  find_accelerations(tree, q, v, joint_forces, gravity, workspace, kinematics, range);
   semi_implicit_velocity(tree, v, workspace.accelerations, h, range);
 }
 
@@ -159,7 +159,7 @@ void semi_implicit_move(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::
 
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range) {
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics, BodyRange range) {
   if (!workspace.fits(tree)) throw std::invalid_argument("integrate: the workspace is not sized for this tree");
   FeatherstoneIntegratorWorkspace& w = workspace;
   // The range's coordinates: element by element, the same bits as over the whole vectors.
@@ -169,7 +169,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
   const auto positions = [&, first = first_position, count = last_position - first_position](Eigen::VectorXd& x) { return x.segment(first, count); };
   switch (integrator) {
     case Integrator::semi_implicit_euler:
-      accelerate(tree, q, v, joint_forces, gravity, h, workspace, poses, range);
+      accelerate(tree, q, v, joint_forces, gravity, h, workspace, kinematics, range);
       semi_implicit_move(tree, q, v, h, w.stage_displacement, range);
       return;
     case Integrator::rk4: {
@@ -181,7 +181,7 @@ void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd&
       velocities(w.stage_displacement).setZero();
       velocities(w.acceleration_sum).setZero(), velocities(w.displacement_rate_sum).setZero();
       for (int s = 0; s < 4; ++s) {
-        find_accelerations(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w, s == 0 ? poses : nullptr, range);
+        find_accelerations(tree, w.stage_positions, w.stage_velocities, joint_forces, gravity, w, s == 0 ? kinematics : nullptr, range);
         displacement_rate(tree, w.stage_displacement, w.stage_velocities, w.stage_rate, range);
         velocities(w.acceleration_sum) += kWeights[s] * velocities(w.accelerations);
         velocities(w.displacement_rate_sum) += kWeights[s] * velocities(w.stage_rate);

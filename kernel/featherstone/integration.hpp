@@ -54,25 +54,25 @@ void displace_positions(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 /// m/s²) with forward_dynamics. Allocates nothing once the workspace is sized. Implements
 /// semi_implicit_euler (v ← v + h v̇(q, v); q ← q ⊕ h v with the new v; order 1; a floating
 /// joint's translation in world-fixed axes: semi_implicit_velocity) and rk4
-/// (stages combined in the tangent space; order 4); compile refuses the others. `poses`, when
-/// given, holds the poses of q (body_poses or forward_kinematics), which the first stage then
-/// does not recompute: the same bits.
+/// (stages combined in the tangent space; order 4); compile refuses the others. `kinematics`,
+/// when given, holds forward_kinematics of (q, v) (poses, body velocities and bias
+/// accelerations), which the first stage then does not find again: the same bits.
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses = nullptr);
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics = nullptr);
 /// The same for the bodies of `range` alone (their coordinates of q and v; the workspace sized
 /// for the tree), the same bits.
 void integrate(const ArticulatedTree& tree, Eigen::VectorXd& q, Eigen::VectorXd& v,
                const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
+               Integrator integrator, FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics, BodyRange range);
 
 /// Semi-implicit Euler's velocity update alone, v ← v + h v̇(q, v) (semi_implicit_velocity;
 /// integrate's first half; q is not moved), on the bodies of `range` (their coordinates of v;
 /// the workspace sized for the tree): the velocity a step solves its constraints on before the positions move with it
-/// (kernel/featherstone/step.hpp). `poses` as for integrate.
+/// (kernel/featherstone/step.hpp). `kinematics` as for integrate.
 void accelerate(const ArticulatedTree& tree, const Eigen::VectorXd& q, Eigen::VectorXd& v,
                 const Eigen::Ref<const Eigen::VectorXd>& joint_forces, const Eigen::Vector3d& gravity, double h,
-                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* poses, BodyRange range);
+                FeatherstoneIntegratorWorkspace& workspace, const DynamicsWorkspace* kinematics, BodyRange range);
 
 /// Semi-implicit Euler's velocity update from accelerations v̇ (nv: forward_dynamics', or the
 /// joint-space factor's) on the bodies of `range`: v ← v + h·v̇, but a floating joint's linear

@@ -513,7 +513,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
   if (through_factor) {
     factored_forward_dynamics(state, island, c.explicit_force, c.armature.data(), c.acceleration);
   } else {
-    forward_dynamics(state.tree, state.kinematics, state.v, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
+    forward_dynamics(state.tree, state.kinematics, c.explicit_force, c.armature.data(), state.settings.gravity, s.articulated,
                      c.acceleration, bodies);
   }
   on_island(c.predicted) = on_island(state.v);

@@ -726,7 +726,9 @@ TEST(FeatherstoneContacts, AContactsRowsGiveItsPointsRelativeVelocity) {
       ASSERT_EQ(update_sleep(state, dt), StepStatus::ok) << scene << " at " << s;
     }
     EXPECT_GT(checked, 20) << scene;
-    if (std::string(scene) == "ragdoll_pile.json") EXPECT_GT(between_limbs, 5);
+    if (std::string(scene) == "ragdoll_pile.json") {
+      EXPECT_GT(between_limbs, 5);
+    }
     RecordProperty(std::string(scene) + "_checked", std::to_string(checked) + " contacts, " + std::to_string(between_limbs) + " between limbs");
   }
 }

@@ -253,8 +253,8 @@ TEST(Dynamics, EachIslandAloneGivesTheBitsOfTheWholeForest) {
     EXPECT_TRUE(whole.world_to_body[index].rotation == apart.world_to_body[index].rotation) << "body " << i;
   }
   Eigen::VectorXd whole_acceleration, apart_acceleration = Eigen::VectorXd::Zero(forest.velocity_count());
-  forward_dynamics(forest, whole, v, tau, nullptr, kGravity, whole, whole_acceleration);
-  for (const BodyRange range : ranges) forward_dynamics(forest, apart, v, tau, nullptr, kGravity, apart, apart_acceleration, range);
+  forward_dynamics(forest, whole, tau, nullptr, kGravity, whole, whole_acceleration);
+  for (const BodyRange range : ranges) forward_dynamics(forest, apart, tau, nullptr, kGravity, apart, apart_acceleration, range);
   EXPECT_TRUE(whole_acceleration == apart_acceleration);
   JointSpaceFactor whole_factor, apart_factor;
   whole_factor.assign(forest), apart_factor.assign(forest);

@@ -312,7 +312,7 @@ TEST(JointSpaceFactor, TheStepsReusedPosesGiveTheSameBits) {
     Eigen::VectorXd from_q_acceleration, from_poses_acceleration;
     DynamicsWorkspace articulated;
     forward_dynamics(tree, q, v, tau, armature, gravity, articulated, from_q_acceleration);
-    forward_dynamics(tree, poses, v, tau, armature.data(), gravity, articulated, from_poses_acceleration);
+    forward_dynamics(tree, poses, tau, armature.data(), gravity, articulated, from_poses_acceleration);
     EXPECT_EQ(from_q_acceleration, from_poses_acceleration);
   }
 }
