@@ -80,8 +80,9 @@ Eigen::Vector3d block_motion(const JointSpaceContactScratch& s, std::size_t g, c
 }
 
 // Block g's half rows Y_g = L⁻ᵀ J_gᵀ (on its path) and its diagonal block Y_gᵀ D⁻¹ Y_g. Needs
-// its rows and the factor; `path` is scratch.
-Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g, std::vector<int>& path) {
+// its rows and the factor; `path` is scratch. A limit row (`one_column`) has its values in x
+// alone: its solve takes that column.
+Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g, std::vector<int>& path, bool one_column) {
   path.clear();
   for (int e = s.row_begin[g]; e < s.row_begin[g + 1]; ++e) {
     const int k = s.row_coordinate[static_cast<std::size_t>(e)];
@@ -90,7 +91,11 @@ Eigen::Matrix3d half_rows(JointSpaceContactScratch& s, std::size_t g, std::vecto
   }
   std::sort(path.begin(), path.end(), std::greater<>());
   path.erase(std::unique(path.begin(), path.end()), path.end());
-  s.factor.solve_transposed_lower(s.scatter, path);
+  if (one_column) {
+    s.factor.solve_transposed_lower_column(s.scatter.col(0), path);
+  } else {
+    s.factor.solve_transposed_lower(s.scatter, path);
+  }
   Eigen::Matrix3d diagonal = Eigen::Matrix3d::Zero();
   auto entry = static_cast<std::size_t>(s.row_begin[g]);  // a block has no more half rows than rows
   for (const int k : path) {
@@ -299,7 +304,7 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
     const auto g = static_cast<std::size_t>(block);
     RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
     contact_rows(state, g, contact);
-    s.contact_matrix[g] = half_rows(s, g, path);
+    s.contact_matrix[g] = half_rows(s, g, path, /*one_column=*/false);
     s.free_motion[g] = block_motion(s, g, state.v);
     record_approach(contact, -s.free_motion[g].dot(contact.normal), state.settings, dt);
   }
@@ -307,7 +312,7 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
     const auto g = static_cast<std::size_t>(block);
     JointLimitRow& row = state.controls.rows[static_cast<std::size_t>(s.block_source[g])];
     limit_row_entries(state, g, row);
-    row.inverse_mass = half_rows(s, g, path)(0, 0);
+    row.inverse_mass = half_rows(s, g, path, /*one_column=*/true)(0, 0);
   }
   form_limit_delassus(state, group);
   return true;

@@ -139,13 +139,28 @@ void transposed_lower_solve(const std::vector<int>& begin, const std::vector<int
 
 void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::VectorXd> y) const { transposed_lower_solve(begin_, ancestor_, entries_, y, 0, size()); }
 
-void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const {
+namespace {
+
+// y ← L⁻ᵀ y on `coordinates` (descending, closed under ancestors), y's rows one to three values.
+template <typename Rows>
+void transposed_lower_solve_on(const std::vector<int>& begin, const std::vector<int>& ancestor, const std::vector<double>& entries,
+                               Rows& y, const std::vector<int>& coordinates) {
   for (const int k : coordinates) {
-    const Eigen::RowVector3d y_k = y.row(k);
-    for (int e = begin_[static_cast<std::size_t>(k)]; e < begin_[static_cast<std::size_t>(k) + 1]; ++e) {
-      y.row(ancestor_[static_cast<std::size_t>(e)]) -= entries_[static_cast<std::size_t>(e)] * y_k;
+    const auto y_k = y.row(k).eval();
+    for (int e = begin[static_cast<std::size_t>(k)]; e < begin[static_cast<std::size_t>(k) + 1]; ++e) {
+      y.row(ancestor[static_cast<std::size_t>(e)]) -= entries[static_cast<std::size_t>(e)] * y_k;
     }
   }
+}
+
+}  // namespace
+
+void JointSpaceFactor::solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const {
+  transposed_lower_solve_on(begin_, ancestor_, entries_, y, coordinates);
+}
+
+void JointSpaceFactor::solve_transposed_lower_column(Eigen::Ref<Eigen::VectorXd> y, const std::vector<int>& coordinates) const {
+  transposed_lower_solve_on(begin_, ancestor_, entries_, y, coordinates);
 }
 
 namespace {

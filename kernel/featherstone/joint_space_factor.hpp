@@ -76,6 +76,8 @@ class JointSpaceFactor {
   /// of each (a union of paths to the root) in descending order: O(their entries of L). The
   /// half rows of a contact, Y = L⁻ᵀ Jᵀ, stay on its paths.
   void solve_transposed_lower(Eigen::Ref<Eigen::Matrix<double, Eigen::Dynamic, 3>> y, const std::vector<int>& coordinates) const;
+  /// The same for one column (nv; a limit row's).
+  void solve_transposed_lower_column(Eigen::Ref<Eigen::VectorXd> y, const std::vector<int>& coordinates) const;
   /// x ← L⁻¹ x (nv), the last part of solve() (after L⁻ᵀ and D⁻¹). O(Σ depth).
   void solve_lower(Eigen::Ref<Eigen::VectorXd> x) const;
   /// The same on coordinates first…last − 1 only (whole subtrees, as solve's range).
