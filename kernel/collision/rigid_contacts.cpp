@@ -107,9 +107,9 @@ void find_speculative_reach(RigidScene& state) {
 // among the bodies as they are now, touching or overlapping, or (speculative_time) closer than
 // their reaches: a rigid method that moves before it collides answers a contact only once it
 // overlaps. An awake limb that touches a sleeping one wakes its island.
-void add_collision_world_contacts(RigidScene& state, BlockRunner* runner) {
+void add_collision_world_contacts(RigidScene& state) {
   for (std::size_t b = 0; b < state.bodies.size(); ++b) state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
-  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts, runner);
+  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts);
   for (const LimbContact& contact : state.limb_contacts) {
     const auto a = static_cast<std::int32_t>(contact.first);
     RigidContact rigid{a, -1, contact.point, contact.normal, -contact.separation, contact.restitution, contact.friction};
@@ -212,7 +212,7 @@ void find_ball_candidates(RigidScene& state) {
 
 void remember_step_start(RigidScene& state) { state.step_start_position = state.bodies.state.position; }
 
-bool detect_rigid_contacts(RigidScene& state, BlockRunner* runner) {
+bool detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
   find_speculative_reach(state);
@@ -227,7 +227,7 @@ bool detect_rigid_contacts(RigidScene& state, BlockRunner* runner) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
   }
-  if (state.collisions.active()) add_collision_world_contacts(state, runner);
+  if (state.collisions.active()) add_collision_world_contacts(state);
   return moved;
 }
 

@@ -53,10 +53,8 @@ void remember_step_start(RigidScene& scene);
 /// have a = the lower body index, b = the other, normal from b to a and restitution 0. First
 /// moves the ball back along its path to where it hit a limb or a static collider (above);
 /// returns whether it did, so a method keeping its own coordinates (Featherstone's q) takes the
-/// ball's new position over. `runner` (or null: the calling thread) runs the collision world's
-/// narrow phase in blocks, joined in block order: the same contacts in the same order on any
-/// number of threads.
-bool detect_rigid_contacts(RigidScene& scene, BlockRunner* runner = nullptr);
+/// ball's new position over.
+bool detect_rigid_contacts(RigidScene& scene);
 
 /// A rigid method's step counts in report.profile (step_status.hpp, StepProfile): one substep,
 /// report.contacts, and the broadphase pairs of the last detect_rigid_contacts. Called only when

@@ -470,15 +470,10 @@ void LimbCollisions::run_narrowphase(const Narrowphase& pass, std::vector<LimbCo
     std::sort(out.begin(), out.end(), contact_before);
     return;
   }
-  if (blocks_.size() < count) {
-    // Room for twice the blocks asked: the candidate pairs grow as bodies pile up, and later calls
-    // should allocate nothing. A limb-pair block gives at most two contacts a pair; a static
-    // block's typical three a segment.
-    blocks_.reserve(2 * count);
-    while (blocks_.size() < 2 * count) {
-      Block& block = blocks_.emplace_back();
-      block.contacts.reserve(2 * kPairsPerBlock), block.kept.reserve(std::max(kPairsPerBlock, 3 * kSegmentsPerBlock));
-    }
+  while (blocks_.size() < count) {
+    // A limb-pair block gives at most two contacts a pair; a static block's typical three a segment.
+    Block& block = blocks_.emplace_back();
+    block.contacts.reserve(2 * kPairsPerBlock), block.kept.reserve(std::max(kPairsPerBlock, 3 * kSegmentsPerBlock));
   }
   Narrowphase stage = pass;
   stage.blocks = blocks_.data();
