@@ -215,6 +215,8 @@ void remember_step_start(RigidScene& state) { state.step_start_position = state.
 bool detect_rigid_contacts(RigidScene& state) {
   state.contacts.clear();
   state.ball_touching = false;
+  // Nothing any body could meet (a hanging chain, a rope in the air): no reaches nor segments.
+  if (state.planes.empty() && !state.collisions.active() && state.ball_begin >= state.bodies.size()) return false;
   find_speculative_reach(state);
   bool moved = false;
   if (state.ball_begin < state.bodies.size()) find_ball_candidates(state);

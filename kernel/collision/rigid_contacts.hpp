@@ -53,7 +53,8 @@ void remember_step_start(RigidScene& scene);
 /// have a = the lower body index, b = the other, normal from b to a and restitution 0. First
 /// moves the ball back along its path to where it hit a limb or a static collider (above);
 /// returns whether it did, so a method keeping its own coordinates (Featherstone's q) takes the
-/// ball's new position over.
+/// ball's new position over. A scene with nothing to meet (no plane, no collision world, no
+/// ball) finds nothing and leaves scene.limb_segments as they were.
 bool detect_rigid_contacts(RigidScene& scene);
 
 /// A rigid method's step counts in report.profile (step_status.hpp, StepProfile): one substep,
