@@ -187,9 +187,12 @@ void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range) {
     const Eigen::Vector3d& centre = state.centre_of_mass[index];
     y.orientation[b] = (Eigen::Quaterniond(rotation) * state.principal_frame[index]).normalized();
     y.position[b] = world_to_body.translation + rotation * centre;
-    // v_i = (ω, v_O) in the body's frame: the centre of mass moves at v_O + ω × c.
+    // v_i = (ω, v_O) in the body's frame: the centre of mass moves at v_O + ω × c. The world
+    // velocities are kept for the sleep and speed guard (update_sleep_from_velocities).
     const SpatialVector& velocity = state.kinematics.velocity[index];
-    y.linear_momentum[b] = state.bodies.mass[b] * (rotation * (velocity.tail<3>() + velocity.head<3>().cross(centre)));
+    state.velocity[b] = rotation * (velocity.tail<3>() + velocity.head<3>().cross(centre));
+    state.angular_velocity[b] = rotation * velocity.head<3>();
+    y.linear_momentum[b] = state.bodies.mass[b] * state.velocity[b];
     y.angular_momentum[b] = rotation * (state.centre_inertia[index] * velocity.head<3>());  // R I Rᵀ ω in the tree body's axes
   }
 }
@@ -215,7 +218,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     }
     report.contacts = static_cast<int>(state.contacts.size());
     state.time += dt;
-    report.status = update_sleep(state, dt);
+    report.status = update_sleep_from_velocities(state, dt);  // the mirror's velocities
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
     state.actuation.setZero();

@@ -206,9 +206,13 @@ void clear_applied_loads(RigidScene& scene) {
 }
 
 StepStatus update_sleep(RigidScene& scene, double dt) {
+  body_velocities(scene, scene.bodies.state);
+  return update_sleep_from_velocities(scene, dt);
+}
+
+StepStatus update_sleep_from_velocities(RigidScene& scene, double dt) {
   const Settings& settings = scene.settings;
   StepStatus status = StepStatus::ok;
-  body_velocities(scene, scene.bodies.state);
   for (RigidIsland& island : scene.islands) {
     if (island.sleeping) continue;
     double fastest = 0;  // NaN once a body's speed or position is not finite

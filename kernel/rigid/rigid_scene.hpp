@@ -164,6 +164,10 @@ void clear_applied_loads(RigidScene& scene);
 /// settings.divergence_speed) and puts islands whose bodies' fastest surface points all stayed
 /// below settings.sleep.speed_threshold for settings.sleep.time_to_sleep to sleep (zeroing P, L).
 StepStatus update_sleep(RigidScene& scene, double dt);
+/// The same from scene.velocity and scene.angular_velocity, which the caller has filled for the
+/// awake bodies' state now (Featherstone's mirror has them at hand); update_sleep finds them
+/// from the momenta first.
+StepStatus update_sleep_from_velocities(RigidScene& scene, double dt);
 
 /// Puts island k to sleep at rest (its bodies' momenta zeroed, so it wakes at rest): what
 /// falling asleep does, and what an engine asks for with World::sleep.
