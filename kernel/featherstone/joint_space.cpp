@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/step.hpp"
@@ -185,7 +184,7 @@ Eigen::VectorXd joint_passive_forces(const FeatherstoneState& state, const Model
   const auto spring = [&](const std::optional<JointDrive>& drive, int r, bool angle) {
     if (!drive || r < 0) return;
     double error = drive->target - q[layout.angle_or_slide[static_cast<std::size_t>(r)]];
-    if (angle) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round, as the step
+    if (angle) error = shorter_way_round(error);  // as the step
     out[r] += drive->stiffness * error + drive->damping * (drive->target_velocity - v[r]);
   };
   for (std::size_t j = 0; j < model.joints.size(); ++j) {

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <type_traits>
 
 #include "limber/kernel/featherstone/joint_space_contacts.hpp"
@@ -435,7 +434,7 @@ void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island)
       c.drive_force.segment<3>(held.offset) = measured.inboard_to_velocity * torque;
     } else {
       double error = drive.target - tree_coordinate(state, held);
-      if (joint.type == JointType::revolute) error = std::remainder(error, 2 * std::numbers::pi);  // the shorter way round
+      if (joint.type == JointType::revolute) error = shorter_way_round(error);
       c.drive_force[held.offset] = held.sign * (drive.stiffness * error + drive.damping * drive.target_velocity);
     }
   }, [&](const TreeSerialAxis& node) {
@@ -444,7 +443,7 @@ void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island)
     if (!acting(axis.drive)) return;
     const JointDrive& drive = *axis.drive;
     double error = drive.target - state.q[state.tree.position_offset(node.body)];
-    if (!axis.slide) error = std::remainder(error, 2 * std::numbers::pi);
+    if (!axis.slide) error = shorter_way_round(error);
     c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
     c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
   });

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "limber/kernel/featherstone/integration.hpp"
 #include "limber/kernel/springs/spring_forces.hpp"
@@ -164,7 +163,7 @@ void measure_serial_axes(const FeatherstoneState& state, JointMeasures& measures
     }
     if (axis.drive) {
       const double error = axis.drive->target - x;
-      measures.drive_error = std::max(measures.drive_error, std::abs(axis.slide ? error : std::remainder(error, 2 * std::numbers::pi)));
+      measures.drive_error = std::max(measures.drive_error, std::abs(axis.slide ? error : shorter_way_round(error)));
       if (node.joint != last_driven) ++measures.driven_joints, last_driven = node.joint;
     }
   }

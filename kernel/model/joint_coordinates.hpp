@@ -23,7 +23,9 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <numbers>
 #include <vector>
 
 #include <Eigen/Core>
@@ -71,6 +73,12 @@ JointCoordinates joint_coordinates(const Joint& joint, const JointFrame& frame, 
 
 /// The angle of rotation D about unit axis `axis` by the swing-twist decomposition, rad, (−π, π].
 double twist_angle(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& axis);
+
+/// `angle` (rad) the shorter way round: its IEEE remainder by 2π, in [−π, π]; `angle` itself when
+/// already there, which is what the remainder gives too (the same bits, without its division).
+inline double shorter_way_round(double angle) {
+  return std::abs(angle) <= std::numbers::pi ? angle : std::remainder(angle, 2 * std::numbers::pi);
+}
 
 /// The gradient of the twist about unit `c` (fixed in the inboard body) of the rotation that took
 /// c to unit `a` (fixed in the outboard), with respect to the relative angular velocity ω_o − ω_i

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include "limber/kernel/model/joint_coordinates.hpp"
 
@@ -54,7 +53,7 @@ JointControlTorques joint_control_torques(const SpringState& state, const RigidB
     const double rate = gradient.dot(relative);
     if (joint.drive) {
       const JointDrive& drive = *joint.drive;
-      const double error = std::remainder(drive.target - q.angle, 2 * std::numbers::pi);
+      const double error = shorter_way_round(drive.target - q.angle);
       out.drive = (drive.stiffness * error + drive.damping * (drive.target_velocity - rate)) * gradient;
       out.drive_stiffness = drive.stiffness, out.drive_damping = drive.damping;
       out.drive_axis = gradient;
