@@ -67,9 +67,10 @@ void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eige
 void forward_kinematics(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& q,
                         const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range);
 
-/// The bodies' velocities alone (workspace.velocity, v: nv) at the poses workspace already holds
-/// (body_poses or forward_kinematics of the current q): forward_kinematics without recomputing
-/// the poses, the same bits.
+/// The bodies' velocities and velocity-product accelerations alone (workspace.velocity and
+/// bias_acceleration, v: nv) at the poses workspace already holds (body_poses or
+/// forward_kinematics of the current q): forward_kinematics without recomputing the poses, the
+/// same bits.
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace);
 /// The same for the bodies of `range` alone, the same bits.
 void body_velocities(const ArticulatedTree& tree, const Eigen::Ref<const Eigen::VectorXd>& v, DynamicsWorkspace& workspace, BodyRange range);
