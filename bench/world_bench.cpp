@@ -2,10 +2,14 @@
 // World::step, against the same method's step() on its state directly, and through the World
 // with a force, a torque and an impulse each step. Compare the rows of one run as ratios (the
 // machine is shared). The state is recompiled when the run is 2 s in, so every repetition times
-// the same stretch of motion.
+// the same stretch of motion. The same for MuJoCo's 22_humanoids.xml under Featherstone at
+// semi-implicit Euler (libmujoco-samples; 264 driven joint axes, which the World's divergence
+// check observes after every step), its first 2 s at the file's 0.005 s.
 //   build/bench/world_bench --benchmark_min_time=0.5
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
+#include <optional>
 #include <string>
 
 #include "limber/kernel/featherstone/step.hpp"
@@ -69,6 +73,41 @@ void BM_World(benchmark::State& run, Method method, bool loads) {
   }
 }
 
+// 22_humanoids.xml under Featherstone, stepped directly (`world` false) or through the World.
+void BM_Humanoids(benchmark::State& run, bool world) {
+  const std::filesystem::path file = "/usr/share/mujoco/model/humanoid/22_humanoids.xml";
+  if (!std::filesystem::exists(file)) return run.SkipWithError("22_humanoids.xml not found (libmujoco-samples)");
+  const Scene scene = load_scene_file(file);
+  WorldOptions options = world_options(Method::featherstone, scene.methods);
+  options.featherstone.integrator = Integrator::semi_implicit_euler;
+  options.featherstone.threads = 1;
+  const double dt = scene.model.settings.time_step;
+  const int steps_per_run = static_cast<int>(2.0 / dt);
+  std::optional<World> through;
+  MethodState state;
+  const auto start = [&] {
+    if (world) {
+      through.emplace(scene.model, options);
+    } else {
+      state = compile_method(scene.model, options);
+    }
+  };
+  start();
+  int steps = 0;
+  for (auto _ : run) {
+    if (steps++ == steps_per_run) {
+      run.PauseTiming();
+      start(), steps = 1;
+      run.ResumeTiming();
+    }
+    if (world) {
+      benchmark::DoNotOptimize(through->step(dt));
+    } else {
+      benchmark::DoNotOptimize(std::visit([&](auto& s) { return step(s, dt).status; }, state));
+    }
+  }
+}
+
 void register_all() {
   for (const Method method : {Method::particles, Method::springs, Method::lagrange, Method::featherstone}) {
     const std::string name(method_name(method));
@@ -76,6 +115,8 @@ void register_all() {
     benchmark::RegisterBenchmark(("world/" + name).c_str(), BM_World, method, false)->Unit(benchmark::kMicrosecond);
     benchmark::RegisterBenchmark(("world_with_loads/" + name).c_str(), BM_World, method, true)->Unit(benchmark::kMicrosecond);
   }
+  benchmark::RegisterBenchmark("direct/featherstone/22_humanoids", BM_Humanoids, false)->Unit(benchmark::kMicrosecond);
+  benchmark::RegisterBenchmark("world/featherstone/22_humanoids", BM_Humanoids, true)->Unit(benchmark::kMicrosecond);
 }
 
 }  // namespace
