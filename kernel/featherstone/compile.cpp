@@ -397,7 +397,9 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
   contact.row_begin.reserve(blocks + 1), contact.half_end.reserve(blocks);
   contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
   contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
-  contact.contact_matrix.reserve(blocks), contact.free_motion.reserve(blocks), contact.push.reserve(blocks);
+  contact.contact_matrix.reserve(blocks), contact.free_motion.reserve(blocks), contact.push.reserve(blocks), contact.impulse.reserve(blocks);
+  contact.remembered.reserve(state.contacts.capacity()), contact.recording.reserve(state.contacts.capacity());
+  contact.remembered_taken.reserve(state.contacts.capacity());
   contact.path_length.assign(static_cast<std::size_t>(tree.body_count()), 0);
   for (int i = 0; i < tree.body_count(); ++i) {
     const int parent = tree.body(i).parent;
@@ -443,6 +445,7 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   controls.explicit_force.setZero(nv), controls.acceleration.setZero(nv), controls.predicted.setZero(nv), controls.forces.setZero(nv);
   controls.friction.reserve(model.joints.size() + state.serial_axes.size());
   controls.rows.reserve(3 * model.joints.size() + 2 * state.serial_axes.size());  // what find_limit_rows may add
+  state.contact.remembered_rows.reserve(controls.rows.capacity()), state.contact.recording_rows.reserve(controls.rows.capacity());
   controls.penalty.assign(tree_size, Eigen::Matrix3d::Zero());
 
 }

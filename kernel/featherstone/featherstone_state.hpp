@@ -66,6 +66,16 @@ struct LimitIsland {
   std::size_t matrix = 0;
 };
 
+/// A contact's impulse kept for the next step's warm start (joint_space_contacts.hpp,
+/// "Warm start"): its bodies (b −1 for a plane), its point (world, m), and the normal impulse
+/// (N·s) and tangential impulse (N·s, world) it ended with.
+struct RememberedContact {
+  std::int32_t a = 0, b = -1;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  double normal_impulse = 0;
+  Eigen::Vector3d tangential_impulse = Eigen::Vector3d::Zero();
+};
+
 /// What one island's group uses alone while it is solved (the group's first island's; its own
 /// limit rows' solve its own): reserved at compile, grown past that by the rows a step needs.
 struct IslandSolveScratch {
@@ -90,8 +100,9 @@ struct IslandSolveScratch {
 /// groups, each writing only its islands' entries.
 ///
 /// Blocks. The step's constraints in joint space are blocks of rows (joint_space_contacts.hpp,
-/// "Responses"), group after group: a contact's block has three rows (the world x, y, z of its
-/// points' relative velocity), a limit row's block one (its first column; the other two are zero).
+/// "Responses"), group after group: a contact's block has three rows (its points' relative
+/// velocity along its normal and two tangents), a limit row's block one (its first column; the
+/// other two are zero).
 struct JointSpaceContactScratch {
   /// Articulated-body inertias (ABA's U_i, D_i⁻¹) of the drives' pass (with their armature).
   DynamicsWorkspace articulated;
@@ -134,9 +145,22 @@ struct JointSpaceContactScratch {
   std::vector<int> half_end;
   std::vector<int> half_coordinate;
   std::vector<Eigen::Vector3d> half_value;
-  std::vector<Eigen::Matrix3d> contact_matrix;   ///< per block (a contact's): K = Y_cᵀ D⁻¹ Y_c, world impulse at p → relative velocity at p
-  std::vector<Eigen::Vector3d> free_motion;      ///< per block (a contact's): J_c v before the impulses, m/s (v holds still until they settle)
+  /// Per block (a contact's): K = Y_cᵀ D⁻¹ Y_c, impulse at p → relative velocity at p, both in the
+  /// contact's frame (normal, t₁, t₂: contact_frame).
+  std::vector<Eigen::Matrix3d> contact_matrix;
+  std::vector<Eigen::Vector3d> free_motion;      ///< per block (a contact's): J_c v before the impulses, m/s, its frame (v holds still until they settle)
   std::vector<double> push;                      ///< per block (a contact's): accumulated push-out "impulse", kg·m
+  /// Per block (a contact's): its accumulated impulse λ (N·s, its frame; λ_n ≥ 0, in Coulomb's
+  /// cone), from its warm start (joint_space_contacts.hpp, "Impulses", "Warm start").
+  std::vector<Eigen::Vector3d> impulse;
+  /// The last step's contact impulses, sorted by (a, b), and this step's being recorded: where
+  /// the next step's contacts find their warm start.
+  std::vector<RememberedContact> remembered, recording;
+  std::vector<char> remembered_taken;  ///< per remembered contact: a contact of this step took it
+  /// The last step's limit rows' impulses (key, N·s or N·m·s), by key, and this step's being
+  /// recorded.
+  std::vector<std::pair<std::int32_t, double>> remembered_rows, recording_rows;
+  double remembered_step = 0;          ///< the step they were solved for, s
   /// nv: y = D⁻¹ Σ_g Y_g λ_g of the impulses not yet in x (v, or the push-out's displacement),
   /// which moves x by L⁻¹ y (settle); J_g of it is Y_gᵀ y.
   Eigen::VectorXd lagging;
@@ -185,6 +209,9 @@ struct JointLimitRow {
   double gap = 0;             ///< C: how far inside the limit (< 0: violated), rad or m
   double inverse_mass = 0;    ///< direction·H⁻¹·direction
   double impulse = 0, push = 0;  ///< accumulated, ≥ 0
+  /// Which limit of which joint it is, the same every step (find_limit_rows numbers them in
+  /// order: the rows' keys ascend): where the next step's row finds its warm start.
+  std::int32_t key = 0;
 };
 
 /// A joint's friction over a step (joint_space_contacts.hpp, "Drives and friction").

@@ -8,6 +8,7 @@
 #include "limber/kernel/featherstone/joint_space_limits.hpp"
 #include "limber/kernel/featherstone/joint_space_response.hpp"
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/numerics/contact_projection.hpp"
 
 namespace limber {
 namespace {
@@ -26,6 +27,7 @@ using namespace joint_space;
 void contact_rows(FeatherstoneState& state, std::size_t g, const RigidContact& contact) {
   JointSpaceContactScratch& s = state.contact;
   const ArticulatedTree& tree = state.tree;
+  const Eigen::Matrix3d frame = contact_frame(contact.normal);
   auto entry = static_cast<std::size_t>(s.row_begin[g]);
   for (const std::int32_t scene_body : {contact.a, contact.b}) {
     if (scene_body < 0) continue;  // a plane
@@ -38,7 +40,7 @@ void contact_rows(FeatherstoneState& state, std::size_t g, const RigidContact& c
       int coordinate = tree.velocity_offset(i);
       const auto put = [&](const Eigen::Vector3d& value) {
         s.row_coordinate[entry] = coordinate++;
-        s.row_value[entry] = sign * value;
+        s.row_value[entry] = sign * (frame * value);
         ++entry;
       };
       switch (body.joint) {
@@ -144,37 +146,62 @@ void factor_island(FeatherstoneState& state, std::size_t k, BodyRange bodies, co
   s.factored[k] = s.factor.factor(first, last) < 0;
 }
 
-// Sequential impulses (joint_space_contacts.hpp, "Impulses"), the group's contacts' and limit
-// rows'.
+// The group's impulses' change of kinetic energy, ½(v + Δv)ᵀH(v + Δv) − ½vᵀHv = λᵀJv + ½λᵀAλ
+// (J, joules), from each block's motion before the impulses and with them; H is the factor's. An
+// impulse past what stops its rows (a warm start the passes have not taken back, a bounce its
+// neighbours' impulses reached before it) can make it positive: then every impulse is scaled by
+// the largest α ≤ 1 with λᵀJv·α + ½λᵀAλ·α² ≤ 0, along the line to none — which stays in every
+// cone. (MuJoCo likewise keeps a warm start only when its cost is below a cold start's.)
+void keep_dissipative(FeatherstoneState& state, const ConstraintGroup& group) {
+  JointSpaceContactScratch& s = state.contact;
+  double work = 0, curvature = 0;  // λᵀJv, λᵀAλ
+  for (int block = group.first_block; block < group.first_row_block; ++block) {
+    const auto g = static_cast<std::size_t>(block);
+    work += s.impulse[g].dot(s.free_motion[g]), curvature += s.impulse[g].dot(lagging_motion(s, g));
+  }
+  for (int block = group.first_row_block; block < group.last_block; ++block) {
+    const auto g = static_cast<std::size_t>(block);
+    const JointLimitRow& row = state.controls.rows[static_cast<std::size_t>(s.block_source[g])];
+    work += row.impulse * joint_dot(row.direction, state.v, row.offset, row.dofs), curvature += row.impulse * lagging_motion(s, g)[0];
+  }
+  if (!(work + 0.5 * curvature > 0) || !(curvature > 0)) return;
+  const double scale = std::clamp(-2 * work / curvature, 0.0, 1.0);
+  for (int block = group.first_block; block < group.first_row_block; ++block) s.impulse[static_cast<std::size_t>(block)] *= scale;
+  for (int block = group.first_row_block; block < group.last_block; ++block) state.controls.rows[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(block)])].impulse *= scale;
+  for_each_island(state, group, [&](std::size_t k, BodyRange) {
+    const auto [first, last] = island_velocities(state, k);
+    s.lagging.segment(first, last - first) *= scale;
+  });
+}
+
+// Projected Gauss–Seidel (joint_space_contacts.hpp, "Impulses") on the group's contacts and limit
+// rows, from the contacts' warm start.
 void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, double dt) {
   JointSpaceContactScratch& s = state.contact;
   const bool before_move = constraints_before_move(state);
-  for (int g = group.first_row_block; g < group.last_block; ++g) state.controls.rows[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])].impulse = 0;
+  for (int block = group.first_block; block < group.last_block; ++block) {  // the warm start
+    const auto g = static_cast<std::size_t>(block);
+    const Eigen::Vector3d impulse =
+        block < group.first_row_block ? s.impulse[g] : Eigen::Vector3d(state.controls.rows[static_cast<std::size_t>(s.block_source[g])].impulse, 0, 0);
+    if (!impulse.isZero()) respond(s, g, impulse);
+  }
   for (int pass = 0; pass < state.contact_iterations; ++pass) {
-    bool applied = false;  // a pass that applies nothing leaves nothing for the next
+    bool applied = false;  // a pass that changes no speed by kSlowestApproach ends them
     for (int block = group.first_block; block < group.first_row_block; ++block) {
       const auto g = static_cast<std::size_t>(block);
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
       const Eigen::Matrix3d& k = s.contact_matrix[g];
-      const Eigen::Vector3d& normal = contact.normal;
-      const Eigen::Vector3d relative = s.free_motion[g] + lagging_motion(s, g);
-      const double normal_speed = relative.dot(normal);
-      const double normal_inverse_mass = normal.dot(k * normal);
-      // Before the move, a contact still apart by a gap may approach by it this step.
-      const double reach = before_move ? std::max(-contact.depth, 0.0) / dt : 0.0;
-      if (normal_speed >= -reach - kSlowestApproach || !(normal_inverse_mass > 0)) continue;
-      const double target = contact.restitution > 0 ? -contact.restitution * normal_speed : -reach;
-      const double normal_impulse = (target - normal_speed) / normal_inverse_mass;
-      Eigen::Vector3d impulse = normal_impulse * normal;
-      const Eigen::Vector3d after = relative + k * impulse;
-      const Eigen::Vector3d sliding = after - after.dot(normal) * normal;
-      const double sliding_speed = sliding.norm();
-      if (contact.friction > 0 && sliding_speed > 1e-12 * relative.norm()) {
-        const Eigen::Vector3d tangent = sliding / sliding_speed;
-        const double tangent_inverse_mass = tangent.dot(k * tangent);
-        if (tangent_inverse_mass > 0) impulse -= std::min(sliding_speed / tangent_inverse_mass, contact.friction * normal_impulse) * tangent;
-      }
-      respond(s, g, impulse);
+      // A bounce leaves at e times the approach before the impulses; before the move, a contact
+      // still apart by a gap may approach by it this step.
+      const double target = contact.restitution > 0 ? contact.restitution * contact.approach_speed
+                            : before_move            ? -std::max(-contact.depth, 0.0) / dt
+                                                     : 0.0;
+      const Eigen::Vector3d impulse =
+          project_contact_impulse(k, s.free_motion[g] + lagging_motion(s, g), s.impulse[g], target, contact.friction);
+      const Eigen::Vector3d change = impulse - s.impulse[g];
+      if (!((k * change).lpNorm<Eigen::Infinity>() > kSlowestApproach)) continue;  // a change no speed would notice
+      s.impulse[g] = impulse;
+      respond(s, g, change);
       applied = true;
     }
     // Limits: accumulated λ ≥ 0 with direction·v ≥ −max(C, 0)/Δt (restitution 0; a limit not yet
@@ -182,6 +209,7 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
     if (solve_limit_rows(state, group, dt, /*position=*/false, state.v)) applied = true;
     if (!applied) break;
   }
+  keep_dissipative(state, group);
   settle(state, group, state.v);
 }
 
@@ -257,15 +285,15 @@ bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
       const double target = !before_move                       ? push_out_distance(contact, state.settings, dt)
                             : contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, push_out_distance(contact, state.settings, dt))
                                                                : 0.0;
-      const double normal_inverse_mass = contact.normal.dot(s.contact_matrix[g] * contact.normal);
+      const double normal_inverse_mass = s.contact_matrix[g](0, 0);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
-      const double done = lagging_motion(s, g).dot(contact.normal);  // the displacement is all in y until settled
+      const double done = lagging_motion(s, g)[0];  // the displacement is all in y until settled
       if (std::abs(target - done) <= kPushTolerance * target) continue;
       const double push = std::max(s.push[g] + (target - done) / normal_inverse_mass, 0.0);
       const double change = push - s.push[g];
       if (change == 0) continue;
       s.push[g] = push;
-      respond(s, g, change * contact.normal);
+      respond(s, g, Eigen::Vector3d(change, 0, 0));
       moved = pushed = true;
     }
     if (solve_limit_rows(state, group, dt, /*position=*/true, s.displacement)) moved = pushed = true;
@@ -306,7 +334,7 @@ bool prepare_group(FeatherstoneState& state, const ConstraintGroup& group, doubl
     contact_rows(state, g, contact);
     s.contact_matrix[g] = half_rows(s, g, path, /*one_column=*/false);
     s.free_motion[g] = block_motion(s, g, state.v);
-    record_approach(contact, -s.free_motion[g].dot(contact.normal), state.settings, dt);
+    record_approach(contact, -s.free_motion[g][0], state.settings, dt);
   }
   for (int block = group.first_row_block; block < group.last_block; ++block) {
     const auto g = static_cast<std::size_t>(block);
@@ -461,8 +489,86 @@ bool form_groups(FeatherstoneState& state) {
   const auto entries = static_cast<std::size_t>(s.row_begin[blocks]);
   s.row_coordinate.resize(entries), s.row_value.resize(entries);
   s.half_coordinate.resize(entries), s.half_value.resize(entries);
-  s.half_end.resize(blocks), s.contact_matrix.resize(blocks), s.free_motion.resize(blocks), s.push.resize(blocks);
+  s.half_end.resize(blocks), s.contact_matrix.resize(blocks), s.free_motion.resize(blocks), s.push.resize(blocks), s.impulse.resize(blocks);
   return true;
+}
+
+// --- Warm start ----------------------------------------------------------------------------------
+
+// How far a contact's point may have moved since the last step for the last step's impulse there
+// to start it, m: a resting contact's point stays within round-off, a rolling or sliding one moves
+// by its speed times the step (5 mm at 1 m/s and 1/200 s).
+constexpr double kWarmStartReach = 0.01;
+
+bool remembered_before(const RememberedContact& x, std::int32_t a, std::int32_t b) { return x.a < a || (x.a == a && x.b < b); }
+
+// Each contact's warm start into s.impulse: the impulse the last step's nearest contact of the
+// same two bodies within kWarmStartReach ended with (each taken once), its normal part along the
+// new normal and its tangential part on the new tangent plane, clamped into the cone, scaled by
+// the ratio of the steps (an impulse is a force times the step); none without one. Each limit
+// row's, likewise, the last step's impulse of the row with its key.
+void warm_start(FeatherstoneState& state, double dt) {
+  JointSpaceContactScratch& s = state.contact;
+  s.remembered_taken.assign(s.remembered.size(), 0);
+  const double scale = s.remembered_step > 0 ? dt / s.remembered_step : 0.0;
+  for (const ConstraintGroup& group : s.groups) {
+    for (int block = group.first_block; block < group.first_row_block; ++block) {
+      const auto g = static_cast<std::size_t>(block);
+      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
+      s.impulse[g].setZero();
+      auto first = std::lower_bound(s.remembered.begin(), s.remembered.end(), contact,
+                                    [](const RememberedContact& x, const RigidContact& c) { return remembered_before(x, c.a, c.b); });
+      std::ptrdiff_t best = -1;
+      double nearest = kWarmStartReach * kWarmStartReach;
+      for (auto it = first; it != s.remembered.end() && it->a == contact.a && it->b == contact.b; ++it) {
+        const std::ptrdiff_t index = it - s.remembered.begin();
+        const double distance = (it->point - contact.point).squaredNorm();
+        if (!s.remembered_taken[static_cast<std::size_t>(index)] && distance < nearest) best = index, nearest = distance;
+      }
+      if (best < 0) continue;
+      s.remembered_taken[static_cast<std::size_t>(best)] = 1;
+      const RememberedContact& last = s.remembered[static_cast<std::size_t>(best)];
+      const Eigen::Matrix3d frame = contact_frame(contact.normal);
+      const double normal = scale * last.normal_impulse;
+      Eigen::Vector2d tangential = scale * (frame.bottomRows<2>() * last.tangential_impulse);
+      const double bound = contact.friction * normal, size = tangential.norm();
+      if (size > bound) tangential *= size > 0 ? bound / size : 0.0;
+      s.impulse[g] << normal, tangential;
+    }
+  }
+  // The limit rows: both lists ascend by key.
+  auto last = s.remembered_rows.begin();
+  for (JointLimitRow& row : state.controls.rows) {
+    while (last != s.remembered_rows.end() && last->first < row.key) ++last;
+    row.impulse = last != s.remembered_rows.end() && last->first == row.key ? scale * last->second : 0.0;
+  }
+}
+
+// The step's contact impulses as the next step's warm start (s.remembered, sorted by bodies; the
+// groups' order, which no thread count changes, among equals).
+void remember_impulses(FeatherstoneState& state, double dt) {
+  JointSpaceContactScratch& s = state.contact;
+  s.recording.clear();
+  for (const ConstraintGroup& group : s.groups) {
+    for (int block = group.first_block; block < group.first_row_block; ++block) {
+      const auto g = static_cast<std::size_t>(block);
+      if (s.impulse[g].isZero()) continue;
+      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
+      const Eigen::Vector3d tangential = contact_frame(contact.normal).bottomRows<2>().transpose() * s.impulse[g].tail<2>();
+      s.recording.push_back({contact.a, contact.b, contact.point, s.impulse[g][0], tangential});
+    }
+  }
+  std::sort(s.recording.begin(), s.recording.end(), [](const RememberedContact& x, const RememberedContact& y) {
+    if (x.a != y.a || x.b != y.b) return remembered_before(x, y.a, y.b);
+    return std::lexicographical_compare(x.point.data(), x.point.data() + 3, y.point.data(), y.point.data() + 3);
+  });
+  std::swap(s.remembered, s.recording);
+  s.recording_rows.clear();
+  for (const JointLimitRow& row : state.controls.rows) {
+    if (row.impulse > 0) s.recording_rows.emplace_back(row.key, row.impulse);
+  }
+  std::swap(s.remembered_rows, s.recording_rows);
+  s.remembered_step = dt;
 }
 
 // Every group, on the state's threads when it has them and more than one group; the limit rows
@@ -475,6 +581,7 @@ void solve_groups(FeatherstoneState& state, double dt, bool push, const Eigen::V
     return;
   }
   if (s.factor.size() != state.tree.velocity_count()) s.factor.assign(state.tree);  // a large tree's first use (compile.cpp)
+  warm_start(state, dt);
   run_stage(state.runner.get(), s.groups.size(), [&](std::size_t g) { solve_group(state, s.groups[g], dt, push); });
 }
 
@@ -488,6 +595,7 @@ void apply_joint_space_impulses(FeatherstoneState& state, double dt) {
 void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
   if (!constraints_before_move(state)) {
     solve_groups(state, dt, /*push=*/true);
+    remember_impulses(state, dt);
     return;
   }
   // Before the move no push-out follows the positions: a limit the rows left out because v did
@@ -498,11 +606,12 @@ void resolve_joint_space_contacts(FeatherstoneState& state, double dt) {
   s.free_velocity = state.v;
   solve_groups(state, dt, /*push=*/true);
   const auto rows = static_cast<int>(state.controls.rows.size());
-  if (rows == 0 && state.contacts.empty()) return;
-  if (find_limit_rows(state, dt, &s.free_velocity, /*count_only=*/true) == rows) return;
-  s.constrained_velocity = state.v;
-  state.v = s.free_velocity;
-  solve_groups(state, dt, /*push=*/true, &s.constrained_velocity);
+  if ((rows > 0 || !state.contacts.empty()) && find_limit_rows(state, dt, &s.free_velocity, /*count_only=*/true) != rows) {
+    s.constrained_velocity = state.v;
+    state.v = s.free_velocity;
+    solve_groups(state, dt, /*push=*/true, &s.constrained_velocity);
+  }
+  remember_impulses(state, dt);
 }
 
 void factored_forward_dynamics(FeatherstoneState& state, std::size_t island, const Eigen::VectorXd& joint_forces, const double* armature,

@@ -56,6 +56,9 @@ double tree_coordinate(const FeatherstoneState& state, const TreeJoint& held) {
 // Whether joint k's island is awake.
 bool awake(const FeatherstoneState& state, const TreeJoint& held) { return !state.islands[island_of(state, held)].sleeping; }
 
+// The slots of a joint's limits (JointLimitRow::key).
+constexpr std::int32_t kLimitsPerJoint = 5;
+
 // What find_limit_rows does with the rows it finds.
 struct LimitRowSearch {
   const Eigen::VectorXd* also = nullptr;  // a second velocity a row may act within the step at
@@ -80,14 +83,19 @@ void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, cons
 
 // A serial joint's axis ranges: each axis's coordinate is its tree body's q (0 at rest).
 void find_serial_limit_rows(FeatherstoneState& state, double dt, LimitRowSearch& search) {
+  // Their keys follow every joint's slots: a lower and an upper side an axis.
+  std::int32_t key = kLimitsPerJoint * static_cast<std::int32_t>(state.joint_controls.joints.size());
   for (const TreeSerialAxis& node : state.serial_axes) {
     const SerialAxis& axis = state.joint_controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
     const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
+    key += 2;
     if (!axis.range || !awake(state, held)) continue;
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held)), row.body = node.body, row.offset = node.offset, row.dofs = 1;
     const double x = state.q[state.tree.position_offset(node.body)];
+    row.key = key - 2;
     add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt, search);
+    row.key = key - 1;
     add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt, search);
   }
 }
@@ -106,12 +114,17 @@ int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* 
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held));
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
-    const auto add = [&](double gap, const Eigen::Vector3d& direction) { add_limit_row(state, row, gap, direction, dt, search); };
+    // Each of the joint's limits has its slot: the range's or twist's lower and upper side, the swing.
+    enum Slot : std::int32_t { lower, upper, swing, twist_lower, twist_upper };
+    const auto add = [&](Slot slot, double gap, const Eigen::Vector3d& direction) {
+      row.key = kLimitsPerJoint * static_cast<std::int32_t>(k) + slot;
+      add_limit_row(state, row, gap, direction, dt, search);
+    };
     if (joint.type == JointType::revolute || joint.type == JointType::prismatic) {
       if (!joint.limits.range) continue;
       const double x = tree_coordinate(state, held);
-      add(x - joint.limits.range->min, Eigen::Vector3d(held.sign, 0, 0));
-      add(joint.limits.range->max - x, Eigen::Vector3d(-held.sign, 0, 0));
+      add(lower, x - joint.limits.range->min, Eigen::Vector3d(held.sign, 0, 0));
+      add(upper, joint.limits.range->max - x, Eigen::Vector3d(-held.sign, 0, 0));
       continue;
     }
     const JointFrame& frame = controls.frames[k];
@@ -125,14 +138,14 @@ int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* 
       // θ = acos(c·a), θ̇ = ω·(c × a)/|c × a|: the axis that turns the cone's axis to the outboard's.
       const Eigen::Vector3d normal = cone.cross(axis);
       const double length = normal.norm();
-      if (length > 1e-9) add(*joint.limits.swing - q.swing, -(measured.inboard_to_velocity * (normal / length)));
+      if (length > 1e-9) add(swing, *joint.limits.swing - q.swing, -(measured.inboard_to_velocity * (normal / length)));
     }
     if (joint.limits.twist && 1 + cone.dot(axis) > 1e-6) {
       // ψ = 2·atan2((D·Q).vec·c, (D·Q).w) has ψ̇ = ω·(c + a)/(1 + c·a): the outboard's axis a plus
       // the swing's own turn about it (= a where a = c).
       const Eigen::Vector3d gradient = measured.inboard_to_velocity * twist_gradient(axis, cone);
-      add(q.twist - joint.limits.twist->min, gradient);
-      add(joint.limits.twist->max - q.twist, -gradient);
+      add(twist_lower, q.twist - joint.limits.twist->min, gradient);
+      add(twist_upper, joint.limits.twist->max - q.twist, -gradient);
     }
   }
   find_serial_limit_rows(state, dt, search);

@@ -52,8 +52,9 @@ inline void respond(JointSpaceContactScratch& s, std::size_t g, const Eigen::Vec
   }
 }
 
-// Approach speeds below this are left to the push-out (an impulse for them would cost a pass
-// over the island and change nothing that matters), m/s.
+// A change of a contact's impulse that moves no speed by this is not applied (it would cost the
+// contact's paths and change nothing that matters), and a pass that applies none ends the
+// passes; a limit row's rate is held to it, m/s.
 constexpr double kSlowestApproach = 1e-6;
 // The push-out leaves a contact alone once what is still to push is below this fraction of its
 // target (the rest is pushed out in the next step).
