@@ -40,33 +40,31 @@ inline Eigen::Matrix3d contact_frame(const Eigen::Vector3d& normal) {
 
 /// The λ minimizing ½λᵀAλ + gᵀλ over the disc |λ| ≤ radius, A (a, b; b, c) symmetric positive
 /// semi-definite: inside it A⁻¹ solves it; on its edge (A + μI)λ = −g with μ ≥ 0 the multiplier
-/// of |λ| = radius, found by Newton's method on |λ(μ)|² = radius² (convex and decreasing in μ, so
-/// Newton from μ = 0 closes on it from below; MuJoCo's mju_QCQP2 alike). So its friction opposes
-/// the slip it leaves, u_t = −μλ (maximal dissipation), where clamping A⁻¹'s answer to the disc
-/// would leave the slip along −Aλ.
+/// of |λ| = radius, found by Newton's method on 1/|λ(μ)| = 1/radius — nearly linear in μ, so
+/// Newton from the left closes on it in a few steps even where A is singular (Moré & Sorensen
+/// 1983, "Computing a trust region step"; MuJoCo's mju_QCQP2 solves the same problem). So the
+/// friction opposes the slip it leaves, Aλ + g = −μλ (maximal dissipation), where clamping A⁻¹'s
+/// answer to the disc would leave the slip along −Aλ.
 inline Eigen::Vector2d disc_minimum(double a, double b, double c, const Eigen::Vector2d& g, double radius) {
   if (!(radius > 0)) return Eigen::Vector2d::Zero();
-  const auto solve = [&](double mu) {
+  const auto solve = [&](double mu, const Eigen::Vector2d& x) {  // (A + μI)⁻¹x
     const double p = a + mu, r = c + mu, determinant = p * r - b * b;
-    return Eigen::Vector2d(-(r * g.x() - b * g.y()) / determinant, -(p * g.y() - b * g.x()) / determinant);
+    return Eigen::Vector2d((r * x.x() - b * x.y()) / determinant, (p * x.y() - b * x.x()) / determinant);
   };
-  const double scale = std::max(a + c, 1e-300);
   double mu = 0;
-  if (a * c - b * b > 1e-12 * a * c) {
-    const Eigen::Vector2d inside = solve(0);
+  if (a * c - b * b > 1e-12 * a * c && a > 0) {
+    const Eigen::Vector2d inside = -solve(0, g);
     if (inside.squaredNorm() <= radius * radius) return inside;
   } else {
-    mu = 1e-12 * scale;  // A singular: the edge, at a multiplier that keeps A + μI invertible
+    mu = 1e-12 * std::max(a + c, 1e-300);  // A singular: the edge, at a multiplier that keeps A + μI invertible
   }
-  Eigen::Vector2d lambda = solve(mu);
-  for (int iteration = 0; iteration < 30; ++iteration) {
-    // φ(μ) = |λ|² − radius², φ'(μ) = −2 λᵀ(A + μI)⁻¹λ.
-    const double p = a + mu, r = c + mu, determinant = p * r - b * b;
-    const Eigen::Vector2d w((r * lambda.x() - b * lambda.y()) / determinant, (p * lambda.y() - b * lambda.x()) / determinant);
-    const double excess = lambda.squaredNorm() - radius * radius, slope = -2 * lambda.dot(w);
-    if (!(excess > 1e-12 * radius * radius) || !(slope < 0)) break;
-    mu -= excess / slope;
-    lambda = solve(mu);
+  Eigen::Vector2d lambda = -solve(mu, g);
+  for (int iteration = 0; iteration < 20; ++iteration) {
+    const double size = lambda.norm();
+    if (!(size > radius * (1 + 1e-12))) break;
+    // ψ(μ) = 1/|λ| − 1/radius, ψ'(μ) = λᵀ(A + μI)⁻¹λ / |λ|³.
+    mu += (size / radius - 1) * size * size / lambda.dot(solve(mu, lambda));
+    lambda = -solve(mu, g);
   }
   return lambda * (radius / std::max(lambda.norm(), 1e-300));
 }
