@@ -6,6 +6,7 @@
 
 #include "limber/kernel/geometry/geometry.hpp"
 #include "limber/kernel/lagrange/multipliers.hpp"
+#include "limber/kernel/numerics/contact_projection.hpp"
 
 namespace limber {
 namespace {
@@ -111,6 +112,16 @@ void measure_responses(LagrangeState& state, JointContactScratch& s) {
     std::copy(state.accelerations.begin(), state.accelerations.end(), first);
   }
   for (Row& row : s.rows) row.mobility = row_rate(row, response_of(s, row, n));  // W_rr
+  // Each contact's 3×3 block of W over its normal and tangents: its rows' rates per unit impulse
+  // on each other (their responses are their batches', on their own islands' bodies).
+  for (std::size_t r = 0; r + 2 < s.rows.size(); ++r) {
+    Row& normal = s.rows[r];
+    if (normal.kind != Kind::normal || s.rows[r + 1].kind != Kind::tangent) continue;
+    for (std::size_t i = 0; i < 3; ++i) {
+      for (std::size_t j = 0; j < 3; ++j) normal.contact_block(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row_rate(s.rows[r + i], response_of(s, s.rows[r + j], n));
+    }
+    normal.contact_block = 0.5 * (normal.contact_block + normal.contact_block.transpose()).eval();  // symmetric in exact arithmetic
+  }
 }
 
 // Adds amount × the row's response to x, on the bodies of the row's islands.
@@ -123,32 +134,33 @@ void add_response(const LagrangeState& state, const JointContactScratch& s, cons
   }
 }
 
-// Projected Gauss-Seidel on G·x ≥ target, λ ≥ 0 for the unilateral rows, and friction rows in
-// Coulomb's disc (|λ_t| ≤ μ·λ_n, a contact's two tangents together, rate 0 while they hold). x
-// holds the bodies' motion and moves with every change of λ. `with_friction` false leaves the
-// tangent rows out.
+// Projected Gauss-Seidel on G·x ≥ target, λ ≥ 0 for the unilateral rows; a contact with friction
+// takes its three rows together, Coulomb's disc |λ_t| ≤ μ·λ_n held by the step of
+// project_contact_impulse (kernel/numerics/contact_projection.hpp: the one Featherstone's contacts
+// take) on its block of W. x holds the bodies' motion and moves with every change of λ.
+// `with_friction` false leaves the tangent rows out.
 void project_rows(const LagrangeState& state, JointContactScratch& s, std::vector<Vector6>& x, bool with_friction) {
   for (Row& row : s.rows) row.impulse = 0;
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     for (std::size_t r = 0; r < s.rows.size(); ++r) {
       Row& row = s.rows[r];
-      if (!(row.mobility > 0)) continue;
-      if (row.kind != Kind::tangent) {
+      if (row.kind == Kind::tangent || !(row.mobility > 0)) continue;  // a contact's tangents go with its normal
+      const bool friction = with_friction && row.kind == Kind::normal && r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent;
+      if (!friction) {
         const double wanted = std::max(row.impulse + (row.target - row_rate(row, x)) / row.mobility, 0.0);
         add_response(state, s, row, wanted - row.impulse, x);
         row.impulse = wanted;
         continue;
       }
-      if (!with_friction || s.rows[r - 1].kind != Kind::normal) continue;  // the second tangent goes with the first
-      Row& other = s.rows[r + 1];
-      const double bound = state.contacts[row.contact].friction * s.rows[r - 1].impulse;
-      double first = row.impulse - row_rate(row, x) / row.mobility;
-      double second = other.mobility > 0 ? other.impulse - row_rate(other, x) / other.mobility : 0;
-      const double size = std::hypot(first, second);
-      if (size > bound) first *= bound / size, second *= bound / size;
-      add_response(state, s, row, first - row.impulse, x);
-      add_response(state, s, other, second - other.impulse, x);
-      row.impulse = first, other.impulse = second;
+      Row* rows = &s.rows[r];
+      const Eigen::Vector3d rate(row_rate(rows[0], x), row_rate(rows[1], x), row_rate(rows[2], x));
+      const Eigen::Vector3d impulse(rows[0].impulse, rows[1].impulse, rows[2].impulse);
+      const Eigen::Vector3d wanted = project_contact_impulse(row.contact_block, rate, impulse, row.target, state.contacts[row.contact].friction);
+      for (Eigen::Index i = 0; i < 3; ++i) {
+        if (wanted[i] == impulse[i]) continue;
+        add_response(state, s, rows[i], wanted[i] - impulse[i], x);
+        rows[i].impulse = wanted[i];
+      }
     }
   }
 }

@@ -10,16 +10,19 @@
 // Δu_r = (M⁻¹ − M⁻¹Jᵀ(JM⁻¹Jᵀ)⁻¹JM⁻¹) G_rᵀ, the Schur complement of the joint rows. The rows'
 // Delassus matrix is W = G·[Δu_r], and projected Gauss-Seidel on it gives the impulses: λ ≥ 0 on
 // a normal reaching its contact's bounce (restitution above the resting speed, else 0) and on a
-// limit reaching at most its bound within the step (a limit past it stops), friction in
-// Coulomb's disc |λ_t| ≤ μ·λ_n. The push-out solves the same rows for position changes: each
+// limit reaching at most its bound within the step (a limit past it stops); a contact's normal
+// and tangents together by the step of kernel/numerics/contact_projection.hpp on its 3×3 block of
+// W, friction in Coulomb's disc |λ_t| ≤ μ·λ_n opposing the slip it leaves (until this design each
+// tangent took its own diagonal entry and their pair was clamped to the disc, which converges to
+// a slip along −W_tt λ_t; the ragdoll stack now rests at every landing phase). The push-out solves the same rows for position changes: each
 // normal out by its depth less the separation it may keep (the rule of every method,
 // geometry.hpp), each limit past its bound back onto it, none pushed past. Rows of bodies in
 // different islands (the bodies joints and gears join) share a substitution (their responses do
 // not overlap), so a step costs a factor and about three substitutions per contact and one per
 // limit of its most touched island, not per row of the scene. Drives and joint friction stay in the step's own solves.
 // MuJoCo forms A = J M⁻¹ Jᵀ through its factor and solves contacts and limits on it alike
-// (engine_solver.c); Featherstone's method here measures each contact's response with
-// articulated-body passes instead (kernel/featherstone/README.md).
+// (engine_solver.c); Featherstone's method takes the same contact step through its joint-space
+// factor, warm-started (kernel/featherstone/joint_space_contacts.hpp).
 #pragma once
 
 #include "limber/kernel/lagrange/lagrange_state.hpp"

@@ -40,6 +40,9 @@ struct JointContactScratch {
     double gap = 0;                ///< a limit's distance inside its bound (rad or m, < 0 past it)
     std::uint32_t batch = 0;       ///< the solve that measured its response
     double mobility = 0;           ///< W_rr: its rate per unit impulse through the joints
+    /// A contact's normal row with friction: W of its three rows (normal, t₁, t₂), the contact's
+    /// collision matrix through the joints (kernel/numerics/contact_projection.hpp).
+    Eigen::Matrix3d contact_block = Eigen::Matrix3d::Zero();
     double target = 0;             ///< the rate (or displacement) it is solved to reach
     double impulse = 0;            ///< λ_r
   };
