@@ -18,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <vector>
 
 #include "limber/kernel/featherstone/compile.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
@@ -240,7 +241,65 @@ void BM_HumanoidLyingSteps(benchmark::State& bench) {
   bench.counters["contacts"] = static_cast<double>(state.contacts.size());
 }
 
+// The contact solve's run time against its error (kernel/featherstone/joint_space_contacts.hpp,
+// "Impulses"): humanoid.xml under semi-implicit Euler, one step from each of 20 states with
+// contacts of its fall (every 30 steps from 0.1 s: arg 1 = 0) or of its rest (from 4 s: 1) with
+// arg 0 passes of projected Gauss-Seidel, warm-started as the run left it. error is the mean
+// distance of the step's joint velocities from the converged answer's (2000 passes, cold), in
+// the kinetic-energy norm, relative to the constraints' change (the converged answer less the
+// unconstrained one); seconds_per_step the time of a step, contacts included.
+//   build/bench/featherstone_bench --benchmark_filter=HumanoidContactSolve
+void BM_HumanoidContactSolve(benchmark::State& bench) {
+  const std::filesystem::path file = "/usr/share/mujoco/model/humanoid/humanoid.xml";
+  if (!std::filesystem::exists(file)) return bench.SkipWithError("humanoid.xml not found (libmujoco-samples)");
+  const Scene scene = load_scene_file(file);
+  const double dt = scene.model.settings.time_step;
+  FeatherstoneState run = compile_featherstone(scene.model, {.integrator = Integrator::semi_implicit_euler});
+  run.settings.sleep.enabled = false;
+  const int first = bench.range(1) == 0 ? 20 : 800;
+  std::vector<FeatherstoneState> samples;
+  for (int n = 0; samples.size() < 20; ++n) {
+    if (n >= first && (n - first) % 30 == 0 && !run.contacts.empty()) samples.push_back(run);
+    step(run, dt);
+  }
+  // Each sample's unconstrained and converged answers, and its H.
+  const auto after_step = [&](const FeatherstoneState& start, int passes, bool cold) {
+    FeatherstoneState state = start;
+    state.contact_iterations = passes;
+    if (cold) state.contact.remembered.clear(), state.contact.remembered_rows.clear();
+    step(state, dt);
+    return Eigen::VectorXd(state.v);
+  };
+  std::vector<Eigen::VectorXd> free, converged;
+  std::vector<Eigen::MatrixXd> inertia(samples.size());
+  DynamicsWorkspace workspace;
+  for (std::size_t k = 0; k < samples.size(); ++k) {
+    free.push_back(after_step(samples[k], 0, true)), converged.push_back(after_step(samples[k], 2000, true));
+    mass_matrix(samples[k].tree, samples[k].q, workspace, inertia[k]);
+  }
+  const int passes = static_cast<int>(bench.range(0));
+  double error = 0;
+  FeatherstoneState state = samples[0];
+  for (auto _ : bench) {
+    error = 0;
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      bench.PauseTiming();
+      state = samples[k];
+      state.contact_iterations = passes;
+      bench.ResumeTiming();
+      benchmark::DoNotOptimize(step(state, dt).status);
+      bench.PauseTiming();
+      const auto norm = [&](const Eigen::VectorXd& x) { return std::sqrt(x.dot(inertia[k] * x)); };
+      error += norm(state.v - converged[k]) / norm(converged[k] - free[k]) / static_cast<double>(samples.size());
+      bench.ResumeTiming();
+    }
+  }
+  bench.counters["error"] = error;
+  bench.counters["seconds_per_step"] = benchmark::Counter(static_cast<double>(samples.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 BENCHMARK(BM_ChainStep)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_HumanoidContactSolve)->ArgsProduct({{1, 2, 4, 8, 16, 32}, {0, 1}})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ChainPass)->Arg(100)->Arg(1000)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidArticulatedBodyPass)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_HumanoidBiasForcesAndFactorSolve)->Unit(benchmark::kMicrosecond);
