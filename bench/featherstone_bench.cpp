@@ -266,7 +266,7 @@ void BM_HumanoidContactSolve(benchmark::State& bench) {
   const auto after_step = [&](const FeatherstoneState& start, int passes, bool cold) {
     FeatherstoneState state = start;
     state.contact_iterations = passes;
-    if (cold) state.contact.remembered.clear(), state.contact.remembered_rows.clear();
+    if (cold) state.contact.memory.clear(), state.contact.remembered_rows.clear();
     step(state, dt);
     return Eigen::VectorXd(state.v);
   };

@@ -398,8 +398,7 @@ void size_constraint_scratch(FeatherstoneState& state, const Model& model) {
   contact.row_coordinate.reserve(entries), contact.row_value.reserve(entries);
   contact.half_coordinate.reserve(entries), contact.half_value.reserve(entries);
   contact.contact_matrix.reserve(blocks), contact.free_motion.reserve(blocks), contact.push.reserve(blocks), contact.impulse.reserve(blocks);
-  contact.remembered.reserve(state.contacts.capacity()), contact.recording.reserve(state.contacts.capacity());
-  contact.remembered_taken.reserve(state.contacts.capacity());
+  contact.memory.reserve(state.contacts.capacity());
   contact.path_length.assign(static_cast<std::size_t>(tree.body_count()), 0);
   for (int i = 0; i < tree.body_count(); ++i) {
     const int parent = tree.body(i).parent;

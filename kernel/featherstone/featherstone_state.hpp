@@ -37,6 +37,7 @@
 #include "limber/kernel/featherstone/joint_space_factor.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/collision/contact_memory.hpp"
 #include "limber/kernel/model/options.hpp"
 #include "limber/kernel/numerics/active_set.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
@@ -64,16 +65,6 @@ struct LimitIsland {
   std::int32_t island = 0;
   int first_block = 0, rows = 0;
   std::size_t matrix = 0;
-};
-
-/// A contact's impulse kept for the next step's warm start (joint_space_contacts.hpp,
-/// "Warm start"): its bodies (b −1 for a plane), its point (world, m), and the normal impulse
-/// (N·s) and tangential impulse (N·s, world) it ended with.
-struct RememberedContact {
-  std::int32_t a = 0, b = -1;
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();
-  double normal_impulse = 0;
-  Eigen::Vector3d tangential_impulse = Eigen::Vector3d::Zero();
 };
 
 /// What one island's group uses alone while it is solved (the group's first island's; its own
@@ -153,14 +144,11 @@ struct JointSpaceContactScratch {
   /// Per block (a contact's): its accumulated impulse λ (N·s, its frame; λ_n ≥ 0, in Coulomb's
   /// cone), from its warm start (joint_space_contacts.hpp, "Impulses", "Warm start").
   std::vector<Eigen::Vector3d> impulse;
-  /// The last step's contact impulses, sorted by (a, b), and this step's being recorded: where
-  /// the next step's contacts find their warm start.
-  std::vector<RememberedContact> remembered, recording;
-  std::vector<char> remembered_taken;  ///< per remembered contact: a contact of this step took it
+  /// The last step's contact impulses, where this step's contacts find their warm start.
+  ContactMemory memory;
   /// The last step's limit rows' impulses (key, N·s or N·m·s), by key, and this step's being
-  /// recorded.
+  /// recorded (scaled to a step as memory scales the contacts').
   std::vector<std::pair<std::int32_t, double>> remembered_rows, recording_rows;
-  double remembered_step = 0;          ///< the step they were solved for, s
   /// nv: y = D⁻¹ Σ_g Y_g λ_g of the impulses not yet in x (v, or the push-out's displacement),
   /// which moves x by L⁻¹ y (settle); J_g of it is Y_gᵀ y.
   Eigen::VectorXd lagging;

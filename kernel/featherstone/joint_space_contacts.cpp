@@ -495,80 +495,40 @@ bool form_groups(FeatherstoneState& state) {
 
 // --- Warm start ----------------------------------------------------------------------------------
 
-// How far a contact's point may have moved since the last step for the last step's impulse there
-// to start it, m: a resting contact's point stays within round-off, a rolling or sliding one moves
-// by its speed times the step (5 mm at 1 m/s and 1/200 s).
-constexpr double kWarmStartReach = 0.01;
-
-bool remembered_before(const RememberedContact& x, std::int32_t a, std::int32_t b) { return x.a < a || (x.a == a && x.b < b); }
-
-// Each contact's warm start into s.impulse: the impulse the last step's nearest contact of the
-// same two bodies within kWarmStartReach ended with (each taken once), its normal part along the
-// new normal and its tangential part on the new tangent plane, clamped into the cone, scaled by
-// the ratio of the steps (an impulse is a force times the step); none without one. Each limit
-// row's, likewise, the last step's impulse of the row with its key.
+// Each contact's warm start into s.impulse (ContactMemory::take), each limit row's likewise: the
+// last step's impulse of the row with its key.
 void warm_start(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  s.remembered_taken.assign(s.remembered.size(), 0);
-  const double scale = s.remembered_step > 0 ? dt / s.remembered_step : 0.0;
+  s.memory.begin_matching();
   for (const ConstraintGroup& group : s.groups) {
-    for (int block = group.first_block; block < group.first_row_block; ++block) {
-      const auto g = static_cast<std::size_t>(block);
-      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
-      s.impulse[g].setZero();
-      auto first = std::lower_bound(s.remembered.begin(), s.remembered.end(), contact,
-                                    [](const RememberedContact& x, const RigidContact& c) { return remembered_before(x, c.a, c.b); });
-      std::ptrdiff_t best = -1;
-      double nearest = kWarmStartReach * kWarmStartReach;
-      for (auto it = first; it != s.remembered.end() && it->a == contact.a && it->b == contact.b; ++it) {
-        const std::ptrdiff_t index = it - s.remembered.begin();
-        const double distance = (it->point - contact.point).squaredNorm();
-        if (!s.remembered_taken[static_cast<std::size_t>(index)] && distance < nearest) best = index, nearest = distance;
-      }
-      if (best < 0) continue;
-      s.remembered_taken[static_cast<std::size_t>(best)] = 1;
-      const RememberedContact& last = s.remembered[static_cast<std::size_t>(best)];
-      const Eigen::Matrix3d frame = contact_frame(contact.normal);
-      const double normal = scale * last.normal_impulse;
-      Eigen::Vector2d tangential = scale * (frame.bottomRows<2>() * last.tangential_impulse);
-      const double bound = contact.friction * normal, size = tangential.norm();
-      if (size > bound) tangential *= size > 0 ? bound / size : 0.0;
-      s.impulse[g] << normal, tangential;
+    for (int g = group.first_block; g < group.first_row_block; ++g) {
+      s.impulse[static_cast<std::size_t>(g)] = s.memory.take(state.contacts[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])], dt);
     }
   }
   // The limit rows: both lists ascend by key.
   auto last = s.remembered_rows.begin();
   for (JointLimitRow& row : state.controls.rows) {
     while (last != s.remembered_rows.end() && last->first < row.key) ++last;
-    row.impulse = last != s.remembered_rows.end() && last->first == row.key ? scale * last->second : 0.0;
+    row.impulse = last != s.remembered_rows.end() && last->first == row.key ? s.memory.scale(dt) * last->second : 0.0;
   }
 }
 
-// The step's contact impulses as the next step's warm start (s.remembered, sorted by bodies; the
-// groups' order, which no thread count changes, among equals).
+// The step's contact and limit-row impulses as the next step's warm start (in the groups' order,
+// which no thread count changes).
 void remember_impulses(FeatherstoneState& state, double dt) {
   JointSpaceContactScratch& s = state.contact;
-  s.recording.clear();
+  s.memory.begin_recording();
   for (const ConstraintGroup& group : s.groups) {
-    for (int block = group.first_block; block < group.first_row_block; ++block) {
-      const auto g = static_cast<std::size_t>(block);
-      if (s.impulse[g].isZero()) continue;
-      const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
-      const Eigen::Vector3d tangential = contact_frame(contact.normal).bottomRows<2>().transpose() * s.impulse[g].tail<2>();
-      s.recording.push_back({contact.a, contact.b, contact.point, s.impulse[g][0], tangential});
+    for (int g = group.first_block; g < group.first_row_block; ++g) {
+      s.memory.record(state.contacts[static_cast<std::size_t>(s.block_source[static_cast<std::size_t>(g)])], s.impulse[static_cast<std::size_t>(g)]);
     }
   }
-  std::sort(s.recording.begin(), s.recording.end(), [](const RememberedContact& x, const RememberedContact& y) {
-    if (x.a != y.a || x.b != y.b) return remembered_before(x, y.a, y.b);
-    return std::lexicographical_compare(x.point.data(), x.point.data() + 3, y.point.data(), y.point.data() + 3);
-  });
-  std::swap(s.remembered, s.recording);
+  s.memory.finish_recording(dt);
   s.recording_rows.clear();
   for (const JointLimitRow& row : state.controls.rows) {
     if (row.impulse > 0) s.recording_rows.emplace_back(row.key, row.impulse);
   }
   std::swap(s.remembered_rows, s.recording_rows);
-  s.remembered_step = dt;
 }
 
 // Every group, on the state's threads when it has them and more than one group; the limit rows

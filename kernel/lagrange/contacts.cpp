@@ -138,9 +138,13 @@ void add_response(const LagrangeState& state, const JointContactScratch& s, cons
 // takes its three rows together, Coulomb's disc |λ_t| ≤ μ·λ_n held by the step of
 // project_contact_impulse (kernel/numerics/contact_projection.hpp: the one Featherstone's contacts
 // take) on its block of W. x holds the bodies' motion and moves with every change of λ.
-// `with_friction` false leaves the tangent rows out.
-void project_rows(const LagrangeState& state, JointContactScratch& s, std::vector<Vector6>& x, bool with_friction) {
-  for (Row& row : s.rows) row.impulse = 0;
+// `with_friction` false leaves the tangent rows out. `warm`: the rows start from their impulses
+// (applied to x first), else from none.
+void project_rows(const LagrangeState& state, JointContactScratch& s, std::vector<Vector6>& x, bool with_friction, bool warm) {
+  for (Row& row : s.rows) {
+    if (!warm) row.impulse = 0;
+    if (row.impulse != 0) add_response(state, s, row, row.impulse, x);
+  }
   for (int sweep = 0; sweep < kSweeps; ++sweep) {
     for (std::size_t r = 0; r < s.rows.size(); ++r) {
       Row& row = s.rows[r];
@@ -165,6 +169,32 @@ void project_rows(const LagrangeState& state, JointContactScratch& s, std::vecto
   }
 }
 
+// Each contact's rows start from the impulse its place had last step (ContactMemory: the
+// normal's, and the tangents' when it has friction); limit rows from none.
+void warm_start(JointContactScratch& s, const std::vector<RigidContact>& contacts, double dt) {
+  s.memory.begin_matching();
+  for (std::size_t r = 0; r < s.rows.size(); ++r) {
+    Row& row = s.rows[r];
+    row.impulse = 0;
+    if (row.kind != Kind::normal) continue;
+    const Eigen::Vector3d impulse = s.memory.take(contacts[row.contact], dt);
+    row.impulse = impulse[0];
+    if (r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent) s.rows[r + 1].impulse = impulse[1], s.rows[r + 2].impulse = impulse[2], r += 2;
+  }
+}
+
+// The contacts' impulses as the next step's warm start.
+void remember_impulses(JointContactScratch& s, const std::vector<RigidContact>& contacts, double dt) {
+  s.memory.begin_recording();
+  for (std::size_t r = 0; r < s.rows.size(); ++r) {
+    const Row& row = s.rows[r];
+    if (row.kind != Kind::normal) continue;
+    const bool friction = r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent;
+    s.memory.record(contacts[row.contact], Eigen::Vector3d(row.impulse, friction ? s.rows[r + 1].impulse : 0.0, friction ? s.rows[r + 2].impulse : 0.0));
+  }
+  s.memory.finish_recording(dt);
+}
+
 }  // namespace
 
 void prepare_contacts_with_joints(LagrangeState& state) {
@@ -182,11 +212,15 @@ void prepare_contacts_with_joints(LagrangeState& state) {
   s.rows.reserve(3 * state.contacts.capacity() + state.controls.rows.size());
   s.responses.reserve(batches * state.bodies.size());
   s.velocity.reserve(state.bodies.size()), s.displacement.reserve(state.bodies.size());
+  s.memory.reserve(state.contacts.capacity());
 }
 
 void resolve_contacts_with_joints(LagrangeState& state, double dt) {
-  if (state.contacts.empty()) return;
   JointContactScratch& s = state.contact_scratch;
+  if (state.contacts.empty()) {
+    s.memory.clear();  // a contact that comes back later starts cold
+    return;
+  }
   RigidBodyState& y = state.bodies.state;
   const std::size_t n = state.bodies.size();
   body_velocities(state, y);
@@ -202,7 +236,9 @@ void resolve_contacts_with_joints(LagrangeState& state, double dt) {
     const RigidContact& contact = state.contacts[row.contact];  // a limit's is unused
     row.target = row.kind == Kind::limit ? -std::max(row.gap, 0.0) / dt : row.kind == Kind::normal ? contact.restitution * contact.approach_speed : 0;
   }
-  project_rows(state, s, s.velocity, /*with_friction=*/true);
+  warm_start(s, state.contacts, dt);
+  project_rows(state, s, s.velocity, /*with_friction=*/true, /*warm=*/true);
+  remember_impulses(s, state.contacts, dt);
   for (std::size_t b = 0; b < n; ++b) {
     y.linear_momentum[b] = state.bodies.mass[b] * s.velocity[b].head<3>();
     y.angular_momentum[b] = state.world_inertia[b] * s.velocity[b].tail<3>();
@@ -215,7 +251,7 @@ void resolve_contacts_with_joints(LagrangeState& state, double dt) {
     row.target = row.kind == Kind::limit ? -row.gap : row.kind == Kind::normal ? push_out_distance(contact, state.settings, dt) : 0;
   }
   s.displacement.assign(n, Vector6::Zero());
-  project_rows(state, s, s.displacement, /*with_friction=*/false);
+  project_rows(state, s, s.displacement, /*with_friction=*/false, /*warm=*/false);
   for (std::size_t b = 0; b < n; ++b) {
     if (s.displacement[b].isZero()) continue;
     y.position[b] += s.displacement[b].head<3>();

@@ -14,6 +14,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 
+#include "limber/kernel/collision/contact_memory.hpp"
 #include "limber/kernel/lagrange/constraints.hpp"
 #include "limber/kernel/lagrange/joint_controls.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
@@ -52,6 +53,7 @@ struct JointContactScratch {
   std::vector<std::uint32_t> next_batch;
   std::vector<Eigen::Matrix<double, 6, 1>> responses;  ///< per batch, per body (batch·bodies + body): Δu
   std::vector<Eigen::Matrix<double, 6, 1>> velocity, displacement;  ///< per body: (v, ω), (Δx, Δθ)
+  ContactMemory memory;  ///< the last step's contact impulses: this step's warm start
 };
 
 struct LagrangeState : RigidScene {

@@ -152,7 +152,7 @@ TEST(FeatherstoneContactSolve, ARestingScenesWarmStartBeginsAtItsAnswer) {
   const auto after_one_step = [&](int passes, bool warm) {
     FeatherstoneState copy = state;
     copy.contact_iterations = passes;
-    if (!warm) copy.contact.remembered.clear();
+    if (!warm) copy.contact.memory.clear(), copy.contact.remembered_rows.clear();
     EXPECT_EQ(step(copy, dt).status, StepStatus::ok);
     return copy.v;
   };
