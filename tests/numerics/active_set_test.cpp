@@ -12,19 +12,12 @@
 #include <Eigen/Cholesky>
 
 #include "limber/kernel/numerics/active_set.hpp"
+#include "tests/support/delassus.hpp"
 
 namespace limber {
 namespace {
 
-// A Delassus matrix J H⁻¹ Jᵀ of m rows on n > m coordinates: symmetric positive definite.
-Eigen::MatrixXd delassus(std::mt19937& random, int m, int n) {
-  std::uniform_real_distribution<double> draw(-1, 1);
-  Eigen::MatrixXd j(m, n), root(n, n);
-  for (int r = 0; r < m; ++r) for (int c = 0; c < n; ++c) j(r, c) = draw(random);
-  for (int r = 0; r < n; ++r) for (int c = 0; c < n; ++c) root(r, c) = draw(random);
-  const Eigen::MatrixXd h = root * root.transpose() + Eigen::MatrixXd::Identity(n, n);
-  return j * h.llt().solve(j.transpose());
-}
+using testing::random_delassus;
 
 struct Problem {
   Eigen::MatrixXd a;
@@ -33,7 +26,7 @@ struct Problem {
 
 Problem random_problem(std::mt19937& random, int m) {
   std::uniform_real_distribution<double> draw(-1, 1), positive(0, 1);
-  Problem p{delassus(random, m, m + 3), Eigen::VectorXd(m), Eigen::VectorXd(m), Eigen::VectorXd(m)};
+  Problem p{random_delassus(random, m, m + 3), Eigen::VectorXd(m), Eigen::VectorXd(m), Eigen::VectorXd(m)};
   for (int i = 0; i < m; ++i) {
     p.value[i] = draw(random), p.target[i] = draw(random);
     p.accumulated[i] = positive(random) < 0.5 ? 0.0 : positive(random);
@@ -120,7 +113,7 @@ TEST(ActiveSet, ReusesItsFactorOnTheSameMatrixUntilForgotten) {
 TEST(ActiveSet, HoldsDependentRowsTogether) {
   // A joint locked at both ends: the same row twice (min and max), both pushed past.
   std::mt19937 random(3);
-  Eigen::MatrixXd a = delassus(random, 3, 5);
+  Eigen::MatrixXd a = random_delassus(random, 3, 5);
   a.row(1) = a.row(0), a.col(1) = a.col(0);  // row 1 duplicates row 0
   const Eigen::VectorXd value = Eigen::Vector3d(-1, -1, 0.5), target = Eigen::Vector3d(0, 0, 0), accumulated = Eigen::Vector3d::Zero();
   std::vector<char> active{1, 1, 0};

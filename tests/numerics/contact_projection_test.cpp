@@ -11,23 +11,14 @@
 
 #include <gtest/gtest.h>
 
-#include <Eigen/Cholesky>
 
 #include "limber/kernel/numerics/contact_projection.hpp"
+#include "tests/support/delassus.hpp"
 
 namespace limber {
 namespace {
 
-// A Delassus matrix J H⁻¹ Jᵀ of m rows on n coordinates (positive semi-definite; definite for
-// n ≥ m).
-Eigen::MatrixXd coupled_delassus(std::mt19937& random, int m, int n) {
-  std::uniform_real_distribution<double> draw(-1, 1);
-  Eigen::MatrixXd j(m, n), root(n, n);
-  for (int r = 0; r < m; ++r) for (int c = 0; c < n; ++c) j(r, c) = draw(random);
-  for (int r = 0; r < n; ++r) for (int c = 0; c < n; ++c) root(r, c) = draw(random);
-  const Eigen::MatrixXd h = root * root.transpose() + 0.1 * Eigen::MatrixXd::Identity(n, n);
-  return j * h.llt().solve(j.transpose());
-}
+using testing::random_delassus;
 
 double tangential_energy(const Eigen::Matrix2d& a, const Eigen::Vector2d& g, const Eigen::Vector2d& x) { return 0.5 * x.dot(a * x) + g.dot(x); }
 
@@ -40,7 +31,7 @@ TEST(ContactProjection, TheFrictionImpulseIsTheDiscsLowestEnergy) {
   std::uniform_real_distribution<double> draw(-1, 1), positive(0, 1);
   int on_edge = 0, inside = 0;
   for (int trial = 0; trial < 2000; ++trial) {
-    const Eigen::MatrixXd block = coupled_delassus(random, 2, trial % 5 == 0 ? 1 : 3);
+    const Eigen::MatrixXd block = random_delassus(random, 2, trial % 5 == 0 ? 1 : 3, 0.1);
     const Eigen::Matrix2d a = block;
     const Eigen::Vector2d g(draw(random), draw(random));
     const double radius = positive(random);
@@ -77,7 +68,7 @@ TEST(ContactProjection, PassesOverCoupledContactsMeetSignoriniAndCoulomb) {
   constexpr int kContacts = 4, kRows = 3 * kContacts;
   int sticking = 0, sliding = 0, apart = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::MatrixXd a = coupled_delassus(random, kRows, 9);
+    const Eigen::MatrixXd a = random_delassus(random, kRows, 9, 0.1);
     Eigen::VectorXd free(kRows), impulse = Eigen::VectorXd::Zero(kRows);
     for (int r = 0; r < kRows; ++r) free[r] = draw(random);
     Eigen::Vector<double, kContacts> target, friction;
