@@ -494,7 +494,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, BallOnWall, ::testing::Values(Method::particle
 //   phase (limbs under 2.5 mm/s, stacked 8.7-8.9 cm, overlaps under 4.3 mm; with sequential
 //   impulses it rested 5.8 cm up at one phase, and without the limit rows' warm start it still
 //   moved at 0.14 m/s at another); Lagrange, whose contacts take the same contact step, rests
-//   at every phase with thin margins (limbs at 0.042-0.044 m/s, stacked 6.1-6.8 cm; with each
+//   at every phase with thin margins (limbs at 0.042-0.045 m/s, stacked 6.3-8.4 cm; with each
 //   tangent on its own and the pair clamped, 0.58 m/s and 5.7 cm at one phase).
 INSTANTIATE_TEST_SUITE_P(DISABLED_KnownFailures, RagdollSelfContact,
                          ::testing::Values(Stepping{Method::springs}, Stepping{Method::lagrange}, Stepping{Method::featherstone}), stepping_name);
