@@ -5,8 +5,8 @@
 // allocates nothing.
 //
 // The Humanoid rows time, on MuJoCo's humanoid.xml (its tree as limber compiles it: 27
-// velocity coordinates), one articulated-body pass against the constraint-space alternative to
-// sequential impulses: the composite-rigid-body H, its LᵀDL factor in the tree's sparsity, the
+// velocity coordinates), one articulated-body pass against the constraint-space work a step's
+// contacts cost: the composite-rigid-body H, its LᵀDL factor in the tree's sparsity, the
 // Delassus matrix of 18 rows (6 contacts × 3, each on a foot's or hand's path to the root) and
 // one solve (kernel/featherstone/joint_space_factor.hpp).
 //

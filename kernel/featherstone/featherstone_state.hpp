@@ -31,13 +31,13 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "limber/kernel/collision/contact_memory.hpp"
 #include "limber/kernel/featherstone/articulated_tree.hpp"
 #include "limber/kernel/featherstone/dynamics.hpp"
 #include "limber/kernel/featherstone/integration.hpp"
 #include "limber/kernel/featherstone/joint_space_factor.hpp"
 #include "limber/kernel/featherstone/spatial.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
-#include "limber/kernel/collision/contact_memory.hpp"
 #include "limber/kernel/model/options.hpp"
 #include "limber/kernel/numerics/active_set.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"

@@ -23,6 +23,11 @@ using Kind = JointContactScratch::Kind;
 // is the step's, whatever the count.
 constexpr int kSweeps = 24;
 
+// Whether row r is a contact's normal followed by its two tangents (the contact has friction).
+bool with_tangents(const JointContactScratch& s, std::size_t r) {
+  return s.rows[r].kind == Kind::normal && r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent;
+}
+
 // G_r·x over the row's two bodies (x: one 6-vector per body).
 double row_rate(const Row& row, const Vector6* x) {
   double rate = row.jacobian_a.dot(x[row.a]);
@@ -115,8 +120,8 @@ void measure_responses(LagrangeState& state, JointContactScratch& s) {
   // Each contact's 3×3 block of W over its normal and tangents: its rows' rates per unit impulse
   // on each other (their responses are their batches', on their own islands' bodies).
   for (std::size_t r = 0; r + 2 < s.rows.size(); ++r) {
+    if (!with_tangents(s, r)) continue;
     Row& normal = s.rows[r];
-    if (normal.kind != Kind::normal || s.rows[r + 1].kind != Kind::tangent) continue;
     for (std::size_t i = 0; i < 3; ++i) {
       for (std::size_t j = 0; j < 3; ++j) normal.contact_block(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = row_rate(s.rows[r + i], response_of(s, s.rows[r + j], n));
     }
@@ -149,8 +154,7 @@ void project_rows(const LagrangeState& state, JointContactScratch& s, std::vecto
     for (std::size_t r = 0; r < s.rows.size(); ++r) {
       Row& row = s.rows[r];
       if (row.kind == Kind::tangent || !(row.mobility > 0)) continue;  // a contact's tangents go with its normal
-      const bool friction = with_friction && row.kind == Kind::normal && r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent;
-      if (!friction) {
+      if (!with_friction || !with_tangents(s, r)) {
         const double wanted = std::max(row.impulse + (row.target - row_rate(row, x)) / row.mobility, 0.0);
         add_response(state, s, row, wanted - row.impulse, x);
         row.impulse = wanted;
@@ -179,7 +183,7 @@ void warm_start(JointContactScratch& s, const std::vector<RigidContact>& contact
     if (row.kind != Kind::normal) continue;
     const Eigen::Vector3d impulse = s.memory.take(contacts[row.contact], dt);
     row.impulse = impulse[0];
-    if (r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent) s.rows[r + 1].impulse = impulse[1], s.rows[r + 2].impulse = impulse[2], r += 2;
+    if (with_tangents(s, r)) s.rows[r + 1].impulse = impulse[1], s.rows[r + 2].impulse = impulse[2], r += 2;
   }
 }
 
@@ -189,7 +193,7 @@ void remember_impulses(JointContactScratch& s, const std::vector<RigidContact>& 
   for (std::size_t r = 0; r < s.rows.size(); ++r) {
     const Row& row = s.rows[r];
     if (row.kind != Kind::normal) continue;
-    const bool friction = r + 2 < s.rows.size() && s.rows[r + 1].kind == Kind::tangent;
+    const bool friction = with_tangents(s, r);
     s.memory.record(contacts[row.contact], Eigen::Vector3d(row.impulse, friction ? s.rows[r + 1].impulse : 0.0, friction ? s.rows[r + 2].impulse : 0.0));
   }
   s.memory.finish_recording(dt);
