@@ -9,6 +9,7 @@
 #include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/collision/impulses.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
 namespace {
@@ -26,9 +27,21 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& stat
   return {centre + half_axis, centre - half_axis};
 }
 
+// Runs body(b) for every body, in blocks of kBodiesPerBlock on `runner`'s threads (or the calling
+// thread's when null): for loops whose body b writes only its own entries.
+constexpr std::size_t kBodiesPerBlock = 64;
+template <typename Body>
+void for_each_body(const RigidScene& state, BlockRunner* runner, const Body& body) {
+  const std::size_t count = state.bodies.size();
+  run_stage(runner, (count + kBodiesPerBlock - 1) / kBodiesPerBlock, [&](std::size_t block) {
+    const std::size_t end = std::min(count, (block + 1) * kBodiesPerBlock);
+    for (std::size_t b = block * kBodiesPerBlock; b < end; ++b) body(b);
+  });
+}
+
 // Every body's limb segment (its axis end points and radius; a ball's a point) as it is now.
-void find_limb_segments(RigidScene& state) {
-  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+void find_limb_segments(RigidScene& state, BlockRunner* runner) {
+  for_each_body(state, runner, [&](std::size_t b) {
     LimbSegment& segment = state.limb_segments[b];
     if (state.shapes.is_ball[b]) {
       segment.head = segment.tail = state.bodies.state.position[b];
@@ -36,7 +49,7 @@ void find_limb_segments(RigidScene& state) {
       std::tie(segment.head, segment.tail) = head_and_tail(state, b);
     }
     segment.radius = state.shapes.radius[b];
-  }
+  });
 }
 
 void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_index) {
@@ -85,10 +98,10 @@ void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body
 }
 
 // Each body's speculative reach (RigidScene::speculative_time) into its limb segment, m.
-void find_speculative_reach(RigidScene& state) {
+void find_speculative_reach(RigidScene& state, BlockRunner* runner) {
   const double t = state.speculative_time;
   const RigidBodyState& y = state.bodies.state;
-  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+  for_each_body(state, runner, [&](std::size_t b) {
     double reach = 0;
     if (t > 0) {
       const double arm = 0.5 * state.shapes.length[b] + state.shapes.radius[b] + state.shapes.centre_offset[b].norm();
@@ -100,16 +113,16 @@ void find_speculative_reach(RigidScene& state) {
       reach = std::min(t * (speed + state.settings.gravity.norm() * t), kMostSpeculativeReach);  // also when not finite
     }
     state.limb_segments[b].reach = reach;
-  }
+  });
 }
 
 // The collision world's contacts (limb–limb, ball–ball, and limbs and balls against static colliders)
 // among the bodies as they are now, touching or overlapping, or (speculative_time) closer than
 // their reaches: a rigid method that moves before it collides answers a contact only once it
 // overlaps. An awake limb that touches a sleeping one wakes its island.
-void add_collision_world_contacts(RigidScene& state) {
+void add_collision_world_contacts(RigidScene& state, BlockRunner* runner) {
   for (std::size_t b = 0; b < state.bodies.size(); ++b) state.limb_awake[b] = awake(state, static_cast<std::int32_t>(b)) ? 1 : 0;
-  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts);
+  state.collisions.find(state.limb_segments, state.limb_awake, 0, state.limb_contacts, runner);
   for (const LimbContact& contact : state.limb_contacts) {
     const auto a = static_cast<std::int32_t>(contact.first);
     RigidContact rigid{a, -1, contact.point, contact.normal, -contact.separation, contact.restitution, contact.friction};
@@ -212,24 +225,24 @@ void find_ball_candidates(RigidScene& state) {
 
 void remember_step_start(RigidScene& state) { state.step_start_position = state.bodies.state.position; }
 
-bool detect_rigid_contacts(RigidScene& state) {
+bool detect_rigid_contacts(RigidScene& state, BlockRunner* runner) {
   state.contacts.clear();
   state.ball_touching = false;
   // Nothing any body could meet (a hanging chain, a rope in the air): no reaches nor segments.
   if (state.planes.empty() && !state.collisions.active() && state.ball_begin >= state.bodies.size()) return false;
-  find_speculative_reach(state);
+  find_speculative_reach(state, runner);
   bool moved = false;
   if (state.ball_begin < state.bodies.size()) find_ball_candidates(state);
   for (std::size_t ball = state.ball_begin; ball < state.bodies.size(); ++ball) {
     moved = sweep_ball(state, ball) || moved;
     add_ball_contacts(state, ball);
   }
-  find_limb_segments(state);  // after the balls' sweeps moved them
+  find_limb_segments(state, runner);  // after the balls' sweeps moved them
   for (std::size_t b = 0; b < state.bodies.size(); ++b) {
     if (!awake(state, static_cast<std::int32_t>(b))) continue;
     for (std::size_t p = 0; p < state.planes.size(); ++p) add_plane_contacts(state, b, p);
   }
-  if (state.collisions.active()) add_collision_world_contacts(state);
+  if (state.collisions.active()) add_collision_world_contacts(state, runner);
   return moved;
 }
 

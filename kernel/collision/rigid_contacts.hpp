@@ -40,6 +40,7 @@
 #pragma once
 
 #include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/threading/block_runner.hpp"
 
 namespace limber {
 
@@ -54,8 +55,10 @@ void remember_step_start(RigidScene& scene);
 /// moves the ball back along its path to where it hit a limb or a static collider (above);
 /// returns whether it did, so a method keeping its own coordinates (Featherstone's q) takes the
 /// ball's new position over. A scene with nothing to meet (no plane, no collision world, no
-/// ball) finds nothing and leaves scene.limb_segments as they were.
-bool detect_rigid_contacts(RigidScene& scene);
+/// ball) finds nothing and leaves scene.limb_segments as they were. `runner`: threads for the
+/// bodies' segments and reaches and the collision world's narrow phase (null: the calling
+/// thread); the contacts are the same, in the same order, for any thread count.
+bool detect_rigid_contacts(RigidScene& scene, BlockRunner* runner = nullptr);
 
 /// A rigid method's step counts in report.profile (step_status.hpp, StepProfile): one substep,
 /// report.contacts, and the broadphase pairs of the last detect_rigid_contacts. Called only when

@@ -114,7 +114,7 @@ void integrate_island(FeatherstoneState& state, std::size_t k, double dt, bool l
 // constraints on it, then the positions (step.hpp).
 void step_constraints_before_move(FeatherstoneState& state, double dt, StepReport& report, StageClock& clock) {
   state.speculative_time = dt;  // gaps the step may close are contacts too
-  if (detect_rigid_contacts(state)) take_moved_balls(state);  // sweeps the balls' paths of the last step
+  if (detect_rigid_contacts(state, state.runner.get())) take_moved_balls(state);  // sweeps the balls' paths of the last step
   remember_step_start(state);
   report.profile.detect = clock.lap();
   integrate_awake_islands(state, dt);
@@ -129,7 +129,7 @@ void step_constraints_after_move(FeatherstoneState& state, double dt, StepReport
   remember_step_start(state);
   integrate_awake_islands(state, dt);
   report.profile.integrate = clock.lap();
-  if (detect_rigid_contacts(state)) take_moved_balls(state);
+  if (detect_rigid_contacts(state, state.runner.get())) take_moved_balls(state);
   report.profile.detect = clock.lap();
   resolve_joint_space_contacts(state, dt);
 }
@@ -211,6 +211,7 @@ void take_moved_balls(FeatherstoneState& state) {
 StepReport step(FeatherstoneState& state, double dt) {
   return guarded_step(state, dt, [&](StepReport& report) {
     StageClock clock(state.options.profile);
+    const AwakeHelpers awake(state.runner.get());
     if (constraints_before_move(state)) {
       step_constraints_before_move(state, dt, report, clock);
     } else {

@@ -72,6 +72,25 @@ TEST(BlockRunner, RunsWithoutBeginAndStopsCleanly) {
   EXPECT_THROW(BlockRunner(Threading::workers, 0), std::invalid_argument);
 }
 
+TEST(BlockRunner, AwakeHelpersSpanTheirScopeAndLeaveAnOuterSessionOpen) {
+  BlockRunner runner(Threading::workers, 2);
+  {
+    const AwakeHelpers awake(&runner);
+    EXPECT_TRUE(runner.active());
+    {
+      const AwakeHelpers inner(&runner);  // a stage's own, inside the step's
+      EXPECT_TRUE(runner.active());
+    }
+    EXPECT_TRUE(runner.active()) << "an inner scope must not end the step's session";
+    std::vector<std::atomic<int>> runs(40);
+    const Stage stage{&runs, 0};
+    runner.run(40, run_block, &stage);
+    for (auto& r : runs) EXPECT_EQ(r.load(), 1);
+  }
+  EXPECT_FALSE(runner.active());
+  const AwakeHelpers none(nullptr);  // one thread: no runner, nothing to do
+}
+
 // 1 when the thread running the block computes a denormal where the caller's mode flushes it
 // to zero. Each block dawdles, so the helpers claim some of them.
 double block_without_the_callers_mode(const void*, std::size_t) {
