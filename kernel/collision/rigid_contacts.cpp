@@ -150,8 +150,16 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
     const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
     if (contact.separation >= state.limb_segments[ball].reach + state.limb_segments[b].reach) continue;
     state.islands[state.island_of_body[b]].wake();
-    state.ball_touching = state.ball_touching || contact.separation < 0;
     const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
+    // Touching: overlapping, or (speculative contacts) a contact this step's impulses answer: the
+    // ball closes the gap within the step, or bounces from where it is (contact_target_speed:
+    // e > 0 above the resting approach, record_approach).
+    const double t = state.speculative_time;
+    const double approach = t > 0 && contact.separation >= 0
+                                ? (velocity_at(impulse_body(state, b), point) - velocity_at(impulse_body(state, static_cast<std::int32_t>(ball)), point)).dot(contact.normal)
+                                : 0.0;
+    const bool bounces = state.shapes.restitution[ball] > 0 && approach >= 2 * state.settings.gravity.norm() * t;
+    state.ball_touching = state.ball_touching || contact.separation < 0 || (t > 0 && (contact.separation < approach * t || bounces));
     state.contacts.push_back({static_cast<std::int32_t>(ball), static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
                               state.shapes.restitution[ball], 0.0});
   }

@@ -191,11 +191,7 @@ void impulse_passes(FeatherstoneState& state, const ConstraintGroup& group, doub
       const auto g = static_cast<std::size_t>(block);
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
       const Eigen::Matrix3d& k = s.contact_matrix[g];
-      // A bounce leaves at e times the approach before the impulses; before the move, a contact
-      // still apart by a gap may approach by it this step.
-      const double target = contact.restitution > 0 ? contact.restitution * contact.approach_speed
-                            : before_move            ? -std::max(-contact.depth, 0.0) / dt
-                                                     : 0.0;
+      const double target = contact_target_speed(contact, before_move, dt);
       const Eigen::Vector3d impulse =
           project_contact_impulse(k, s.free_motion[g] + lagging_motion(s, g), s.impulse[g], target, contact.friction);
       const Eigen::Vector3d change = impulse - s.impulse[g];
@@ -278,13 +274,9 @@ bool push_out(FeatherstoneState& state, const ConstraintGroup& group, double dt)
     for (int block = group.first_block; block < group.first_row_block; ++block) {
       const auto g = static_cast<std::size_t>(block);
       const RigidContact& contact = state.contacts[static_cast<std::size_t>(s.block_source[g])];
-      // Before the move the depth is the last steps': once past twice the slop, back to the slop,
-      // as after the move a step's approach in full and an older overlap at the recovery speed
-      // (the band keeps a resting contact, which the passes' tolerance lets sink by ~10⁻⁷ m a
-      // step, from being pushed and re-projected every step).
-      const double target = !before_move                       ? push_out_distance(contact, state.settings, dt)
-                            : contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, push_out_distance(contact, state.settings, dt))
-                                                               : 0.0;
+      // Before the move the band keeps a resting contact, which the passes' tolerance lets sink by
+      // ~10⁻⁷ m a step, from being pushed and re-projected every step.
+      const double target = before_move ? push_out_before_move(contact, state.settings, dt) : push_out_distance(contact, state.settings, dt);
       const double normal_inverse_mass = s.contact_matrix[g](0, 0);
       if (!(target > 0) || !(normal_inverse_mass > 0)) continue;
       const double done = lagging_motion(s, g)[0];  // the displacement is all in y until settled

@@ -59,9 +59,5 @@ constexpr double kSlowestApproach = 1e-6;
 // The push-out leaves a contact alone once what is still to push is below this fraction of its
 // target (the rest is pushed out in the next step).
 constexpr double kPushTolerance = 0.01;
-// When the constraints are solved before the move, a contact's depth up to this is left to rest
-// in, m: the velocity solve keeps it from growing, and pushing out its round-off every step would
-// cost a re-projection every step.
-constexpr double kRestingSlop = 1e-4;
 
 }  // namespace limber::joint_space

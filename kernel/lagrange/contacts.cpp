@@ -219,7 +219,7 @@ void prepare_contacts_with_joints(LagrangeState& state) {
   s.memory.reserve(state.contacts.capacity());
 }
 
-void resolve_contacts_with_joints(LagrangeState& state, double dt) {
+void resolve_contacts_with_joints(LagrangeState& state, double dt, bool before_move) {
   JointContactScratch& s = state.contact_scratch;
   if (state.contacts.empty()) {
     s.memory.clear();  // a contact that comes back later starts cold
@@ -234,11 +234,12 @@ void resolve_contacts_with_joints(LagrangeState& state, double dt) {
   build_rows(state, s, dt);
   measure_responses(state, s);
 
-  // Velocities: each normal reaches its contact's bounce, −e times its approach; a limit comes
-  // at most to its bound within the step, and one already past stops.
+  // Velocities: each normal reaches its contact's target speed (its bounce, or before the move a
+  // gap closed within the step); a limit comes at most to its bound within the step, and one
+  // already past stops.
   for (Row& row : s.rows) {
     const RigidContact& contact = state.contacts[row.contact];  // a limit's is unused
-    row.target = row.kind == Kind::limit ? -std::max(row.gap, 0.0) / dt : row.kind == Kind::normal ? contact.restitution * contact.approach_speed : 0;
+    row.target = row.kind == Kind::limit ? -std::max(row.gap, 0.0) / dt : row.kind == Kind::normal ? contact_target_speed(contact, before_move, dt) : 0;
   }
   warm_start(s, state.contacts, dt);
   project_rows(state, s, s.velocity, /*with_friction=*/true, /*warm=*/true);
@@ -248,11 +249,13 @@ void resolve_contacts_with_joints(LagrangeState& state, double dt) {
     y.angular_momentum[b] = state.world_inertia[b] * s.velocity[b].tail<3>();
   }
 
-  // Positions: each normal moves out by its depth, less the separation it may keep; a limit is
-  // not pushed past its bound, and one past it is moved back onto it.
+  // Positions: each normal moves out by its depth, less the separation it may keep (before the
+  // move: the depth at the step's start, beyond the resting slop); a limit is not pushed past its
+  // bound, and one past it is moved back onto it.
   for (Row& row : s.rows) {
     const RigidContact& contact = state.contacts[row.contact];
-    row.target = row.kind == Kind::limit ? -row.gap : row.kind == Kind::normal ? push_out_distance(contact, state.settings, dt) : 0;
+    const double push = before_move ? push_out_before_move(contact, state.settings, dt) : push_out_distance(contact, state.settings, dt);
+    row.target = row.kind == Kind::limit ? -row.gap : row.kind == Kind::normal ? push : 0;
   }
   s.displacement.assign(n, Vector6::Zero());
   project_rows(state, s, s.displacement, /*with_friction=*/false, /*warm=*/false);

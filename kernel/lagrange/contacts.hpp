@@ -20,6 +20,11 @@
 // different islands (the bodies joints and gears join) share a substitution (their responses do
 // not overlap), so a step costs a factor and about three substitutions per contact and one per
 // limit of its most touched island, not per row of the scene. Drives and joint friction stay in the step's own solves.
+// Before the move (semi-implicit Euler; step.cpp): the contacts are found at the step's start
+// pose, speculative gaps included, and answered on the velocity-level step's velocities before
+// the bodies move: a gap may close within the step and no more, a bounce leaves from where it is
+// (contact_target_speed), and the push-out takes the start pose's overlap beyond twice
+// kRestingSlop (push_out_before_move), as Featherstone's contacts before the move do.
 // MuJoCo forms A = J M⁻¹ Jᵀ through its factor and solves contacts and limits on it alike
 // (engine_solver.c); Featherstone's method takes the same contact step through its joint-space
 // factor, warm-started (kernel/featherstone/joint_space_contacts.hpp).
@@ -34,9 +39,11 @@ namespace limber {
 void prepare_contacts_with_joints(LagrangeState& state);
 
 /// Answers state.contacts (detect_rigid_contacts) and the joints' limits for a step of dt through
-/// the joints: velocity impulses, then the push-out (positions). Does nothing without contacts
-/// (the step's own solves hold the limits then). Needs constraints (state.constraints.size() >
-/// 0); without them resolve_rigid_contacts answers the same contacts body by body.
-void resolve_contacts_with_joints(LagrangeState& state, double dt);
+/// the joints: velocity impulses, then the push-out (positions). `before_move`: the contacts were
+/// found at the step's start, speculative gaps included, and the bodies move after this
+/// ("Before the move" above). Does nothing without contacts (the step's own solves hold the
+/// limits then). Needs constraints (state.constraints.size() > 0); without them
+/// resolve_rigid_contacts answers the same contacts body by body.
+void resolve_contacts_with_joints(LagrangeState& state, double dt, bool before_move);
 
 }  // namespace limber

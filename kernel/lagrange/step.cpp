@@ -117,7 +117,8 @@ void control_impulses(LagrangeState& state, double dt) {
 // and the gyroscopic torque. Then L₁ = L₀ + h·(τ + Σ r × λ), x += h·v₁, and q turns by the free
 // rotation with L₁. Enforcing the acceleration (C̈ = 0) instead and integrating explicitly
 // gains energy and diverges on the heavy-end chain within 4 s (measured); this does not.
-void velocity_level_step(LagrangeState& state, double dt) {
+// `move` false: the momenta only, the positions left to move_bodies (the contacts before the move).
+void velocity_level_step(LagrangeState& state, double dt, bool move) {
   RigidBodyState& y = state.bodies.state;
   step_impulses(state, dt, /*with_momentum=*/true);
   const std::size_t body_count = state.bodies.size();
@@ -138,19 +139,44 @@ void velocity_level_step(LagrangeState& state, double dt) {
     const Eigen::Vector3d velocity = state.accelerations[b].head<3>(), new_omega = state.accelerations[b].tail<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * velocity;
     y.angular_momentum[b] = inertia * new_omega + dt * omega.cross(inertia * omega);
+    if (!move) continue;
     y.position[b] += dt * velocity;
     rotate_free_body(y.orientation[b], y.angular_momentum[b], state.bodies.body_inertia[b].diagonal(), dt);
   }
   for (auto& lambda : state.multipliers) lambda /= dt;  // the solve gave impulses h·λ
 }
 
+// Symplectic Euler's move with the momenta the contacts left: x += h·v, q turned by the free
+// rotation with L (velocity_level_step's).
+void move_bodies(LagrangeState& state, double dt) {
+  RigidBodyState& y = state.bodies.state;
+  for (std::size_t b = 0; b < state.bodies.size(); ++b) {
+    if (state.islands[state.island_of_body[b]].sleeping) continue;
+    y.position[b] += dt * state.bodies.linear_velocity(y, b);
+    rotate_free_body(y.orientation[b], y.angular_momentum[b], state.bodies.body_inertia[b].diagonal(), dt);
+  }
+}
+
+// Whether the step solves its contacts before the move (contacts_with_joints.hpp, "Before the
+// move"): semi-implicit Euler on a scene with joints. Without joints the contacts are the
+// springs' impulses, which answer overlaps after the move.
+bool constraints_before_move(const LagrangeState& state) {
+  return state.options.integrator == Integrator::semi_implicit_euler && state.constraints.size() > 0;
+}
+
 // One step after the guard: integrate, contacts, projections, errors, sleep.
 void advance(LagrangeState& state, double dt, StepReport& report) {
   StageClock clock(state.options.profile);
   state.time_step = dt;
+  const bool before_move = constraints_before_move(state);
+  if (before_move) {
+    state.speculative_time = dt;  // gaps the step may close are contacts too
+    detect_rigid_contacts(state);  // sweeps the balls' paths of the last step
+    report.profile.detect = clock.lap();
+  }
   remember_step_start(state);
   if (state.options.integrator == Integrator::semi_implicit_euler) {
-    velocity_level_step(state, dt);
+    velocity_level_step(state, dt, /*move=*/!before_move);
   } else {
     // Limits (speculative), friction and drives (implicit) as one velocity change before the
     // step; within it, limits at their bounds hold at the acceleration level.
@@ -162,11 +188,14 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   std::swap(state.multipliers, state.projection_multipliers);
   const bool projection = state.options.stabilization == Stabilization::projection;
   report.profile.integrate = clock.lap();
-  detect_rigid_contacts(state);
-  report.profile.detect = clock.lap();
+  if (!before_move) {
+    detect_rigid_contacts(state);
+    report.profile.detect = clock.lap();
+  }
   const bool constrained = state.constraints.size() > 0;
-  if (constrained) resolve_contacts_with_joints(state, dt);
+  if (constrained) resolve_contacts_with_joints(state, dt, before_move);
   else resolve_rigid_contacts(state, dt);
+  if (before_move) move_bodies(state, dt);
   if (projection && constrained) project_positions(state);
   if ((projection || !state.contacts.empty()) && constrained) project_velocities(state, dt);
   std::swap(state.multipliers, state.projection_multipliers);

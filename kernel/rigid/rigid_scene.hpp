@@ -66,6 +66,28 @@ inline double push_out_distance(const RigidContact& contact, const Settings& set
   return contact.depth + allowed_separation(contact.approach_speed * dt - contact.depth, settings.contact_recovery_speed * dt);
 }
 
+/// When a method solves its contacts before the move (speculative contacts found at the step's
+/// start), a contact's depth up to this is left to rest in, m: the velocity solve keeps it from
+/// growing, and pushing out its round-off every step would cost a re-projection every step.
+inline constexpr double kRestingSlop = 1e-4;
+
+/// The normal speed a contact's impulses hold it to, m/s (relative, along its normal, ≥ target):
+/// a bounce leaves at e times its approach, from where it is; before the move (`before_move`: the
+/// contact found at the step's start) a contact still apart by a gap may close it within the step
+/// and no more (Catto's speculative contacts); else it stops.
+inline double contact_target_speed(const RigidContact& contact, bool before_move, double dt) {
+  if (contact.restitution > 0) return contact.restitution * contact.approach_speed;
+  return before_move ? -std::max(-contact.depth, 0.0) / dt : 0.0;
+}
+
+/// How far the push-out moves a contact apart when the contacts are solved before the move, m:
+/// its depth is the last steps' (found at the step's start); once past twice kRestingSlop it is
+/// pushed back to kRestingSlop, by at most push_out_distance (a step's approach in full and an
+/// older overlap at the recovery speed, as after the move). ≤ 0: nothing to push.
+inline double push_out_before_move(const RigidContact& contact, const Settings& settings, double dt) {
+  return contact.depth > 2 * kRestingSlop ? std::min(contact.depth - kRestingSlop, push_out_distance(contact, settings, dt)) : 0.0;
+}
+
 /// The Model's joints as anchor pairs on the rigid bodies, one per joint, one array per field:
 /// a joint's separation is d = p_inboard − p_outboard (m). A world anchor has body −1 and its
 /// point in world coordinates; a body anchor is in the rigid body's (principal) frame, relative
@@ -101,7 +123,7 @@ struct RigidScene {
   /// (remember_step_start): the start of the path the ball is swept along (rigid_contacts.hpp).
   std::vector<Eigen::Vector3d> step_start_position;
   std::vector<RigidContact> contacts;  ///< of the last step
-  bool ball_touching = false;          ///< a ball had a contact with a limb in the last step
+  bool ball_touching = false;          ///< a ball touched a limb in the last step (overlapping, or a speculative contact it closes)
   std::vector<Eigen::Vector3d> velocity, angular_velocity;  ///< scratch: v and ω of the state being evaluated, world
   /// Limbs against limbs and against the static colliders (kernel/geometry/limb_collisions.hpp),
   /// and its per-step buffers, sized only when it is active (a scene without either pays nothing).

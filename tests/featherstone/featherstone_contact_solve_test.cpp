@@ -70,9 +70,9 @@ void measure_conditions(const FeatherstoneState& state, double dt, ConditionMiss
     const RigidContact& contact = state.contacts[c];
     const Eigen::Vector3d u = contact_frame(contact.normal) * contact_velocity(state, motion, contact);
     const Eigen::Vector3d& impulse = impulses[c];
-    // The target the rule sets (joint_space_contacts.hpp): a bounce leaves at e times its approach,
-    // a contact apart by a gap may close it in the step.
-    const double target = contact.restitution > 0 ? contact.restitution * contact.approach_speed : -std::max(-contact.depth, 0.0) / dt;
+    // The target the rule sets: a bounce leaves at e times its approach, a contact apart by a gap
+    // may close it in the step.
+    const double target = contact_target_speed(contact, /*before_move=*/true, dt);
     ++miss.contacts;
     miss.approach = std::max(miss.approach, target - u[0]);
     if (!(impulse[0] > 0)) continue;

@@ -417,7 +417,7 @@ TEST(FeatherstoneContacts, DroppedCapsuleBouncesToAQuarterOfItsHeightWithRestitu
     model.settings.sleep.enabled = false;
     FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
     const double rest_height = 0.25;  // the centre, when the cap touches
-    const double rest_tolerance = integrator == Integrator::rk4 ? 1e-4 : 2 * joint_space::kRestingSlop + 1e-5;
+    const double rest_tolerance = integrator == Integrator::rk4 ? 1e-4 : 2 * kRestingSlop + 1e-5;
     double lowest = 1, apex = 0;
     bool bounced = false;
     for (int s = 0; s < 240 * 3; ++s) {
