@@ -89,7 +89,8 @@
 // would add energy has them all scaled back along the line to none until they add none (which
 // keeps every impulse in its cone; MuJoCo keeps a warm start only when it costs less than a cold
 // one). Tested: the impulses never add energy, with bounces, over 2 s of a thrown chain and the
-// knocked humanoid.
+// knocked humanoid; and with one pass a step, where the warm start is not taken back (the thrown
+// chain gained 0.75 % of its kinetic energy in a step without the scaling).
 //
 // Penetration. Then a position pass through the same effective masses pushes overlaps out: each
 // contact's target is its depth, at most the step's approach plus
