@@ -153,12 +153,12 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
     const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
     // Touching: overlapping, or (speculative contacts) a contact this step's impulses answer: the
     // ball closes the gap within the step, or bounces from where it is (contact_target_speed:
-    // e > 0 above the resting approach, record_approach).
+    // e > 0 from the resting approach up, record_approach).
     const double t = state.speculative_time;
     const double approach = t > 0 && contact.separation >= 0
                                 ? (velocity_at(impulse_body(state, b), point) - velocity_at(impulse_body(state, static_cast<std::int32_t>(ball)), point)).dot(contact.normal)
                                 : 0.0;
-    const bool bounces = state.shapes.restitution[ball] > 0 && approach >= 2 * state.settings.gravity.norm() * t;
+    const bool bounces = state.shapes.restitution[ball] > 0 && approach >= resting_approach(state.settings, t);
     state.ball_touching = state.ball_touching || contact.separation < 0 || (t > 0 && (contact.separation < approach * t || bounces));
     state.contacts.push_back({static_cast<std::int32_t>(ball), static_cast<std::int32_t>(b), point, contact.normal, -contact.separation,
                               state.shapes.restitution[ball], 0.0});

@@ -117,8 +117,8 @@ void control_impulses(LagrangeState& state, double dt) {
 // and the gyroscopic torque. Then L₁ = L₀ + h·(τ + Σ r × λ), x += h·v₁, and q turns by the free
 // rotation with L₁. Enforcing the acceleration (C̈ = 0) instead and integrating explicitly
 // gains energy and diverges on the heavy-end chain within 4 s (measured); this does not.
-// `move` false: the momenta only, the positions left to move_bodies (the contacts before the move).
-void velocity_level_step(LagrangeState& state, double dt, bool move) {
+// Sets the momenta; move_bodies then moves the bodies (after the contacts, before the move).
+void velocity_level_step(LagrangeState& state, double dt) {
   RigidBodyState& y = state.bodies.state;
   step_impulses(state, dt, /*with_momentum=*/true);
   const std::size_t body_count = state.bodies.size();
@@ -139,9 +139,6 @@ void velocity_level_step(LagrangeState& state, double dt, bool move) {
     const Eigen::Vector3d velocity = state.accelerations[b].head<3>(), new_omega = state.accelerations[b].tail<3>();
     y.linear_momentum[b] = state.bodies.mass[b] * velocity;
     y.angular_momentum[b] = inertia * new_omega + dt * omega.cross(inertia * omega);
-    if (!move) continue;
-    y.position[b] += dt * velocity;
-    rotate_free_body(y.orientation[b], y.angular_momentum[b], state.bodies.body_inertia[b].diagonal(), dt);
   }
   for (auto& lambda : state.multipliers) lambda /= dt;  // the solve gave impulses h·λ
 }
@@ -176,7 +173,8 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   }
   remember_step_start(state);
   if (state.options.integrator == Integrator::semi_implicit_euler) {
-    velocity_level_step(state, dt, /*move=*/!before_move);
+    velocity_level_step(state, dt);
+    if (!before_move) move_bodies(state, dt);
   } else {
     // Limits (speculative), friction and drives (implicit) as one velocity change before the
     // step; within it, limits at their bounds hold at the acceleration level.

@@ -51,11 +51,14 @@ struct RigidContact {
   double approach_speed = 0;  ///< normal speed towards each other before the impulses, m/s, ≥ 0
 };
 
+/// The approach speed below which a contact does not bounce, m/s: 2|g|Δt, what gravity alone
+/// gives a resting contact over a step or two, so resting contacts stay at rest.
+inline double resting_approach(const Settings& settings, double dt) { return 2 * settings.gravity.norm() * dt; }
+
 /// Records a contact's approach (m/s, the normal speed towards each other before any impulse)
-/// in approach_speed; below 2|g|Δt it bounces with e = 0, so resting contacts stay at rest. Every
-/// rigid method's contacts.
+/// in approach_speed; below resting_approach it bounces with e = 0. Every rigid method's contacts.
 inline void record_approach(RigidContact& contact, double approach, const Settings& settings, double dt) {
-  if (approach < 2 * settings.gravity.norm() * dt) contact.restitution = 0;
+  if (approach < resting_approach(settings, dt)) contact.restitution = 0;
   contact.approach_speed = std::max(approach, 0.0);
 }
 

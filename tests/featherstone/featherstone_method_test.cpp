@@ -590,32 +590,58 @@ Model thrown_chain() {
   return chain;
 }
 
+// The kinetic energy across a step's constraints, every step for `seconds`, the step's stages run
+// by hand so ½vᵀHv can be read on either side of them (at the pose they are solved at; the
+// push-out, and before the move its re-projection, excluded). `passes` 0: the state's own.
+struct EnergyAcrossConstraints {
+  int contact_steps = 0, speculative = 0;  // steps with a contact; contacts across a gap
+  double worst = 0;                        // the largest relative gain
+};
+EnergyAcrossConstraints energy_across_constraints(const Model& model, Integrator integrator, int passes, double seconds) {
+  FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
+  if (passes > 0) state.contact_iterations = passes;
+  const double dt = model.settings.time_step;
+  const bool before_move = integrator == Integrator::semi_implicit_euler;
+  DynamicsWorkspace workspace;
+  EnergyAcrossConstraints result;
+  for (int s = 0; s < std::lround(seconds / dt); ++s) {
+    if (before_move) {
+      state.speculative_time = dt;  // as the step does: the gaps it may close are contacts
+      if (detect_rigid_contacts(state)) take_moved_balls(state);
+      remember_step_start(state);
+      integrate_awake_islands(state, dt);  // the velocity update, in substeps where a limb spins
+    } else {
+      move_then_detect(state, dt);
+    }
+    const double before = kinetic_energy(state.tree, state.q, state.v, workspace);
+    if (before_move) resolve_joint_space_contacts(state, dt);
+    else apply_joint_space_impulses(state, dt);
+    const double after = kinetic_energy(state.tree, state.q, state.v, workspace);
+    result.contact_steps += !state.contacts.empty();
+    for (const RigidContact& contact : state.contacts) result.speculative += contact.depth < 0;
+    result.worst = std::max(result.worst, (after - before) / std::max(before, 1e-12));
+    if (before_move) {
+      for (const std::int32_t k : state.awake_islands) advance_positions(state, static_cast<std::size_t>(k));
+    } else {
+      resolve_joint_space_contacts(state, dt);  // what is left: the push-out
+    }
+    state.time += dt;
+    EXPECT_EQ(update_sleep(state, dt), StepStatus::ok) << model.name << " at " << s;
+  }
+  return result;
+}
+
 TEST(FeatherstoneContacts, ImpulsesNeverAddEnergy) {
   // A free 5-link chain thrown tumbling onto rough, bouncy ground, and the humanoid hit by the
-  // ball: the step's stages run by hand so the kinetic energy can be read on either side of the
-  // impulses (push-out excluded), every step for 2 s.
+  // ball, under RK4 (the contacts after the move), every step for 2 s.
   Model chain = thrown_chain();
   Model humanoid = load_shipped_scene("humanoid.json");
-  humanoid.settings.sleep.enabled = false;  // the stages below integrate every island
+  humanoid.settings.sleep.enabled = false;  // the stages integrate every island
   for (const Model* model : {&chain, &humanoid}) {
-    FeatherstoneState state = compile_featherstone(*model);
-    const double dt = model->settings.time_step;
-    int contact_steps = 0;
-    double worst = 0;  // largest relative gain across the impulses
-    for (int s = 0; s < std::lround(2 / dt); ++s) {
-      move_then_detect(state, dt);
-      const double before = observe(state).kinetic_energy;
-      apply_joint_space_impulses(state, dt);
-      const double after = observe(state).kinetic_energy;
-      if (!state.contacts.empty()) ++contact_steps;
-      worst = std::max(worst, (after - before) / std::max(before, 1e-12));
-      resolve_joint_space_contacts(state, dt);  // what is left: the push-out
-      state.time += dt;
-      ASSERT_EQ(update_sleep(state, dt), StepStatus::ok) << model->name << " at " << s;
-    }
-    EXPECT_GT(contact_steps, 100) << model->name;
-    EXPECT_LT(worst, 1e-12) << model->name;
-    RecordProperty(model->name + "_worst_gain", number(worst) + " over " + std::to_string(contact_steps) + " steps");
+    const EnergyAcrossConstraints energy = energy_across_constraints(*model, Integrator::rk4, 0, 2);
+    EXPECT_GT(energy.contact_steps, 100) << model->name;
+    EXPECT_LT(energy.worst, 1e-12) << model->name;
+    RecordProperty(model->name + "_worst_gain", number(energy.worst) + " over " + std::to_string(energy.contact_steps) + " steps");
   }
 }
 
@@ -631,79 +657,29 @@ TEST(FeatherstoneContacts, OnePassFromTheWarmStartAddsNoEnergy) {
   humanoid.settings.sleep.enabled = false;
   for (const Integrator integrator : {Integrator::semi_implicit_euler, Integrator::rk4}) {
     for (const Model* model : {&chain, &humanoid}) {
-      FeatherstoneState state = compile_featherstone(*model, {.integrator = integrator});
-      state.contact_iterations = 1;
-      const double dt = model->settings.time_step;
-      const bool before_move = integrator == Integrator::semi_implicit_euler;
-      DynamicsWorkspace workspace;
-      int contact_steps = 0;
-      double worst = 0;  // largest relative gain across the constraints
-      for (int s = 0; s < std::lround(0.5 / dt); ++s) {
-        if (before_move) {
-          state.speculative_time = dt;
-          if (detect_rigid_contacts(state)) take_moved_balls(state);
-          remember_step_start(state);
-          integrate_awake_islands(state, dt);
-        } else {
-          move_then_detect(state, dt);
-        }
-        const double before = kinetic_energy(state.tree, state.q, state.v, workspace);
-        if (before_move) resolve_joint_space_contacts(state, dt);
-        else apply_joint_space_impulses(state, dt);
-        const double after = kinetic_energy(state.tree, state.q, state.v, workspace);
-        contact_steps += !state.contacts.empty();
-        worst = std::max(worst, (after - before) / std::max(before, 1e-12));
-        if (before_move) {
-          for (const std::int32_t k : state.awake_islands) advance_positions(state, static_cast<std::size_t>(k));
-        } else {
-          resolve_joint_space_contacts(state, dt);
-        }
-        state.time += dt;
-        ASSERT_EQ(update_sleep(state, dt), StepStatus::ok) << model->name << " at " << s;
-      }
-      EXPECT_GT(contact_steps, 50) << model->name;
-      EXPECT_LT(worst, 1e-12) << model->name << (before_move ? " before" : " after") << " the move";
+      const EnergyAcrossConstraints energy = energy_across_constraints(*model, integrator, 1, 0.5);
+      EXPECT_GT(energy.contact_steps, 50) << model->name;
+      EXPECT_LT(energy.worst, 1e-12) << model->name << (integrator == Integrator::rk4 ? " after" : " before") << " the move";
     }
   }
 }
 
 TEST(FeatherstoneContacts, ConstraintsBeforeTheMoveNeverAddEnergy) {
   // The same scenes under semi-implicit Euler, whose step solves the contacts and limits on the
-  // velocity update before the positions move: its stages run by hand, the kinetic energy ½vᵀHv
-  // read at the start pose on either side of the constraints (the push-out and its re-projection
-  // excluded), every step for 0.5 s. Speculative contacts among them: a gap closed by an impulse
-  // must not be one that pushes. (Semi-implicit Euler's explicit velocity-product terms wind both
-  // scenes up until they diverge later, in either order of the step: the chain near 0.6–0.9 s even
-  // at 1/960 s, the humanoid's spinning head near 0.8–1.3 s.)
+  // velocity update before the positions move, every step for 0.5 s. Speculative contacts among
+  // them: a gap closed by an impulse must not be one that pushes. (Semi-implicit Euler's explicit
+  // velocity-product terms wind both scenes up until they diverge later, in either order of the
+  // step: the chain near 0.6–0.9 s even at 1/960 s, the humanoid's spinning head near 0.8–1.3 s.)
   Model chain = thrown_chain();
   chain.settings.time_step = 1.0 / 960;  // (at 1/240 s it winds up within 0.25 s)
   Model humanoid = load_shipped_scene("humanoid.json");
-  humanoid.settings.sleep.enabled = false;  // the stages below integrate every island
+  humanoid.settings.sleep.enabled = false;
   for (const Model* model : {&chain, &humanoid}) {
-    FeatherstoneState state = compile_featherstone(*model, {.integrator = Integrator::semi_implicit_euler});
-    const double dt = model->settings.time_step;
-    DynamicsWorkspace workspace;
-    int contact_steps = 0, speculative = 0;
-    double worst = 0;  // largest relative gain across the constraints
-    for (int s = 0; s < std::lround(0.5 / dt); ++s) {
-      state.speculative_time = dt;  // as the step does: the gaps it may close are contacts
-      if (detect_rigid_contacts(state)) take_moved_balls(state);
-      remember_step_start(state);
-      integrate_awake_islands(state, dt);  // the velocity update, in substeps where a limb spins
-      const double before = kinetic_energy(state.tree, state.q, state.v, workspace);
-      resolve_joint_space_contacts(state, dt);
-      const double after = kinetic_energy(state.tree, state.q, state.v, workspace);
-      if (!state.contacts.empty()) ++contact_steps;
-      for (const RigidContact& contact : state.contacts) speculative += contact.depth < 0;
-      worst = std::max(worst, (after - before) / std::max(before, 1e-12));
-      for (const std::int32_t k : state.awake_islands) advance_positions(state, static_cast<std::size_t>(k));
-      state.time += dt;
-      ASSERT_EQ(update_sleep(state, dt), StepStatus::ok) << model->name << " at " << s;
-    }
-    EXPECT_GT(contact_steps, 50) << model->name;
-    EXPECT_GT(speculative, 50) << model->name;
-    EXPECT_LT(worst, 1e-12) << model->name;
-    RecordProperty(model->name + "_worst_gain", number(worst) + " over " + std::to_string(contact_steps) + " steps");
+    const EnergyAcrossConstraints energy = energy_across_constraints(*model, Integrator::semi_implicit_euler, 0, 0.5);
+    EXPECT_GT(energy.contact_steps, 50) << model->name;
+    EXPECT_GT(energy.speculative, 50) << model->name;
+    EXPECT_LT(energy.worst, 1e-12) << model->name;
+    RecordProperty(model->name + "_worst_gain", number(energy.worst) + " over " + std::to_string(energy.contact_steps) + " steps");
   }
 }
 
