@@ -849,6 +849,28 @@ TEST(FeatherstoneHumanoid, BallKnocksTheBodyOverInItsDirection) {
   EXPECT_LT(largest_gap(state), 1e-9);
 }
 
+TEST(FeatherstoneHumanoid, DISABLED_KnownFailureTheKnockedThinBodyMakesNoEnergyUnderSemiImplicitEuler) {
+  // Under semi-implicit Euler the constraints come before the move: the ball's impulse at 16 m/s
+  // sets the thin body's neck and head spinning at 130 and 205 rad/s relative to their parents,
+  // and the move q ⊕ h·v with those relative velocities raises the kinetic energy from 210 J to
+  // 954 J in that one step (1/240 s). Re-projecting v at the new pose after such a turn (tried:
+  // the push-out's H-orthogonal projection, for any joint turning past 0.1 rad) keeps that step
+  // dissipative, but the run then diverges later, in steps with no contact: the velocity update's
+  // explicit velocity-product terms (integration.hpp). RK4 moves before it collides and keeps
+  // the energy. RK4's velocity with semi-implicit Euler's move q ⊕ h·v (tried, so that RK4 too
+  // could solve before the move) diverges in the same run.
+  Model model = load_shipped_scene("humanoid.json", {.variant = "thin", .links = {}, .copies = {}});
+  testing::set_ball_speed(model.balls.front(), 16);
+  FeatherstoneState state = compile_featherstone(model, {.integrator = Integrator::semi_implicit_euler});
+  const double start = observe(state).energy();
+  double most = start;
+  for (int s = 0; s < std::lround(1 / model.settings.time_step); ++s) {
+    if (step(state).status != StepStatus::ok) break;
+    most = std::max(most, observe(state).energy());
+  }
+  EXPECT_LT(most - start, 0.01 * start) << "J: the most the energy rose above its start";
+}
+
 // --- Agreement with the Lagrange method ----------------------------------------------------------
 
 // A random tree of make_tree_model's links: spherical, revolute, prismatic and fixed joints with
