@@ -27,21 +27,11 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& stat
   return {centre + half_axis, centre - half_axis};
 }
 
-// Runs body(b) for every body, in blocks of kBodiesPerBlock on `runner`'s threads (or the calling
-// thread's when null): for loops whose body b writes only its own entries.
-constexpr std::size_t kBodiesPerBlock = 64;
-template <typename Body>
-void for_each_body(const RigidScene& state, BlockRunner* runner, const Body& body) {
-  const std::size_t count = state.bodies.size();
-  run_stage(runner, (count + kBodiesPerBlock - 1) / kBodiesPerBlock, [&](std::size_t block) {
-    const std::size_t end = std::min(count, (block + 1) * kBodiesPerBlock);
-    for (std::size_t b = block * kBodiesPerBlock; b < end; ++b) body(b);
-  });
-}
+constexpr std::size_t kBodiesPerBlock = 64;  // the per-body loops' blocks on the runner's threads
 
 // Every body's limb segment (its axis end points and radius; a ball's a point) as it is now.
 void find_limb_segments(RigidScene& state, BlockRunner* runner) {
-  for_each_body(state, runner, [&](std::size_t b) {
+  run_blocks(runner, state.bodies.size(), kBodiesPerBlock, [&](std::size_t b) {
     LimbSegment& segment = state.limb_segments[b];
     if (state.shapes.is_ball[b]) {
       segment.head = segment.tail = state.bodies.state.position[b];
@@ -101,7 +91,7 @@ void store_velocities(RigidScene& state, std::int32_t b, const ImpulseBody& body
 void find_speculative_reach(RigidScene& state, BlockRunner* runner) {
   const double t = state.speculative_time;
   const RigidBodyState& y = state.bodies.state;
-  for_each_body(state, runner, [&](std::size_t b) {
+  run_blocks(runner, state.bodies.size(), kBodiesPerBlock, [&](std::size_t b) {
     double reach = 0;
     if (t > 0) {
       const double arm = 0.5 * state.shapes.length[b] + state.shapes.radius[b] + state.shapes.centre_offset[b].norm();

@@ -191,8 +191,6 @@ void add_static_contacts(std::uint32_t limb_index, const LimbSegment& limb, cons
 // queries one block runs. About 5 µs of work a block, so a hand-off to a thread pays.
 constexpr std::size_t kPairsPerBlock = 64, kSegmentsPerBlock = 32;
 
-std::size_t blocks_for(std::size_t count, std::size_t per_block) { return (count + per_block - 1) / per_block; }
-
 bool contact_before(const LimbContact& a, const LimbContact& b) {
   if (a.first != b.first) return a.first < b.first;
   if (a.second != b.second) return a.second < b.second;
@@ -395,8 +393,8 @@ bool LimbCollisions::find_kept_pairs(std::span<const LimbSegment> limbs, std::sp
   }
   const Narrowphase pass{.collisions = this, .limbs = limbs, .awake = awake, .margin = margin, .search = false, .keep = false,
                          .pairs = kept_limb_pairs_, .static_pairs = kept_static_pairs_,
-                         .pair_blocks = blocks_for(kept_limb_pairs_.size(), kPairsPerBlock),
-                         .static_blocks = blocks_for(kept_static_pairs_.size(), kPairsPerBlock)};
+                         .pair_blocks = block_count(kept_limb_pairs_.size(), kPairsPerBlock),
+                         .static_blocks = block_count(kept_static_pairs_.size(), kPairsPerBlock)};
   run_narrowphase(pass, out, /*keep=*/false, runner);
   return true;
 }
@@ -425,8 +423,8 @@ void LimbCollisions::search(std::span<const LimbSegment> limbs, std::span<const 
   const std::size_t segments = statics_.empty() ? 0 : filters_.size();
   const Narrowphase pass{.collisions = this, .limbs = limbs, .awake = awake, .margin = margin, .search = true, .keep = keep,
                          .pairs = pairs, .static_pairs = {},
-                         .pair_blocks = blocks_for(pairs.size(), kPairsPerBlock),
-                         .static_blocks = blocks_for(segments, kSegmentsPerBlock)};
+                         .pair_blocks = block_count(pairs.size(), kPairsPerBlock),
+                         .static_blocks = block_count(segments, kSegmentsPerBlock)};
   run_narrowphase(pass, out, keep, runner);
 }
 

@@ -19,6 +19,7 @@
 // a block never changes its result, so results are the same bits for any thread count.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
@@ -90,6 +91,19 @@ void run_stage(BlockRunner* runner, std::size_t count, const Block& block) {
         return 0.0;
       },
       &block);
+}
+
+/// The blocks of `per_block` items (> 0) that cover `count` items: ⌈count / per_block⌉.
+constexpr std::size_t block_count(std::size_t count, std::size_t per_block) { return (count + per_block - 1) / per_block; }
+
+/// run_stage over `count` items in blocks of `per_block`: item(i) for every i in [0, count), for
+/// loops whose item i writes only its own entries.
+template <typename Item>
+void run_blocks(BlockRunner* runner, std::size_t count, std::size_t per_block, const Item& item) {
+  run_stage(runner, block_count(count, per_block), [&](std::size_t block) {
+    const std::size_t end = std::min(count, (block + 1) * per_block);
+    for (std::size_t i = block * per_block; i < end; ++i) item(i);
+  });
 }
 
 /// Keeps `runner`'s helpers awake from construction to destruction (BlockRunner::begin/end), so a
