@@ -42,6 +42,23 @@ void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, do
   state.actuation[held.offset + axis] += held.sign * force;
 }
 
+void apply_actuator(FeatherstoneState& state, const Actuator& actuator, double control) {
+  const auto joint = static_cast<std::size_t>(actuator.joint);
+  if (actuator.kind == ActuatorKind::motor) {
+    if (const double force = actuator_force(actuator, control); force != 0) apply_joint_force(state, joint, actuator.axis, force);
+    return;
+  }
+  // The servo's force at q = 0, q̇ = 0 (its control clamped), and its pull on q and q̇.
+  const TreeJoint& held = state.tree_joint[joint];
+  const int r = held.offset + actuator.axis;
+  const double squared = actuator.gear * actuator.gear * actuator.gain;
+  ServoTerms& servos = state.servos;
+  servos.force[r] += held.sign * actuator_force(actuator, control);
+  (actuator.kind == ActuatorKind::position ? servos.stiffness : servos.damping)[r] += squared;
+  servos.position[static_cast<std::size_t>(r)] = state.tree.position_offset(held.axis_body(actuator.axis));
+  servos.island[island_of(state, held)] = 1;
+}
+
 CoordinateMotion coordinate_motion(const FeatherstoneState& state, std::size_t joint, int axis) {
   const TreeJoint& held = state.tree_joint[joint];
   return {held.sign * state.q[state.tree.position_offset(held.axis_body(axis))], held.sign * state.v[held.offset + axis]};

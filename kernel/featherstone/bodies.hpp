@@ -18,6 +18,11 @@ namespace limber {
 /// Adds `force` (N·m on a hinge, N on a slide) to joint `joint`'s coordinate `axis` (a serial
 /// joint's axis; 0 otherwise) for the next step: a generalized force, as an actuator's.
 void apply_joint_force(FeatherstoneState& state, std::size_t joint, int axis, double force);
+/// Actuator `actuator` at `control` for the next step: a motor's gear × control as a joint force
+/// (apply_joint_force); a servo (position or velocity actuator) taken implicitly, as a drive is —
+/// its force at the end of each substep (Tan, Liu & Turk 2011's stable PD), so any gain is stable
+/// (MuJoCo's servos are explicit: stable while gear²·kp·h²/I and gear²·kv·h/I stay small).
+void apply_actuator(FeatherstoneState& state, const Actuator& actuator, double control);
 /// Joint `joint`'s coordinate `axis` (a revolute or prismatic joint's, or a serial joint's axis)
 /// as the tree holds it.
 CoordinateMotion coordinate_motion(const FeatherstoneState& state, std::size_t joint, int axis);

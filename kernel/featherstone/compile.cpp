@@ -427,6 +427,8 @@ void size_scratch(FeatherstoneState& state, const Model& model) {
   state.integration.resize(tree);
   state.joint_forces.setZero(nv);
   state.actuation.setZero(nv);
+  state.servos.force.setZero(nv), state.servos.stiffness.setZero(nv), state.servos.damping.setZero(nv);
+  state.servos.position.assign(static_cast<std::size_t>(nv), -1), state.servos.island.assign(state.islands.size(), 0);
   state.drag_force.assign(tree_size, SpatialVector::Zero());
   state.awake_islands.reserve(state.islands.size());
   state.last_substep.assign(state.islands.size(), 0.0);

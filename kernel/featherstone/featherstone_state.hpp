@@ -214,6 +214,18 @@ struct JointFrictionBlock {
   bool held = true;                                   ///< held in the last factorization
 };
 
+/// The servos (MuJoCo's position and velocity actuators) set for the next step, per velocity
+/// coordinate (apply_actuator, kernel/featherstone/bodies.hpp). Each is taken implicitly, as a
+/// drive is (joint_space_limits.cpp): its force at the end of each substep of h,
+/// force − stiffness·(q + h·q̇⁺) − damping·q̇⁺, q in the tree's sign. Zeroed after each step.
+struct ServoTerms {
+  Eigen::VectorXd force;      ///< nv: Σ gear·kp·(u − gear·ref) + gear·kv·u, N·m or N, tree sign
+  Eigen::VectorXd stiffness;  ///< nv: Σ gear²·kp, N·m/rad or N/m
+  Eigen::VectorXd damping;    ///< nv: Σ gear²·kv, N·m·s/rad or N·s/m
+  std::vector<std::int32_t> position;  ///< nv: the coordinate's index in q (set where a servo acts)
+  std::vector<char> island;            ///< per island: a servo acts on it this step
+};
+
 /// Scratch of the joint limits, friction and drives, sized at compile so a step allocates nothing.
 struct JointControlScratch {
   Eigen::VectorXd drive_force;    ///< nv: a drive's k·(target − x) + c·target_velocity, mapped onto v
@@ -286,6 +298,7 @@ struct FeatherstoneState : RigidScene {
   JointSpaceContactScratch contact;
   Eigen::VectorXd joint_forces;  ///< nv: Settings::drag, the loads and the actuation as joint forces, held over a step
   Eigen::VectorXd actuation;     ///< nv: generalized forces for the next step (apply_joint_force), zeroed after it
+  ServoTerms servos;             ///< the servos for the next step (apply_actuator), zeroed after it
   std::vector<SpatialVector> drag_force;  ///< per tree body (scratch)
   StepReport last_report;
 };

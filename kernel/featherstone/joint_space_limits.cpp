@@ -423,7 +423,8 @@ void for_each_island_joint(const FeatherstoneState& state, std::size_t island, V
 
 // The drives' force k·(target − x) + c·target_velocity and gain k·h + c on each driven velocity
 // of island `island` (x, target and rates in the Model's coordinates, carried onto v), a serial
-// joint's axes each on its own velocity. Needs state.kinematics at the current (q, v).
+// joint's axes each on its own velocity; then the servos' (ServoTerms), the same terms. Needs
+// state.kinematics at the current (q, v).
 void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island) {
   const JointControls& controls = state.joint_controls;
   JointControlScratch& c = state.controls;
@@ -460,6 +461,15 @@ void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island)
     c.drive_gain[node.offset] = drive.stiffness * h + drive.damping;
     c.drive_force[node.offset] = drive.stiffness * error + drive.damping * drive.target_velocity;
   });
+  // The servos add to a drive on the same coordinate: their force at q, and their gain.
+  const ServoTerms& servos = state.servos;
+  if (!servos.island[island]) return;
+  const auto [first, last] = island_velocities(state, island);
+  for (int r = first; r < last; ++r) {
+    if (servos.stiffness[r] == 0 && servos.damping[r] == 0) continue;
+    c.drive_gain[r] += servos.stiffness[r] * h + servos.damping[r];
+    c.drive_force[r] += servos.force[r] - servos.stiffness[r] * state.q[servos.position[static_cast<std::size_t>(r)]];
+  }
 }
 
 // Joint friction's blocks of island `island`, per joint and per serial axis, then their impulses
@@ -509,6 +519,7 @@ bool joint_control_forces(FeatherstoneState& state, const Eigen::VectorXd& loads
     const SerialAxis& axis = controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
     drives = drives || acting(axis.drive), friction = friction || axis.friction > 0;
   });
+  drives = drives || state.servos.island[island];
   if (!drives && !friction) return false;
 
   // The island's coordinates: element by element, the same bits as over the whole vectors.

@@ -134,6 +134,13 @@ void step_constraints_after_move(FeatherstoneState& state, double dt, StepReport
   resolve_joint_space_contacts(state, dt);
 }
 
+// The servos act for one step: the World sets them again before the next (apply_actuator).
+void clear_servos(ServoTerms& servos) {
+  if (std::find(servos.island.begin(), servos.island.end(), 1) == servos.island.end()) return;
+  servos.force.setZero(), servos.stiffness.setZero(), servos.damping.setZero();
+  std::fill(servos.island.begin(), servos.island.end(), 0);
+}
+
 }  // namespace
 
 void integrate_awake_islands(FeatherstoneState& state, double dt) {
@@ -223,6 +230,7 @@ StepReport step(FeatherstoneState& state, double dt) {
     if (state.joint_forces.size() > 0 && !state.joint_forces.isZero(0)) state.joint_forces.setZero();  // loads held this step only
     clear_applied_loads(state);
     state.actuation.setZero();
+    clear_servos(state.servos);
     rest_sleeping_islands(state);
     if (state.options.profile) count_rigid_step(state, report);
   });

@@ -32,17 +32,21 @@ std::string vector_text(const Eigen::Vector3d& v) {
   return text.str();
 }
 
-// The actuators' joint forces for this step, each method's way (apply_joint_force): a generalized
-// force under Featherstone, the pair of loads ±force·a on the joint's bodies under the others.
+// An actuator's joint force for this step, explicit: taken at the state the step starts from (as
+// MuJoCo's are), each method's way (apply_joint_force: the pair of loads ±force·a on the joint's
+// bodies). A method that takes a servo implicitly answers apply_actuator itself (Featherstone:
+// featherstone/bodies.hpp), and overload resolution prefers its non-template.
+template <typename State>
+void apply_actuator(State& state, const Actuator& actuator, double control) {
+  const auto joint = static_cast<std::size_t>(actuator.joint);
+  const CoordinateMotion now = actuator.kind == ActuatorKind::motor ? CoordinateMotion{} : coordinate_motion(state, joint, actuator.axis);
+  const double amount = actuator_force(actuator, control, now.position, now.velocity);
+  if (amount != 0) apply_joint_force(state, joint, actuator.axis, amount);
+}
+
 template <typename State>
 void apply_actuators(State& state, const Model& model, const std::vector<double>& controls) {
-  for (std::size_t a = 0; a < controls.size(); ++a) {
-    const Actuator& actuator = model.actuators[a];
-    const auto joint = static_cast<std::size_t>(actuator.joint);
-    const CoordinateMotion now = actuator.kind == ActuatorKind::motor ? CoordinateMotion{} : coordinate_motion(state, joint, actuator.axis);
-    const double amount = actuator_force(actuator, controls[a], now.position, now.velocity);
-    if (amount != 0) apply_joint_force(state, joint, actuator.axis, amount);
-  }
+  for (std::size_t a = 0; a < controls.size(); ++a) apply_actuator(state, model.actuators[a], controls[a]);
 }
 
 // Serials for the handles of each World made (0 is no World's).

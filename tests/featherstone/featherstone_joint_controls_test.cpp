@@ -382,6 +382,45 @@ TEST(FeatherstoneJointDrives, StiffDriveStaysStableFarPastAnExplicitStep) {
   }
 }
 
+TEST(FeatherstoneJointDrives, APendulumDrivenIntoItsLimitMakesNoEnergyAtMujocosStep) {
+  // The limb falls from horizontal onto its 0.5 rad limit while a stiff drive pulls it toward
+  // 1 rad, past the limit, at MuJoCo's default step of 0.005 s: k·h²/I = 30 and c·h/I = 6 (I =
+  // 1/3 kg·m² about the pivot), where an explicit PD diverges. The limit holds against the drive
+  // through H + h·G, the drive's own armature. Energy — kinetic, gravity's and the drive's
+  // spring ½·k·(θ − θ*)² — never rises past its start (semi-implicit Euler: never from one step to
+  // the next, backward Euler's on the drive), and the limb comes to rest on its limit.
+  const double inertia = 1.0 / 3, dt = 0.005, target = 1;
+  const double stiffness = 30 * inertia / (dt * dt), damping = 6 * inertia / dt;
+  for (const bool reversed : {false, true}) {
+    for (const Integrator integrator : kIntegrators) {
+      Model model = pivoted_limb(JointType::revolute, Vector3::UnitY(), reversed);
+      model.joints[0].limits.range = Range{-0.5, 0.5};
+      model.joints[0].drive = JointDrive{.stiffness = stiffness, .damping = damping, .target = target};
+      model.settings.sleep.enabled = false;
+      FeatherstoneState state = compile_featherstone(model, {.integrator = integrator});
+      const auto energy = [&] {
+        const Observation o = observe(state);
+        const double stretch = coordinates(state, 0).angle - target;
+        return o.kinetic_energy + o.potential_energy + 0.5 * stiffness * stretch * stretch;
+      };
+      const std::string label = std::string(reversed ? "turned round, " : "") + integrator_name(integrator);
+      const double start = energy();
+      double last = start, worst = 0;
+      for (int s = 0; s < 400; ++s) {  // 2 s
+        ASSERT_EQ(step(state, dt).status, StepStatus::ok) << label << ", step " << s;
+        const double now = energy();
+        ASSERT_LE(now, start) << label << ", step " << s << ": energy made";
+        if (integrator == Integrator::semi_implicit_euler) ASSERT_LE(now, last + 1e-9 * start) << label << ", step " << s;
+        last = now;
+        worst = std::max(worst, limit_violation(model.joints[0], coordinates(state, 0)));
+      }
+      EXPECT_LT(worst, 0.01) << label;  // rad: as the falling limb without a drive (above)
+      EXPECT_NEAR(coordinates(state, 0).angle, 0.5, 0.01) << label;
+      EXPECT_LT(std::abs(state.v[0]), 1e-6) << label << ": at rest";
+    }
+  }
+}
+
 TEST(FeatherstoneJointDrives, UnderSemiImplicitEulerTheDrivesDynamicsAreTheStepsOwn) {
   // The step takes the stable PD's predicted velocity as semi-implicit Euler's (step.cpp): it must
   // be what the integrator gives under the forces the drives hold, to round-off. A ball joint

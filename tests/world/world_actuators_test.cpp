@@ -92,6 +92,47 @@ TEST_P(WorldServos, AVelocityActuatorSpinsItsHingeAtControlOverGear) {
 INSTANTIATE_TEST_SUITE_P(Methods, WorldServos, ::testing::Values(Method::particles, Method::lagrange, Method::featherstone),
                          [](const auto& info) { return std::string(method_name(info.param)); });
 
+// A stiff servo at MuJoCo's default step, 0.005 s: on the rod (I ≈ 1/3 kg·m²), gear 2, kp = 10⁵
+// and kv = 100 make gear²·kp·h²/I = 30 and gear²·kv·h/I = 6, past where an explicit servo is
+// stable under either integrator (ω·h < 2 for semi-implicit Euler, < 2.8 for RK4; explicit, the
+// first step's force spins the rod at 1800 rad/s and the step is refused). Taken implicitly, it makes no energy — the rod's kinetic
+// energy plus the servo's spring ½·gear²·kp·(q − q*)² never rises past what the control gave it —
+// and settles at q* = control/gear − reference. Under semi-implicit Euler the step is backward
+// Euler's on the servo, whose energy falls every step; RK4 moves by the mean of the step's two
+// velocities, and its energy may rise in one step, but not past its start.
+class StiffServo : public ::testing::TestWithParam<Integrator> {};
+
+TEST_P(StiffServo, MakesNoEnergyAndSettlesAtMujocosStep) {
+  Model model = servo_rod(true);
+  model.actuators[0].gain = 1e5, model.actuators[1].gain = 100;
+  WorldOptions options{.method = Method::featherstone};
+  options.featherstone.integrator = GetParam();
+  options.divergence_check = false;  // the servo's spring, which the check does not count, turns into motion: the test counts it
+  World world(model, options);
+  const Eigen::Vector3d initial = world.pose(world.body("rod")).orientation * Eigen::Vector3d::UnitZ();
+  const double controls[] = {0.8, 0};
+  world.set_controls(controls);
+  const double stiffness = 2 * 2 * 1e5, target = 0.8 / 2 - 0.1;  // gear²·kp, rad
+  const auto energy = [&] {
+    const double offset = turn(world, initial) - target;
+    return world.observe().kinetic_energy + 0.5 * stiffness * offset * offset;
+  };
+  const double start = energy();  // J: the servo's spring at the control's first step
+  double last = start;
+  for (int n = 0; n < 400; ++n) {
+    ASSERT_EQ(world.step(0.005), StepStatus::ok) << "step " << n;
+    const double now = energy();
+    ASSERT_LE(now, start) << "step " << n << ": energy made";
+    if (GetParam() == Integrator::semi_implicit_euler) ASSERT_LE(now, last * (1 + 1e-12) + 1e-12) << "step " << n << ": energy made";
+    last = now;
+  }
+  EXPECT_NEAR(turn(world, initial), target, 1e-6) << "rad";
+  EXPECT_NEAR(world.motion(world.body("rod")).angular.z(), 0, 1e-6) << "rad/s, at rest";
+}
+
+INSTANTIATE_TEST_SUITE_P(Featherstone, StiffServo, ::testing::Values(Integrator::semi_implicit_euler, Integrator::rk4),
+                         [](const auto& info) { return std::string(info.param == Integrator::rk4 ? "rk4" : "semi_implicit_euler"); });
+
 TEST(WorldActuators, ControlsAreCheckedAndKeptUntilSetAgain) {
   World world(motorized_rod(), WorldOptions{});
   EXPECT_EQ(std::vector<double>(world.controls().begin(), world.controls().end()), std::vector<double>{0.0});
