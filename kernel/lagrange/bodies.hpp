@@ -24,6 +24,24 @@ inline void apply_joint_force(LagrangeState& state, std::size_t joint, int axis,
   apply_coordinate_force(state, state.coordinate_axes, joint, axis, force);
 }
 
+/// Actuator `actuator` at `control` for the next step: a motor's gear × control as a joint force
+/// (apply_joint_force); a servo (position or velocity actuator) taken implicitly on its joint's
+/// control row, as a drive is (JointServos), so any gain is stable (MuJoCo's servos are
+/// explicit: stable while gear²·kp·h²/I and gear²·kv·h/I stay small).
+inline void apply_actuator(LagrangeState& state, const Actuator& actuator, double control) {
+  const auto joint = static_cast<std::size_t>(actuator.joint);
+  if (actuator.kind == ActuatorKind::motor) {
+    if (const double force = actuator_force(actuator, control); force != 0) apply_joint_force(state, joint, actuator.axis, force);
+    return;
+  }
+  // The servo's force at q = 0, q̇ = 0 (its control clamped), and its pull on q and q̇.
+  const std::size_t k = joint_of_axis(state.coordinate_axes.first_added_joint, joint, actuator.axis);
+  JointServos& servos = state.servos;
+  servos.force[k] += actuator_force(actuator, control);
+  (actuator.kind == ActuatorKind::position ? servos.stiffness : servos.damping)[k] += actuator.gear * actuator.gear * actuator.gain;
+  servos.any = true;
+}
+
 /// Joint `joint`'s coordinate `axis` now (coordinate_motion over the bodies' poses and motions).
 inline CoordinateMotion coordinate_motion(const LagrangeState& state, std::size_t joint, int axis) {
   return coordinate_motion(state, state.coordinate_axes, joint, axis);

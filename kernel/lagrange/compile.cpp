@@ -25,7 +25,13 @@ LagrangeState compile_lagrange(const Model& input, const LagrangeOptions& option
   state.options = options;
   state.time_step = model.settings.time_step;
   state.joints = joint_anchors(state, model);
-  state.constraints = compile_constraints(state, model);
+  // A joint a servo acts on gets a control row, which takes the servo as a drive.
+  std::vector<char> servo_joints(model.joints.size(), 0);
+  for (const Actuator& actuator : input.actuators) {
+    if (actuator.kind != ActuatorKind::motor) servo_joints[joint_of_axis(state.coordinate_axes.first_added_joint, static_cast<std::size_t>(actuator.joint), actuator.axis)] = 1;
+  }
+  for (std::vector<double>* terms : {&state.servos.force, &state.servos.stiffness, &state.servos.damping}) terms->assign(model.joints.size(), 0.0);
+  state.constraints = compile_constraints(state, model, servo_joints);
   const ConstraintSet& constraints = state.constraints;
   state.joint_controls = joint_controls(model);
   state.controls = compile_joint_controls(state, model, constraints);

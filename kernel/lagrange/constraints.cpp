@@ -46,7 +46,7 @@ Anchors anchor_points(const JointAnchors& anchors, const ConstraintGeometry& geo
 
 }  // namespace
 
-ConstraintSet compile_constraints(const RigidScene& scene, const Model& model) {
+ConstraintSet compile_constraints(const RigidScene& scene, const Model& model, const std::vector<char>& servo_joints) {
   ConstraintSet set;
   const RigidBodyState& y = scene.bodies.state;
   // World vectors at the initial poses into a body's frame.
@@ -54,7 +54,8 @@ ConstraintSet compile_constraints(const RigidScene& scene, const Model& model) {
     return body >= 0 ? Eigen::Vector3d(y.orientation[body].conjugate() * world) : world;
   };
   set.row_offset.push_back(0);
-  for (const Joint& joint : model.joints) {
+  for (std::size_t c = 0; c < model.joints.size(); ++c) {
+    const Joint& joint = model.joints[c];
     const std::int32_t i = joint.inboard, o = joint.outboard;
     ConstraintRows rows;
     const auto angular_pair = [&](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
@@ -90,7 +91,7 @@ ConstraintSet compile_constraints(const RigidScene& scene, const Model& model) {
         break;
       }
     }
-    rows.control_rows = static_cast<std::uint8_t>(control_row_count(joint));
+    rows.control_rows = static_cast<std::uint8_t>(control_row_count(joint, !servo_joints.empty() && servo_joints[c] != 0));
     set.inboard.push_back(i), set.outboard.push_back(o), set.rows.push_back(rows);
     set.row_offset.push_back(set.row_offset.back() + rows.rows());
   }
@@ -239,8 +240,8 @@ ConstraintVector velocity_product(const ConstraintSet& constraints, const JointA
 
 // --- Joint controls: limits, friction and drives (joint_controls.hpp) ---
 
-int control_row_count(const Joint& joint) {
-  if (!has_joint_controls(joint) && !(joint.armature > 0)) return 0;  // armature: revolute and prismatic only
+int control_row_count(const Joint& joint, bool servo) {
+  if (!has_joint_controls(joint) && !(joint.armature > 0) && !servo) return 0;  // armature, servos: revolute and prismatic only
   switch (joint.type) {
     case JointType::revolute:
     case JointType::prismatic: return 1;
@@ -377,6 +378,7 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
         set_angular_row(row, twist_gradient(a, rest), w_i, w_o);
         row.velocity_product = twist_gradient_rate(a, rest, w_i, w_o).dot(w_o - w_i);  // exact: w is the angle's rate
         if (limits.range) set_nearer_limit(row, q.angle, *limits.range);
+        row.coordinate = q.angle;
         if (drive) row.drive_error = wrapped_angle(drive->target - q.angle), row.target_rate = drive->target_velocity;
         break;
       }
@@ -393,6 +395,7 @@ void measure_joint_controls(const RigidScene& scene, const JointAnchors& anchors
         const Eigen::Vector3d centripetal = w_o.cross(w_o.cross(r_o)) - w_i.cross(w_i.cross(r_i));
         row.velocity_product = centripetal.dot(h) + 2 * (v_po - v_pi).dot(w_i.cross(h)) + (p_o - p_i).dot(w_i.cross(w_i.cross(h)));
         if (limits.range) set_nearer_limit(row, q.slide, *limits.range);
+        row.coordinate = q.slide;
         if (drive) row.drive_error = drive->target - q.slide, row.target_rate = drive->target_velocity;
         break;
       }

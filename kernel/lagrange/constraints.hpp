@@ -68,7 +68,7 @@ struct ConstraintSet {
 };
 
 /// The rows of `model`'s joints and gears, from the bodies' poses in `scene` (the joints' zero).
-ConstraintSet compile_constraints(const RigidScene& scene, const Model& model);
+ConstraintSet compile_constraints(const RigidScene& scene, const Model& model, const std::vector<char>& servo_joints = {});
 
 /// The control rows of `model`'s joints (those of `constraints` with control_rows > 0), their axes
 /// carried into the bodies' frames from the poses in `scene`.

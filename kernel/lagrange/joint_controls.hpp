@@ -52,6 +52,7 @@ struct ControlRow {
   std::int8_t side = 0;          ///< the nearer limit on this row: +1 a lower, −1 an upper, 0 none
   double gap = 0;                ///< distance inside that limit, in the row's rate units (< 0: violated)
   double drive_error = 0;        ///< target − coordinate along the row (rad or m)
+  double coordinate = 0;         ///< revolute, prismatic: the joint's angle or slide (rad or m), for its servos
   double target_rate = 0;        ///< the drive's target rate along the row
   double velocity_product = 0;   ///< J̇u (approximate for angular rows: the row turning with the inboard body)
   double rate = 0;               ///< w₀ = J·u at the state measured (measure_control_rates)
@@ -96,8 +97,20 @@ struct JointControlSet {
   bool empty() const { return joints.empty(); }
 };
 
-/// How many control rows joint `joint` gets (0 without limits, friction or drive).
-int control_row_count(const Joint& joint);
+/// The servos (position and velocity actuators) set for the next step, per joint (of the Model
+/// the method runs: a serial joint's axes are joints of their own), in the joint's coordinate.
+/// Each is taken implicitly on its joint's row, as a drive is (set_control_problem): its force
+/// force − stiffness·(q + h·q̇) − damping·q̇ at the rate q̇ the step ends with. Zeroed after each step.
+struct JointServos {
+  std::vector<double> force;      ///< Σ gear·kp·(u − gear·ref) + gear·kv·u, N·m or N
+  std::vector<double> stiffness;  ///< Σ gear²·kp, N·m/rad or N/m
+  std::vector<double> damping;    ///< Σ gear²·kv, N·m·s/rad or N·s/m
+  bool any = false;               ///< a servo acts this step
+};
+
+/// How many control rows joint `joint` gets (0 without limits, friction, drive, armature or a
+/// servo; `servo`: an actuator that is not a motor acts on it, a revolute or prismatic joint).
+int control_row_count(const Joint& joint, bool servo = false);
 
 /// A body's Model frame (the shape's centre, Model axes) from its rigid state.
 FramePose model_frame_pose(const RigidScene& scene, const RigidBodyState& y, std::int32_t body);

@@ -65,6 +65,7 @@ struct LagrangeState : RigidScene {
   /// a drive, limit or friction given later to a joint compiled without them is not applied.
   JointControls joint_controls;
   JointControlSet controls;  ///< the controlled joints' rows (joint_controls.hpp)
+  JointServos servos;        ///< the servos for the next step (apply_actuator), per joint; zeroed after it
   /// Where motors act (Model::actuators; empty without them), serial joints through their
   /// virtual links (scene/serial_links.hpp).
   CoordinateAxes coordinate_axes;

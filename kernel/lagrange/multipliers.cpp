@@ -252,7 +252,12 @@ void set_control_problem(LagrangeState& state, ControlLevel level, double dt, do
     controlled.friction_bound = !friction ? 0 : level == ControlLevel::acceleration ? joint.friction : joint.friction * dt;
     controlled.sliding = false;
     const JointDrive* drive = joint.drive && step_rows ? &*joint.drive : nullptr;
-    const double drive_gain = drive ? drive->stiffness * dt + drive->damping : 0;  // k·h + c
+    // A servo on the joint's one row (revolute, prismatic) adds to its drive: stiffness K, damping
+    // C and the force F − K·q at the coordinate q (JointServos).
+    const JointServos& servos = state.servos;
+    const bool servo = servos.any && step_rows && (servos.stiffness[controlled.joint] != 0 || servos.damping[controlled.joint] != 0);
+    const double servo_gain = servo ? servos.stiffness[controlled.joint] * dt + servos.damping[controlled.joint] : 0;  // K·h + C
+    const double drive_gain = (drive ? drive->stiffness * dt + drive->damping : 0) + servo_gain;  // k·h + c
     for (int k = 0; k < controlled.count; ++k) {
       ControlRow& row = state.controls.rows[controlled.first_row + k];
       const double offset = change ? row.rate : 0;  // the rate before a velocity change
@@ -261,8 +266,10 @@ void set_control_problem(LagrangeState& state, ControlLevel level, double dt, do
       if (drive_gain > 0) {
         // τ = k·(e₀ − h·w) + c·(w* − w), implicit in the rate w after the step; its impulse
         // h·τ = (drive_rhs − w)/A.
+        double force = drive ? drive->stiffness * row.drive_error + drive->damping * row.target_rate : 0;
+        if (servo) force += servos.force[controlled.joint] - servos.stiffness[controlled.joint] * row.coordinate;
         row.compliance = 1 / (dt * drive_gain);
-        row.drive_rhs = (drive->stiffness * row.drive_error + drive->damping * row.target_rate) / drive_gain - offset;
+        row.drive_rhs = force / drive_gain - offset;
       }
       if (joint.armature > 0 && level != ControlLevel::position) {
         // The unknown: u after the step (velocity), a change of u (the other impulse levels), u̇.

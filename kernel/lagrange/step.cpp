@@ -207,6 +207,10 @@ void advance(LagrangeState& state, double dt, StepReport& report) {
   state.time += dt;
   report.status = update_sleep(state, dt);
   clear_applied_loads(state);
+  if (state.servos.any) {  // the World sets them again before the next step
+    for (std::vector<double>* terms : {&state.servos.force, &state.servos.stiffness, &state.servos.damping}) std::fill(terms->begin(), terms->end(), 0.0);
+    state.servos.any = false;
+  }
   if (state.options.profile) count_rigid_step(state, report);
 }
 

@@ -323,8 +323,8 @@ enum class ActuatorKind { motor, position, velocity };
 /// joint's two bodies and nowhere else: a generalized force on the coordinate, computed from the
 /// state at the start of each step (explicit, as MuJoCo's are: a servo is stable while
 /// gear²·gain·h²/I, or gear²·gain·h/I for a velocity servo, stays below about 2–4). Featherstone
-/// takes a servo implicitly instead, its force at the end of the step as a drive's (stable at any
-/// gain: kernel/featherstone/bodies.hpp, apply_actuator). MuJoCo's actuator models
+/// and Lagrange take a servo implicitly instead, its force at the end of the step as a drive's
+/// (stable at any gain: their bodies.hpp, apply_actuator). MuJoCo's actuator models
 /// (XMLreference, "actuator"), u the control and l = gear·(q + reference) the actuator's length:
 /// - motor: gear·u;
 /// - position: gear·gain·(u − l), a PD servo's P (MuJoCo's kp);

@@ -34,8 +34,8 @@ std::string vector_text(const Eigen::Vector3d& v) {
 
 // An actuator's joint force for this step, explicit: taken at the state the step starts from (as
 // MuJoCo's are), each method's way (apply_joint_force: the pair of loads ±force·a on the joint's
-// bodies). A method that takes a servo implicitly answers apply_actuator itself (Featherstone:
-// featherstone/bodies.hpp), and overload resolution prefers its non-template.
+// bodies). A method that takes a servo implicitly answers apply_actuator itself (Featherstone,
+// Lagrange: their bodies.hpp), and overload resolution prefers its non-template.
 template <typename State>
 void apply_actuator(State& state, const Actuator& actuator, double control) {
   const auto joint = static_cast<std::size_t>(actuator.joint);

@@ -3,6 +3,8 @@
 // runs the joint; position and velocity actuators servo the coordinate (MuJoCo's); bad controls
 // are refused and change nothing; removing a motor's joint drops it.
 #include <cmath>
+#include <string>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -95,18 +97,20 @@ INSTANTIATE_TEST_SUITE_P(Methods, WorldServos, ::testing::Values(Method::particl
 // A stiff servo at MuJoCo's default step, 0.005 s: on the rod (I ≈ 1/3 kg·m²), gear 2, kp = 10⁵
 // and kv = 100 make gear²·kp·h²/I = 30 and gear²·kv·h/I = 6, past where an explicit servo is
 // stable under either integrator (ω·h < 2 for semi-implicit Euler, < 2.8 for RK4; explicit, the
-// first step's force spins the rod at 1800 rad/s and the step is refused). Taken implicitly, it makes no energy — the rod's kinetic
-// energy plus the servo's spring ½·gear²·kp·(q − q*)² never rises past what the control gave it —
-// and settles at q* = control/gear − reference. Under semi-implicit Euler the step is backward
-// Euler's on the servo, whose energy falls every step; RK4 moves by the mean of the step's two
-// velocities, and its energy may rise in one step, but not past its start.
-class StiffServo : public ::testing::TestWithParam<Integrator> {};
+// first step's force spins the rod at 1800 rad/s and the step is refused). Featherstone and
+// Lagrange take it implicitly, as a drive: it makes no energy — the rod's kinetic energy plus the
+// servo's spring ½·gear²·kp·(q − q*)² never rises past what the control gave it — and settles at
+// q* = control/gear − reference. Under semi-implicit Euler the step is backward Euler's on the
+// servo, whose energy falls every step; RK4 moves by the mean of the step's two velocities, and
+// its energy may rise in one step, but not past its start.
+class StiffServo : public ::testing::TestWithParam<std::tuple<Method, Integrator>> {};
 
 TEST_P(StiffServo, MakesNoEnergyAndSettlesAtMujocosStep) {
+  const auto [method, integrator] = GetParam();
   Model model = servo_rod(true);
   model.actuators[0].gain = 1e5, model.actuators[1].gain = 100;
-  WorldOptions options{.method = Method::featherstone};
-  options.featherstone.integrator = GetParam();
+  WorldOptions options{.method = method};
+  options.featherstone.integrator = integrator, options.lagrange.integrator = integrator;
   options.divergence_check = false;  // the servo's spring, which the check does not count, turns into motion: the test counts it
   World world(model, options);
   const Eigen::Vector3d initial = world.pose(world.body("rod")).orientation * Eigen::Vector3d::UnitZ();
@@ -123,15 +127,50 @@ TEST_P(StiffServo, MakesNoEnergyAndSettlesAtMujocosStep) {
     ASSERT_EQ(world.step(0.005), StepStatus::ok) << "step " << n;
     const double now = energy();
     ASSERT_LE(now, start) << "step " << n << ": energy made";
-    if (GetParam() == Integrator::semi_implicit_euler) ASSERT_LE(now, last * (1 + 1e-12) + 1e-12) << "step " << n << ": energy made";
+    if (integrator == Integrator::semi_implicit_euler) ASSERT_LE(now, last * (1 + 1e-12) + 1e-12) << "step " << n << ": energy made";
     last = now;
   }
   EXPECT_NEAR(turn(world, initial), target, 1e-6) << "rad";
   EXPECT_NEAR(world.motion(world.body("rod")).angular.z(), 0, 1e-6) << "rad/s, at rest";
 }
 
-INSTANTIATE_TEST_SUITE_P(Featherstone, StiffServo, ::testing::Values(Integrator::semi_implicit_euler, Integrator::rk4),
-                         [](const auto& info) { return std::string(info.param == Integrator::rk4 ? "rk4" : "semi_implicit_euler"); });
+INSTANTIATE_TEST_SUITE_P(Methods, StiffServo,
+                         ::testing::Combine(::testing::Values(Method::lagrange, Method::featherstone),
+                                            ::testing::Values(Integrator::semi_implicit_euler, Integrator::rk4)),
+                         [](const auto& info) {
+                           return std::string(method_name(std::get<0>(info.param))) + "_" +
+                                  (std::get<1>(info.param) == Integrator::rk4 ? "rk4" : "semi_implicit_euler");
+                         });
+
+// Two stiff position servos on the two axes of a serial joint (about z, then about y as the first
+// turn carries it: MuJoCo's two hinges in one body), no gravity: the rod comes to rest with each
+// axis at its own servo's target, the rotation Rz(α*)·Ry(β*) from its initial pose — so each
+// servo acts on its own axis's row (Lagrange: through the serial joint's virtual links).
+TEST_P(StiffServo, ServosOnASerialJointsAxesEachHoldTheirOwn) {
+  const auto [method, integrator] = GetParam();
+  Model model = testing::rod_held_at_head(JointType::serial);
+  model.settings.gravity.setZero();
+  SerialAxis about_z, about_y;
+  about_z.name = "about_z", about_z.axis = Eigen::Vector3d::UnitZ();
+  about_y.name = "about_y", about_y.axis = Eigen::Vector3d::UnitY();
+  model.joints[0].serial_axes = {about_z, about_y};
+  for (int axis = 0; axis < 2; ++axis) {
+    model.actuators.push_back({.name = "hold" + std::to_string(axis), .joint = 0, .axis = axis, .kind = ActuatorKind::position, .gear = 1, .gain = 1e4, .control_range = {}});
+    model.actuators.push_back({.name = "damp" + std::to_string(axis), .joint = 0, .axis = axis, .kind = ActuatorKind::velocity, .gear = 1, .gain = 50, .control_range = {}});
+  }
+  WorldOptions options{.method = method};
+  options.featherstone.integrator = integrator, options.lagrange.integrator = integrator;
+  options.divergence_check = false;  // as above: the servos' springs turn into motion
+  World world(model, options);
+  const Eigen::Quaterniond initial = world.pose(world.body("rod")).orientation;
+  const double alpha = 0.3, beta = -0.2;
+  const double controls[] = {alpha, 0, beta, 0};
+  world.set_controls(controls);
+  for (int n = 0; n < 400; ++n) ASSERT_EQ(world.step(0.005), StepStatus::ok) << "step " << n;
+  const Eigen::Quaterniond expected(Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(beta, Eigen::Vector3d::UnitY()));
+  const Eigen::Quaterniond turned = world.pose(world.body("rod")).orientation * initial.conjugate();
+  EXPECT_LT(turned.angularDistance(expected), 1e-4) << "rad";
+}
 
 TEST(WorldActuators, ControlsAreCheckedAndKeptUntilSetAgain) {
   World world(motorized_rod(), WorldOptions{});
