@@ -159,8 +159,9 @@ class World {
   /// The actuators' controls, one per Model::actuators entry in its order: from each next step
   /// on, each actuator's joint gets its generalized force at the state the step starts from
   /// (model.hpp's actuator_force: a motor's gear × control, a position or velocity servo's pull;
-  /// Featherstone's and Lagrange's servos at the state it ends with, as their drives), until set again; 0 until the first call. Throws WorldError when the count is not
-  /// the actuators' or a control is not finite (nothing changes).
+  /// Featherstone's and Lagrange's servos at the state it ends with, as their drives), until set
+  /// again; 0 until the first call. Throws WorldError when the count is not the actuators' or a
+  /// control is not finite (nothing changes).
   void set_controls(std::span<const double> controls);
   /// The controls as set (before clamping), Model::actuators order.
   std::span<const double> controls() const;

@@ -97,7 +97,7 @@ INSTANTIATE_TEST_SUITE_P(Methods, WorldServos, ::testing::Values(Method::particl
 // A stiff servo at MuJoCo's default step, 0.005 s: on the rod (I ≈ 1/3 kg·m²), gear 2, kp = 10⁵
 // and kv = 100 make gear²·kp·h²/I = 30 and gear²·kv·h/I = 6, past where an explicit servo is
 // stable under either integrator (ω·h < 2 for semi-implicit Euler, < 2.8 for RK4; explicit, the
-// first step's force spins the rod at 1800 rad/s and the step is refused). Featherstone and
+// first step's force spins the rod at 1800 rad/s and the step reports a divergence). Featherstone and
 // Lagrange take it implicitly, as a drive: it makes no energy — the rod's kinetic energy plus the
 // servo's spring ½·gear²·kp·(q − q*)² never rises past what the control gave it — and settles at
 // q* = control/gear − reference. Under semi-implicit Euler the step is backward Euler's on the
