@@ -324,11 +324,31 @@ void place_tree_joints(FeatherstoneState& state, const Model& model) {
 void index_island_joints(FeatherstoneState& state, const Model& model) {
   const std::size_t islands = state.islands.size();
   const auto island_of_joint = [&](std::size_t j) { return island_of(state, state.tree_joint[j]); };
+  const auto controlled = [&](std::size_t j) {
+    const Joint& joint = model.joints[j];
+    return state.tree_joint[j].dofs > 0 && (joint.limits.any() || joint.friction > 0 || joint.drive.has_value());
+  };
+  const auto axis_of = [&](const TreeSerialAxis& node) -> const SerialAxis& {
+    return model.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
+  };
+  const auto axis_controlled = [&](const TreeSerialAxis& node) {
+    const SerialAxis& axis = axis_of(node);
+    return axis.range || axis.friction > 0 || axis.drive.has_value();
+  };
+  state.limited_joints.clear(), state.limited_axes.clear();
+  for (std::size_t j = 0; j < model.joints.size(); ++j) {
+    if (state.tree_joint[j].dofs > 0 && model.joints[j].limits.any()) state.limited_joints.push_back(static_cast<std::int32_t>(j));
+  }
+  for (std::size_t a = 0; a < state.serial_axes.size(); ++a) {
+    if (axis_of(state.serial_axes[a]).range) state.limited_axes.push_back(static_cast<std::int32_t>(a));
+  }
   state.island_joint_begin.assign(islands + 1, 0), state.island_axis_begin.assign(islands + 1, 0);
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    if (state.tree_joint[j].dofs > 0) ++state.island_joint_begin[island_of_joint(j) + 1];
+    if (controlled(j)) ++state.island_joint_begin[island_of_joint(j) + 1];
   }
-  for (const TreeSerialAxis& axis : state.serial_axes) ++state.island_axis_begin[island_of_joint(static_cast<std::size_t>(axis.joint)) + 1];
+  for (const TreeSerialAxis& axis : state.serial_axes) {
+    if (axis_controlled(axis)) ++state.island_axis_begin[island_of_joint(static_cast<std::size_t>(axis.joint)) + 1];
+  }
   for (std::size_t k = 0; k < islands; ++k) {
     state.island_joint_begin[k + 1] += state.island_joint_begin[k], state.island_axis_begin[k + 1] += state.island_axis_begin[k];
   }
@@ -337,9 +357,10 @@ void index_island_joints(FeatherstoneState& state, const Model& model) {
   std::vector<std::int32_t> next_joint(state.island_joint_begin.begin(), state.island_joint_begin.end() - 1);
   std::vector<std::int32_t> next_axis(state.island_axis_begin.begin(), state.island_axis_begin.end() - 1);
   for (std::size_t j = 0; j < model.joints.size(); ++j) {
-    if (state.tree_joint[j].dofs > 0) state.island_joint[static_cast<std::size_t>(next_joint[island_of_joint(j)]++)] = static_cast<std::int32_t>(j);
+    if (controlled(j)) state.island_joint[static_cast<std::size_t>(next_joint[island_of_joint(j)]++)] = static_cast<std::int32_t>(j);
   }
   for (std::size_t a = 0; a < state.serial_axes.size(); ++a) {
+    if (!axis_controlled(state.serial_axes[a])) continue;
     state.island_axis[static_cast<std::size_t>(next_axis[island_of_joint(static_cast<std::size_t>(state.serial_axes[a].joint))]++)] = static_cast<std::int32_t>(a);
   }
 }

@@ -286,10 +286,15 @@ struct FeatherstoneState : RigidScene {
   std::vector<TreeJoint> tree_joint;
   /// Every serial joint's axes, joint by joint, in order.
   std::vector<TreeSerialAxis> serial_axes;
-  /// Island k's Model joints with coordinates (tree_joint's dofs > 0) are
-  /// island_joint[island_joint_begin[k] … island_joint_begin[k + 1]), in joint order; its serial
-  /// axes (indices into serial_axes) island_axis[island_axis_begin[k] …], likewise.
+  /// Island k's Model joints with coordinates (tree_joint's dofs > 0) and a control of their own
+  /// (a limit, friction or a drive) are island_joint[island_joint_begin[k] … island_joint_begin[k + 1]),
+  /// in joint order; its serial axes with one (indices into serial_axes) island_axis[island_axis_begin[k] …],
+  /// likewise. Which joints have controls is fixed at compile (the World recompiles when a drive
+  /// appears or goes): a step reads no other joint's.
   std::vector<std::int32_t> island_joint_begin, island_joint, island_axis_begin, island_axis;
+  /// The Model joints with coordinates and a limit, and the serial axes with a range (indices
+  /// into serial_axes), ascending: the joints find_limit_rows measures.
+  std::vector<std::int32_t> limited_joints, limited_axes;
   JointControlScratch controls;
 
   /// forward_kinematics of the current (q, v): world_to_body and the bodies' spatial velocities.

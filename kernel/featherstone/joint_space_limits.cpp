@@ -84,18 +84,18 @@ void add_limit_row(FeatherstoneState& state, JointLimitRow row, double gap, cons
 // A serial joint's axis ranges: each axis's coordinate is its tree body's q (0 at rest).
 void find_serial_limit_rows(FeatherstoneState& state, double dt, LimitRowSearch& search) {
   // Their keys follow every joint's slots: a lower and an upper side an axis.
-  std::int32_t key = kLimitsPerJoint * static_cast<std::int32_t>(state.joint_controls.joints.size());
-  for (const TreeSerialAxis& node : state.serial_axes) {
+  const std::int32_t first_key = kLimitsPerJoint * static_cast<std::int32_t>(state.joint_controls.joints.size());
+  for (const std::int32_t limited : state.limited_axes) {
+    const TreeSerialAxis& node = state.serial_axes[static_cast<std::size_t>(limited)];
     const SerialAxis& axis = state.joint_controls.joints[static_cast<std::size_t>(node.joint)].serial_axes[static_cast<std::size_t>(node.axis)];
     const TreeJoint& held = state.tree_joint[static_cast<std::size_t>(node.joint)];
-    key += 2;
-    if (!axis.range || !awake(state, held)) continue;
+    if (!awake(state, held)) continue;
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held)), row.body = node.body, row.offset = node.offset, row.dofs = 1;
     const double x = state.q[state.tree.position_offset(node.body)];
-    row.key = key - 2;
+    row.key = first_key + 2 * limited;
     add_limit_row(state, row, x - axis.range->min, Eigen::Vector3d::UnitX(), dt, search);
-    row.key = key - 1;
+    row.key = first_key + 2 * limited + 1;
     add_limit_row(state, row, axis.range->max - x, -Eigen::Vector3d::UnitX(), dt, search);
   }
 }
@@ -107,10 +107,11 @@ int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* 
   LimitRowSearch search{also, count_only};
   if (!count_only) state.controls.rows.clear();
   const JointControls& controls = state.joint_controls;
-  for (std::size_t k = 0; k < controls.joints.size(); ++k) {
+  for (const std::int32_t limited : state.limited_joints) {
+    const auto k = static_cast<std::size_t>(limited);
     const Joint& joint = controls.joints[k];
     const TreeJoint& held = state.tree_joint[k];
-    if (!joint.limits.any() || held.dofs == 0 || !awake(state, held)) continue;
+    if (!awake(state, held)) continue;
     JointLimitRow row;
     row.island = static_cast<std::int32_t>(island_of(state, held));
     row.body = held.body, row.offset = held.offset, row.dofs = held.dofs;
