@@ -192,7 +192,9 @@ void mirror_rigid_bodies(FeatherstoneState& state, BodyRange range) {
     const PluckerTransform& world_to_body = state.kinematics.world_to_body[index];
     const Eigen::Matrix3d rotation = world_to_body.rotation.transpose();  // body → world
     const Eigen::Vector3d& centre = state.centre_of_mass[index];
-    y.orientation[b] = (Eigen::Quaterniond(rotation) * state.principal_frame[index]).normalized();
+    // Unit to round-off without normalizing: the rotation is composed afresh from q every step
+    // (forward kinematics), so no error accumulates (the normalization was half the read-out).
+    y.orientation[b] = Eigen::Quaterniond(rotation) * state.principal_frame[index];
     y.position[b] = world_to_body.translation + rotation * centre;
     // v_i = (ω, v_O) in the body's frame: the centre of mass moves at v_O + ω × c. The world
     // velocities are kept for the sleep and speed guard (update_sleep_from_velocities).
