@@ -216,7 +216,7 @@ struct JointFrictionBlock {
 
 /// The servos (MuJoCo's position and velocity actuators) set for the next step, per velocity
 /// coordinate (apply_actuator, kernel/featherstone/bodies.hpp). Each is taken implicitly, as a
-/// drive is (joint_space_limits.cpp): its force at the end of each substep of h,
+/// drive is (joint_space_drives.cpp): its force at the end of each substep of h,
 /// force − stiffness·(q + h·q̇⁺) − damping·q̇⁺, q in the tree's sign. Zeroed after each step.
 struct ServoTerms {
   Eigen::VectorXd force;      ///< nv: Σ gear·kp·(u − gear·ref) + gear·kv·u, N·m or N, tree sign
