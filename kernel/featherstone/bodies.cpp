@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "limber/kernel/featherstone/step.hpp"
+#include "limber/kernel/model/servo.hpp"
 
 namespace limber {
 
@@ -48,13 +49,12 @@ void apply_actuator(FeatherstoneState& state, const Actuator& actuator, double c
     if (const double force = actuator_force(actuator, control); force != 0) apply_joint_force(state, joint, actuator.axis, force);
     return;
   }
-  // The servo's force at q = 0, q̇ = 0 (its control clamped), and its pull on q and q̇.
   const TreeJoint& held = state.tree_joint[joint];
   const int r = held.offset + actuator.axis;
-  const double squared = actuator.gear * actuator.gear * actuator.gain;
+  const ServoPull pull = servo_pull(actuator, control);
   ServoTerms& servos = state.servos;
-  servos.force[r] += held.sign * actuator_force(actuator, control);
-  (actuator.kind == ActuatorKind::position ? servos.stiffness : servos.damping)[r] += squared;
+  servos.force[r] += held.sign * pull.force;
+  servos.stiffness[r] += pull.stiffness, servos.damping[r] += pull.damping;
   servos.position[static_cast<std::size_t>(r)] = state.tree.position_offset(held.axis_body(actuator.axis));
   servos.island[island_of(state, held)] = 1;
 }

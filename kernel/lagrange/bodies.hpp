@@ -8,6 +8,7 @@
 
 #include "limber/kernel/lagrange/lagrange_state.hpp"
 #include "limber/kernel/model/model.hpp"
+#include "limber/kernel/model/servo.hpp"
 #include "limber/kernel/rigid/bodies.hpp"
 
 namespace limber {
@@ -34,11 +35,10 @@ inline void apply_actuator(LagrangeState& state, const Actuator& actuator, doubl
     if (const double force = actuator_force(actuator, control); force != 0) apply_joint_force(state, joint, actuator.axis, force);
     return;
   }
-  // The servo's force at q = 0, q̇ = 0 (its control clamped), and its pull on q and q̇.
   const std::size_t k = joint_of_axis(state.coordinate_axes.first_added_joint, joint, actuator.axis);
+  const ServoPull pull = servo_pull(actuator, control);
   JointServos& servos = state.servos;
-  servos.force[k] += actuator_force(actuator, control);
-  (actuator.kind == ActuatorKind::position ? servos.stiffness : servos.damping)[k] += actuator.gear * actuator.gear * actuator.gain;
+  servos.force[k] += pull.force, servos.stiffness[k] += pull.stiffness, servos.damping[k] += pull.damping;
   servos.any = true;
 }
 
