@@ -4,8 +4,8 @@
 //
 // Workload (bench/chains.md, "The heavy-end chain"): N links of 0.1 m and 1 kg, the last
 // 2 kg; link 0's inboard end pinned at the origin by a ball joint; released at rest, straight
-// along +x; gravity 9.81 m/s² along −z; no contacts, no damping, no sleeping; Δt = 1/60 s; 2 s
-// (120 steps); one thread. limber's chain is make_chain_model's (kernel/scene/generators.hpp:
+// along +x; gravity 9.81 m/s² along −z; no contacts, no damping, no sleeping; Δt = 1/60 s (or
+// --dt); 2 s; one thread. limber's chain is make_chain_model's (kernel/scene/generators.hpp:
 // capsules of radius 1 mm, uniform density); the peers' links are solid cylinders of radius
 // 1 cm (bench/peers/peer_chain.hpp): their transverse moments differ by 3%.
 //
@@ -22,7 +22,8 @@
 // labelled so. A run whose stepping took under 2 s is repeated twice more and the median time
 // kept (the errors are the same bits every run).
 //
-// Usage: peer_chains [--links N,N,...] [--csv FILE]   (default 5,10,100,1000,10000)
+// Usage: peer_chains [--links N,N,...] [--dt SECONDS] [--csv FILE]   (default 5,10,100,1000,10000;
+// Δt 1/60 s)
 // Prints a markdown table on stdout (progress on stderr) and writes the CSV that
 // tools/plot_peers.py plots.
 #include <algorithm>
@@ -53,14 +54,19 @@
 namespace limber {
 namespace {
 
-constexpr double kTimeStep = 1.0 / 60;  // s
-constexpr int kSteps = 120;             // 2 s
+constexpr double kSimulated = 2;       // s
 constexpr double kLinkLength = 0.1;     // m
 constexpr double kEqualErrorFloor = 1e-6;       // relative: errors below it count as equal
 constexpr double kLongestRun = 60;              // s of stepping, estimated, above which a run is skipped
 constexpr double kRepeatBelow = 2;              // s of stepping under which a run is repeated (median of 3)
 constexpr int kBulletRigidIterations = 10;      // Bullet's default, as PEERS.md measured
 constexpr int kOdeQuickStepIterations = 20;     // as PEERS.md measured
+
+/// The step every contender takes (s) and how many: 2 s simulated.
+struct Workload {
+  double time_step = 1.0 / 60;
+  int steps = 120;
+};
 
 /// One run's outcome, in the table's units.
 struct Measurement {
@@ -77,28 +83,28 @@ struct Contender {
   std::string engine, method;
   bool is_limber = false;
   int cost_exponent = 1;  // time per step grows as N^cost_exponent
-  std::function<Measurement(std::size_t links)> run;
+  std::function<Measurement(std::size_t links, const Workload& workload)> run;
   std::string label = method;  // short name, for the ratio column
 };
 
 // ---------------------------------------------------------------------------------------------
 // limber's methods
 
-Model chain_model(std::size_t links) {
+Model chain_model(std::size_t links, const Workload& workload) {
   Model model = make_chain_model({.links = links, .link_length = kLinkLength, .link_mass = 1, .end_mass_ratio = 2});
   model.settings.sleep.enabled = false;
-  model.settings.time_step = kTimeStep;
+  model.settings.time_step = workload.time_step;
   model.settings.damping = 0;
   return model;
 }
 
-// Steps `state` kSteps times (only step() timed), observing after each.
+// Steps `state` workload.steps times (only step() timed), observing after each.
 template <typename State>
-Measurement simulate(State& state) {
+Measurement simulate(State& state, const Workload& workload) {
   Measurement result;
   const double energy_start = observe(state).energy();
   double seconds = 0;
-  for (int s = 0; s < kSteps; ++s) {
+  for (int s = 0; s < workload.steps; ++s) {
     const auto start = std::chrono::steady_clock::now();
     const auto report = step(state);
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -118,8 +124,8 @@ Measurement simulate(State& state) {
   return result;
 }
 
-Measurement run_verlet(std::size_t links, RelaxationSolver solver, int iterations, double tolerance) {
-  Model model = chain_model(links);
+Measurement run_verlet(std::size_t links, const Workload& workload, RelaxationSolver solver, int iterations, double tolerance) {
+  Model model = chain_model(links, workload);
   VerletOptions options;
   options.verlet.joints = ParticleJoints::shared_particle;  // make_chain_model's chain, one particle a joint
   options.relaxation.iterations = solver == RelaxationSolver::direct ? 1 : iterations;
@@ -128,32 +134,38 @@ Measurement run_verlet(std::size_t links, RelaxationSolver solver, int iteration
   options.newton_iterations = solver == RelaxationSolver::direct ? iterations : 1;
   options.threads = 1;
   VerletState<double> state = compile<double>(model, options);
-  return simulate(state);
+  return simulate(state, workload);
 }
 
 std::vector<Contender> limber_contenders() {
   return {
       {"limber", "Verlet, direct solver to 1e-5 m (at most 50 Newton steps)", true, 1,
-       [](std::size_t links) { return run_verlet(links, RelaxationSolver::direct, 50, 1e-5); }, "Verlet direct"},
+       [](std::size_t links, const Workload& workload) { return run_verlet(links, workload, RelaxationSolver::direct, 50, 1e-5); }, "Verlet direct"},
       {"limber", "Verlet, Gauss-Seidel 100 sweeps", true, 1,
-       [](std::size_t links) { return run_verlet(links, RelaxationSolver::gauss_seidel, 100, 0); }, "Verlet Gauss-Seidel"},
+       [](std::size_t links, const Workload& workload) { return run_verlet(links, workload, RelaxationSolver::gauss_seidel, 100, 0); }, "Verlet Gauss-Seidel"},
       {"limber", "Featherstone ABA, RK4", true, 1,
-       [](std::size_t links) {
-         FeatherstoneState state = compile_featherstone(chain_model(links), {.integrator = Integrator::rk4});
-         return simulate(state);
+       [](std::size_t links, const Workload& workload) {
+         FeatherstoneState state = compile_featherstone(chain_model(links, workload), {.integrator = Integrator::rk4});
+         return simulate(state, workload);
        },
        "Featherstone"},
+      {"limber", "Featherstone ABA, semi-implicit Euler", true, 1,
+       [](std::size_t links, const Workload& workload) {
+         FeatherstoneState state = compile_featherstone(chain_model(links, workload), {.integrator = Integrator::semi_implicit_euler});
+         return simulate(state, workload);
+       },
+       "Featherstone semi-implicit"},
       {"limber", "Lagrange, semi-implicit Euler + Baumgarte", true, 1,
-       [](std::size_t links) {
+       [](std::size_t links, const Workload& workload) {
          LagrangeState state = compile_lagrange(
-             chain_model(links), {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte});
-         return simulate(state);
+             chain_model(links, workload), {.integrator = Integrator::semi_implicit_euler, .stabilization = Stabilization::baumgarte});
+         return simulate(state, workload);
        },
        "Lagrange"},
       {"limber", "implicit springs (backward Euler, k 2e4 N/m, c 20 N s/m)", true, 1,
-       [](std::size_t links) {
-         SpringState state = compile_springs(chain_model(links), {.integrator = Integrator::backward_euler});
-         return simulate(state);
+       [](std::size_t links, const Workload& workload) {
+         SpringState state = compile_springs(chain_model(links, workload), {.integrator = Integrator::backward_euler});
+         return simulate(state, workload);
        },
        "springs"},
   };
@@ -181,32 +193,32 @@ std::vector<Contender> peer_contenders() {
 #ifdef LIMBER_HAVE_BULLET
   const std::string bullet_precision = peers::bullet_uses_double_precision() ? "f64" : "f32";
   contenders.push_back({"Bullet 3.24", "btMultiBody (" + bullet_precision + ", joint-velocity clamp 100 rad/s)", false, 1,
-                        [](std::size_t links) {
-                          return from_peer(peers::run_bullet_multibody_chain(int(links), kTimeStep, kSteps, false));
+                        [](std::size_t links, const Workload& workload) {
+                          return from_peer(peers::run_bullet_multibody_chain(int(links), workload.time_step, workload.steps, false));
                         }});
   contenders.push_back({"Bullet 3.24",
                         "btRigidBody + point-to-point (" + bullet_precision + ", " + std::to_string(kBulletRigidIterations) +
                             " iterations)",
-                        false, 1, [](std::size_t links) {
-                          return from_peer(peers::run_bullet_rigid_chain(int(links), kTimeStep, kSteps, kBulletRigidIterations));
+                        false, 1, [](std::size_t links, const Workload& workload) {
+                          return from_peer(peers::run_bullet_rigid_chain(int(links), workload.time_step, workload.steps, kBulletRigidIterations));
                         }});
 #endif
 #ifdef LIMBER_HAVE_ODE
   const std::string ode_precision = peers::ode_uses_double_precision() ? "f64" : "f32";
-  contenders.push_back({"ODE 0.16", "dWorldStep (" + ode_precision + ", dense LCP)", false, 3, [](std::size_t links) {
-                          return from_peer(peers::run_ode_chain(int(links), kTimeStep, kSteps, peers::OdeStepper::world_step, 1));
+  contenders.push_back({"ODE 0.16", "dWorldStep (" + ode_precision + ", dense LCP)", false, 3, [](std::size_t links, const Workload& workload) {
+                          return from_peer(peers::run_ode_chain(int(links), workload.time_step, workload.steps, peers::OdeStepper::world_step, 1));
                         }});
   contenders.push_back({"ODE 0.16", "dWorldQuickStep (" + ode_precision + ", " + std::to_string(kOdeQuickStepIterations) + " iterations)",
-                        false, 1, [](std::size_t links) {
-                          return from_peer(peers::run_ode_chain(int(links), kTimeStep, kSteps, peers::OdeStepper::quick_step,
+                        false, 1, [](std::size_t links, const Workload& workload) {
+                          return from_peer(peers::run_ode_chain(int(links), workload.time_step, workload.steps, peers::OdeStepper::quick_step,
                                                                 kOdeQuickStepIterations));
                         }});
 #endif
 #ifdef LIMBER_HAVE_MUJOCO
   for (const peers::MujocoIntegrator integrator : {peers::MujocoIntegrator::euler, peers::MujocoIntegrator::rk4}) {
     const std::string name = integrator == peers::MujocoIntegrator::euler ? "Euler" : "RK4";
-    contenders.push_back({"MuJoCo 2.2.2", "mj_step, " + name + " (f64)", false, 3, [integrator](std::size_t links) {
-                            Measurement result = from_peer(peers::run_mujoco_chain(int(links), kTimeStep, kSteps, integrator));
+    contenders.push_back({"MuJoCo 2.2.2", "mj_step, " + name + " (f64)", false, 3, [integrator](std::size_t links, const Workload& workload) {
+                            Measurement result = from_peer(peers::run_mujoco_chain(int(links), workload.time_step, workload.steps, integrator));
                             if (!result.finite) result.note += " (MuJoCo warned and reset the state)";
                             return result;
                           }});
@@ -230,10 +242,10 @@ struct Row {
 };
 
 // Median of three runs' times when one run is quick; one run otherwise.
-Measurement measure(const Contender& contender, std::size_t links) {
-  const Measurement first = contender.run(links);
+Measurement measure(const Contender& contender, std::size_t links, const Workload& workload) {
+  const Measurement first = contender.run(links, workload);
   if (first.seconds_per_step * first.steps_taken >= kRepeatBelow) return first;
-  std::vector<Measurement> runs{first, contender.run(links), contender.run(links)};
+  std::vector<Measurement> runs{first, contender.run(links, workload), contender.run(links, workload)};
   std::sort(runs.begin(), runs.end(), [](const Measurement& a, const Measurement& b) { return a.seconds_per_step < b.seconds_per_step; });
   return runs[1];
 }
@@ -330,6 +342,20 @@ std::vector<std::size_t> parse_links(const std::string& text) {
   return links;
 }
 
+// --dt: a time step in [1e-5, 1] s, and the steps that simulate kSimulated with it.
+Workload parse_time_step(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(value >= 1e-5 && value <= 1))
+    throw std::invalid_argument("--dt: '" + text + "' is not a time step from 1e-5 to 1 s");
+  return {.time_step = value, .steps = static_cast<int>(std::lround(kSimulated / value))};
+}
+
 }  // namespace
 }  // namespace limber
 
@@ -337,12 +363,15 @@ int main(int argc, char** argv) {
   using namespace limber;
   std::vector<std::size_t> link_counts{5, 10, 100, 1000, 10000};
   std::string csv_path;
+  Workload workload;
   try {
     for (int k = 1; k < argc; k += 2) {
       const std::string flag = argv[k];
-      if (flag != "--links" && flag != "--csv") throw std::invalid_argument("unknown flag " + flag + " (use --links N,N,... --csv FILE)");
+      if (flag != "--links" && flag != "--csv" && flag != "--dt")
+        throw std::invalid_argument("unknown flag " + flag + " (use --links N,N,... --dt SECONDS --csv FILE)");
       if (k + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
       if (flag == "--links") link_counts = parse_links(argv[k + 1]);
+      else if (flag == "--dt") workload = parse_time_step(argv[k + 1]);
       else csv_path = argv[k + 1];
     }
   } catch (const std::exception& error) {
@@ -375,11 +404,11 @@ int main(int argc, char** argv) {
           row.estimated_seconds_per_step =
               previous_seconds_per_step * std::pow(double(links) / double(*previous_links), contender.cost_exponent);
         }
-        if (row.estimated_seconds_per_step * kSteps > kLongestRun) {
+        if (row.estimated_seconds_per_step * workload.steps > kLongestRun) {
           std::fprintf(stderr, "%6zu  %s, %s: skipped (~%.3g s/step)\n", links, contender.engine.c_str(), contender.method.c_str(),
                        row.estimated_seconds_per_step);
         } else {
-          row.measured = measure(contender, links);
+          row.measured = measure(contender, links, workload);
           previous_links = links;
           previous_seconds_per_step = row.measured->seconds_per_step;
           std::fprintf(stderr, "%6zu  %s, %s: %.4g us/step, error %.2g L, %s\n", links, contender.engine.c_str(), contender.method.c_str(),
