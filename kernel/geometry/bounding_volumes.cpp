@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/geometry/separating_axis.hpp"
 
 namespace limber {
 namespace {
@@ -12,15 +13,6 @@ namespace {
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-// Ericson's ε (4.4.1), added to every |R_ij| of the separating-axis test: far above the rounding
-// of R (~1e-16), far below any size that matters (it grows the boxes by ~1e-12 of their size).
-constexpr double kParallelEpsilon = 1e-12;
-// An edge–edge axis a_i × b_j shorter than this (sine of the angle between the edges) has no
-// reliable direction, so it is not used as a contact normal.
-constexpr double kMinimumEdgeAxisLength = 1e-6;
-// An edge–edge axis becomes the contact normal only when it is this much shallower than the
-// best face axis (face contacts are steadier; Box2D and ODE bias the same way).
-constexpr double kEdgeAxisPreference = 0.95;
 // A segment whose squared length is at most this (m²) is treated as a point.
 constexpr double kPointLengthSquared = 1e-24;
 // Segments with sin²(angle) below this are parallel (ae − b² ≤ this · ae).
@@ -43,97 +35,6 @@ Contact rounded_contact(const Vector3d& first_core, double first_radius, const V
   // Midway between the first's deepest point into the second and the second's into the first.
   contact.point = 0.5 * ((first_core - first_radius * contact.normal) + (second_core + second_radius * contact.normal));
   return contact;
-}
-
-// What the separating-axis test of two boxes found.
-struct SatResult {
-  bool overlap = false;
-  Vector3d normal = Vector3d::UnitZ();  // unit, world, from the second box towards the first
-  double depth = 0;                     // overlap of the projections on `normal`, m
-};
-
-// The separating-axis test (Ericson 4.4.1), in the first box's frame. R_ij = a_i·b_j expresses
-// the second box's axes in the first's; t is the offset of centres there. On an axis L the
-// boxes' projections have radii r_A = Σ_k h^A_k |a_k·L| and r_B = Σ_k h^B_k |b_k·L|, and the
-// axis separates when |t·L| > r_A + r_B. For L = a_i × b_j the dot products reduce to entries
-// of R (with (i, i1, i2) and (j, j1, j2) cyclic):
-//   |t·L| = |t_i2 R_i1j − t_i1 R_i2j|,  r_A = h^A_i1 |R_i2j| + h^A_i2 |R_i1j|,
-//   r_B = h^B_j1 |R_ij2| + h^B_j2 |R_ij1|,  |L| = √(R_i1j² + R_i2j²).
-// With `find_contact` false it returns at the first separating axis.
-SatResult separating_axis_test(const Obb& first, const Obb& second, bool find_contact) {
-  const Vector3d& ha = first.half_extents;
-  const Vector3d& hb = second.half_extents;
-  const Matrix3d r = first.rotation.transpose() * second.rotation;
-  const Matrix3d abs_r = r.cwiseAbs();
-  // The test uses |R| + ε (so near-parallel edges never separate); depths use |R| itself.
-  const Matrix3d abs_r_test = abs_r.array() + kParallelEpsilon;
-  const Vector3d t = first.rotation.transpose() * (second.centre - first.centre);
-
-  SatResult result;
-  double best_face_depth = std::numeric_limits<double>::infinity();
-  Vector3d best_face_axis = Vector3d::UnitZ();  // first-box frame, unit
-  double best_face_offset = 0;                  // t·L on it
-  double best_edge_depth = std::numeric_limits<double>::infinity();
-  Vector3d best_edge_axis = Vector3d::UnitZ();
-  double best_edge_offset = 0;
-
-  // The first box's face normals a_k.
-  for (int k = 0; k < 3; ++k) {
-    const double distance = std::abs(t[k]);
-    if (distance > ha[k] + hb.dot(abs_r_test.row(k))) return result;
-    const double depth = ha[k] + hb.dot(abs_r.row(k)) - distance;
-    if (depth < best_face_depth) {
-      best_face_depth = depth;
-      best_face_axis = Vector3d::Unit(k);
-      best_face_offset = t[k];
-    }
-  }
-  // The second box's face normals b_k = column k of R.
-  for (int k = 0; k < 3; ++k) {
-    const double offset = t.dot(r.col(k));
-    const double distance = std::abs(offset);
-    if (distance > ha.dot(abs_r_test.col(k)) + hb[k]) return result;
-    const double depth = ha.dot(abs_r.col(k)) + hb[k] - distance;
-    if (depth < best_face_depth) {
-      best_face_depth = depth;
-      best_face_axis = r.col(k);
-      best_face_offset = offset;
-    }
-  }
-  // The nine edge–edge axes a_i × b_j.
-  for (int i = 0; i < 3; ++i) {
-    const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
-    for (int j = 0; j < 3; ++j) {
-      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      const double offset = t[i2] * r(i1, j) - t[i1] * r(i2, j);
-      const double distance = std::abs(offset);
-      const double radius_a_test = ha[i1] * abs_r_test(i2, j) + ha[i2] * abs_r_test(i1, j);
-      const double radius_b_test = hb[j1] * abs_r_test(i, j2) + hb[j2] * abs_r_test(i, j1);
-      if (distance > radius_a_test + radius_b_test) return result;
-      if (!find_contact) continue;
-      const double length = std::hypot(r(i1, j), r(i2, j));
-      if (length < kMinimumEdgeAxisLength) continue;
-      const double radius_a = ha[i1] * abs_r(i2, j) + ha[i2] * abs_r(i1, j);
-      const double radius_b = hb[j1] * abs_r(i, j2) + hb[j2] * abs_r(i, j1);
-      const double depth = (radius_a + radius_b - distance) / length;
-      if (depth < best_edge_depth) {
-        best_edge_depth = depth;
-        best_edge_axis = Vector3d::Unit(i).cross(Vector3d(r.col(j))) / length;
-        best_edge_offset = offset / length;
-      }
-    }
-  }
-  result.overlap = true;
-  if (!find_contact) return result;
-
-  const bool use_edge = best_edge_depth < kEdgeAxisPreference * best_face_depth;
-  const Vector3d axis = use_edge ? best_edge_axis : best_face_axis;
-  const double offset = use_edge ? best_edge_offset : best_face_offset;
-  // t points from the first box to the second: the normal points against it.
-  const Vector3d local_normal = offset > 0 ? Vector3d(-axis) : axis;
-  result.normal = (first.rotation * local_normal).normalized();
-  result.depth = std::max(0.0, use_edge ? best_edge_depth : best_face_depth);
-  return result;
 }
 
 // The centre of a box's support feature in `direction` (the face, edge or vertex furthest along
@@ -257,7 +158,7 @@ std::optional<Contact> contact(const BoundingSphere& first, const Obb& second) {
 }
 
 std::optional<Contact> contact(const Obb& first, const Obb& second) {
-  const SatResult sat = separating_axis_test(first, second, true);
+  const SeparatingAxisResult sat = separating_axis_test(first, second, true);
   if (!sat.overlap) return std::nullopt;
   const Vector3d& n = sat.normal;
   // Each box's support feature towards the other, reduced to its centre and clamped into the other.
@@ -269,7 +170,7 @@ std::optional<Contact> contact(const Obb& first, const Obb& second) {
   const double overlap_high = second.centre.dot(n) + projected_radius(second, n);
   Contact result;
   result.normal = n;
-  result.depth = sat.depth;
+  result.depth = std::max(0.0, sat.depth);
   result.point = mean + (0.5 * (overlap_low + overlap_high) - mean.dot(n)) * n;
   return result;
 }

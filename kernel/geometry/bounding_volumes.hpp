@@ -77,13 +77,7 @@ bool overlaps(const BoundingSphere& sphere, const Aabb& box);
 bool overlaps(const Aabb& first, const Aabb& second);
 /// Upright cylinders overlap iff their vertical intervals overlap and their horizontal circles do.
 bool overlaps(const UprightCylinder& first, const UprightCylinder& second);
-/// The separating-axis test: two boxes are disjoint iff their projections are disjoint on one of
-/// 15 axes — the 3 face normals of each and the 9 cross products of an edge of one with an edge
-/// of the other (Gottschalk et al. 1996; Ericson, "Real-Time Collision Detection", 4.4.1).
-/// Near-parallel edges make a cross product nearly zero, and rounding could then make that
-/// degenerate axis look separating; as Ericson does, a small ε is added to every |R_ij| so such an
-/// axis can never separate (the face normals already decide those cases). The boxes are thereby
-/// grown by about 1e-12 of their size.
+/// By the separating-axis test (separating_axis.hpp).
 bool overlaps(const Obb& first, const Obb& second);
 bool overlaps(const Capsule& first, const Capsule& second);
 bool overlaps(const BoundingSphere& sphere, const Capsule& capsule);
