@@ -4,7 +4,7 @@
 //   pareto_study <scene> [--csv FILE] [--repeats R] [--quick]
 //   scenes: double-pendulum  two uniform rods 0.5 m, 1 kg, released horizontally
 //           chain-5          tools/scenes/chain.json: the thesis's 5 links, the end one double mass
-//           chain-100        100 links of 0.1 m, 1 kg, the last 2 kg (PEERS.md's heavy-end chain)
+//           chain-100        100 links of 0.1 m, 1 kg, the last 2 kg (the heavy-end chain, bench/chains.md)
 //           humanoid         tools/scenes/humanoid.json: the medium body hit by the ball at 10 m/s
 //
 // Per run: wall time per simulated second (median of R fresh runs, stepping only), and the

@@ -59,8 +59,8 @@ constexpr double kLinkLength = 0.1;     // m
 constexpr double kEqualErrorFloor = 1e-6;       // relative: errors below it count as equal
 constexpr double kLongestRun = 60;              // s of stepping, estimated, above which a run is skipped
 constexpr double kRepeatBelow = 2;              // s of stepping under which a run is repeated (median of 3)
-constexpr int kBulletRigidIterations = 10;      // Bullet's default, as PEERS.md measured
-constexpr int kOdeQuickStepIterations = 20;     // as PEERS.md measured
+constexpr int kBulletRigidIterations = 10;      // Bullet's default (btContactSolverInfo::m_numIterations)
+constexpr int kOdeQuickStepIterations = 20;     // ODE's default (dWorldSetQuickStepNumIterations)
 
 /// The step every contender takes (s) and how many: 2 s simulated.
 struct Workload {
