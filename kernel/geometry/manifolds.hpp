@@ -54,12 +54,14 @@ Manifold box_plane_manifold(const Obb& box, const Plane& plane, double margin);
 /// corners of the faces' overlap.
 Manifold box_box_manifold(const Obb& first, const Obb& second, double margin);
 
-/// A capsule (first) against a box (second): the closest points of its core segment and the solid
+/// A capsule (first; a sphere when its ends coincide) against a box (second): the closest points of its core segment and the solid
 /// box (exact: the squared distance is piecewise quadratic along the segment); where the segment
 /// enters the box, the axis of least overlap among the box's faces and the segment's crosses with
 /// its edges. Two points when the segment lies along the face it touches (within 3°), clipped
 /// to the face, so a capsule lies still on a box; one point otherwise. ids: 0 and 1 the
-/// segment's ends (clipped or not), 2 a single point.
+/// segment's ends (clipped or not), 2 a single point. (Two capsules' manifold is the collision
+/// world's, `add_limb_pair_contacts` in limb_collisions.cpp; its capsule against a static box
+/// finds the deepest point by a search, which this exact pair can replace.)
 Manifold capsule_box_manifold(const Capsule& capsule, const Obb& box, double margin);
 
 }  // namespace limber

@@ -210,5 +210,14 @@ TEST(CapsuleBoxManifold, RandomCapsulesTouchOnBothShapesAtTheirExactDistance) {
   EXPECT_GT(overlapping, 50);
 }
 
+TEST(CapsuleBoxManifold, ASphereIsACapsuleWhoseEndsCoincide) {
+  const Obb crate = box(Vector3d::Zero(), Vector3d(0.2, 0.2, 0.1), Matrix3d(AngleAxisd(0.3, Vector3d::UnitY())));
+  const Vector3d centre = crate.centre + crate.rotation * Vector3d(0.05, -0.1, 0.1 + 0.04);  // 1 cm into the top face
+  const Manifold m = capsule_box_manifold({centre, centre, 0.05}, crate, 0.005);
+  ASSERT_EQ(m.count, 1);
+  EXPECT_NEAR(m.points[0].separation, -0.01, kTolerance);
+  EXPECT_NEAR((m.normal - crate.rotation.col(2)).norm(), 0, 1e-12);
+}
+
 }  // namespace
 }  // namespace limber
