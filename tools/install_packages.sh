@@ -11,8 +11,9 @@
 #   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone and MJCF cross-checks) and its
 #             sample models (/usr/share/mujoco/model: the MJCF reader's humanoid tests)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
-#   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), matplotlib (tools/plot_*.py),
-#             valgrind (tools/cachegrind_layouts.sh)
+#   bench     Google Benchmark, the peer engines (MuJoCo, Bullet, ODE), libccd and FCL
+#             (bench/convex_pairs), matplotlib (tools/plot_*.py), valgrind
+#             (tools/cachegrind_layouts.sh)
 #   clang     clang 14 and its runtimes (libFuzzer, the sanitizers) and llvm-symbolizer: the fuzzer
 #             and the sanitizer runs build with it
 #   python    Python 3's headers, pybind11, NumPy and pytest: the module `limber` and its tests;
@@ -24,7 +25,7 @@ for purpose in "$@"; do
     library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libpugixml-dev libcli11-dev) ;;
     tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev libmujoco-samples) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
-    bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev python3-matplotlib valgrind) ;;
+    bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev libccd-dev libfcl-dev python3-matplotlib valgrind) ;;
     clang) packages+=(clang-14 libclang-rt-14-dev llvm-14) ;;
     python) packages+=(python3-dev pybind11-dev python3-numpy python3-pytest python3-pandas python3-distributed) ;;
     *) echo "install_packages.sh: unknown purpose '$purpose' (expected library, tests, viewer, bench, clang or python)" >&2; exit 2 ;;
