@@ -11,7 +11,7 @@
 #   --tests      also GoogleTest, GoogleMock and MuJoCo (the Featherstone cross-check), and the
 #                viewer's packages (its tests render under Xvfb), and --python's (its tests are
 #                the suite's too); builds the tests
-#   --bench      also Google Benchmark, Bullet, ODE and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
+#   --bench      also Google Benchmark, Bullet, ODE, libccd, FCL and matplotlib; builds bench/ (LIMBER_BUILD_BENCHMARKS)
 #   --python     also python3-dev, pybind11, NumPy, pytest, pandas and Dask; builds the module `limber`
 #                (build/python/limber: PYTHONPATH=build/python; LIMBER_BUILD_PYTHON)
 #   --portable   build for baseline x86-64 instead of -march=native
