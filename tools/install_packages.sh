@@ -7,7 +7,7 @@
 #
 #   library   the library and the `limber` program (compiler, CMake, Ninja and make — an installed
 #             package's client may configure with either —, Eigen, oneTBB, xsimd,
-#             nlohmann-json, pugixml (the MJCF reader), CLI11)
+#             nlohmann-json, pugixml (the MJCF reader), CLI11, libccd (general convex pairs))
 #   tests     GoogleTest, GoogleMock, MuJoCo (the Featherstone and MJCF cross-checks) and its
 #             sample models (/usr/share/mujoco/model: the MJCF reader's humanoid tests)
 #   viewer    GLFW, OpenGL (Mesa), Dear ImGui, stb; Xvfb, which runs it headless
@@ -22,7 +22,7 @@ set -euo pipefail
 packages=()
 for purpose in "$@"; do
   case "$purpose" in
-    library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libpugixml-dev libcli11-dev) ;;
+    library) packages+=(g++ cmake ninja-build make pkg-config libeigen3-dev libtbb-dev libxsimd-dev nlohmann-json3-dev libpugixml-dev libcli11-dev libccd-dev) ;;
     tests) packages+=(libgtest-dev libgmock-dev libmujoco-dev libmujoco-samples) ;;
     viewer) packages+=(libglfw3-dev libgl-dev libimgui-dev libstb-dev xvfb xauth libgl1-mesa-dri) ;;
     bench) packages+=(libbenchmark-dev libmujoco-dev libbullet-dev libode-dev libccd-dev libfcl-dev python3-matplotlib valgrind) ;;

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "limber/kernel/geometry/separating_axis.hpp"
+#include "tests/support/random_poses.hpp"
 
 namespace limber {
 namespace {
@@ -19,15 +20,11 @@ namespace {
 using Eigen::AngleAxisd;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
+using testing::random_rotation;
 
 constexpr double kTolerance = 1e-9;  // m
 
 Obb box(const Vector3d& centre, const Vector3d& half, const Matrix3d& rotation = Matrix3d::Identity()) { return {centre, half, rotation}; }
-
-Matrix3d random_rotation(std::mt19937& random) {
-  std::normal_distribution<double> normal;
-  return Eigen::Quaterniond(normal(random), normal(random), normal(random), normal(random)).normalized().toRotationMatrix();
-}
 
 double distance_to(const Obb& b, const Vector3d& p) { return (p - closest_point_on_obb(b, p)).norm(); }
 
