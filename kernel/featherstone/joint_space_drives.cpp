@@ -11,6 +11,7 @@
 #include "limber/kernel/featherstone/joint_space_response.hpp"
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
 
 namespace limber {
 namespace joint_space {
@@ -191,7 +192,7 @@ void gather_drive_forces(FeatherstoneState& state, double h, std::size_t island)
       // The turn E = D_target·D⁻¹ that takes the deviation D to the target (inboard frame), as a
       // rotation vector, the shorter way round.
       const JointFrame& frame = controls.frames[k];
-      Eigen::Quaterniond error = drive_target_rotation(drive, frame) * rotation_of(q.rotation).conjugate();
+      Eigen::Quaterniond error = drive_target_rotation(drive, frame) * rotation_quaternion(q.rotation).conjugate();
       if (error.w() < 0) error.coeffs() = -error.coeffs();
       const Eigen::AngleAxisd turn(error.normalized());
       const Eigen::Vector3d torque =

@@ -8,6 +8,7 @@
 #include "limber/kernel/featherstone/joint_space_response.hpp"
 #include "limber/kernel/featherstone/step.hpp"
 #include "limber/kernel/model/joint_coordinates.hpp"
+#include "limber/kernel/rigid/rigid_integration.hpp"
 
 namespace limber {
 namespace joint_space {
@@ -18,11 +19,6 @@ namespace joint_space {
 // solved; the others cannot reach it within the step (nor be pushed there by the contacts'
 // push-out of an ordinary step).
 constexpr double kLimitMargin = 0.02;
-
-Eigen::Quaterniond rotation_of(const Eigen::Vector3d& rotation) {
-  const double angle = rotation.norm();
-  return angle > 0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, rotation / angle)) : Eigen::Quaterniond::Identity();
-}
 
 MeasuredJoint measure_joint(const FeatherstoneState& state, std::size_t k) {
   const Joint& joint = state.joint_controls.joints[k];
@@ -120,7 +116,7 @@ int find_limit_rows(FeatherstoneState& state, double dt, const Eigen::VectorXd* 
     const JointCoordinates& q = measured.coordinates;
     // Spherical: rates of the swing and twist as rows on the relative angular velocity ω
     // (inboard frame), carried onto v.
-    const Eigen::Vector3d axis = (rotation_of(q.rotation) * frame.rest_axis).normalized();  // a = D·a₀
+    const Eigen::Vector3d axis = (rotation_quaternion(q.rotation) * frame.rest_axis).normalized();  // a = D·a₀
     const Eigen::Vector3d& cone = frame.cone_axis;                                           // c
     if (joint.limits.swing) {
       // θ = acos(c·a), θ̇ = ω·(c × a)/|c × a|: the axis that turns the cone's axis to the outboard's.

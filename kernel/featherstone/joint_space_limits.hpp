@@ -16,9 +16,6 @@ namespace limber::joint_space {
 // rows") and the stuck joints' of friction (joint_space_drives.cpp).
 inline constexpr int kActiveSetIterations = 8;
 
-// The rotation by rotation vector `rotation` (axis × angle, rad).
-Eigen::Quaterniond rotation_of(const Eigen::Vector3d& rotation);
-
 // Joint k measured at the tree's current poses (state.kinematics): its bodies' Model frames, its
 // coordinates, and the map from an inboard-frame angular vector to joint k's velocity coordinates,
 // sign·E_child·R_inboard (orthogonal: it maps rates' rows and torques alike).

@@ -43,8 +43,8 @@ struct Cylinder {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  ///< column 2: the axis in world
 };
 
-/// The convex hull of `vertices` (in its own frame, m), placed at centre + rotation·y. The
-/// vertices are the caller's and must outlive the hull.
+/// The convex hull of `vertices` (in its own frame, m; at least one), placed at centre +
+/// rotation·y. The vertices are the caller's and must outlive the hull.
 struct ConvexHull {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();

@@ -15,9 +15,6 @@ using Eigen::Vector3d;
 constexpr double kAlongFaceSine = 0.0523;
 // Below this (m), the capsule's core meets the box: the overlap is found by axes, not distance.
 constexpr double kCoreTouches = 1e-12;
-// An edge–edge axis is kept only where it is this much shallower than the best face axis
-// (separating_axis.hpp); the capsule's core against the box's faces uses the same preference.
-constexpr double kFacePreference = 0.95;
 
 // Which feature made a point, for ManifoldPoint::id: the kind of contact in bits 16–17, then its
 // own fields.
@@ -258,7 +255,7 @@ CoreAxis least_overlap(const Vector3d& p0, const Vector3d& d, const Vector3d& h)
     const Vector3d across = d.cross(Vector3d::Unit(k));
     if (across.norm() > 1e-6 * d.norm()) consider(edge, across.normalized(), -1);
   }
-  return edge.overlap < kFacePreference * face.overlap ? edge : face;
+  return edge.overlap < kEdgeAxisPreference * face.overlap ? edge : face;
 }
 
 }  // namespace

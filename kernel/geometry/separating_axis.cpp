@@ -15,9 +15,6 @@ constexpr double kParallelEpsilon = 1e-12;
 // An edge–edge axis a_i × b_j shorter than this (sine of the angle between the edges) has no
 // reliable direction, so it is not used as a contact normal.
 constexpr double kMinimumEdgeAxisLength = 1e-6;
-// An edge–edge axis becomes the contact normal only when it is this much shallower than the
-// best face axis (face contacts are steadier; Box2D and ODE bias the same way).
-constexpr double kEdgeAxisPreference = 0.95;
 
 // The best axis of one kind so far: its depth, unit axis (first box's frame) and t·L on it.
 struct AxisCandidate {

@@ -16,6 +16,11 @@
 
 namespace limber {
 
+/// An edge–edge axis becomes the contact normal only when its depth is below this fraction of the
+/// best face axis's (face contacts are steadier; Box2D and ODE bias the same way); the capsule–box
+/// manifold's axes take the same preference (manifolds.cpp).
+inline constexpr double kEdgeAxisPreference = 0.95;
+
 /// Which of the 15 axes: a face normal of the first box (`first` its axis 0–2), of the second
 /// (`second` its axis 0–2), or the cross product of the first's edges along its axis `first` and
 /// the second's along its axis `second`.

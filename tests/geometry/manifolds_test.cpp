@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "limber/kernel/geometry/golden_section.hpp"
 #include "limber/kernel/geometry/separating_axis.hpp"
 #include "tests/support/random_poses.hpp"
 
@@ -48,16 +49,12 @@ std::set<std::uint32_t> ids(const Manifold& m) {
   return result;
 }
 
-// The distance from the segment a–b to the solid box, by ternary search on the parameter (the
-// distance to a convex set is convex along a line): a check, not the method.
+// The distance from the segment a–b to the solid box, by golden-section search on the parameter
+// (the distance to a convex set is convex along a line): a check, not the method.
 double search_distance(const Vector3d& a, const Vector3d& b, const Obb& o) {
-  double lo = 0, hi = 1;
-  for (int i = 0; i < 200; ++i) {
-    const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
-    if (distance_to(o, a + m1 * (b - a)) < distance_to(o, a + m2 * (b - a))) hi = m2;
-    else lo = m1;
-  }
-  return distance_to(o, a + 0.5 * (lo + hi) * (b - a));
+  const auto at = [&](double s) { return distance_to(o, a + s * (b - a)); };
+  const GoldenBracket found = golden_section(at, 0.0, 1.0, 150, [](double, double) { return false; });
+  return at(0.5 * (found.low + found.high));
 }
 
 TEST(BoxPlaneManifold, ABoxOnItsFaceTouchesAtTheFacesFourCorners) {
