@@ -88,6 +88,15 @@ MassProperties solid_box(double mass, const Vector3d& size) {
   return diagonal(mass, mass * (s2.y() + s2.z()) / 12, mass * (s2.x() + s2.z()) / 12, mass * (s2.x() + s2.y()) / 12);
 }
 
+MassProperties solid_ellipsoid(double mass, const Vector3d& semi_axes) {
+  require_positive(mass, "mass");
+  require_positive(semi_axes.x(), "semi_axes.x");
+  require_positive(semi_axes.y(), "semi_axes.y");
+  require_positive(semi_axes.z(), "semi_axes.z");
+  const Vector3d a2 = semi_axes.cwiseProduct(semi_axes);
+  return diagonal(mass, mass * (a2.y() + a2.z()) / 5, mass * (a2.x() + a2.z()) / 5, mass * (a2.x() + a2.y()) / 5);
+}
+
 MassProperties solid_sphere(double mass, double radius) {
   require_positive(mass, "mass");
   require_positive(radius, "radius");
@@ -237,12 +246,31 @@ MassProperties combine(std::span<const MassProperties> parts) {
   return result;
 }
 
+namespace {
+
+// Uniform density over the shape, in the body frame.
+MassProperties solid_shape(double mass, const Shape& shape) {
+  switch (shape.type) {
+    case ShapeType::capsule:
+      if (shape.radius > 0) return solid_capsule(mass, shape.radius, shape.length);
+      break;
+    case ShapeType::box:
+    case ShapeType::ellipsoid: {
+      MassProperties solid = shape.type == ShapeType::box ? solid_box(mass, 2 * shape.half_extents) : solid_ellipsoid(mass, shape.half_extents);
+      const Matrix3d turn = shape.rotation.toRotationMatrix();
+      solid.inertia = turn * solid.inertia * turn.transpose();
+      return solid;
+    }
+    case ShapeType::cylinder: break;
+  }
+  return solid_cylinder(mass, shape.radius, shape.length);
+}
+
+}  // namespace
+
 MassProperties body_mass_properties(const Body& body) {
   if (body.inertial) return MassProperties{body.mass, body.inertial->centre_of_mass, body.inertial->inertia};
-  if (body.point_masses.empty()) {
-    return body.shape.type == ShapeType::capsule && body.shape.radius > 0 ? solid_capsule(body.mass, body.shape.radius, body.shape.length)
-                                                 : solid_cylinder(body.mass, body.shape.radius, body.shape.length);
-  }
+  if (body.point_masses.empty()) return solid_shape(body.mass, body.shape);
   std::vector<MassProperties> lumps;
   lumps.reserve(body.point_masses.size());
   for (const PointMass& lump : body.point_masses) {

@@ -34,6 +34,8 @@ MassProperties solid_cylinder(double mass, double radius, double length);
 MassProperties solid_capsule(double mass, double radius, double length);
 /// Solid box of edge lengths `size` (x, y, z): I_xx = m (s_y² + s_z²)/12, and so on.
 MassProperties solid_box(double mass, const Eigen::Vector3d& size);
+/// Solid ellipsoid of semi-axes `semi_axes` (x, y, z): I_xx = m (b² + c²)/5, and so on.
+MassProperties solid_ellipsoid(double mass, const Eigen::Vector3d& semi_axes);
 /// Solid sphere: I = (2/5) m r² E.
 MassProperties solid_sphere(double mass, double radius);
 

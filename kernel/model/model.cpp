@@ -27,8 +27,22 @@ double volume(const Shape& shape) {
       return cylinder;
     case ShapeType::capsule:
       return cylinder + 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    case ShapeType::box:
+      return 8 * shape.half_extents.prod();
+    case ShapeType::ellipsoid:
+      return 4.0 / 3.0 * std::numbers::pi * shape.half_extents.prod();
   }
   return cylinder;
+}
+
+std::string_view shape_type_name(ShapeType type) {
+  switch (type) {
+    case ShapeType::cylinder: return "cylinder";
+    case ShapeType::capsule: return "capsule";
+    case ShapeType::box: return "box";
+    case ShapeType::ellipsoid: return "ellipsoid";
+  }
+  return "unknown";
 }
 
 std::string_view joint_type_name(JointType type) {
@@ -177,16 +191,36 @@ void require_finite_derived(const Body& body, const Path& path) {
   }
 }
 
+// A shape's own fields: a cylinder's or capsule's length and radius, a box's or ellipsoid's
+// half-extents and rotation, and the other type's fields left at zero (never silently ignored).
+template <typename Path>
+void validate_shape(const Shape& shape, const Path& path) {
+  const auto unused = [&](const char* field, std::string_view uses) {
+    fail(path(field), "a " + std::string(shape_type_name(shape.type)) + " has " + std::string(uses) + ", not this field; leave it out");
+  };
+  if (has_half_extents(shape)) {
+    if (shape.length != 0) unused("shape.length", "half_extents");
+    if (shape.radius != 0) unused("shape.radius", "half_extents");
+    for (int k = 0; k < 3; ++k) require_positive(shape.half_extents[k], path("shape.half_extents"));
+    const Eigen::Vector4d q = shape.rotation.coeffs();
+    if (!q.allFinite() || !(std::abs(q.norm() - 1) <= 1e-9)) fail(path("shape.rotation"), "must be a unit quaternion");
+    return;
+  }
+  if (!shape.half_extents.isZero(0)) unused("shape.half_extents", "a length and a radius");
+  if (shape.rotation.coeffs() != Eigen::Quaterniond::Identity().coeffs()) unused("shape.rotation", "its axis along the body's");
+  if (shape.type == ShapeType::capsule) {
+    require_non_negative(shape.length, path("shape.length"));
+    if (shape.length == 0) require_positive(shape.radius, path("shape.radius"));  // a sphere
+  } else {
+    require_positive(shape.length, path("shape.length"));
+  }
+  require_non_negative(shape.radius, path("shape.radius"));
+}
+
 void validate_body(const Body& body, std::size_t index) {
   const auto path = field_path("bodies", index);
   require_name(body.name, path("name"), /*is_body=*/true);
-  if (body.shape.type == ShapeType::capsule) {
-    require_non_negative(body.shape.length, path("shape.length"));
-    if (body.shape.length == 0) require_positive(body.shape.radius, path("shape.radius"));  // a sphere
-  } else {
-    require_positive(body.shape.length, path("shape.length"));
-  }
-  require_non_negative(body.shape.radius, path("shape.radius"));
+  validate_shape(body.shape, path);
   require_positive(body.mass, path("mass"));
   double point_mass_sum = 0;
   for (std::size_t k = 0; k < body.point_masses.size(); ++k) {

@@ -34,20 +34,36 @@ class ModelError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class ShapeType { cylinder, capsule };
+enum class ShapeType { cylinder, capsule, box, ellipsoid };
 
-/// A limb's shape in its body frame: the axis is local +z, the centre is the origin.
-/// - cylinder: flat end faces at z = ±length/2, radius `radius`.
-/// - capsule: hemispherical caps centred at z = ±length/2 (total extent length + 2·radius); of
-///   length 0, a sphere (MuJoCo's sphere geoms: a head, a hand).
-/// The axis end points (0, 0, ±length/2) are the limb's *head* (+) and *tail* (−).
+/// A limb's shape in its body frame, centred at the origin.
+/// - cylinder: axis local +z, flat end faces at z = ±length/2, radius `radius`.
+/// - capsule: axis local +z, hemispherical caps centred at z = ±length/2 (total extent
+///   length + 2·radius); of length 0, a sphere (MuJoCo's sphere geoms: a head, a hand).
+/// - box: half-sizes `half_extents` along the shape frame's x, y, z; the shape frame is the body
+///   frame turned by `rotation` (a box's roll about the body's axis, which the body frame, a
+///   shortest arc from +z, does not carry).
+/// - ellipsoid: semi-axes `half_extents` along the shape frame's axes, as a box's.
+/// A cylinder's or capsule's axis end points (0, 0, ±length/2) are the limb's *head* (+) and
+/// *tail* (−); a box's and an ellipsoid's are both the centre (length 0). Cylinders and capsules
+/// use length and radius only, boxes and ellipsoids half_extents and rotation only.
 struct Shape {
   ShapeType type = ShapeType::cylinder;
   double length = 0;  ///< m, > 0 (a capsule: ≥ 0)
   double radius = 0;  ///< m, ≥ 0 (a capsule of length 0: > 0)
+  Vector3 half_extents = Vector3::Zero();                      ///< m, each > 0 (box, ellipsoid)
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  ///< unit: shape frame → body frame (box, ellipsoid)
 };
 
-/// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule.
+/// The name of a shape type as scene files and messages spell it ("box", "capsule", …).
+std::string_view shape_type_name(ShapeType type);
+
+/// Whether a shape is a box or an ellipsoid (half-extents and a rotation) rather than a
+/// cylinder or capsule (a length along the body's axis and a radius).
+inline bool has_half_extents(const Shape& shape) { return shape.type == ShapeType::box || shape.type == ShapeType::ellipsoid; }
+
+/// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule, 8·x·y·z for a
+/// box and 4/3 π x·y·z for an ellipsoid of half-extents (x, y, z).
 double volume(const Shape& shape);
 
 /// A lump of a limb's mass (thesis 4.1, eq. 4.1): a solid sphere of `radius` (0: a point)

@@ -1,6 +1,5 @@
 #include "limber/kernel/scene/mjcf_model.hpp"
 
-#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
 #include "limber/kernel/scene/mjcf_reader.hpp"
 #include "limber/kernel/scene/model_origins.hpp"
@@ -49,10 +48,9 @@ std::string geom_element(const mjcf::Geom& geom) {
   return "geom" + (geom.name.empty() ? std::string() : " name='" + geom.name + "'") + " type=" + kNames[static_cast<int>(geom.type)];
 }
 
-// A box or ellipsoid: on a moving body, a capsule stands in for its shape (capsule_proxy.hpp).
-bool collides_as_proxy(const mjcf::Geom& geom) { return geom.type == mjcf::GeomType::box || geom.type == mjcf::GeomType::ellipsoid; }
-
 // A geom of a moving body as a limber body at its world pose, with the geom's mass over its shape.
+// A box's or ellipsoid's body axis is its longest (the particle method's capsule proxy lies
+// along it, capsule_proxy.hpp), its own frame the geom's.
 Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string name) {
   Body body;
   body.name = std::move(name);
@@ -69,17 +67,16 @@ Body geom_body(const mjcf::Geom& geom, const Isometry& body_frame, std::string n
     case mjcf::GeomType::capsule: body.shape = {ShapeType::capsule, 2 * geom.size[1], geom.size[0]}; break;
     case mjcf::GeomType::cylinder: body.shape = {ShapeType::cylinder, 2 * geom.size[1], geom.size[0]}; break;
     case mjcf::GeomType::box:
-    case mjcf::GeomType::ellipsoid: {
-      const CapsuleProxy proxy = capsule_proxy(geom.size);
-      body.shape = proxy.shape, along = proxy.along;
+    case mjcf::GeomType::ellipsoid:
+      body.shape.type = geom.type == mjcf::GeomType::box ? ShapeType::box : ShapeType::ellipsoid;
+      body.shape.half_extents = geom.size;
+      geom.size.maxCoeff(&along);
       break;
-    }
     case mjcf::GeomType::plane: refuse(geom.at, geom_element(geom), "a plane must belong to the worldbody");
   }
   body.axis = world.linear().col(along).normalized();
-  if (collides_as_proxy(geom)) {  // the shape stands in: the mass distribution is the geom's
-    const Eigen::Vector3d moments = mjcf::detail::geom_principal_moments(geom.type, geom.size, geom.mass);
-    body.inertial = inertial_in_body_frame(body, world.translation(), world.linear(), moments.asDiagonal());
+  if (has_half_extents(body.shape)) {
+    body.shape.rotation = (body.orientation().conjugate() * Eigen::Quaterniond(world.linear())).normalized();
   }
   body.collision = {static_cast<std::uint32_t>(geom.contype), static_cast<std::uint32_t>(geom.conaffinity)};
   if (geom.contype != geom.conaffinity) {
@@ -292,23 +289,6 @@ Actuator actuator(const mjcf::Document& document, const mjcf::Actuator& source, 
   return actuator;
 }
 
-// One note for the box and ellipsoid geoms of moving bodies, at the first of them.
-void note_capsule_proxies(const mjcf::Document& document, std::vector<std::string>& notes) {
-  const mjcf::Geom* first = nullptr;
-  std::size_t count = 0;
-  for (const mjcf::Body& body : document.bodies) {
-    for (const mjcf::Geom& geom : body.geoms) {
-      if (!collides_as_proxy(geom)) continue;
-      if (count++ == 0) first = &geom;
-    }
-  }
-  if (count == 0) return;
-  notes.push_back(first->at.file + ":" + std::to_string(first->at.line) + ": <" + geom_element(*first) + ">: " +
-                  (count == 1 ? std::string("this box or ellipsoid") : "this and " + std::to_string(count - 1) + " more box and ellipsoid geoms") +
-                  " on moving bodies collide as the capsule along the longest axis, radius the shortest half-size; mass and inertia exact "
-                  "(kernel/scene/capsule_proxy.hpp)");
-}
-
 }  // namespace
 
 Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& notes) {
@@ -336,7 +316,6 @@ Model model_from_mjcf(const mjcf::Document& document, std::vector<std::string>& 
     const bool jointed = !source.joints.empty() && source.joints.front().type != mjcf::JointType::free;
     if (jointed) joint_of[b] = static_cast<int>(model.joints.size()) - 1;  // add_body adds the body's joint last
   }
-  note_capsule_proxies(document, notes);
   add_world_geoms(document, model, body_friction, origins);
   for (const mjcf::Actuator& each : document.actuators) {
     model.actuators.push_back(actuator(document, each, model, joint_of));

@@ -9,7 +9,6 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/inertial_import.hpp"
 #include "limber/kernel/scene/input_file.hpp"
 #include "limber/kernel/scene/model_origins.hpp"
@@ -151,8 +150,11 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
   body.name = link.name;
   int along = 2;  // the collision frame's axis that is the body's
   if (collision.type == urdf::GeometryType::box) {
-    const CapsuleProxy proxy = capsule_proxy(collision.size / 2);
-    body.shape = proxy.shape, along = proxy.along;
+    // Its body axis is its longest side (the particle method's capsule proxy lies along it,
+    // capsule_proxy.hpp), its own frame the collision frame.
+    body.shape.type = ShapeType::box;
+    body.shape.half_extents = collision.size / 2;
+    collision.size.maxCoeff(&along);
   } else {
     body.shape = collision.type == urdf::GeometryType::cylinder ? Shape{ShapeType::cylinder, collision.length, collision.radius}
                                                                   : Shape{ShapeType::capsule, 0, collision.radius};
@@ -163,6 +165,7 @@ Body link_body(const urdf::Link& link, const Isometry& frame) {
   const Isometry world = frame * collision.origin;
   body.position = world.translation();
   body.axis = world.linear().col(along).normalized();
+  if (has_half_extents(body.shape)) body.shape.rotation = (body.orientation().conjugate() * Eigen::Quaterniond(world.linear())).normalized();
   check_inertia(link);
   const urdf::Inertial& source = *link.inertial;
   body.mass = source.mass;
@@ -277,10 +280,6 @@ void add_links(const urdf::Robot& robot, const Tree& tree, bool floating_base, M
     }
     model.bodies.push_back(link_body(link, frame[index]));
     origins.bodies.push_back(urdf::where(link.at) + link_tag(link));
-    if (link.collisions.front().type == urdf::GeometryType::box) {
-      notes.push_back(urdf::where(link.collisions.front().shape_at) + "<box> of link '" + link.name +
-                      "': collides as the capsule along its longest side, radius its shortest half-side (kernel/scene/capsule_proxy.hpp)");
-    }
     const int own = static_cast<int>(model.bodies.size()) - 1;
     body_of[index] = own;
     if (l == floats) continue;

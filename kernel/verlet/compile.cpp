@@ -12,6 +12,7 @@
 #include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/model/checks.hpp"
 #include "limber/kernel/relaxation/relaxation.hpp"
+#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/sleeping/sleeping.hpp"
 #include "limber/kernel/verlet/bodies.hpp"
@@ -383,8 +384,12 @@ void build_joint_rows(VerletState<Scalar>& state, const Model& model, const Plan
 // The passes in order (kernel/PIPELINE.md lists them): check, plan the particles, fill the state,
 // then number, colour and prepare what the step needs.
 template <typename Scalar>
-VerletState<Scalar> compile(const Model& input, const VerletOptions& options) {
-  validate(input);
+VerletState<Scalar> compile(const Model& given, const VerletOptions& options) {
+  validate(given);
+  // Boxes and ellipsoids collide as their capsule proxies (capsule_proxy.hpp), on a copy.
+  std::optional<Model> proxies;
+  if (has_box_or_ellipsoid(given)) proxies = with_capsule_proxies(given);
+  const Model& input = proxies ? *proxies : given;
   validate(options.relaxation);
   validate(options.verlet);
   require_supported(input, Method::particles);
