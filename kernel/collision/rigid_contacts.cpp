@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <tuple>
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
 #include "limber/kernel/geometry/geometry.hpp"
+#include "limber/kernel/geometry/shape_pairs.hpp"
 #include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/collision/impulses.hpp"
 #include "limber/kernel/rigid/rigid_integration.hpp"
@@ -29,7 +31,17 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& stat
 
 constexpr std::size_t kBodiesPerBlock = 64;  // the per-body loops' blocks on the runner's threads
 
-// Every body's limb segment (its axis end points and radius; a ball's a point) as it is now.
+bool has_half_extents(const RigidScene& state, std::size_t b) {
+  return state.shapes.shape[b] == ShapeType::box || state.shapes.shape[b] == ShapeType::ellipsoid;
+}
+
+// A box's or an ellipsoid's shape frame in world, as it is now.
+Eigen::Quaterniond shape_frame(const RigidScene& state, std::size_t b) {
+  return (state.bodies.state.orientation[b] * state.shapes.principal_frame[b].conjugate() * state.shapes.shape_rotation[b]).normalized();
+}
+
+// Every body's limb segment (its axis end points and radius; a ball's a point; a box's or an
+// ellipsoid's centre, bounding radius and shape frame) as it is now.
 void find_limb_segments(RigidScene& state, BlockRunner* runner) {
   run_blocks(runner, state.bodies.size(), kBodiesPerBlock, [&](std::size_t b) {
     LimbSegment& segment = state.limb_segments[b];
@@ -39,11 +51,48 @@ void find_limb_segments(RigidScene& state, BlockRunner* runner) {
       std::tie(segment.head, segment.tail) = head_and_tail(state, b);
     }
     segment.radius = state.shapes.radius[b];
+    if (has_half_extents(state, b)) segment.orientation = shape_frame(state, b);
   });
+}
+
+// A box or an ellipsoid body as the shape-pair table sees it, as it is now.
+PlacedShape placed_shape(const RigidScene& state, std::size_t b) {
+  const Eigen::Vector3d centre = head_and_tail(state, b).first;  // head = tail: its length is 0
+  const Eigen::Matrix3d rotation = shape_frame(state, b).toRotationMatrix();
+  if (state.shapes.shape[b] == ShapeType::box) return Obb{centre, state.shapes.half_extents[b], rotation};
+  return Ellipsoid{centre, state.shapes.half_extents[b], rotation};
+}
+
+// A ball (centre, radius) against limb b: its separation and normal (from the limb towards the
+// ball). A box's or an ellipsoid's through the shape-pair table, within `margin` (m): farther, an
+// infinite separation.
+SphereLimbContact ball_limb_contact(const RigidScene& state, const Eigen::Vector3d& centre, double radius, std::size_t b, double margin) {
+  if (!has_half_extents(state, b)) {
+    const auto [head, tail] = head_and_tail(state, b);
+    return sphere_limb_contact(centre, radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
+  }
+  SphereLimbContact contact;
+  contact.separation = std::numeric_limits<double>::infinity();
+  const Manifold manifold = collide(Capsule{centre, centre, radius}, placed_shape(state, b), margin);
+  if (manifold.count > 0) contact.normal = manifold.normal, contact.separation = manifold.points[0].separation;
+  return contact;
+}
+
+// A box's or an ellipsoid's contacts with a plane: the manifold's points within the body's reach.
+void add_shape_plane_contacts(RigidScene& state, std::size_t b, const Plane& plane) {
+  const double reach = state.limb_segments[b].reach;
+  const Manifold manifold = collide(placed_shape(state, b), plane, reach);
+  for (int k = 0; k < manifold.count; ++k) {
+    const ManifoldPoint& point = manifold.points[k];
+    if (!(point.separation < reach)) continue;  // as a capsule's: a gap its reach does not close is no contact
+    state.contacts.push_back({static_cast<std::int32_t>(b), -1, point.point, plane.normal, -point.separation,
+                              std::max(plane.restitution, state.shapes.restitution[b]), plane.friction});
+  }
 }
 
 void add_plane_contacts(RigidScene& state, std::size_t b, std::size_t plane_index) {
   const Plane& plane = state.planes[plane_index];
+  if (has_half_extents(state, b)) return add_shape_plane_contacts(state, b, plane);
   const double radius = state.shapes.radius[b];
   const Eigen::Vector3d head = state.limb_segments[b].head, tail = state.limb_segments[b].tail;
   const bool disk = state.shapes.shape[b] == ShapeType::cylinder && !state.shapes.is_ball[b];
@@ -136,9 +185,9 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
     const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
     const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
     if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
-    const auto [head, tail] = head_and_tail(state, b);
-    const SphereLimbContact contact = sphere_limb_contact(centre, ball_radius, head, tail, state.shapes.shape[b], state.shapes.radius[b]);
-    if (contact.separation >= state.limb_segments[ball].reach + state.limb_segments[b].reach) continue;
+    const double reach = state.limb_segments[ball].reach + state.limb_segments[b].reach;
+    const SphereLimbContact contact = ball_limb_contact(state, centre, ball_radius, b, reach);
+    if (contact.separation >= reach) continue;
     state.islands[state.island_of_body[b]].wake();
     const Eigen::Vector3d point = centre - (ball_radius + 0.5 * contact.separation) * contact.normal;
     // Touching: overlapping, or (speculative contacts) a contact this step's impulses answer: the
@@ -173,15 +222,16 @@ bool sweep_ball(RigidScene& state, std::size_t ball) {
   for (const std::uint32_t b : state.collisions.ball_candidates().of(ball - state.ball_begin)) {
     if (b == ball) continue;
     const auto [head, tail] = head_and_tail(state, b);
-    const ShapeType shape = state.shapes.shape[b];
     const double limb_radius = state.shapes.radius[b];
     if (!overlaps(swept, BoundingSphere{0.5 * (head + tail), 0.5 * (head - tail).norm() + limb_radius})) continue;
-    if (sphere_limb_contact(from, radius, head, tail, shape, limb_radius).separation < -kSweptSlop * radius) continue;
-    const TimeOfImpact impact = sphere_limb_time_of_impact(from, to, radius, head, tail, shape, limb_radius);
+    if (ball_limb_contact(state, from, radius, b, radius).separation < -kSweptSlop * radius) continue;
+    const TimeOfImpact impact = has_half_extents(state, b) ? sphere_shape_time_of_impact(from, to, radius, placed_shape(state, b))
+                                                           : sphere_limb_time_of_impact(from, to, radius, head, tail, state.shapes.shape[b], limb_radius);
     if (!impact.hit || !(impact.time < first.time)) continue;
-    const SphereLimbContact touch = sphere_limb_contact(from + impact.time * path, radius, head, tail, shape, limb_radius);
-    const SphereLimbContact end = sphere_limb_contact(to, radius, head, tail, shape, limb_radius);
-    if (answer_at_touch(path, impact.time, touch.normal, radius, end.separation, end.normal)) {
+    const SphereLimbContact touch = ball_limb_contact(state, from + impact.time * path, radius, b, radius);
+    const SphereLimbContact end = ball_limb_contact(state, to, radius, b, radius);
+    const Eigen::Vector3d end_normal = std::isfinite(end.separation) ? end.normal : touch.normal;  // ends beyond the margin
+    if (answer_at_touch(path, impact.time, touch.normal, radius, end.separation, end_normal)) {
       first.keep_if_earlier(impact.time, touch.normal, touch.separation);
     }
   }

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "limber/kernel/geometry/golden_section.hpp"
+#include "limber/kernel/geometry/shape_pairs.hpp"
 #include "limber/layouts/graph/disjoint_sets.hpp"
 
 namespace limber {
@@ -24,7 +25,44 @@ constexpr double kEndZone = 0.02;
 // 0.618 per step, so 40 steps leave 4·10⁻⁹ of the segment's length.
 constexpr int kDeepestPointSteps = 40;
 
-LimbSegment model_segment(const Body& body) { return {body.head(), body.tail(), body.shape.radius}; }
+LimbSegment model_segment(const Body& body) {
+  if (!has_half_extents(body.shape)) return {body.head(), body.tail(), body.shape.radius};
+  LimbSegment segment{body.position, body.position, bounding_radius(body.shape)};
+  segment.orientation = body.orientation() * body.shape.rotation;
+  return segment;
+}
+
+// A static primitive as a shape: a mesh triangle is the prism it spans down to its thickness
+// below (or the flat triangle), its vertices in `storage`, which must outlive the shape.
+PlacedShape placed_shape(const StaticPrimitive& primitive, std::array<Vector3d, 6>& storage) {
+  switch (primitive.type) {
+    case ColliderType::box: return primitive.box;
+    case ColliderType::capsule: return primitive.capsule;
+    case ColliderType::mesh: break;
+  }
+  std::size_t count = 0;
+  for (const Vector3d& v : primitive.vertices) storage[count++] = v;
+  if (primitive.thickness > 0) {
+    for (const Vector3d& v : primitive.vertices) storage[count++] = v - primitive.thickness * primitive.face_normal;
+  }
+  return ConvexHull{Vector3d::Zero(), Eigen::Matrix3d::Identity(), std::span<const Vector3d>(storage.data(), count)};
+}
+
+// A manifold's points as contacts of `first` (and `second`, or static geometry).
+void add_manifold_contacts(std::uint32_t first, std::uint32_t second, const Manifold& manifold, std::vector<LimbContact>& out) {
+  for (int k = 0; k < manifold.count; ++k) {
+    const ManifoldPoint& point = manifold.points[k];
+    LimbContact contact;
+    contact.first = first, contact.second = second;
+    contact.normal = manifold.normal;
+    contact.point = point.point;
+    contact.separation = point.separation;
+    contact.feature = point.id;
+    // The static surface's point is point − ½·separation·n (C = n·p − offset, radius 0).
+    contact.offset = manifold.normal.dot(point.point) - 0.5 * point.separation;
+    out.push_back(contact);
+  }
+}
 
 // The segment's box, grown by its radius and `grow` (m).
 Aabb segment_box(const LimbSegment& limb, double grow) {
@@ -196,10 +234,18 @@ bool contact_before(const LimbContact& a, const LimbContact& b) {
   if (a.second != b.second) return a.second < b.second;
   if (a.collider != b.collider) return a.collider < b.collider;
   if (a.triangle != b.triangle) return a.triangle < b.triangle;
-  return a.axial_first < b.axial_first;
+  if (a.axial_first != b.axial_first) return a.axial_first < b.axial_first;
+  return a.feature < b.feature;
 }
 
 }  // namespace
+
+PlacedShape placed_shape(const Shape& shape, const LimbSegment& segment) {
+  if (!has_half_extents(shape)) return Capsule{segment.head, segment.tail, segment.radius};
+  const Eigen::Matrix3d rotation = segment.orientation.toRotationMatrix();
+  if (shape.type == ShapeType::box) return Obb{segment.head, shape.half_extents, rotation};
+  return Ellipsoid{segment.head, shape.half_extents, rotation};
+}
 
 // Bodies welded by fixed joints are one rigid body (a compound shape: MuJoCo's weld bodies, a
 // torso of two capsules), so a joint joins their whole groups: no two of a group collide, nor any
@@ -275,11 +321,13 @@ LimbCollisions::LimbCollisions(const Model& model)
   for (const Body& body : model.bodies) {
     limbs.push_back(model_segment(body));
     filters_.push_back(body.collision);
+    shapes_.push_back(body.shape);
   }
   restitution_.assign(limb_count_, 0.0);
   for (const Ball& ball : model.balls) {
     limbs.push_back({ball.position, ball.position, ball.radius});
     filters_.emplace_back();  // a ball meets everything its default filter allows
+    shapes_.push_back(Shape{ShapeType::capsule, 0, ball.radius});
     restitution_.push_back(ball.restitution);
   }
 
@@ -292,7 +340,7 @@ LimbCollisions::LimbCollisions(const Model& model)
   if (some_pair_tested(/*balls=*/false)) {
     for (std::uint32_t i = 0; i < limb_count_; ++i) boxes_[i] = segment_box(limbs[i], 0);
     for (const CandidatePair& pair : broadphase_.find_pairs(std::span<const Aabb>(boxes_).first(limb_count_))) {
-      if (limb_pair_contact(pair.first, pair.second, limbs[pair.first], limbs[pair.second]).separation < 0) excluded_.push_back(pair);
+      if (overlapping(pair.first, pair.second, limbs)) excluded_.push_back(pair);
     }
     set_up_comparisons_ += broadphase_.comparisons();
     std::sort(excluded_.begin(), excluded_.end());
@@ -349,6 +397,17 @@ bool LimbCollisions::some_pair_tested(bool balls) {
       allowed += a == b ? classes[a].count * (classes[a].count - 1) / 2 : classes[a].count * classes[b].count;
       if (allowed > excluded_allowed) return true;
     }
+  }
+  return false;
+}
+
+bool LimbCollisions::overlapping(std::uint32_t first, std::uint32_t second, std::span<const LimbSegment> limbs) const {
+  if (!has_half_extents(shapes_[first]) && !has_half_extents(shapes_[second])) {
+    return limb_pair_contact(first, second, limbs[first], limbs[second]).separation < 0;
+  }
+  const Manifold manifold = collide(placed_shape(shapes_[first], limbs[first]), placed_shape(shapes_[second], limbs[second]), 0);
+  for (int k = 0; k < manifold.count; ++k) {
+    if (manifold.points[k].separation < 0) return true;
   }
   return false;
 }
@@ -491,7 +550,11 @@ void LimbCollisions::add_limb_pair(std::uint32_t i, std::uint32_t j, std::span<c
   const double reach = margin + limbs[i].reach + limbs[j].reach;
   if (!spheres_within(segment_sphere(limbs[i]), segment_sphere(limbs[j]), reach)) return;
   const std::size_t begin = out.size();
-  add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
+  if (has_half_extents(shapes_[i]) || has_half_extents(shapes_[j])) {
+    add_manifold_contacts(i, j, collide(placed_shape(shapes_[i], limbs[i]), placed_shape(shapes_[j], limbs[j]), reach), out);
+  } else {
+    add_limb_pair_contacts(i, j, limbs[i], limbs[j], reach, out);
+  }
   // Limbs have no restitution and rub with the limbs' friction; balls have no friction.
   const double friction = i < limb_count_ ? limb_friction_ : 0.0;
   const double restitution = std::max(restitution_[i], restitution_[j]);
@@ -503,7 +566,16 @@ void LimbCollisions::add_static_pair(std::uint32_t s, const LimbSegment& limb, c
   const double reach = margin + limb.reach;
   if (!spheres_within(segment_sphere(limb), primitive.sphere, reach)) return;
   const std::size_t begin = out.size();
-  add_static_contacts(s, limb, primitive, reach, out);
+  if (has_half_extents(shapes_[s])) {
+    std::array<Vector3d, 6> vertices;
+    add_manifold_contacts(s, kStaticShape, collide(placed_shape(shapes_[s], limb), placed_shape(primitive, vertices), reach), out);
+    for (std::size_t k = begin; k < out.size(); ++k) {
+      out[k].collider = primitive.collider, out[k].triangle = primitive.triangle;
+      out[k].friction = primitive.friction, out[k].restitution = primitive.restitution;
+    }
+  } else {
+    add_static_contacts(s, limb, primitive, reach, out);
+  }
   // A ball bounces with the larger of its restitution and the collider's, as on the ground.
   for (std::size_t k = begin; k < out.size(); ++k) out[k].restitution = std::max(out[k].restitution, restitution_[s]);
 }

@@ -8,7 +8,10 @@
 // - bounding spheres: a pair whose spheres are apart is dropped with one distance;
 // - the exact closest points of the limb's capsule (its segment and radius) and the other shape.
 // Limbs are capsules here, a cylinder by the capsule around it (its caps stick out r past its
-// flat ends; the ground and the bounds still see a cylinder's exact rim, geometry.hpp).
+// flat ends; the ground and the bounds still see a cylinder's exact rim, geometry.hpp). A box or
+// an ellipsoid limb is its bounding sphere to the broadphase (head = tail = its centre, radius
+// bounding_radius) and itself to the narrowphase: every pair with one goes through the shape-pair
+// table (shape_pairs.hpp) as a manifold of up to four points.
 // Pairs a filter rejects, joined by a joint or overlapping in the Model's poses never reach the
 // broadphase's answer (CollisionFilter, model.hpp). A search keeps the pairs within each
 // segment's search_reach, so that the next few (a step's substeps) can run the narrowphase on
@@ -35,6 +38,7 @@
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
 #include "limber/kernel/geometry/broadphase.hpp"
+#include "limber/kernel/geometry/shape_pairs.hpp"
 #include "limber/kernel/geometry/static_geometry.hpp"
 #include "limber/kernel/geometry/time_of_impact.hpp"
 #include "limber/kernel/model/model.hpp"
@@ -45,7 +49,9 @@ namespace limber {
 /// LimbContact::second for a contact with static geometry.
 inline constexpr std::uint32_t kStaticShape = 0xFFFFFFFFu;
 
-/// A limb as collision sees it this step: the segment head → tail and its radius.
+/// A limb as collision sees it this step: the segment head → tail and its radius. A box or an
+/// ellipsoid (its Model shape, which LimbCollisions keeps): head = tail = its centre, radius its
+/// bounding_radius, and `orientation` its shape frame.
 struct LimbSegment {
   Eigen::Vector3d head = Eigen::Vector3d::Zero();  ///< m, world
   Eigen::Vector3d tail = Eigen::Vector3d::Zero();  ///< m, world
@@ -56,7 +62,15 @@ struct LimbSegment {
   /// m, ≥ reach: how far it may move before the next broadphase search; find() keeps the pairs
   /// within it for find_kept_pairs() (0: reach).
   double search_reach = 0;
+  /// Unit, shape frame → world: a box's or ellipsoid's (body orientation × Shape::rotation);
+  /// unused for capsules, cylinders and balls.
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
 };
+
+/// A segment's shape in the world: a box or an ellipsoid (`shape`, its Model shape) about the
+/// segment's centre in its orientation; any other limb (a cylinder too) and a ball the capsule of
+/// its segment.
+PlacedShape placed_shape(const Shape& shape, const LimbSegment& segment);
 
 /// Two shapes closer than the margin. For a limb–limb contact, first < second (Model body
 /// indices); against static geometry, second == kStaticShape and `collider` names it.
@@ -68,8 +82,9 @@ struct LimbContact {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  ///< unit, from second towards first
   Eigen::Vector3d point = Eigen::Vector3d::Zero();    ///< m, world: midway between the surfaces
   double separation = 0;     ///< m, < 0 overlapping (depth −separation)
-  double axial_first = 0;    ///< where on first's segment: 0 at the head, 1 at the tail
+  double axial_first = 0;    ///< where on first's segment: 0 at the head, 1 at the tail (0 for a box or ellipsoid)
   double axial_second = 0;   ///< the same on second's (limb–limb)
+  std::uint32_t feature = 0; ///< a manifold point's id (manifolds.hpp): the features that touch; 0 for capsule pairs
   /// For static contacts: the static surface's point is fixed, and C = n·p_first − offset with
   /// offset = n·(static surface point) + r_first (m). Unused for limb–limb.
   double offset = 0;
@@ -85,6 +100,9 @@ class LimbCollisions {
   /// Builds from `model` (its bodies, joints, colliders and Settings::limb_friction).
   explicit LimbCollisions(const Model& model);
 
+  /// The shape segment `s` collides as: its Model body's (a ball's: a capsule of length 0).
+  const Shape& shape(std::size_t s) const { return shapes_[s]; }
+
   /// Whether the model has anything to collide beyond the ground, the bounds and the balls'
   /// hits on limbs: a limb pair or a ball pair the filters allow, or a static collider. When
   /// false, find() does nothing.
@@ -94,10 +112,12 @@ class LimbCollisions {
   /// body, in order, then one per ball (head = tail = its centre): a ball meets static geometry
   /// and the other balls here, and limbs through its own path (contacts.hpp,
   /// rigid_contacts.hpp) — into `out` (cleared first), ordered by (first, second, collider,
-  /// triangle, axial_first): the same list whatever the broadphase's order, so a method's result
-  /// is the same bits run to run. Up to three contacts per limb and static shape (a limb lying on a
-  /// face touches it with both ends; one across an edge, at the edge too); one per limb pair, or
-  /// two for limbs lying along each other (within 15° of parallel: the ends of their shared length).
+  /// triangle, axial_first, feature): the same list whatever the broadphase's order, so a
+  /// method's result is the same bits run to run. Up to three contacts per capsule limb and
+  /// static shape (a limb lying on a face touches it with both ends; one across an edge, at the
+  /// edge too); one per capsule pair, or two for capsules lying along each other (within 15° of
+  /// parallel: the ends of their shared length); up to four (a manifold) for a pair with a box
+  /// or an ellipsoid.
   /// A pair is tested only when at least one of its segments is `awake` (one flag per segment;
   /// static geometry is never awake). A contact's restitution is the larger of its two sides'
   /// (a ball's, a collider's; a limb has none). The narrowphase runs on `runner`'s threads when
@@ -194,6 +214,8 @@ class LimbCollisions {
   void add_static_pair(std::uint32_t s, const LimbSegment& limb, const StaticPrimitive& primitive, double margin,
                        std::vector<LimbContact>& out) const;
   bool excluded(std::uint32_t first, std::uint32_t second) const;
+  // Whether two segments' shapes overlap (the Model's poses: such a pair is excluded).
+  bool overlapping(std::uint32_t first, std::uint32_t second, std::span<const LimbSegment> limbs) const;
   // Whether some pair of limbs (or of balls) left after the exclusions has filters that collide.
   bool some_pair_tested(bool balls);
   // Whether a search tests segments first < second: limb–limb or ball–ball, filters allowing.
@@ -204,6 +226,7 @@ class LimbCollisions {
   std::uint32_t limb_count_ = 0;            // Model bodies; the balls are the segments after them
   double limb_friction_ = 0;
   std::vector<CollisionFilter> filters_;    // per segment (a ball: the default filter)
+  std::vector<Shape> shapes_;               // per segment: the Model body's (a ball: a capsule of length 0)
   std::vector<double> restitution_;         // per segment: a ball's, 0 for a limb
   std::vector<CandidatePair> excluded_;     // sorted: joined, or overlapping at the Model's poses
   std::vector<std::uint32_t> excluded_begin_;  // segment s's exclusions with later segments: excluded_[excluded_begin_[s], excluded_begin_[s + 1])

@@ -120,6 +120,35 @@ TimeOfImpact sphere_limb_time_of_impact(const Vector3d& from, const Vector3d& to
   return at(first_touch(separation, around.time, path.norm()));
 }
 
+TimeOfImpact sphere_shape_time_of_impact(const Vector3d& from, const Vector3d& to, double radius, const PlacedShape& shape) {
+  if (const auto* capsule = std::get_if<Capsule>(&shape)) return sphere_capsule_time_of_impact(from, to, radius, capsule->a, capsule->b, capsule->radius);
+  if (const auto* box = std::get_if<Obb>(&shape)) return sphere_box_time_of_impact(from, to, radius, *box);
+  // The bounding sphere about the shape's own centre (the support's midpoint along three axes).
+  Vector3d centre;
+  double bound = 0;
+  for (int k = 0; k < 3; ++k) {
+    const Vector3d axis = Vector3d::Unit(k);
+    const auto extent = [&](const Vector3d& d) { return std::visit([&](const auto& s) { return support(s, d); }, shape); };
+    const Vector3d high = extent(axis), low = extent(-axis);
+    centre[k] = 0.5 * (high[k] + low[k]);
+    bound = std::max(bound, 0.5 * (high[k] - low[k]));
+  }
+  bound *= std::sqrt(3.0);  // the box of the supports holds the shape, its half-diagonal bounds it
+  const TimeOfImpact around = sphere_capsule_time_of_impact(from, to, radius, centre, centre, bound);
+  if (!around.hit) return around;
+  const Vector3d path = to - from;
+  // Gaps past `margin` are not measured (GJK grows both shapes by it): taken as the margin,
+  // which keeps the advancement conservative.
+  const double margin = bound + radius;
+  const auto separation = [&](double t) {
+    const Vector3d p = from + t * path;
+    const Manifold manifold = collide(Capsule{p, p, radius}, shape, margin);
+    return manifold.count > 0 ? std::min(manifold.points[0].separation, margin) : margin;
+  };
+  if (separation(0) <= 0) return {true, 0};
+  return at(first_touch(separation, around.time, path.norm()));
+}
+
 TimeOfImpact sphere_box_time_of_impact(const Vector3d& from, const Vector3d& to, double radius, const Obb& box) {
   if (box_surface_point(box, from).distance <= radius) return {true, 0};
   // In the box's frame: three boxes each grown along one axis, and the twelve edge capsules.

@@ -30,6 +30,7 @@
 #include <Eigen/Core>
 
 #include "limber/kernel/geometry/bounding_volumes.hpp"
+#include "limber/kernel/geometry/shape_pairs.hpp"
 #include "limber/kernel/geometry/static_geometry.hpp"
 #include "limber/kernel/model/model.hpp"
 
@@ -63,6 +64,12 @@ TimeOfImpact sphere_box_time_of_impact(const Eigen::Vector3d& from, const Eigen:
 TimeOfImpact sphere_triangle_time_of_impact(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius,
                                             const std::array<Eigen::Vector3d, 3>& triangle,
                                             const Eigen::Vector3d& face_normal);
+
+/// Against a limb's convex shape (shape_pairs.hpp): a capsule's and a box's exact, as above; any
+/// other's (an ellipsoid) by conservative advancement on the shape-pair table's separation, from
+/// the touch of its bounding sphere, to 1e-9 m of separation, never later than the touch.
+TimeOfImpact sphere_shape_time_of_impact(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius,
+                                         const PlacedShape& shape);
 
 /// Against a static primitive (a box, a capsule or a mesh triangle), as the functions above.
 TimeOfImpact sphere_static_time_of_impact(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double radius,

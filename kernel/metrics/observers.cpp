@@ -225,6 +225,10 @@ void limb_segments(const RigidScene& scene, const Model& model, std::vector<Limb
     const Shape& shape = model.bodies[body].shape;
     segments[body] = {world_point(scene, body, {0, 0, 0.5 * shape.length}), world_point(scene, body, {0, 0, -0.5 * shape.length}),
                       shape.radius};
+    if (has_half_extents(shape)) {
+      segments[body].radius = bounding_radius(shape);
+      segments[body].orientation = scene.bodies.state.orientation[body] * scene.shapes.principal_frame[body].conjugate() * shape.rotation;
+    }
   }
   for (std::size_t ball = scene.ball_begin; ball < scene.bodies.size(); ++ball) {
     segments.push_back({scene.bodies.state.position[ball], scene.bodies.state.position[ball], scene.shapes.radius[ball]});
@@ -247,6 +251,12 @@ Penetration deepest_penetration(const Model& model, LimbCollisions& collisions, 
   if (!model.ground) return deepest;
   for (std::size_t body = 0; body < segments.size() && body < model.bodies.size(); ++body) {
     const LimbSegment& segment = segments[body];
+    if (has_half_extents(collisions.shape(body))) {  // a box's or an ellipsoid's lowest point
+      const PlacedShape shape = placed_shape(collisions.shape(body), segment);
+      const double lowest = std::visit([](const auto& s) { return support(s, -Eigen::Vector3d::UnitZ()).z(); }, shape);
+      if (model.ground->height - lowest > deepest.depth) deepest = {model.ground->height - lowest, static_cast<int>(body), -1, -1};
+      continue;
+    }
     const Eigen::Vector3d axis = segment.tail - segment.head;
     const double length = axis.norm();
     const bool disk = model.bodies[body].shape.type == ShapeType::cylinder && length > 0;

@@ -58,6 +58,7 @@ RigidScene compile_rigid_scene(const Model& model) {
   bodies.resize(body_count);
   RigidShapes& shapes = scene.shapes;
   shapes.shape.resize(body_count), shapes.length.resize(body_count), shapes.radius.resize(body_count);
+  shapes.half_extents.assign(body_count, Eigen::Vector3d::Zero()), shapes.shape_rotation.assign(body_count, Eigen::Quaterniond::Identity());
   shapes.centre_offset.resize(body_count), shapes.principal_frame.resize(body_count), shapes.is_ball.assign(body_count, false);
   shapes.restitution.assign(body_count, 0.0);
 
@@ -80,6 +81,10 @@ RigidScene compile_rigid_scene(const Model& model) {
     set_body(b, mass, body.orientation(), body.to_world(mass.centre_of_mass), body.velocity_at(mass.centre_of_mass),
              body.angular_velocity);
     shapes.shape[b] = body.shape.type, shapes.length[b] = body.shape.length, shapes.radius[b] = body.shape.radius;
+    if (has_half_extents(body.shape)) {
+      shapes.radius[b] = bounding_radius(body.shape);
+      shapes.half_extents[b] = body.shape.half_extents, shapes.shape_rotation[b] = body.shape.rotation;
+    }
     shapes.centre_offset[b] = mass.centre_of_mass;
   }
   scene.ball_begin = static_cast<std::uint32_t>(limb_count);

@@ -24,7 +24,13 @@ namespace limber {
 /// The limbs' geometry for contacts, per body (the balls are the last bodies).
 struct RigidShapes {
   std::vector<ShapeType> shape;
-  std::vector<double> length, radius;           ///< m (a ball: length 0, its radius)
+  /// m (a ball: length 0, its radius; a box or an ellipsoid: length 0, its bounding_radius, so
+  /// every bound read from them holds)
+  std::vector<double> length, radius;
+  /// A box's or ellipsoid's Shape::half_extents (m) and Shape::rotation (its frame in the Model's
+  /// body frame); zero and identity for the other shapes.
+  std::vector<Eigen::Vector3d> half_extents;
+  std::vector<Eigen::Quaterniond> shape_rotation;
   std::vector<Eigen::Vector3d> centre_offset;   ///< centre of mass in the Model's body frame (shape-centred), m
   /// Rotation from the rigid body's frame (its principal axes) to the Model's body frame: a
   /// Model body-frame point p is at x + q·principal_frame⁻¹·(p − centre_offset) in world.
