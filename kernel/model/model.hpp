@@ -10,6 +10,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
@@ -65,6 +66,20 @@ inline bool has_half_extents(const Shape& shape) { return shape.type == ShapeTyp
 /// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule, 8·x·y·z for a
 /// box and 4/3 π x·y·z for an ellipsoid of half-extents (x, y, z).
 double volume(const Shape& shape);
+
+/// The radius of the smallest sphere about the shape's centre that holds it, m: length/2 + radius
+/// for a capsule, √((length/2)² + radius²) for a cylinder (its rim), |half_extents| for a box
+/// (a corner) and the longest semi-axis for an ellipsoid. Needs no rotation: a sphere about the
+/// centre holds the shape however it is turned.
+inline double bounding_radius(const Shape& shape) {
+  switch (shape.type) {
+    case ShapeType::capsule: return 0.5 * shape.length + shape.radius;
+    case ShapeType::cylinder: return std::hypot(0.5 * shape.length, shape.radius);
+    case ShapeType::box: return shape.half_extents.norm();
+    case ShapeType::ellipsoid: return shape.half_extents.maxCoeff();
+  }
+  return std::hypot(0.5 * shape.length, shape.radius);
+}
 
 /// A lump of a limb's mass (thesis 4.1, eq. 4.1): a solid sphere of `radius` (0: a point)
 /// centred at `position` in the body frame.
