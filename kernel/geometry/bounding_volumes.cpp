@@ -230,14 +230,19 @@ Vector3d closest_point_on_obb(const Obb& box, const Vector3d& point) {
 // ---- Fitting a limb ----
 
 BoundingSphere limb_sphere(const Shape& shape, const Vector3d& position, const Eigen::Quaterniond& /*orientation*/) {
-  const double half_length = 0.5 * shape.length;
   BoundingSphere sphere;
   sphere.centre = position;
-  sphere.radius = shape.type == ShapeType::capsule ? half_length + shape.radius : std::hypot(half_length, shape.radius);
+  sphere.radius = bounding_radius(shape);
   return sphere;
 }
 
 Aabb limb_aabb(const Shape& shape, const Vector3d& position, const Eigen::Quaterniond& orientation) {
+  if (has_half_extents(shape)) {
+    // Row i of R·diag(h) is the shape's half-axes' reach along world axis i.
+    const Eigen::Matrix3d reach = (orientation * shape.rotation).toRotationMatrix() * shape.half_extents.asDiagonal();
+    const Vector3d half_extents = shape.type == ShapeType::box ? Vector3d(reach.cwiseAbs().rowwise().sum()) : Vector3d(reach.rowwise().norm());
+    return Aabb{position - half_extents, position + half_extents};
+  }
   const Vector3d axis = orientation * Vector3d::UnitZ();
   Vector3d half_extents;
   for (int k = 0; k < 3; ++k) {

@@ -128,12 +128,16 @@ Eigen::Vector3d closest_point_on_obb(const Obb& box, const Eigen::Vector3d& poin
 // ---- Fitting a limb (kernel/model/model.hpp: its Shape in its body frame, axis local +z,
 // ---- placed with its centre at `position` and rotated by `orientation` from body to world) ----
 
-/// The smallest sphere about the centre: radius √((L/2)² + r²) for a cylinder (its rim), L/2 + r
-/// for a capsule. (It needs no orientation; the argument keeps the four fitters alike.)
+/// The smallest sphere about the centre, of radius bounding_radius(shape) (model.hpp):
+/// √((L/2)² + r²) for a cylinder (its rim), L/2 + r for a capsule, |half_extents| for a box, the
+/// longest semi-axis for an ellipsoid. (It needs no orientation; the argument keeps the four
+/// fitters alike.)
 BoundingSphere limb_sphere(const Shape& shape, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation);
 /// The tight box. With u the world axis, a cylinder's half-extent along world axis e is
 /// |u·e|·L/2 + r·√(1 − (u·e)²) (the end disk's rim reaches r·√(1 − (u·e)²) along e beyond its
-/// centre); a capsule's is |u·e|·L/2 + r (a cap's sphere reaches r along every axis).
+/// centre); a capsule's is |u·e|·L/2 + r (a cap's sphere reaches r along every axis). With R the
+/// shape frame's turn to world (orientation × shape.rotation) and h the half-extents, a box's is
+/// Σ_j |R_ij| h_j (its farthest corner) and an ellipsoid's √(Σ_j (R_ij h_j)²) (its support).
 Aabb limb_aabb(const Shape& shape, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation);
 /// The body-frame box, half-extents (r, r, L/2) for a cylinder and (r, r, L/2 + r) for a capsule.
 Obb limb_obb(const Shape& shape, const Eigen::Vector3d& position, const Eigen::Quaterniond& orientation);

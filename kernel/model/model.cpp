@@ -165,10 +165,13 @@ void require_finite_derived(const Body& body, const Path& path) {
     fail(path("mass"), "must be large enough that 1/mass is a finite number, got " + format_number(body.mass));
   }
   const auto overflows = [](double value) { return !std::isfinite(value); };
-  const double shape_extent = body.shape.length + 2 * body.shape.radius;
+  const bool boxlike = has_half_extents(body.shape);
+  const double shape_extent = boxlike ? 2 * bounding_radius(body.shape) : body.shape.length + 2 * body.shape.radius;
   if (overflows(shape_extent * shape_extent) || overflows(body.mass * shape_extent * shape_extent)) {
-    fail(path("shape"), "length " + format_number(body.shape.length) + " m and radius " + format_number(body.shape.radius) + " m with mass " +
-                            format_number(body.mass) + " kg: the body's extent squared, or its inertia (mass × extent²), is not a finite number");
+    const std::string size = boxlike ? "half_extents " + format_vector(body.shape.half_extents) + " m"
+                                     : "length " + format_number(body.shape.length) + " m and radius " + format_number(body.shape.radius) + " m";
+    fail(path("shape"), size + " with mass " + format_number(body.mass) +
+                            " kg: the body's extent squared, or its inertia (mass × extent²), is not a finite number");
   }
   double extent = shape_extent;  // from the centre of mass outwards, twice over: a bound on the inertia's lever arm
   for (std::size_t k = 0; k < body.point_masses.size(); ++k) {
@@ -196,12 +199,15 @@ void require_finite_derived(const Body& body, const Path& path) {
 template <typename Path>
 void validate_shape(const Shape& shape, const Path& path) {
   const auto unused = [&](const char* field, std::string_view uses) {
-    fail(path(field), "a " + std::string(shape_type_name(shape.type)) + " has " + std::string(uses) + ", not this field; leave it out");
+    const char* article = shape.type == ShapeType::ellipsoid ? "an " : "a ";
+    fail(path(field), article + std::string(shape_type_name(shape.type)) + " has " + std::string(uses) + ", not this field; leave it out");
   };
   if (has_half_extents(shape)) {
     if (shape.length != 0) unused("shape.length", "half_extents");
     if (shape.radius != 0) unused("shape.radius", "half_extents");
-    for (int k = 0; k < 3; ++k) require_positive(shape.half_extents[k], path("shape.half_extents"));
+    for (std::size_t k = 0; k < 3; ++k) {
+      require_positive(shape.half_extents[static_cast<int>(k)], [&] { return indexed(path("shape.half_extents")(), k); });
+    }
     const Eigen::Vector4d q = shape.rotation.coeffs();
     if (!q.allFinite() || !(std::abs(q.norm() - 1) <= 1e-9)) fail(path("shape.rotation"), "must be a unit quaternion");
     return;

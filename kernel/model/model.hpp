@@ -80,6 +80,20 @@ inline double bounding_radius(const Shape& shape) {
 /// box and 4/3 π x·y·z for an ellipsoid of half-extents (x, y, z).
 double volume(const Shape& shape);
 
+/// The radius of the smallest sphere about the shape's centre that holds it, m: length/2 + radius
+/// for a capsule, √((length/2)² + radius²) for a cylinder (its rim), |half_extents| for a box
+/// (a corner) and the longest semi-axis for an ellipsoid. Needs no rotation: a sphere about the
+/// centre holds the shape however it is turned.
+inline double bounding_radius(const Shape& shape) {
+  switch (shape.type) {
+    case ShapeType::capsule: return 0.5 * shape.length + shape.radius;
+    case ShapeType::cylinder: return std::hypot(0.5 * shape.length, shape.radius);
+    case ShapeType::box: return shape.half_extents.norm();
+    case ShapeType::ellipsoid: return shape.half_extents.maxCoeff();
+  }
+  return std::hypot(0.5 * shape.length, shape.radius);
+}
+
 /// A lump of a limb's mass (thesis 4.1, eq. 4.1): a solid sphere of `radius` (0: a point)
 /// centred at `position` in the body frame.
 struct PointMass {

@@ -194,11 +194,13 @@ Model make_grid_model(const GridSpec& spec) {
 
 namespace {
 
-/// The bodies' bounding box (capsule axes ± radius), m; empty (low > high) for no bodies.
+/// The bodies' bounding box (capsule axes ± radius; a box or ellipsoid: its centre ± its bounding
+/// radius, which holds it however it is turned), m; empty (low > high) for no bodies.
 Eigen::AlignedBox3d body_bounds(const Model& model) {
   Eigen::AlignedBox3d box;  // empty
   for (const Body& body : model.bodies) {
-    const Vector3 reach = Vector3::Constant(body.shape.radius);
+    // A box's or ellipsoid's head and tail are its centre (length 0).
+    const Vector3 reach = Vector3::Constant(has_half_extents(body.shape) ? bounding_radius(body.shape) : body.shape.radius);
     box.extend(body.head() - reach).extend(body.head() + reach).extend(body.tail() - reach).extend(body.tail() + reach);
   }
   return box;

@@ -103,10 +103,11 @@ TriangleMesh make_stairs_mesh(const StairsSpec& spec);
 /// How many triangles make_stairs_mesh(spec) makes: 8·steps + 4.
 inline std::size_t stairs_triangles(const StairsSpec& spec) { return 8 * spec.steps + 4; }
 
-/// The larger of the bodies' extents in x and y (capsule axes ± radius), m; 0 for no bodies.
+/// The larger of the bodies' extents in x and y (capsule axes ± radius; boxes and ellipsoids
+/// their bounding spheres, model.hpp's bounding_radius), m; 0 for no bodies.
 double footprint(const Model& model);
 
-/// The bodies' extent in z (capsule axes ± radius), m; 0 for no bodies.
+/// The bodies' extent in z (as footprint's), m; 0 for no bodies.
 double vertical_extent(const Model& model);
 
 /// `count` ≥ 1 copies of `model`'s bodies, joints and gears on square lattices, names led by

@@ -252,6 +252,36 @@ Inertial read_inertial(const Object& object) {
   return inertial;
 }
 
+/// A body's "shape": a cylinder's or capsule's length and radius, a box's or ellipsoid's
+/// half_extents and rotation (optional: the identity). The other family's fields are refused by
+/// name, as validate() words it, never ignored.
+Shape read_shape(const Object& object) {
+  object.allow_only({"type", "length", "radius", "half_extents", "rotation"});
+  Shape shape;
+  shape.type = read_shape_type(object.at("type"), object.path("type"));
+  const auto refuse = [&](std::initializer_list<const char*> fields, std::string_view uses) {
+    for (const char* field : fields) {
+      if (!object.find(field)) continue;
+      fail(object.path(field), a_shape(shape.type) + " has " + std::string(uses) + ", not this field; leave it out");
+    }
+  };
+  if (has_half_extents(shape)) {
+    refuse({"length", "radius"}, "half_extents");
+    shape.half_extents = object.vector("half_extents");
+    for (int k = 0; k < 3; ++k) require_positive(shape.half_extents[k], indexed(object.path("half_extents"), k));
+    if (const Json* rotation = object.find("rotation")) shape.rotation = read_unit_quaternion(*rotation, object.path("rotation"));
+    return shape;
+  }
+  refuse({"half_extents", "rotation"}, "a length and a radius");
+  shape.length = object.number("length");
+  // A capsule of length 0 is a sphere (model.hpp's Shape); its radius must then be > 0 (validate).
+  if (shape.type == ShapeType::capsule) require_non_negative(shape.length, object.path("length"));
+  else require_positive(shape.length, object.path("length"));
+  shape.radius = object.number("radius");
+  require_non_negative(shape.radius, object.path("radius"));
+  return shape;
+}
+
 BodySpec read_body(const Object& object) {
   object.allow_only({"name", "shape", "mass", "density", "point_masses", "inertial", "position", "axis", "linear_velocity",
                      "angular_velocity", "collision"});
@@ -260,15 +290,7 @@ BodySpec read_body(const Object& object) {
   body.name = object.string("name");
   require_name(body.name, object.path("name"), /*is_body=*/true);
 
-  const Object shape(object.at("shape"), object.path("shape"));
-  shape.allow_only({"type", "length", "radius"});
-  body.shape.type = read_shape_type(shape.at("type"), shape.path("type"));
-  body.shape.length = shape.number("length");
-  // A capsule of length 0 is a sphere (model.hpp's Shape); its radius must then be > 0 (validate).
-  if (body.shape.type == ShapeType::capsule) require_non_negative(body.shape.length, shape.path("length"));
-  else require_positive(body.shape.length, shape.path("length"));
-  body.shape.radius = shape.number("radius");
-  require_non_negative(body.shape.radius, shape.path("radius"));
+  body.shape = read_shape(Object(object.at("shape"), object.path("shape")));
 
   if (const Json* lumps = object.find("point_masses")) {
     for (const char* other : {"mass", "density", "inertial"}) {
@@ -311,6 +333,10 @@ Chain read_chain(const Object& object) {
   chain.links = object.integer("links");
   require_at_least(chain.links, 1, object.path("links"));
   chain.shape.type = read_shape_type(object.at("shape"), object.path("shape"));
+  if (has_half_extents(chain.shape)) {
+    fail(object.path("shape"), "must be \"cylinder\" or \"capsule\" (a chain's links are link_length long with link_radius), got " +
+                                   in_quotes(shape_type_name(chain.shape.type)));
+  }
   chain.shape.length = object.number("link_length");
   require_positive(chain.shape.length, object.path("link_length"));
   chain.shape.radius = object.number("link_radius");
@@ -460,6 +486,10 @@ std::vector<std::pair<std::string, Variant>> read_variants(
         fail(override_object.path(), "no body named " + in_quotes(body_name));
       Override entry{body->second, std::nullopt, &body_json, override_object.path()};
       if (override_object.find("radius")) {
+        if (has_half_extents(bodies[body->second].body.shape)) {
+          fail(override_object.path("radius"), "body " + in_quotes(body_name) + " is " + a_shape(bodies[body->second].body.shape.type) +
+                                                   ", which has half_extents and no radius");
+        }
         entry.radius = override_object.number("radius");
         require_non_negative(*entry.radius, override_object.path("radius"));
       }

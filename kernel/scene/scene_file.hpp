@@ -60,8 +60,18 @@
 //   "bodies": [ {                              required unless "chain" is given
 //       "name": "neck",                        required, unique, non-empty, not "world"
 //       "shape": { "type": "cylinder", "length": 0.05, "radius": 0.02 },
-//                                              required; type "cylinder" | "capsule"; length > 0 (a
-//                                              capsule: ≥ 0, a sphere of length 0 and radius > 0); radius ≥ 0
+//                                              required; type "cylinder" | "capsule" | "box" | "ellipsoid"
+//                                              (model.hpp's Shape). cylinder, capsule: length and radius,
+//                                              both required; length > 0 (a capsule: ≥ 0, a sphere of
+//                                              length 0 and radius > 0); radius ≥ 0
+//       "shape": { "type": "box", "half_extents": [0.1, 0.05, 0.2], "rotation": [1, 0, 0, 0] },
+//                                              box, ellipsoid: "half_extents" required, m, each > 0 (a
+//                                              box's half-sizes, an ellipsoid's semi-axes, along the shape
+//                                              frame's x, y, z); "rotation" optional ([1, 0, 0, 0], the
+//                                              identity): the unit quaternion [w, x, y, z] (norm 1 within
+//                                              1e-9) turning the shape frame into the body frame (a
+//                                              collider's "rotation" is a rotation vector instead). Either
+//                                              family's fields on the other are refused by name
 //       "mass": 2.268,                         exactly one of "mass" (kg, > 0),
 //       "density": 1000,                       "density" (kg/m³, > 0; mass = density × volume(shape)) or
 //       "point_masses": [ {"position": [0, 0, 0.01], "mass": 1.2, "radius": 0.02}, ... ],
@@ -86,8 +96,8 @@
 //       "inboard": "head",                     required: a body name, or "world"
 //       "outboard": "neck",                    required: a body name, different from inboard
 //       "inboard_anchor": "tail",              required: "head" | "tail" (the axis end points,
-//       "outboard_anchor": "head",             local (0,0,±length/2)) or a local [x,y,z] in m;
-//                                              with inboard "world", a world [x,y,z] in m
+//       "outboard_anchor": "head",             local (0,0,±length/2); not on a box or ellipsoid) or a
+//                                              local [x,y,z] in m; with inboard "world", a world [x,y,z] in m
 //       "axis": [1, 0, 0],                     revolute, prismatic, universal: required, world at rest
 //       "second_axis": [0, 1, 0],              universal: required, perpendicular to axis
 //       "stiffness": 2e4, "damping": 20,       optional: the stiff-spring method's spring (N/m, N·s/m)
@@ -125,7 +135,7 @@
 //       "control_range": [-1, 1] } ],          optional: controls outside are clamped to it
 //   "chain": {                                 optional generator of a straight chain of links
 //       "links": 5,                            required integer ≥ 1 (SceneOptions::links overrides)
-//       "shape": "capsule",                    required: "cylinder" | "capsule"
+//       "shape": "capsule",                    required: "cylinder" | "capsule" (not "box" or "ellipsoid")
 //       "link_length": 0.2, "link_radius": 0.015,     required; > 0 and ≥ 0
 //       "link_mass": 2.268, "end_mass": 4.536,        required, kg, > 0 (end_mass: the last link)
 //       "anchor": [0, 0, 1.5],                 required: world point of link_0's head
@@ -194,7 +204,8 @@
 //       "thin": { "head": { "radius": 0.04, "mass": 9.07 }, ... }, ... },
 //                                              each override may give "radius" and/or "mass" (or
 //                                              "density") for a body that exists; only "radius"
-//                                              for a body with "point_masses" (their sum is its mass)
+//                                              for a body with "point_masses" (their sum is its mass);
+//                                              no "radius" for a box or an ellipsoid
 //   "variant": "medium"                        required when "variants" is given: the default one
 // }
 //

@@ -14,14 +14,19 @@ namespace limber::scene_json {
 
 namespace {
 
-/// "head" | "tail" (the axis end points of `shape`) or a 3-vector; a world point when `shape`
-/// is null (inboard "world").
+/// "head" | "tail" (the axis end points of `shape`, a cylinder or capsule) or a 3-vector; a world
+/// point when `shape` is null (inboard "world").
 Vector3 read_anchor(const Json& value, const std::string& path, const Shape* shape) {
   if (value.is_string()) {
     const std::string end = value.get<std::string>();
     if (!shape) {
       fail(path,
            "must be a world point [x, y, z] when inboard is \"world\", got " + in_quotes(end));
+    }
+    // Both ends of a box or ellipsoid are its centre (model.hpp's Shape): a name that says an end
+    // and means the middle is refused.
+    if (has_half_extents(*shape) && (end == "head" || end == "tail")) {
+      fail(path, "must be a body-frame point [x, y, z] on " + a_shape(shape->type) + ", which has no " + end + ", got " + in_quotes(end));
     }
     if (end == "head") return {0, 0, 0.5 * shape->length};
     if (end == "tail") return {0, 0, -0.5 * shape->length};

@@ -9,9 +9,11 @@
 
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <initializer_list>
 #include <optional>
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <string_view>
@@ -104,12 +106,31 @@ inline Vector3 read_direction(const Json& value, const std::string& path) {
   return direction.normalized();
 }
 
+/// A unit quaternion [w, x, y, z]: four finite numbers whose norm is 1 within 1e-9 (as
+/// validate() holds a shape's rotation to), kept as given.
+inline Eigen::Quaterniond read_unit_quaternion(const Json& value, const std::string& path) {
+  if (!value.is_array() || value.size() != 4) {
+    const std::string found = value.is_array() ? "an array of " + std::to_string(value.size()) : std::string(value.type_name());
+    fail(path, "must be a unit quaternion [w, x, y, z], got " + found);
+  }
+  double q[4];
+  for (std::size_t k = 0; k < 4; ++k) q[k] = read_number(value[k], indexed(path, k));
+  const Eigen::Quaterniond rotation(q[0], q[1], q[2], q[3]);
+  const double norm = rotation.norm();
+  if (!(std::abs(norm - 1) <= 1e-9)) fail(path, "must be a unit quaternion [w, x, y, z], got one of norm " + format_number(norm) + " (1 within 1e-9)");
+  return rotation;
+}
+
 inline ShapeType read_shape_type(const Json& value, const std::string& path) {
   const std::string type = read_string(value, path);
-  if (type == "cylinder") return ShapeType::cylinder;
-  if (type == "capsule") return ShapeType::capsule;
-  fail(path, "must be \"cylinder\" or \"capsule\", got " + in_quotes(type));
+  for (const ShapeType each : {ShapeType::cylinder, ShapeType::capsule, ShapeType::box, ShapeType::ellipsoid}) {
+    if (type == shape_type_name(each)) return each;
+  }
+  fail(path, "must be \"cylinder\", \"capsule\", \"box\" or \"ellipsoid\", got " + in_quotes(type));
 }
+
+/// A shape type with its article, as messages name it: "a box", "an ellipsoid".
+inline std::string a_shape(ShapeType type) { return (type == ShapeType::ellipsoid ? "an " : "a ") + std::string(shape_type_name(type)); }
 
 /// A JSON object being read: known fields only, required ones present.
 class Object {

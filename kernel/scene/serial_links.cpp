@@ -18,9 +18,11 @@ Vector3 in_frame(const Model& model, int body, const Vector3& world) {
 }
 
 // A link's length where its two axes meet: a quarter of the outboard's length (its diameter for
-// a sphere), so that a particle limb has an axis to hold a frame on.
+// a sphere, its longest side for a box or ellipsoid, whose length is 0), so that a particle limb
+// has an axis to hold a frame on.
 double link_length(const Body& outboard) {
-  return 0.25 * std::max(outboard.shape.length, 2 * outboard.shape.radius);
+  const Shape& shape = outboard.shape;
+  return 0.25 * (has_half_extents(shape) ? 2 * shape.half_extents.maxCoeff() : std::max(shape.length, 2 * shape.radius));
 }
 
 // The revolute or prismatic joint of one axis between `inboard` and `outboard`, anchored at the

@@ -456,6 +456,65 @@ std::vector<Vector3d> surface_samples(const Shape& shape) {
   return points;
 }
 
+// A box's or ellipsoid's bounding sphere and tight box, its shape frame turned by shape.rotation
+// inside a turned body: every corner (box) or surface sample (ellipsoid) inside both; the box's
+// farthest corner on the sphere; along each world axis the farthest corner, or the ellipsoid's
+// support point H²d/|Hd| (d the axis in the shape frame, H the semi-axes), on the box's face.
+TEST(LimbFitting, BoxAndEllipsoidVolumesHoldTheShapeAndTouchIt) {
+  std::mt19937 rng(7);
+  for (int i = 0; i < 40; ++i) {
+    Shape shape;
+    shape.type = i % 2 == 0 ? ShapeType::box : ShapeType::ellipsoid;
+    shape.half_extents = random_vector(rng, 0.05, 0.5);
+    shape.rotation = random_rotation(rng);
+    const Vector3d position = random_vector(rng, -1, 1);
+    const Quaterniond orientation = random_rotation(rng);
+    const Matrix3d to_world = (orientation * shape.rotation).toRotationMatrix();
+    std::vector<Vector3d> surface;  // shape frame
+    if (shape.type == ShapeType::box) {
+      for (int corner = 0; corner < 8; ++corner) {
+        surface.push_back(Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1, corner & 4 ? 1 : -1).cwiseProduct(shape.half_extents));
+      }
+    } else {
+      for (int j = 0; j <= 24; ++j) {
+        for (int k = 0; k < 48; ++k) {
+          const double polar = std::numbers::pi * j / 24, around = 2 * std::numbers::pi * k / 48;
+          const Vector3d unit(std::sin(polar) * std::cos(around), std::sin(polar) * std::sin(around), std::cos(polar));
+          surface.push_back(unit.cwiseProduct(shape.half_extents));
+        }
+      }
+    }
+    const BoundingSphere sphere = limb_sphere(shape, position, orientation);
+    const Aabb aabb = limb_aabb(shape, position, orientation);
+    double farthest = 0;
+    for (const Vector3d& local : surface) {
+      const Vector3d point = position + to_world * local;
+      EXPECT_LE((point - sphere.centre).norm(), sphere.radius + 1e-12);
+      farthest = std::max(farthest, (point - sphere.centre).norm());
+      EXPECT_TRUE((point.array() >= aabb.min.array() - 1e-12).all());
+      EXPECT_TRUE((point.array() <= aabb.max.array() + 1e-12).all());
+    }
+    if (shape.type == ShapeType::box) {
+      EXPECT_NEAR(farthest, sphere.radius, 1e-12) << "a corner on the sphere";
+    }
+    for (int k = 0; k < 3; ++k) {
+      for (const double sign : {-1.0, 1.0}) {
+        const Vector3d along = to_world.transpose() * (sign * Vector3d::Unit(k));  // the world axis in the shape frame
+        double reach = -std::numeric_limits<double>::infinity();
+        if (shape.type == ShapeType::box) {
+          for (const Vector3d& local : surface) reach = std::max(reach, sign * (position + to_world * local)[k]);
+        } else {
+          const Vector3d h2d = shape.half_extents.cwiseProduct(shape.half_extents).cwiseProduct(along);
+          const Vector3d support = h2d / shape.half_extents.cwiseProduct(along).norm();
+          EXPECT_NEAR(support.cwiseQuotient(shape.half_extents).norm(), 1, 1e-12) << "on the surface";
+          reach = sign * (position + to_world * support)[k];
+        }
+        EXPECT_NEAR(reach, sign > 0 ? aabb.max[k] : -aabb.min[k], 1e-12) << shape_type_name(shape.type) << ", axis " << k << " side " << sign;
+      }
+    }
+  }
+}
+
 TEST(LimbFitting, FittedVolumesContainTheLimb) {
   std::mt19937 rng(5);
   for (int i = 0; i < 40; ++i) {

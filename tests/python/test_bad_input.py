@@ -137,6 +137,8 @@ OVERFLOWING_BODIES = {
     "capsule 1e160 m long": ({"shape": {"type": "capsule", "length": 1e160, "radius": 0.05}}, "shape"),
     "capsule of radius 1e300 m": ({"shape": {"type": "capsule", "length": 0.3, "radius": 1e300}}, "shape"),
     "cylinder of radius 1e160 m": ({"shape": {"type": "cylinder", "length": 0.3, "radius": 1e160}}, "shape"),
+    "box 1e200 m wide": ({"shape": {"type": "box", "half_extents": [1e200, 0.1, 0.1]}}, "shape"),
+    "ellipsoid of semi-axis 1e160 m": ({"shape": {"type": "ellipsoid", "half_extents": [0.1, 1e160, 0.1]}}, "shape"),
     "mass 1e-320 kg": ({"mass": 1e-320}, "mass"),
     "speed 1e300 m/s": ({"linear_velocity": [1e300, 0, 0]}, "linear_velocity"),
     "spin 1e300 rad/s": ({"angular_velocity": [0, 1e300, 0]}, "angular_velocity"),

@@ -169,11 +169,49 @@ def test_a_body_description_reads_back_into_the_same_body():
         assert again[key] == world.body_description("head")[key]
 
 
+def test_a_box_and_an_ellipsoid_are_described_as_themselves_and_read_back():
+    world = ragdoll()
+    turn = [np.cos(0.3), 0.0, 0.0, np.sin(0.3)]  # 0.6 rad about the body's axis
+    world.add_body({"name": "box", "shape": {"type": "box", "half_extents": [0.1, 0.2, 0.3], "rotation": turn}, "mass": 2.0,
+                    "position": [3, 0, 2], "axis": [0, 0, 1]})
+    world.add_body({"name": "egg", "shape": {"type": "ellipsoid", "half_extents": (0.05, 0.04, 0.08)}, "density": 1000.0,
+                    "position": [4, 0, 2], "axis": [1, 0, 0]})
+    assert world.body_description("box")["shape"] == {"type": "box", "half_extents": [0.1, 0.2, 0.3], "rotation": turn}
+    egg = world.body_description("egg")
+    assert egg["shape"] == {"type": "ellipsoid", "half_extents": [0.05, 0.04, 0.08], "rotation": [1, 0, 0, 0]}  # the identity
+    assert egg["mass"] == pytest.approx(1000 * 4 / 3 * np.pi * 0.05 * 0.04 * 0.08, rel=1e-15)
+    for name in ("box", "egg"):
+        twin = world.body_description(name)
+        twin["name"] = name + "_twin"
+        twin["position"] = np.array(twin["position"]) + [0, 2, 0]
+        world.add_body(twin)
+        again = world.body_description(name + "_twin")
+        for key in ("shape", "mass", "axis", "collision"):
+            assert again[key] == world.body_description(name)[key]
+
+
+@pytest.mark.parametrize("shape, named", [
+    ({"type": "box", "half_extents": [0.1, 0.2, 0.3], "length": 0.3},
+     r"add_body: bodies\[0\]\.shape\.length: a box has half_extents, not this field; leave it out"),
+    ({"type": "ellipsoid", "half_extents": [0.1, 0.0, 0.3]}, r"add_body: bodies\[0\]\.shape\.half_extents\[1\]: must be > 0, got 0"),
+    ({"type": "box", "half_extents": [0.1, 0.2, 0.3], "rotation": [1, 0, 0, 0.5]},
+     r"add_body: bodies\[0\]\.shape\.rotation: must be a unit quaternion \[w, x, y, z\]"),
+    ({"type": "capsule", "length": 0.3, "radius": 0.05, "half_extents": [0.1, 0.1, 0.1]},
+     r"add_body: bodies\[0\]\.shape\.half_extents: a capsule has a length and a radius, not this field; leave it out"),
+])
+def test_a_bad_box_or_ellipsoid_is_a_model_error_naming_the_field(shape, named):
+    world = ragdoll()
+    before = world.body_names
+    with pytest.raises(limber.ModelError, match=named):
+        world.add_body(dict(crate(), shape=shape))
+    assert world.body_names == before
+
+
 @pytest.mark.parametrize("change, named", [
     ({"mass": -1.0}, r"add_body: bodies\[0\]\.mass: must be > 0, got -1"),
     ({"colour": "red"}, r"add_body: bodies\[0\]: unknown field \"colour\""),
     ({"position": [0, float("nan"), 1]}, r"add_body: bodies\[0\]\.position\[1\]: must be a finite number, got nan"),
-    ({"shape": {"type": "cube", "length": 1, "radius": 1}}, r"bodies\[0\]\.shape\.type: must be \"cylinder\" or \"capsule\""),
+    ({"shape": {"type": "cube", "length": 1, "radius": 1}}, r"bodies\[0\]\.shape\.type: must be \"cylinder\", \"capsule\", \"box\" or \"ellipsoid\", got \"cube\""),
     ({"axis": [0, 0, 0]}, r"bodies\[0\]\.axis"),
 ])
 def test_a_bad_body_field_raises_a_model_error_naming_it_and_changes_nothing(change, named):

@@ -273,5 +273,26 @@ TEST(Generators, HumanoidPileRejectsOverlappingCopies) {
   EXPECT_NO_THROW(make_humanoid_pile(2, 0.25));
 }
 
+// A box's or ellipsoid's head and tail are its centre: its extent is its bounding sphere's
+// (model.hpp's bounding_radius), however it is turned, beside a capsule's axis ± radius.
+TEST(Footprint, ABoxOrEllipsoidReachesItsBoundingRadius) {
+  Model model;
+  Body box;
+  box.name = "box", box.mass = 1, box.position = {0, 0, 1};
+  box.shape.type = ShapeType::box, box.shape.half_extents = {0.1, 0.2, 0.2};  // corner 0.3 m out
+  box.shape.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
+  model.bodies = {box};
+  EXPECT_NEAR(footprint(model), 0.6, 1e-12);
+  EXPECT_NEAR(vertical_extent(model), 0.6, 1e-12);
+  Body egg = box;
+  egg.name = "egg", egg.position = {1, 0, 1};
+  egg.shape.type = ShapeType::ellipsoid;  // longest semi-axis 0.2 m
+  Body rod;
+  rod.name = "rod", rod.mass = 1, rod.position = {-1, 0, 1}, rod.shape = {ShapeType::capsule, 0.4, 0.05};  // along z
+  model.bodies = {box, egg, rod};
+  EXPECT_NEAR(footprint(model), 1 + 0.2 + 1 + 0.05, 1e-12) << "x: the rod's radius to the egg's semi-axis";
+  EXPECT_NEAR(vertical_extent(model), 0.6, 1e-12) << "z: the box's corners, above and below the rod's 0.5 m";
+}
+
 }  // namespace
 }  // namespace limber

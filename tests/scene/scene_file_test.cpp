@@ -161,7 +161,7 @@ TEST(SceneErrors, NeitherMassNorDensityNamesBoth) {
 
 TEST(SceneErrors, UnknownShapeTypeIsRejected) {
   EXPECT_EQ(pendulum_error(R"("type": "capsule")", R"("type": "sphere")"),
-            "test.json: bodies[1].shape.type: must be \"cylinder\" or \"capsule\", got \"sphere\"");
+            "test.json: bodies[1].shape.type: must be \"cylinder\", \"capsule\", \"box\" or \"ellipsoid\", got \"sphere\"");
 }
 
 TEST(SceneErrors, DuplicateBodyNameIsRejected) {
@@ -525,6 +525,94 @@ TEST(SceneErrors, BeforeGeneratingHearsTheBodiesAndItsRefusalStopsTheLoad) {
   ASSERT_EQ(heard.size(), 2u);
   EXPECT_EQ(heard[0], std::make_pair(10.0, std::string("chain.links (SceneOptions::links)")));
   EXPECT_EQ(heard[1].first, 2000.0);
+}
+
+// ---- Boxes and ellipsoids: half_extents and a rotation in place of a length and a radius
+
+// A box turned 60° about the body's z (the quaternion's w = cos 30°, z = sin 30°) and an
+// ellipsoid in the body frame (no rotation: the identity), both hanging from the world.
+constexpr std::string_view kBoxAndEllipsoid = R"({
+  "limber_scene": 1,
+  "name": "box_and_ellipsoid",
+  "settings": {"gravity": [0, 0, -9.81], "time_step": 0.01, "duration": 1},
+  "bodies": [
+    {"name": "crate", "shape": {"type": "box", "half_extents": [0.1, 0.2, 0.3], "rotation": [0.8660254037844387, 0, 0, 0.5]},
+     "density": 500, "position": [0, 0, 1], "axis": [0, 0, 1]},
+    {"name": "egg", "shape": {"type": "ellipsoid", "half_extents": [0.05, 0.04, 0.08]},
+     "mass": 1.5, "position": [1, 0, 1], "axis": [1, 0, 0]},
+    {"name": "rod", "shape": {"type": "capsule", "length": 0.2, "radius": 0.01},
+     "mass": 1, "position": [2, 0, 1], "axis": [0, 0, 1]}
+  ],
+  "joints": [
+    {"name": "hook", "type": "spherical", "inboard": "world", "outboard": "crate",
+     "inboard_anchor": [0, 0, 1.3], "outboard_anchor": [0, 0, 0.3]}
+  ]
+})";
+
+std::string box_error(std::string_view from, std::string_view to) { return load_error(with(kBoxAndEllipsoid, from, to)); }
+
+TEST(SceneLoading, BoxesAndEllipsoidsKeepTheirTypeHalfExtentsAndRotation) {
+  const Model model = load_scene_text(kBoxAndEllipsoid, "test.json").model;
+  const Shape& crate = model.bodies[0].shape;
+  EXPECT_EQ(crate.type, ShapeType::box);
+  EXPECT_EQ(crate.half_extents, Vector3(0.1, 0.2, 0.3));
+  EXPECT_EQ(crate.rotation.coeffs(), Eigen::Quaterniond(0.8660254037844387, 0, 0, 0.5).coeffs()) << "kept as given";
+  EXPECT_EQ(crate.length, 0);
+  EXPECT_EQ(crate.radius, 0);
+  EXPECT_DOUBLE_EQ(model.bodies[0].mass, 500 * 0.2 * 0.4 * 0.6) << "density × the box's volume";
+  const Shape& egg = model.bodies[1].shape;
+  EXPECT_EQ(egg.type, ShapeType::ellipsoid);
+  EXPECT_EQ(egg.half_extents, Vector3(0.05, 0.04, 0.08));
+  EXPECT_EQ(egg.rotation.coeffs(), Eigen::Quaterniond::Identity().coeffs()) << "rotation left out: the identity";
+  const Shape& rod = model.bodies[2].shape;
+  EXPECT_EQ(rod.half_extents, Vector3::Zero());
+  EXPECT_EQ(rod.rotation.coeffs(), Eigen::Quaterniond::Identity().coeffs());
+}
+
+TEST(SceneErrors, BadBoxAndEllipsoidFieldsAreNamed) {
+  EXPECT_EQ(box_error(R"("type": "box", )", R"("type": "box", "length": 0.2, )"),
+            "test.json: bodies[0].shape.length: a box has half_extents, not this field; leave it out");
+  EXPECT_EQ(box_error(R"("type": "ellipsoid", )", R"("type": "ellipsoid", "radius": 0.2, )"),
+            "test.json: bodies[1].shape.radius: an ellipsoid has half_extents, not this field; leave it out");
+  EXPECT_EQ(box_error(R"("half_extents": [0.1, 0.2, 0.3], )", ""), "test.json: bodies[0].shape.half_extents: missing required field");
+  EXPECT_EQ(box_error("[0.1, 0.2, 0.3]", "[0.1, 0, 0.3]"), "test.json: bodies[0].shape.half_extents[1]: must be > 0, got 0");
+  EXPECT_EQ(box_error("[0.05, 0.04, 0.08]", "[0.05, 0.04, -0.08]"), "test.json: bodies[1].shape.half_extents[2]: must be > 0, got -0.08");
+  EXPECT_EQ(box_error("[0.1, 0.2, 0.3]", "[0.1, 0.2]"),
+            "test.json: bodies[0].shape.half_extents: must be an array of 3 numbers, got an array of 2");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", "[1, 0, 0, 0.1]"),
+            "test.json: bodies[0].shape.rotation: must be a unit quaternion [w, x, y, z], got one of norm 1.004987562112089 (1 within 1e-9)");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", "[0.866, 0, 0, 0.5]"),
+            "test.json: bodies[0].shape.rotation: must be a unit quaternion [w, x, y, z], got one of norm 0.9999779997579946 (1 within 1e-9)");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", "[0, 0, 0, 0]"),
+            "test.json: bodies[0].shape.rotation: must be a unit quaternion [w, x, y, z], got one of norm 0 (1 within 1e-9)");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", "[0, 0, 1]"),
+            "test.json: bodies[0].shape.rotation: must be a unit quaternion [w, x, y, z], got an array of 3");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", "[1e999, 0, 0, 0]"),
+            "test.json: bodies[0].shape.rotation[0]: must be a finite number, got 1e999");
+  EXPECT_EQ(box_error("[0.8660254037844387, 0, 0, 0.5]", R"([1, 0, 0, "0"])"),
+            "test.json: bodies[0].shape.rotation[3]: must be a number, got string");
+  // A capsule's or cylinder's shape takes neither field of a box's.
+  EXPECT_EQ(box_error(R"("radius": 0.01})", R"("radius": 0.01, "half_extents": [0.1, 0.1, 0.1]})"),
+            "test.json: bodies[2].shape.half_extents: a capsule has a length and a radius, not this field; leave it out");
+  EXPECT_EQ(box_error(R"("radius": 0.01})", R"("radius": 0.01, "rotation": [1, 0, 0, 0]})"),
+            "test.json: bodies[2].shape.rotation: a capsule has a length and a radius, not this field; leave it out");
+}
+
+TEST(SceneErrors, ABoxHasNoHeadOrTailAnchorAndNoRadiusToVary) {
+  EXPECT_EQ(box_error(R"("outboard_anchor": [0, 0, 0.3])", R"("outboard_anchor": "head")"),
+            "test.json: joints[0].outboard_anchor: must be a body-frame point [x, y, z] on a box, which has no head, got \"head\"");
+  const std::string variants = with(kBoxAndEllipsoid, R"(  "joints": [)", R"(  "variants": {"big": {"crate": {"radius": 0.5}}},
+  "variant": "big",
+  "joints": [)");
+  EXPECT_EQ(load_error(variants), "test.json: variants.big.crate.radius: body \"crate\" is a box, which has half_extents and no radius");
+}
+
+TEST(SceneErrors, AChainsLinksAreCylindersOrCapsules) {
+  const std::string chain = read_text(kScenes + "chain.json");
+  EXPECT_EQ(load_error(with(chain, R"("shape": "capsule")", R"("shape": "box")")),
+            "test.json: chain.shape: must be \"cylinder\" or \"capsule\" (a chain's links are link_length long with link_radius), got \"box\"");
+  EXPECT_EQ(load_error(with(chain, R"("shape": "capsule")", R"("shape": "ellipsoid")")),
+            "test.json: chain.shape: must be \"cylinder\" or \"capsule\" (a chain's links are link_length long with link_radius), got \"ellipsoid\"");
 }
 
 TEST(SceneLoading, DensityGivesMassDensityTimesVolume) {

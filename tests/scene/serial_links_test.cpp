@@ -79,6 +79,23 @@ TEST(SerialLinks, TheExpansionKeepsIndicesMassAndJointPoints) {
   validate(out);
 }
 
+// A box's length is 0: where its two hinges' axes meet, the link between them takes a quarter of
+// its longest side (not 0 m, whose direction is undefined).
+TEST(SerialLinks, AHingedBoxGetsALinkOfAQuarterOfItsLongestSide) {
+  Model model = rod_on_two_skew_hinges();
+  Body& box = model.bodies[0];
+  box.shape = Shape{};
+  box.shape.type = ShapeType::box, box.shape.half_extents = {0.05, 0.1, 0.5};
+  model.joints[0].serial_axes[1].point = Eigen::Vector3d::Zero();  // the axes meet at the origin,
+  model.joints[0].outboard_anchor = Eigen::Vector3d(0, 0, 0.5);     // the box's end
+  validate(model);
+  const Model out = expand_serial_joints(model).model;
+  ASSERT_EQ(out.bodies.size(), 2u);
+  EXPECT_NEAR(out.bodies[1].shape.length, 0.25, 1e-15) << "a quarter of 1 m";
+  EXPECT_TRUE(out.bodies[1].axis.allFinite());
+  validate(out);
+}
+
 // Against Featherstone's exact motion, 0.5 s of a swing about both axes under gravity: the gap
 // shrinks with the links' mass share, at first order (ten times less mass, about ten times less
 // gap), so it is the virtual links' mass and nothing else.

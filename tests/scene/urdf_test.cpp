@@ -164,23 +164,27 @@ TEST(UrdfArm, InertiaAboutTheCentreIsTheFilesTensorRotatedIntoTheWorld) {
   expect_near(upper.to_world(upper.inertial->centre_of_mass), {0.25, 0, 0.1});
 }
 
-// A box collides as the capsule along its longest side (capsule_proxy.hpp), in the collision
-// frame (here turned by pitch π/2, so the box's z is the world's x), and the link keeps its
-// <inertial> exactly.
-TEST(UrdfArm, ABoxLinkCollidesAsTheCapsuleAlongItsLongestSideKeepingItsInertial) {
+// A <box> collision is a box body: half its size as half_extents, the collision frame (here
+// turned by pitch π/2, so the box's z is the world's x) as its shape frame, its body axis along
+// its longest side; the link keeps its <inertial> exactly, and no note is made of the box.
+TEST(UrdfArm, ABoxLinkIsABoxInTheCollisionFrameKeepingItsInertial) {
   const std::string xml = replaced(kArm, "<geometry><cylinder radius=\"0.02\" length=\"0.4\"/></geometry>", "<geometry><box size=\"0.05 0.04 0.4\"/></geometry>");
   std::vector<std::string> notes;
   const Model model = parse(xml, &notes);
   const Body& lower = model.bodies[2];
-  EXPECT_EQ(lower.shape.type, ShapeType::capsule);
-  EXPECT_DOUBLE_EQ(lower.shape.radius, 0.02);
-  EXPECT_DOUBLE_EQ(lower.shape.length + 2 * lower.shape.radius, 0.4);
+  EXPECT_EQ(lower.shape.type, ShapeType::box);
+  EXPECT_EQ(lower.shape.half_extents, Eigen::Vector3d(0.025, 0.02, 0.2));
+  EXPECT_EQ(lower.shape.length, 0);
+  EXPECT_EQ(lower.shape.radius, 0);
+  const Eigen::Matrix3d box_to_world = (lower.orientation() * lower.shape.rotation).toRotationMatrix();
+  expect_near(box_to_world.col(2), {1, 0, 0});  // the box's z, its longest side, along the world's x
+  expect_near(box_to_world.col(1), {0, 1, 0});
   expect_near(lower.axis, {1, 0, 0});
   expect_near(lower.position, {0.7, 0, 0.1});
   EXPECT_EQ(lower.mass, 0.5);
   ASSERT_TRUE(lower.inertial.has_value());
   expect_near(lower.to_world(lower.inertial->centre_of_mass), {0.7, 0, 0.1});
-  EXPECT_EQ(std::count_if(notes.begin(), notes.end(), [](const std::string& note) { return note.find("<box> of link 'lower'") != std::string::npos; }), 1);
+  EXPECT_EQ(std::count_if(notes.begin(), notes.end(), [](const std::string& note) { return note.find("<box>") != std::string::npos; }), 0);
 }
 
 TEST(UrdfArm, JointsAreRevoluteAtTheirOriginsWithAxesRangesDampingAndFriction) {

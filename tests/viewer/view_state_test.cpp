@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -202,6 +203,41 @@ TEST(SceneDrawer, DrawsEveryLimbAndBallAndTheContactsOfALandedBody) {
   const std::vector<ShownContact>& standing = drawer.contacts(view.world());
   ASSERT_FALSE(standing.empty());
   for (const ShownContact& contact : standing) EXPECT_NEAR(contact.point.z(), 0.0, 1e-9);
+}
+
+// A box body is drawn as a box and an ellipsoid as the unit sphere scaled by its semi-axes, each
+// in its shape frame: the body's pose turned by the shape's rotation.
+TEST(SceneDrawer, DrawsBoxesAndEllipsoidsAsThemselvesInTheirShapeFrames) {
+  const std::filesystem::path scene = limber::testing::test_directory() / "box_and_ellipsoid.json";
+  std::ofstream(scene) << R"({
+  "limber_scene": 1, "name": "box_and_ellipsoid",
+  "settings": {"gravity": [0, 0, -9.81], "time_step": 0.01, "duration": 1},
+  "bodies": [
+    {"name": "crate", "shape": {"type": "box", "half_extents": [0.1, 0.2, 0.3], "rotation": [0.9238795325112867, 0, 0, 0.3826834323650898]},
+     "mass": 2, "position": [0, 0, 1], "axis": [1, 0, 1]},
+    {"name": "egg", "shape": {"type": "ellipsoid", "half_extents": [0.05, 0.04, 0.08]}, "mass": 1, "position": [1, 0, 1], "axis": [0, 1, 0]}
+  ]
+})";
+  ViewState view({scene.string()});
+  SceneDrawer drawer;
+  DrawList list;
+  drawer.draw(view, list);
+  ASSERT_EQ(list.solids.size(), 2u);
+  const SolidKind kinds[2] = {SolidKind::box, SolidKind::ellipsoid};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const Shape& shape = view.world().model().bodies[i].shape;
+    const Pose pose = view.world().pose(view.world().bodies()[i]);
+    const Solid& solid = list.solids[i];
+    SCOPED_TRACE(std::string(shape_type_name(shape.type)));
+    EXPECT_EQ(solid.kind, kinds[i]);
+    EXPECT_EQ(solid.half_extents, shape.half_extents.cast<float>());
+    const Eigen::Matrix3f turn = (pose.orientation * shape.rotation).toRotationMatrix().cast<float>();
+    EXPECT_LT((solid.placement.linear() - turn).cwiseAbs().maxCoeff(), 1e-6f);
+    EXPECT_LT((solid.placement.translation() - pose.position.cast<float>()).norm(), 1e-6f);
+  }
+  // The box's 45° turn about its body axis is drawn: its shape x is not its body frame's x.
+  const Eigen::Vector3f body_x = (view.world().pose(view.world().bodies()[0]).orientation * Eigen::Vector3d::UnitX()).cast<float>();
+  EXPECT_NEAR(list.solids[0].placement.linear().col(0).dot(body_x), std::cos(std::numbers::pi_v<float> / 4), 1e-6f);
 }
 
 TEST(SceneDrawer, GapColourGoesFromGreenToRedAsTheGapGrows) {

@@ -105,6 +105,21 @@ Json to_json(py::handle value, const std::string& path, std::string_view call, s
 
 py::list triple(const Vector3& v) { return py::cast(std::vector<double>{v.x(), v.y(), v.z()}); }
 
+// A body's shape as the scene file gives it: a box's or ellipsoid's half_extents and rotation
+// (w, x, y, z), a cylinder's or capsule's length and radius.
+py::dict shape_dict(const Shape& given) {
+  py::dict shape;
+  shape["type"] = std::string(shape_type_name(given.type));
+  if (has_half_extents(given)) {
+    const Eigen::Quaterniond& q = given.rotation;
+    shape["half_extents"] = triple(given.half_extents);
+    shape["rotation"] = py::cast(std::vector<double>{q.w(), q.x(), q.y(), q.z()});
+  } else {
+    shape["length"] = given.length, shape["radius"] = given.radius;
+  }
+  return shape;
+}
+
 }  // namespace
 
 Scene scene_of(std::string_view call, const py::dict& sections) {
@@ -118,9 +133,7 @@ Scene scene_of(std::string_view call, const py::dict& sections) {
 }
 
 py::dict body_dict(const Body& body) {
-  py::dict shape;
-  shape["type"] = body.shape.type == ShapeType::capsule ? "capsule" : "cylinder";
-  shape["length"] = body.shape.length, shape["radius"] = body.shape.radius;
+  const py::dict shape = shape_dict(body.shape);
   py::dict out;
   out["name"] = body.name, out["shape"] = shape;
   if (!body.point_masses.empty()) {

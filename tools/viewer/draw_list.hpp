@@ -19,10 +19,11 @@ struct Colour {
 };
 
 enum class SolidKind : std::uint8_t {
-  capsule,   ///< core segment along local z from −half_length to +half_length, hemispherical caps of `radius`
-  cylinder,  ///< along local z from −half_length to +half_length, flat ends, `radius`
-  sphere,    ///< `radius` about the origin
-  box,       ///< half_extents along local x, y, z
+  capsule,    ///< core segment along local z from −half_length to +half_length, hemispherical caps of `radius`
+  cylinder,   ///< along local z from −half_length to +half_length, flat ends, `radius`
+  sphere,     ///< `radius` about the origin
+  box,        ///< half_extents along local x, y, z
+  ellipsoid,  ///< semi-axes half_extents along local x, y, z (the unit sphere scaled per axis)
 };
 
 /// A shaded solid: a limb, a ball, a collider.
@@ -31,7 +32,7 @@ struct Solid {
   Eigen::Isometry3f placement = Eigen::Isometry3f::Identity();  ///< local → world (rotation and translation, no scale)
   float radius = 0;                                              ///< m (capsule, cylinder, sphere)
   float half_length = 0;                                         ///< m (capsule, cylinder)
-  Eigen::Vector3f half_extents = Eigen::Vector3f::Zero();        ///< m (box)
+  Eigen::Vector3f half_extents = Eigen::Vector3f::Zero();        ///< m (box, ellipsoid)
   Colour colour;
   bool casts_shadow = true;
 };

@@ -134,6 +134,9 @@ int parts_of(const Solid& solid, std::array<Part, 3>& parts) {
     case SolidKind::box:
       parts[0] = Part{UnitShape::box, identity, solid.half_extents};
       return 1;
+    case SolidKind::ellipsoid:  // the normal matrix (append_instance) keeps its shading true
+      parts[0] = Part{UnitShape::sphere, identity, solid.half_extents};
+      return 1;
   }
   return 0;
 }
@@ -141,11 +144,14 @@ int parts_of(const Solid& solid, std::array<Part, 3>& parts) {
 // A regular n-gon strays r (1 − cos(π/n)) from its circle of radius r: the coarsest level
 // keeping that within a pixel. All parts of a solid share the level, so their seams match.
 std::size_t level_of(const Solid& solid, const Eigen::RowVector4f& clip_w, float pixels_per_unit) {
-  const float reach = solid.kind == SolidKind::box ? solid.half_extents.norm() : solid.radius + solid.half_length;
+  const bool scaled = solid.kind == SolidKind::box || solid.kind == SolidKind::ellipsoid;
+  const float reach = scaled ? solid.half_extents.norm() : solid.radius + solid.half_length;
   // w of the solid's nearest possible point (perspective), or the constant w (orthographic).
   const float w = clip_w.head<3>().dot(solid.placement.translation()) + clip_w(3) - reach * clip_w.head<3>().norm();
   if (!(w > 0)) return kLevelCount - 1;
-  const float radius_pixels = solid.radius * pixels_per_unit / w;
+  // An ellipsoid's outline strays most along its longest semi-axis (a box is the same at every level).
+  const float radius = solid.kind == SolidKind::ellipsoid ? solid.half_extents.maxCoeff() : solid.radius;
+  const float radius_pixels = radius * pixels_per_unit / w;
   for (std::size_t level = 0; level + 1 < kLevelCount; ++level) {
     if (radius_pixels * (1 - std::cos(kPi / static_cast<float>(kLevelSegments[level]))) <= 1) return level;
   }

@@ -90,10 +90,16 @@ void draw_bodies(const ViewState& view, DrawList& list) {
     const Pose pose = world.pose(bodies[i]);
     const Shape& shape = world.body_description(bodies[i]).shape;
     Solid solid;
-    solid.kind = shape.type == ShapeType::capsule ? SolidKind::capsule : SolidKind::cylinder;
-    solid.placement = placement(pose.position, pose.orientation);
-    solid.radius = std::max(float(shape.radius), kThinnest);
-    solid.half_length = float(0.5 * shape.length);
+    if (has_half_extents(shape)) {  // in its own frame, turned from the body's by shape.rotation
+      solid.kind = shape.type == ShapeType::box ? SolidKind::box : SolidKind::ellipsoid;
+      solid.placement = placement(pose.position, pose.orientation * shape.rotation);
+      solid.half_extents = shape.half_extents.cast<float>();
+    } else {
+      solid.kind = shape.type == ShapeType::capsule ? SolidKind::capsule : SolidKind::cylinder;
+      solid.placement = placement(pose.position, pose.orientation);
+      solid.radius = std::max(float(shape.radius), kThinnest);
+      solid.half_length = float(0.5 * shape.length);
+    }
     solid.colour = body_colour(i, view.picked() == i, world.sleeping(bodies[i]));
     list.solids.push_back(solid);
   }
@@ -131,6 +137,10 @@ void draw_level(const Model& model, DrawList& list) {
   if (model.bounds) add_box_edges(list.lines, model.bounds->min, model.bounds->max, {0.3f, 0.3f, 0.35f});
 }
 
+// A limb's size to measure a joint's gap against, m: its length, a box's or ellipsoid's longest
+// extent (its length is 0).
+double limb_size(const Shape& shape) { return has_half_extents(shape) ? 2 * shape.half_extents.maxCoeff() : shape.length; }
+
 void draw_joint_gaps(const World& world, DrawList& list) {
   const Model& model = world.model();
   const std::vector<BodyId> bodies = world.bodies();
@@ -138,11 +148,11 @@ void draw_joint_gaps(const World& world, DrawList& list) {
     const Pose out = world.pose(bodies[joint.outboard]);
     const Eigen::Vector3d b = out.position + out.orientation * joint.outboard_anchor;
     Eigen::Vector3d a = joint.inboard_anchor;
-    double length = model.bodies[joint.outboard].shape.length;
+    double length = limb_size(model.bodies[joint.outboard].shape);
     if (joint.inboard != kWorld) {
       const Pose in = world.pose(bodies[joint.inboard]);
       a = in.position + in.orientation * joint.inboard_anchor;
-      length = 0.5 * (length + model.bodies[joint.inboard].shape.length);
+      length = 0.5 * (length + limb_size(model.bodies[joint.inboard].shape));
     }
     const Colour colour = gap_colour((a - b).norm() / std::max(length, 1e-9));
     add_line(list.on_top, a, b, colour);
