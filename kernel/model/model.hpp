@@ -63,19 +63,6 @@ std::string_view shape_type_name(ShapeType type);
 /// cylinder or capsule (a length along the body's axis and a radius).
 inline bool has_half_extents(const Shape& shape) { return shape.type == ShapeType::box || shape.type == ShapeType::ellipsoid; }
 
-/// The radius of the smallest sphere about the shape's centre that holds it, m: length/2 + radius
-/// for a capsule, hypot(length/2, radius) for a cylinder, |half_extents| for a box, the largest
-/// semi-axis for an ellipsoid.
-inline double bounding_radius(const Shape& shape) {
-  switch (shape.type) {
-    case ShapeType::capsule: return 0.5 * shape.length + shape.radius;
-    case ShapeType::cylinder: return std::hypot(0.5 * shape.length, shape.radius);
-    case ShapeType::box: return shape.half_extents.norm();
-    case ShapeType::ellipsoid: return shape.half_extents.maxCoeff();
-  }
-  return 0;
-}
-
 /// Volume of a shape, m³: π r² L for a cylinder, π r² L + 4/3 π r³ for a capsule, 8·x·y·z for a
 /// box and 4/3 π x·y·z for an ellipsoid of half-extents (x, y, z).
 double volume(const Shape& shape);
