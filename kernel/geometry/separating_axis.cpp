@@ -1,7 +1,9 @@
 #include "limber/kernel/geometry/separating_axis.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace limber {
 namespace {
@@ -15,6 +17,8 @@ constexpr double kParallelEpsilon = 1e-12;
 // An edge–edge axis a_i × b_j shorter than this (sine of the angle between the edges) has no
 // reliable direction, so it is not used as a contact normal.
 constexpr double kMinimumEdgeAxisLength = 1e-6;
+// Face normals of the two boxes within 1° of parallel tie (separating_axis_test, below).
+const double kParallelFacesCosine = std::cos(std::numbers::pi / 180);
 
 // The best axis of one kind so far: its depth, unit axis (first box's frame) and t·L on it.
 struct AxisCandidate {
@@ -47,19 +51,19 @@ SeparatingAxisResult separating_axis_test(const Obb& first, const Obb& second, b
   const Vector3d t = first.rotation.transpose() * (second.centre - first.centre);
 
   SeparatingAxisResult result;
-  AxisCandidate face, edge;
+  AxisCandidate first_face, second_face, edge;
   // The first box's face normals a_k.
   for (int k = 0; k < 3; ++k) {
     const double distance = std::abs(t[k]);
     if (distance > ha[k] + hb.dot(abs_r_test.row(k)) + margin) return result;
-    consider(face, ha[k] + hb.dot(abs_r.row(k)) - distance, Vector3d::Unit(k), t[k], {BoxAxis::Kind::first_face, k, 0});
+    consider(first_face, ha[k] + hb.dot(abs_r.row(k)) - distance, Vector3d::Unit(k), t[k], {BoxAxis::Kind::first_face, k, 0});
   }
   // The second box's face normals b_k = column k of R.
   for (int k = 0; k < 3; ++k) {
     const double offset = t.dot(r.col(k));
     const double distance = std::abs(offset);
     if (distance > ha.dot(abs_r_test.col(k)) + hb[k] + margin) return result;
-    consider(face, ha.dot(abs_r.col(k)) + hb[k] - distance, r.col(k), offset, {BoxAxis::Kind::second_face, 0, k});
+    consider(second_face, ha.dot(abs_r.col(k)) + hb[k] - distance, r.col(k), offset, {BoxAxis::Kind::second_face, 0, k});
   }
   // The nine edge–edge axes a_i × b_j.
   for (int i = 0; i < 3; ++i) {
@@ -82,8 +86,15 @@ SeparatingAxisResult separating_axis_test(const Obb& first, const Obb& second, b
   result.overlap = true;
   if (!find_contact) return result;
 
-  // Overlapping, the edge must be 5 % shallower; apart, its gap 5 % wider.
-  const double preferred = face.depth >= 0 ? kEdgeAxisPreference * face.depth : (2 - kEdgeAxisPreference) * face.depth;
+  // Two faces nearly parallel (a box resting on a box) have nearly the same depth, and rounding
+  // or a slight rock would swap them step to step, and the manifold's ids with them: the first
+  // box's face wins such a tie.
+  const bool faces_parallel = std::abs(first_face.axis.dot(second_face.axis)) >= kParallelFacesCosine;
+  const AxisCandidate& face = second_face.depth < first_face.depth && !faces_parallel ? second_face : first_face;
+  // Overlapping, the edge must be 5 % shallower than either face; apart, its gap 5 % wider. (Against
+  // the tie's winner alone, an edge axis near the other face's normal would win the tie back.)
+  const double face_depth = std::min(first_face.depth, second_face.depth);
+  const double preferred = face_depth >= 0 ? kEdgeAxisPreference * face_depth : (2 - kEdgeAxisPreference) * face_depth;
   const AxisCandidate& best = edge.depth < preferred ? edge : face;
   // t points from the first box to the second: the normal points against it.
   const Vector3d local_normal = best.offset > 0 ? Vector3d(-best.axis) : best.axis;

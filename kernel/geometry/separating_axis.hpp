@@ -44,7 +44,10 @@ struct SeparatingAxisResult {
 /// and fills only `overlap`. Otherwise the axis of least overlap (or widest gap) is the normal:
 /// edge–edge axes are normalized first, skipped when their edges are near parallel (the axis is
 /// undefined), and chosen over the best face axis only when their depth is below 0.95 of it (a
-/// gap 1.05 times wider) — face normals give steadier contacts, as in Box2D and ODE. `margin`: m, ≥ 0.
+/// gap 1.05 times wider) — face normals give steadier contacts, as in Box2D and ODE. Between the
+/// two boxes' best face axes, the first box's wins when they are within 1° of parallel (a box on
+/// a box: the same reference face step after step, so the manifold's ids hold; Box2D v3 prefers
+/// its first polygon the same way); otherwise the shallower. `margin`: m, ≥ 0.
 SeparatingAxisResult separating_axis_test(const Obb& first, const Obb& second, bool find_contact, double margin = 0);
 
 }  // namespace limber
