@@ -58,9 +58,11 @@ void find_limb_segments(RigidScene& state, BlockRunner* runner) {
 // A box or an ellipsoid body as the shape-pair table sees it, as it is now.
 PlacedShape placed_shape(const RigidScene& state, std::size_t b) {
   const Eigen::Vector3d centre = head_and_tail(state, b).first;  // head = tail: its length is 0
-  const Eigen::Matrix3d rotation = shape_frame(state, b).toRotationMatrix();
-  if (state.shapes.shape[b] == ShapeType::box) return Obb{centre, state.shapes.half_extents[b], rotation};
-  return Ellipsoid{centre, state.shapes.half_extents[b], rotation};
+  Shape shape;
+  shape.type = state.shapes.shape[b], shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
+  LimbSegment segment{centre, centre, state.shapes.radius[b]};
+  segment.orientation = shape_frame(state, b);
+  return placed_shape(shape, segment);
 }
 
 // A ball (centre, radius) against limb b: its separation and normal (from the limb towards the
