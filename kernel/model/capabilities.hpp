@@ -28,15 +28,19 @@ struct MethodCapabilities {
   /// diverging), so they refuse a servo there at compile and a motor's non-zero control
   /// (require_actuator_supported).
   bool serial_actuators;
+  /// Box and ellipsoid limbs collide as themselves (the shape-pair table,
+  /// kernel/geometry/shape_pairs.hpp); without, as their capsule proxies (the particles' limbs
+  /// are segments: kernel/scene/capsule_proxy.hpp).
+  bool true_shapes;
 };
 
 /// One row a method, in Method's order.
 inline constexpr std::array<MethodCapabilities, 4> kMethodCapabilities{{
-    //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres serial_actuators
-    {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true,   false},
-    {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false,  false},
-    {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true,   true},
-    {Method::featherstone, {true, true, true, false, true, true},               false, true,   false, false, true,   true},
+    //                     spherical revolute prismatic universal fixed serial   float  threads gears  holds  spheres serial_actuators true_shapes
+    {Method::particles,    {true, true, false, true, true, true},               true,  true,   false, true,  true,   false,           false},
+    {Method::springs,      {true, true, false, false, false, false},            false, false,  false, true,  false,  false,           true},
+    {Method::lagrange,     {true, true, true, true, true, true},                false, false,  true,  true,  true,   true,            true},
+    {Method::featherstone, {true, true, true, false, true, true},               false, true,   false, false, true,   true,            true},
 }};
 static_assert(kMethodCapabilities[static_cast<std::size_t>(Method::particles)].method == Method::particles &&
                   kMethodCapabilities[static_cast<std::size_t>(Method::springs)].method == Method::springs &&

@@ -4,6 +4,7 @@
 // the README's row for the method names exactly those joint types and, for precision, float
 // exactly when the table allows it.
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -112,6 +113,32 @@ TEST(Capabilities, ASerialAxisTakesAnActuatorExactlyWhereTheTableSaysSo) {
   }
 }
 
+// A 0.4 × 0.2 × 0.1 m box lying on its middle face (0.2 m tall) on the floor: a method that
+// collides it as itself holds its centre at 0.1 m; one that collides its capsule proxy (radius
+// 0.05 m, along the longest side) lets it sink to 0.05 m.
+TEST(Capabilities, ABoxRestsOnItsSideExactlyWhereTheTableSaysItCollidesAsItself) {
+  for (const MethodCapabilities& entry : kMethodCapabilities) {
+    Model model;
+    model.name = "box on its side";
+    model.ground = Ground{};
+    model.settings.time_step = 1.0 / 240;
+    Body box;
+    box.name = "box";
+    box.shape.type = ShapeType::box;
+    box.shape.half_extents = Vector3(0.05, 0.1, 0.2);  // its longest side on the body's axis, as the importers put it
+    box.mass = 1;
+    box.axis = Vector3::UnitX();                        // lying along x, its 0.2 m side upright
+    box.shape.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2, Vector3::UnitZ()));
+    box.position = Vector3(0, 0, 0.1 + 1e-3);
+    model.bodies.push_back(box);
+    World world(model, WorldOptions{.method = entry.method});
+    for (int n = 0; n < 240; ++n) ASSERT_EQ(world.step(), StepStatus::ok) << method_name(entry.method);
+    std::vector<Pose> poses(1);
+    world.poses(poses);
+    EXPECT_NEAR(poses[0].position.z(), entry.true_shapes ? 0.1 : 0.05, 3e-3) << method_name(entry.method);
+  }
+}
+
 TEST(Capabilities, TheReadmeStatusTableSaysWhatTheTableSays) {
   const std::pair<Method, std::string_view> rows[] = {
       {Method::particles, "particles"}, {Method::springs, "springs"}, {Method::lagrange, "lagrange"}, {Method::featherstone, "featherstone"}};
@@ -125,6 +152,8 @@ TEST(Capabilities, TheReadmeStatusTableSaysWhatTheTableSays) {
     }
     const bool serial_without_actuators = supports(method, JointType::serial) && !capabilities(method).serial_actuators;
     EXPECT_EQ(joints.find("take no actuator") != std::string::npos, serial_without_actuators) << name << "'s joints cell: " << joints;
+    EXPECT_EQ(cells[3].find("boxes and ellipsoids as themselves") != std::string::npos, capabilities(method).true_shapes)
+        << name << "'s contacts: " << cells[3];
     EXPECT_EQ(cells[4].find("float") != std::string::npos, capabilities(method).single_precision) << name << "'s precision: " << cells[4];
     EXPECT_EQ(cells[5].find("1–n") != std::string::npos, capabilities(method).threads) << name << "'s threads: " << cells[5];
   }

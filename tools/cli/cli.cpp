@@ -21,6 +21,7 @@
 #include "limber/kernel/metrics/divergence.hpp"
 #include "limber/kernel/metrics/knock.hpp"
 #include "limber/kernel/metrics/observers.hpp"
+#include "limber/kernel/model/capabilities.hpp"
 #include "limber/kernel/model/model.hpp"
 #include "limber/kernel/relaxation/joint_trees.hpp"
 #include "limber/kernel/methods/method.hpp"
@@ -473,6 +474,26 @@ int view(const ViewFlags& flags, std::vector<std::string> run_arguments, const R
   return viewer(request, out, err);
 }
 
+
+// The note a method that collides boxes and ellipsoids as capsule proxies gives (capsule_proxy.hpp),
+// naming the first such body and how many more; empty when none or when the method collides them
+// as themselves (MethodCapabilities::true_shapes).
+std::string capsule_proxy_note(const LoadedRun& loaded) {
+  if (capabilities(loaded.options.method).true_shapes) return {};
+  const std::vector<Body>& bodies = loaded.scene.model.bodies;
+  const auto first = std::find_if(bodies.begin(), bodies.end(), [](const Body& body) { return has_half_extents(body.shape); });
+  if (first == bodies.end()) return {};
+  const auto more = std::count_if(first + 1, bodies.end(), [](const Body& body) { return has_half_extents(body.shape); });
+  std::string exact;  // the methods that collide them as themselves
+  for (const MethodCapabilities& entry : kMethodCapabilities) {
+    if (entry.true_shapes) exact += (exact.empty() ? "" : ", ") + std::string(method_name(entry.method));
+  }
+  return "bodies[" + std::to_string(first - bodies.begin()) + "] '" + first->name + "'" +
+         (more > 0 ? " and " + std::to_string(more) + " more box and ellipsoid bodies" : ", a " + std::string(shape_type_name(first->shape.type)) + ",") +
+         " collide as capsule proxies under the " + std::string(method_name(loaded.options.method)) +
+         " method (the capsule along the longest axis, radius the shortest half-extent; mass and inertia exact); " + exact +
+         " collide them as themselves";
+}
 }  // namespace
 
 int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream& err, Viewer viewer) {
@@ -504,6 +525,7 @@ int run_main(int argc, const char* const* argv, std::ostream& out, std::ostream&
     }
     LoadedRun loaded = load(flags);
     for (const std::string& note : loaded.scene.notes) err << "limber: note: " << note << "\n";  // what a model file's loader dropped
+    if (const std::string proxies = capsule_proxy_note(loaded); !proxies.empty()) err << "limber: note: " << proxies << "\n";
     return simulate(std::move(loaded), flags, out);
   } catch (const ModelError& error) {
     err << "limber: " << error.what() << "\n";
