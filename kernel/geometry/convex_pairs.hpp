@@ -58,7 +58,9 @@ Eigen::Vector3d support(const Ellipsoid& ellipsoid, const Eigen::Vector3d& direc
 Eigen::Vector3d support(const Cylinder& cylinder, const Eigen::Vector3d& direction);
 Eigen::Vector3d support(const ConvexHull& hull, const Eigen::Vector3d& direction);
 
-/// Two convex shapes within `margin` (m, ≥ 0) as a manifold of one point (id 0), by GJK and EPA
+/// Two convex shapes within `margin` (m, ≥ 0) as a manifold of one point (id 0), by GJK and EPA;
+/// with an ellipsoid, the point is its deepest along the normal, half the separation out (EPA's
+/// own point can lie anywhere on a flat support, a capsule's side or a box's face)
 /// (above); empty when farther apart. Normal from the second to the first; instantiated for
 /// every pair of the shapes above.
 template <typename First, typename Second>

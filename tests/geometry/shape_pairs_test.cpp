@@ -82,6 +82,23 @@ TEST(ShapePairs, SwappedPairsGiveTheSameManifoldWithTheNormalTurned) {
   EXPECT_GT(compared, 50) << "enough pairs touched to compare";
 }
 
+TEST(ShapePairs, AnEllipsoidAgainstAWallsCapsuleTouchesAtItsOwnDeepestPoint) {
+  // A wall as MuJoCo's humanoid100 has one: a capsule of radius 0.4 m along x, 6 m long; the
+  // contact must be where the ellipsoid is, not anywhere along the capsule's side (EPA's point).
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> uniform(-1, 1);
+  const Capsule wall{Vector3d(-3, 3, 0), Vector3d(3, 3, 0), 0.4};
+  for (int trial = 0; trial < 50; ++trial) {
+    const Ellipsoid egg{Vector3d(2 * uniform(random), 2.5 + 0.02 * uniform(random), 0.1), Vector3d(0.15, 0.1, 0.07),
+                        limber::testing::random_rotation(random)};
+    const Manifold manifold = collide(egg, wall, 0.05);
+    if (manifold.count == 0) continue;
+    const Vector3d deepest = support(egg, -manifold.normal);
+    EXPECT_LT((manifold.points[0].point - (deepest - 0.5 * manifold.points[0].separation * manifold.normal)).norm(), 1e-12) << "trial " << trial;
+    EXPECT_NEAR(manifold.points[0].point.x(), egg.centre.x(), 0.15) << "trial " << trial << ": beside the ellipsoid, m";
+  }
+}
+
 TEST(ShapePairs, TwoCapsulesAreTheCollisionWorldsPair) {
   const Capsule a{Vector3d::Zero(), Vector3d::UnitX(), 0.1}, b{Vector3d(0, 0, 0.1), Vector3d(1, 0, 0.1), 0.1};
   EXPECT_THROW(collide(a, b, 0.0), std::invalid_argument);
