@@ -10,17 +10,26 @@
 //   build/bench/manifold_bench --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 //
 // convex_pairs cannot link limber (Debian's FCL is built for baseline x86-64; limber for this
-// CPU), so the two programs race in separate runs: compare their ns, not within one run.
+// CPU), so the two programs race in separate runs: compare their ns, not within one run. MuJoCo
+// (libmujoco-dev) races here, in the same run, where it is found: its box–box function
+// (mjCOLLISIONFUNC[box][box], `mjc_BoxBox`, called on the same 256 poses, the boxes' frames set
+// straight into mjData) against limber's.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
+#include <memory>
 #include <random>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "limber/kernel/geometry/manifolds.hpp"
+
+#ifdef LIMBER_HAS_MUJOCO
+#include <mujoco/mujoco.h>
+#endif
 
 namespace limber {
 namespace {
@@ -118,6 +127,49 @@ void BM_BoxPlane(benchmark::State& state) {
 }
 
 BENCHMARK(BM_BoxBox);
+
+#ifdef LIMBER_HAS_MUJOCO
+// MuJoCo's box–box on the poses of BM_BoxBox (the same seed and the same draws): two box geoms of
+// free bodies, their frames written into mjData's geom_xpos and geom_xmat (row-major), the pair
+// function called directly with the same margin. Its contacts a pair are `points_a_manifold`.
+void BM_MujocoBoxBox(benchmark::State& state) {
+  static const char* kXml = R"(<mujoco><worldbody>
+    <body><freejoint/><geom type="box" size="0.15 0.04 0.02"/></body>
+    <body><freejoint/><geom type="box" size="0.10 0.06 0.03"/></body>
+  </worldbody></mujoco>)";
+  char error[1000] = "";
+  const auto vfs = std::make_unique<mjVFS>();  // megabytes: not on the stack
+  mj_defaultVFS(vfs.get());
+  mj_makeEmptyFileVFS(vfs.get(), "boxes.xml", static_cast<int>(std::strlen(kXml)));
+  std::memcpy(vfs->filedata[vfs->nfile - 1], kXml, std::strlen(kXml));
+  mjModel* model = mj_loadXML("boxes.xml", vfs.get(), error, sizeof error);
+  mj_deleteVFS(vfs.get());
+  if (!model) {
+    state.SkipWithError(error);
+    return;
+  }
+  mjData* data = mj_makeData(model);
+  mjContact contacts[mjMAXCONPAIR];
+  const auto place = [data](int geom, const Vector3d& centre, const Matrix3d& rotation) {
+    for (int k = 0; k < 3; ++k) data->geom_xpos[3 * geom + k] = centre[k];
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) data->geom_xmat[9 * geom + 3 * r + c] = rotation(r, c);
+    }
+  };
+  run(state, [&](std::mt19937& random) -> PairAt {
+    const Matrix3d a = random_rotation(random), b = random_rotation(random);
+    return [=, &contacts](const Vector3d& offset, double margin) {
+      place(0, offset, b), place(1, Vector3d::Zero(), a);
+      Manifold manifold;  // only its count: MuJoCo's contacts
+      manifold.count = mjCOLLISIONFUNC[mjGEOM_BOX][mjGEOM_BOX](model, data, contacts, 0, 1, margin);
+      return manifold;
+    };
+  }, 1);
+  mj_deleteData(data);
+  mj_deleteModel(model);
+}
+BENCHMARK(BM_MujocoBoxBox);
+#endif
 BENCHMARK(BM_CapsuleBox);
 BENCHMARK(BM_SphereBox);
 BENCHMARK(BM_BoxPlane);

@@ -18,7 +18,11 @@
 // - penetration: MuJoCo's deepest contact (−dist), limber's deepest overlap of its limbs with
 //   each other and the ground (the CLI's measure);
 // - energy: each engine's own, at the start and the end: MuJoCo's potential (gravity and joint
-//   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs).
+//   springs) plus kinetic; limber's gravity plus kinetic (its observers leave out the springs);
+// - the floor: at the end, the lowest point of each free box and ellipsoid within 1 cm of the
+//   floor (z = 0) or below it, the same measure in both engines (the support along −z of the
+//   shape as placed): the range over those objects, mm, and how many. Where a shape rests as
+//   itself its lowest point is at the floor (MuJoCo's a little below: its soft contacts).
 // Method M is any method that can run the model, on N threads (default 1; default methods:
 // particles and featherstone, each on 1 and 2 threads). --integrator sets Featherstone's (RK4 by default; semi-implicit Euler is
 // MuJoCo's default, the integrator it races with here).
@@ -46,7 +50,26 @@ struct Measures {
   double cpu_seconds = 0;
   double largest_gap = 0, deepest_penetration = 0;
   double energy_start = 0, energy_end = 0;
+  double floor_lowest = 0, floor_highest = 0;  // m: the range of the floor objects' lowest points
+  int floor_objects = 0;
 };
+
+// An object within this of the floor is on it, m.
+constexpr double kOnTheFloor = 0.01;
+
+// Adds a box's or ellipsoid's lowest point z (m) to the floor range when it is on the floor.
+void add_floor_object(Measures& out, double lowest) {
+  if (!(lowest < kOnTheFloor)) return;
+  out.floor_lowest = out.floor_objects == 0 ? lowest : std::min(out.floor_lowest, lowest);
+  out.floor_highest = out.floor_objects == 0 ? lowest : std::max(out.floor_highest, lowest);
+  ++out.floor_objects;
+}
+
+// How far below its centre a box or an ellipsoid of half-extents h reaches, its axes' world z
+// components `up` (row 2 of its rotation): Σ|up_k|·h_k for a box, |up ∘ h| for an ellipsoid.
+double reach_down(bool is_box, const Eigen::Vector3d& up, const Eigen::Vector3d& h) {
+  return is_box ? up.cwiseAbs().dot(h) : up.cwiseProduct(h).norm();
+}
 
 double median(std::vector<double> values) {
   std::sort(values.begin(), values.end());
@@ -83,6 +106,15 @@ Measures run_mujoco(const mjModel* model, mjData* data, long steps, bool measure
   }
   out.cpu_seconds += thread_seconds() - start;
   if (measure) out.energy_end = energy();
+  for (int g = 0; g < model->ngeom && measure; ++g) {
+    const int type = model->geom_type[g], body = model->geom_bodyid[g];
+    if (type != mjGEOM_BOX && type != mjGEOM_ELLIPSOID) continue;
+    const int joint = model->body_jntadr[body];
+    if (joint < 0 || model->jnt_type[joint] != mjJNT_FREE) continue;
+    const mjtNum* xmat = data->geom_xmat + 9 * g;  // row-major: row 2 is the world z of the geom's axes
+    const Eigen::Vector3d up(xmat[6], xmat[7], xmat[8]), h(model->geom_size[3 * g], model->geom_size[3 * g + 1], model->geom_size[3 * g + 2]);
+    add_floor_object(out, data->geom_xpos[3 * g + 2] - reach_down(type == mjGEOM_BOX, up, h));
+  }
   return out;
 }
 
@@ -118,14 +150,24 @@ Measures run_limber(const Scene& scene, Runner runner, long steps, bool measure)
   }
   out.cpu_seconds = stepping;
   if (measure) out.energy_end = world.observe().energy();
+  std::vector<Pose> poses(scene.model.bodies.size());
+  world.poses(poses);
+  for (std::size_t b = 0; b < poses.size() && measure; ++b) {
+    const Shape& shape = scene.model.bodies[b].shape;
+    if (!has_half_extents(shape)) continue;
+    const Eigen::Vector3d up = (poses[b].orientation * shape.rotation).toRotationMatrix().row(2).transpose();
+    add_floor_object(out, poses[b].position.z() - reach_down(shape.type == ShapeType::box, up, shape.half_extents));
+  }
   return out;
 }
 
 void print_row(const char* engine, double load, const std::vector<double>& times, const Measures& first, long steps, double dt, int humanoids) {
   const double per_step = median(times) / static_cast<double>(steps);
   const double per_humanoid_frame = per_step * (1.0 / 60.0 / dt) / humanoids;
-  std::printf("| %-26s | %8.1f | %9.0f | %10.0f | %9.2g | %9.3g | %8.1f → %-8.1f |\n", engine, 1e3 * load, 1.0 / per_step,
-              1e6 * per_humanoid_frame, first.largest_gap, first.deepest_penetration, first.energy_start, first.energy_end);
+  char floor[64] = "none";
+  if (first.floor_objects > 0) std::snprintf(floor, sizeof floor, "%.2f … %.2f (%d)", 1e3 * first.floor_lowest, 1e3 * first.floor_highest, first.floor_objects);
+  std::printf("| %-26s | %8.1f | %9.0f | %10.0f | %9.2g | %9.3g | %8.1f → %-8.1f | %s |\n", engine, 1e3 * load, 1.0 / per_step,
+              1e6 * per_humanoid_frame, first.largest_gap, first.deepest_penetration, first.energy_start, first.energy_end, floor);
 }
 
 void race(const std::filesystem::path& file, double seconds, int rounds, const std::vector<Runner>& methods) {
@@ -162,8 +204,8 @@ void race(const std::filesystem::path& file, double seconds, int rounds, const s
   }
   std::printf("\n%s: %d humanoid(s), %ld steps of %g s, median of %d rounds (thread CPU time)\n\n", file.filename().c_str(), humanoids, steps,
               dt, rounds);
-  std::printf("| engine                     | load ms  | steps/s   | µs/humanoid/frame | joint gap | penetr. m | energy J start → end |\n");
-  std::printf("|---|---:|---:|---:|---:|---:|---|\n");
+  std::printf("| engine                     | load ms  | steps/s   | µs/humanoid/frame | joint gap | penetr. m | energy J start → end | floor objects' lowest points, mm (count) |\n");
+  std::printf("|---|---:|---:|---:|---:|---:|---|---|\n");
   print_row("MuJoCo 2.2.2 mj_step", mujoco_load, mujoco_times, mujoco_first, steps, dt, humanoids);
   for (std::size_t k = 0; k < methods.size(); ++k) {
     std::string name = "limber " + std::string(method_name(methods[k].method)) + ", " + std::to_string(methods[k].threads) +
