@@ -475,8 +475,9 @@ struct Tolerances {
   /// Largest joint gap, or particle limb stretch, relative to the link length, ≥ 0.
   double joint_gap = 0.01;
   /// Deepest overlap of a limb into another, static geometry or the ground, m, ≥ 0. Absent: the
-  /// radius of the Model's thinnest limb with a radius (0.01 m without one): a limb sunk that deep
-  /// has half its thickness through whatever it met.
+  /// radius of the Model's thinnest limb with a radius, or a box's or ellipsoid's smallest
+  /// half-extent (0.01 m without one): a limb sunk that deep has half its thickness through
+  /// whatever it met.
   std::optional<double> penetration;
   /// Largest violation of a joint limit, rad (m for a prismatic range), ≥ 0.
   double limit = 0.1;

@@ -12,7 +12,7 @@ namespace limber::study {
 
 double energy_scale(const Model& model) {
   double length = 0;
-  for (const Body& body : model.bodies) length += body.shape.length;
+  for (const Body& body : model.bodies) length += has_half_extents(body.shape) ? 2 * body.shape.half_extents.maxCoeff() : body.shape.length;
   const double mass = model.body_mass(), gravity = model.settings.gravity.norm();
   return gravity > 0 ? mass * gravity * length : mass * 1.0;
 }
@@ -99,7 +99,8 @@ VerdictBounds verdict_bounds(const Model& model, const Observation& start) {
   bounds.joint_gap = tolerances.joint_gap, bounds.limit = tolerances.limit;
   double thinnest = std::numeric_limits<double>::infinity();
   for (const Body& body : model.bodies) {
-    if (body.shape.radius > 0) thinnest = std::min(thinnest, body.shape.radius);
+    const double half_thickness = has_half_extents(body.shape) ? body.shape.half_extents.minCoeff() : body.shape.radius;
+    if (half_thickness > 0) thinnest = std::min(thinnest, half_thickness);
   }
   bounds.penetration = tolerances.penetration.value_or(std::isfinite(thinnest) ? thinnest : 0.01);
   const bool driven = !model.actuators.empty() ||

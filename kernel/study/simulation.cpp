@@ -4,6 +4,7 @@
 #include <type_traits>
 
 #include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/world/world_internals.hpp"
 
 namespace limber::study {
@@ -63,7 +64,7 @@ void Simulation::limb_points(std::vector<Eigen::Vector3d>& points) const {
       },
       state);
   for (std::size_t body = 0; body < model.bodies.size(); ++body) {
-    const double half = 0.5 * model.bodies[body].shape.length;
+    const double half = 0.5 * capsule_proxy(model.bodies[body].shape).length;  // a box: its proxy's ends, the particles' limb ends
     points.push_back(world_point(rigid, body, Eigen::Vector3d(0, 0, half)));
     points.push_back(world_point(rigid, body, Eigen::Vector3d(0, 0, -half)));
   }

@@ -164,6 +164,15 @@ TEST(StudyMetrics, TheVerdictFlagsEachMeasurePastItsToleranceAndNothingWithin) {
   model.settings.tolerances.energy_gain = 0.5, model.settings.tolerances.penetration = 0.001;
   EXPECT_EQ(verdict_bounds(model, start).energy_gain, 0.5);
   EXPECT_EQ(verdict_bounds(model, start).penetration, 0.001);
+
+  // A box's thickness is its smallest half-extent (it has no radius): a board 2 mm thick, its
+  // 1 mm half below the chain's 2 mm radius, bounds the default penetration as a limb's radius does.
+  model.settings.tolerances.penetration.reset();
+  Body board = model.bodies[0];
+  board.name = "board", board.shape = Shape{};
+  board.shape.type = ShapeType::box, board.shape.half_extents = Vector3(0.3, 0.2, 0.001);
+  model.bodies.push_back(board);
+  EXPECT_EQ(verdict_bounds(model, start).penetration, 0.001);
 }
 
 // The double pendulum of uniform rods, released horizontally, compared over 0.5 s with

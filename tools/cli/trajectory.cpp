@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "limber/kernel/rigid/rigid_scene.hpp"
+#include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/serial_links.hpp"
 #include "limber/kernel/verlet/compile.hpp"  // particle_name
 
@@ -65,7 +66,13 @@ void write_header(std::ostream& csv, const Model& model, const RigidScene& state
 void write_row(std::ostream& csv, const RigidScene& state) {
   auto write = [&](const Eigen::Vector3d& x) { write_point<double>(csv, x.x(), x.y(), x.z()); };
   for (std::size_t b = 0; b < state.ball_begin; ++b) {
-    const double half = 0.5 * state.shapes.length[b];
+    // A box's or an ellipsoid's head and tail: its capsule proxy's, along its body axis (the
+    // particles' limb ends, so every method writes the same points).
+    Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
+    if (shape.type == ShapeType::box || shape.type == ShapeType::ellipsoid) {
+      shape.length = shape.radius = 0, shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
+    }
+    const double half = 0.5 * capsule_proxy(shape).length;
     write(world_point(state, b, Eigen::Vector3d(0, 0, half)));
     write(world_point(state, b, Eigen::Vector3d(0, 0, -half)));
   }
