@@ -55,11 +55,18 @@ void find_limb_segments(RigidScene& state, BlockRunner* runner) {
   });
 }
 
+// Body b's Model shape (a ball's: a capsule of length 0).
+Shape model_shape(const RigidScene& state, std::size_t b) {
+  if (!has_half_extents(state, b)) return Shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
+  Shape shape;
+  shape.type = state.shapes.shape[b], shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
+  return shape;
+}
+
 // A box or an ellipsoid body as the shape-pair table sees it, as it is now.
 PlacedShape placed_shape(const RigidScene& state, std::size_t b) {
   const Eigen::Vector3d centre = head_and_tail(state, b).first;  // head = tail: its length is 0
-  Shape shape;
-  shape.type = state.shapes.shape[b], shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
+  const Shape shape = model_shape(state, b);
   LimbSegment segment{centre, centre, state.shapes.radius[b]};
   segment.orientation = shape_frame(state, b);
   return placed_shape(shape, segment);
@@ -184,7 +191,7 @@ void add_ball_contacts(RigidScene& state, std::size_t ball) {
   for (const std::uint32_t b : state.collisions.ball_candidates().of(ball - state.ball_begin)) {
     if (b >= state.ball_begin) break;  // the other balls, after the limbs: the collision world's
     // Bounding spheres first (thesis 2.4); the exact closest point only when they overlap.
-    const Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
+    const Shape shape = model_shape(state, b);
     const Eigen::Quaterniond model_orientation = y.orientation[b] * state.shapes.principal_frame[b].conjugate();
     if (!overlaps(BoundingSphere{centre, ball_radius}, limb_sphere(shape, world_point(state, b, Eigen::Vector3d::Zero()), model_orientation))) continue;
     const double reach = state.limb_segments[ball].reach + state.limb_segments[b].reach;

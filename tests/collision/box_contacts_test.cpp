@@ -123,6 +123,30 @@ TEST_P(RigidBoxes, ABoxOnASlopeBelowTheFrictionAngleCreepsNoMoreThanTheMoveBefor
   EXPECT_LT(std::abs(crate_slide(before_the_move, shallow, friction, seconds)), 1e-4) << "m, held by static friction";
 }
 
+TEST_P(RigidBoxes, ABallThrownAtABoxBouncesOffItsFace) {
+  // A ball of 5 cm radius at 3 m/s towards a 0.4 × 0.4 × 0.2 m box of 10 kg resting on the floor,
+  // level with the box's middle and off its long axis (so neither the box's bounding sphere nor
+  // its centre is what the ball meets first): it stops at the face, x ≤ −(0.2 + 0.05) m, and
+  // leaves backwards (restitution 0.5).
+  Model model = crate_floor(0.0);
+  Body crate = crate_body("crate", Eigen::Vector3d(0.2, 0.2, 0.1), Eigen::Vector3d(0, 0, 0.1));
+  crate.mass = 10;
+  model.bodies.push_back(crate);
+  Ball ball;
+  ball.radius = 0.05, ball.mass = 0.5, ball.restitution = 0.5;
+  ball.position = Eigen::Vector3d(-0.6, 0.15, 0.1), ball.velocity = Eigen::Vector3d(3, 0, 0);
+  model.balls.push_back(ball);
+  model.settings.gravity.setZero();
+  World world(model, crate_options(GetParam()));
+  double farthest = -1;
+  for (int n = 0; n < 120; ++n) {
+    ASSERT_EQ(world.step(), StepStatus::ok) << "step " << n;
+    farthest = std::max(farthest, world.ball(world.balls().front()).position.x());
+  }
+  EXPECT_LT(farthest, -0.25 + 2e-3) << "the ball's centre never passed the box's face less its radius, m";
+  EXPECT_LT(world.ball(world.balls().front()).velocity.x(), -0.5) << "it bounced back, m/s";
+}
+
 INSTANTIATE_TEST_SUITE_P(Methods, RigidBoxes, ::testing::ValuesIn(true_shape_methods_of_table()), crate_test_name);
 
 // A stack of five boxes, 0.3 × 0.2 × 0.1 m, 0.5 mm apart at the start: after 1 s to settle, none
