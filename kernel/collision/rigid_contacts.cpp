@@ -31,9 +31,7 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> head_and_tail(const RigidScene& stat
 
 constexpr std::size_t kBodiesPerBlock = 64;  // the per-body loops' blocks on the runner's threads
 
-bool has_half_extents(const RigidScene& state, std::size_t b) {
-  return state.shapes.shape[b] == ShapeType::box || state.shapes.shape[b] == ShapeType::ellipsoid;
-}
+bool has_half_extents(const RigidScene& state, std::size_t b) { return has_half_extents(model_shape(state, b)); }
 
 // A box's or an ellipsoid's shape frame in world, as it is now.
 Eigen::Quaterniond shape_frame(const RigidScene& state, std::size_t b) {
@@ -53,14 +51,6 @@ void find_limb_segments(RigidScene& state, BlockRunner* runner) {
     segment.radius = state.shapes.radius[b];
     if (has_half_extents(state, b)) segment.orientation = shape_frame(state, b);
   });
-}
-
-// Body b's Model shape (a ball's: a capsule of length 0).
-Shape model_shape(const RigidScene& state, std::size_t b) {
-  if (!has_half_extents(state, b)) return Shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
-  Shape shape;
-  shape.type = state.shapes.shape[b], shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
-  return shape;
 }
 
 // A box or an ellipsoid body as the shape-pair table sees it, as it is now.
@@ -279,6 +269,14 @@ void find_ball_candidates(RigidScene& state) {
 }
 
 }  // namespace
+
+Shape model_shape(const RigidScene& state, std::size_t b) {
+  const ShapeType type = state.shapes.shape[b];
+  if (type != ShapeType::box && type != ShapeType::ellipsoid) return Shape{type, state.shapes.length[b], state.shapes.radius[b]};
+  Shape shape;
+  shape.type = type, shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
+  return shape;
+}
 
 void remember_step_start(RigidScene& state) { state.step_start_position = state.bodies.state.position; }
 

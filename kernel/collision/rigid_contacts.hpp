@@ -44,6 +44,9 @@
 
 namespace limber {
 
+/// Body b's Model shape as the rigid scene keeps it (RigidShapes; a ball's: a capsule of length 0).
+Shape model_shape(const RigidScene& scene, std::size_t b);
+
 /// Records every body's centre of mass in scene.step_start_position: the start of the path
 /// detect_rigid_contacts sweeps the ball along. Every rigid method's step calls it first.
 void remember_step_start(RigidScene& scene);

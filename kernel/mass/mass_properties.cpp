@@ -79,23 +79,24 @@ MassProperties solid_capsule(double mass, double radius, double length) {
   return result;
 }
 
-MassProperties solid_box(double mass, const Vector3d& size) {
+namespace {
+
+// A solid whose principal moments are m (s_j² + s_k²) / divisor over the lengths s along x, y, z
+// (a box's edges, 12; an ellipsoid's semi-axes, 5), each > 0 (`name`: what s is, for the error).
+MassProperties solid_of_lengths(double mass, const Vector3d& lengths, double divisor, const std::string& name) {
   require_positive(mass, "mass");
-  require_positive(size.x(), "size.x");
-  require_positive(size.y(), "size.y");
-  require_positive(size.z(), "size.z");
-  const Vector3d s2 = size.cwiseProduct(size);
-  return diagonal(mass, mass * (s2.y() + s2.z()) / 12, mass * (s2.x() + s2.z()) / 12, mass * (s2.x() + s2.y()) / 12);
+  require_positive(lengths.x(), (name + ".x").c_str());
+  require_positive(lengths.y(), (name + ".y").c_str());
+  require_positive(lengths.z(), (name + ".z").c_str());
+  const Vector3d s2 = lengths.cwiseProduct(lengths);
+  return diagonal(mass, mass * (s2.y() + s2.z()) / divisor, mass * (s2.x() + s2.z()) / divisor, mass * (s2.x() + s2.y()) / divisor);
 }
 
-MassProperties solid_ellipsoid(double mass, const Vector3d& semi_axes) {
-  require_positive(mass, "mass");
-  require_positive(semi_axes.x(), "semi_axes.x");
-  require_positive(semi_axes.y(), "semi_axes.y");
-  require_positive(semi_axes.z(), "semi_axes.z");
-  const Vector3d a2 = semi_axes.cwiseProduct(semi_axes);
-  return diagonal(mass, mass * (a2.y() + a2.z()) / 5, mass * (a2.x() + a2.z()) / 5, mass * (a2.x() + a2.y()) / 5);
-}
+}  // namespace
+
+MassProperties solid_box(double mass, const Vector3d& size) { return solid_of_lengths(mass, size, 12, "size"); }
+
+MassProperties solid_ellipsoid(double mass, const Vector3d& semi_axes) { return solid_of_lengths(mass, semi_axes, 5, "semi_axes"); }
 
 MassProperties solid_sphere(double mass, double radius) {
   require_positive(mass, "mass");

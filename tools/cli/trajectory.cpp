@@ -7,6 +7,7 @@
 #include <string>
 #include <type_traits>
 
+#include "limber/kernel/collision/rigid_contacts.hpp"
 #include "limber/kernel/rigid/rigid_scene.hpp"
 #include "limber/kernel/scene/capsule_proxy.hpp"
 #include "limber/kernel/scene/serial_links.hpp"
@@ -68,11 +69,7 @@ void write_row(std::ostream& csv, const RigidScene& state) {
   for (std::size_t b = 0; b < state.ball_begin; ++b) {
     // A box's or an ellipsoid's head and tail: its capsule proxy's, along its body axis (the
     // particles' limb ends, so every method writes the same points).
-    Shape shape{state.shapes.shape[b], state.shapes.length[b], state.shapes.radius[b]};
-    if (shape.type == ShapeType::box || shape.type == ShapeType::ellipsoid) {
-      shape.length = shape.radius = 0, shape.half_extents = state.shapes.half_extents[b], shape.rotation = state.shapes.shape_rotation[b];
-    }
-    const double half = 0.5 * capsule_proxy(shape).length;
+    const double half = 0.5 * capsule_proxy(model_shape(state, b)).length;
     write(world_point(state, b, Eigen::Vector3d(0, 0, half)));
     write(world_point(state, b, Eigen::Vector3d(0, 0, -half)));
   }
